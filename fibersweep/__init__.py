@@ -1,0 +1,10 @@
+"""fibersweep: rigid fibers meeting a triangular pillar in a shallow microchannel."""
+
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("fibersweep")
+except PackageNotFoundError:  # running from a source tree without install
+    __version__ = "0.0.0+unknown"
+
+__all__ = ["__version__"]

@@ -1,0 +1,1 @@
+"""fibersweep.fiber."""

@@ -1,0 +1,155 @@
+"""What one fiber run returns: a frozen record plus an optional trajectory.
+
+This is the contract between the fiber dynamics (which fills it), the sweep
+(which stores ``RunResult.row()`` in Parquet and the trajectory in a second
+dataset) and the analysis (which re-classifies from the trajectory).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Literal
+
+import numpy as np
+
+__all__ = ["FiberStart", "Trajectory", "RunResult", "CLASSES", "STATUSES"]
+
+CLASSES = ("Below", "Above", "Pole-vaulting", "Trapping")
+STATUSES = ("ok", "failed")
+
+
+@dataclass(frozen=True)
+class FiberStart:
+    """Initial condition of a run, in the SPEC's normalised units.
+
+    Attributes
+    ----------
+    theta0 : float
+        Angle from +x, counter-clockwise [degrees].
+    y0 : float
+        Centre-of-mass lateral position from the pillar base / h_obs.
+    length : float
+        Fiber length L / l_obs.
+    """
+
+    theta0: float
+    y0: float
+    length: float
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Thinned record of a run (time-ordered samples).
+
+    Attributes
+    ----------
+    t : ndarray, shape (m,)
+        Time [s].
+    x, y : ndarray, shape (m,)
+        Centre of mass [µm].
+    theta : ndarray, shape (m,)
+        Angle of the head-to-tail axis from +x, unwrapped [degrees]; the head
+        is the bead that leads at the start.
+    head : ndarray, shape (m, 2)
+        Head bead position [µm].
+    tail : ndarray, shape (m, 2)
+        Tail bead position [µm].
+    head_speed : ndarray, shape (m,)
+        Head bead speed [µm/s].
+    com_speed : ndarray, shape (m,)
+        Centre-of-mass speed [µm/s].
+    contact : ndarray, shape (m,), bool
+        Contact force non-zero at the sample.
+    beads : ndarray or None, shape (m, n, 2)
+        All bead positions [µm] when recorded.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    theta: np.ndarray
+    head: np.ndarray
+    tail: np.ndarray
+    head_speed: np.ndarray
+    com_speed: np.ndarray
+    contact: np.ndarray
+    beads: np.ndarray | None = None
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """Flat columns for a table (beads excluded; see ``beads``)."""
+        return {
+            "t": self.t,
+            "x": self.x,
+            "y": self.y,
+            "theta": self.theta,
+            "head_x": self.head[:, 0],
+            "head_y": self.head[:, 1],
+            "tail_x": self.tail[:, 0],
+            "tail_y": self.tail[:, 1],
+            "head_speed": self.head_speed,
+            "com_speed": self.com_speed,
+            "contact": self.contact,
+        }
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """Outcome of one fiber run.
+
+    Attributes
+    ----------
+    start : FiberStart
+    status : {'ok', 'failed'}
+    reason : str
+        Why a run failed ('' when ok), e.g. 'nan', 'penetration', 'time limit'.
+    cls : str
+        One of CLASSES, or '' when failed.
+    delta : float
+        (y_f - y0) / h_obs far downstream; NaN for Trapping or failure.
+    contact : bool
+        Whether the contact force ever became non-zero.
+    theta_c, y_c : float
+        Fiber angle [deg] and contact point lateral position / h_obs at first
+        contact (NaN without contact).
+    t_contact, t_pass : float
+        Time of first contact and time to pass the pillar [s] (NaN if none).
+    x_f, y_f, theta_f : float
+        Final centre of mass [µm] and angle [deg].
+    n_steps : int
+    wall_time : float
+        Seconds of computation.
+    model : str
+    trajectory : Trajectory or None
+    """
+
+    start: FiberStart
+    status: Literal["ok", "failed"]
+    reason: str = ""
+    cls: str = ""
+    delta: float = math.nan
+    contact: bool = False
+    theta_c: float = math.nan
+    y_c: float = math.nan
+    t_contact: float = math.nan
+    t_pass: float = math.nan
+    x_f: float = math.nan
+    y_f: float = math.nan
+    theta_f: float = math.nan
+    n_steps: int = 0
+    wall_time: float = 0.0
+    model: str = ""
+    trajectory: Trajectory | None = field(default=None, compare=False, repr=False)
+
+    def row(self) -> dict[str, object]:
+        """Flat scalar columns for the results table (one row per run)."""
+        d = asdict(self)
+        d.pop("trajectory")
+        start = d.pop("start")
+        return {
+            "theta0": start["theta0"],
+            "y0": start["y0"],
+            "length": start["length"],
+            "class": d.pop("cls"),
+            **d,
+        }

@@ -1,0 +1,89 @@
+"""Validated settings of one fiber run: model, contact, stepping, classification, recording."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+__all__ = [
+    "ContactSettings",
+    "StepSettings",
+    "ClassifySettings",
+    "RecordSettings",
+    "FiberSettings",
+]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class ContactSettings(_Strict):
+    """Fiber-pillar repulsion (SPEC section 3, 'Contact with the pillar')."""
+
+    pillar: Literal["rough", "smooth"] = Field("rough", description="pillar surface model")
+    obstacle_bead_radius: float = Field(0.6, gt=0, description="a_obs of the rough pillar [µm]")
+    chi: float = Field(1.1, gt=1.0, description="cutoff R_ref = chi (a + a_obs) (smooth: chi a)")
+    f_ref: float | None = Field(
+        None, gt=0, description="force scale [pN]; None means 6 pi mu a U_center"
+    )
+    corner_radius: float = Field(
+        2.0, ge=0, description="rounding of the smooth pillar's corners (Bezier) [µm]"
+    )
+
+
+class StepSettings(_Strict):
+    """Time stepping and stopping of a run."""
+
+    dt: float | None = Field(
+        None, gt=0, description="bead-spring step [s]; None: the model's validated default"
+    )
+    max_displacement: float = Field(
+        0.5, gt=0, description="rigid: largest bead move per step far from contact [µm]"
+    )
+    contact_displacement: float = Field(
+        0.02, gt=0, description="rigid: largest bead move per step near the pillar [µm]"
+    )
+    t_max: float = Field(30.0, gt=0, description="give up after this time [s] (status failed)")
+    x_end: float = Field(
+        300.0, gt=0, description="stop when the rearmost bead is this far past the pillar [µm]"
+    )
+
+
+class ClassifySettings(_Strict):
+    """Thresholds of the classification (a pure function of the trajectory)."""
+
+    head_blocked_speed: float = Field(
+        0.01, gt=0, description="head counts as blocked below this fraction of U_center"
+    )
+    trap_time: float = Field(
+        2.0, gt=0, description="in contact and stopped for this long [s] -> Trapping"
+    )
+    trap_speed: float = Field(
+        0.01, gt=0, description="'stopped' means COM speed below this fraction of U_center"
+    )
+
+
+class RecordSettings(_Strict):
+    """What a run keeps of its trajectory."""
+
+    trajectories: bool = Field(False, description="store trajectories")
+    samples: int = Field(200, ge=2, description="samples kept per trajectory")
+    all_beads: bool = Field(False, description="keep every bead's position, not only COM/angle")
+
+
+class FiberSettings(_Strict):
+    """One fiber run apart from its start (theta0, y0, L)."""
+
+    model: Literal["rigid", "bead-spring"] = Field("rigid", description="fiber model")
+    bead_radius: float = Field(2.0, gt=0, description="bead radius a [µm]")
+    young_modulus: float = Field(26e6, gt=0, description="E [Pa] (bead-spring only)")
+    x0: float | None = Field(None, description="start x of the centre of mass [µm]; None: L_ch/4")
+    contact: ContactSettings = ContactSettings()
+    step: StepSettings = StepSettings()
+    classify: ClassifySettings = ClassifySettings()
+    record: RecordSettings = RecordSettings()
+    effects: dict[str, float] = Field(
+        default_factory=dict, description="extra physical effects, name -> strength (0 = off)"
+    )
