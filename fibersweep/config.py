@@ -14,11 +14,19 @@ import difflib
 import itertools
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    ValidationError,
+    model_validator,
+)
 
 from fibersweep.errors import InputError
 from fibersweep.fiber.result import FiberStart
@@ -63,6 +71,12 @@ class RangeSpec(_Strict):
     stop: float
     step: float = Field(gt=0)
 
+    @model_validator(mode="after")
+    def _not_empty(self) -> RangeSpec:
+        if self.stop < self.start:
+            raise ValueError(f"empty range: start {self.start} > stop {self.stop}")
+        return self
+
     def values(self) -> np.ndarray:
         n = int(np.floor((self.stop - self.start) / self.step + 1e-9)) + 1
         if n < 1:
@@ -75,13 +89,38 @@ class LinspaceSpec(_Strict):
 
     start: float
     stop: float
-    num: int = Field(ge=1)
+    num: int = Field(ge=1, le=100_000)
 
     def values(self) -> np.ndarray:
         return np.linspace(self.start, self.stop, self.num)
 
 
-Axis = float | list[float] | RangeSpec | LinspaceSpec
+def _axis_kind(v: Any) -> str | None:
+    """Which form an axis is written in, so a bad one gets one clear message."""
+    if isinstance(v, RangeSpec) or (isinstance(v, dict) and "step" in v):
+        return "axis:range"
+    if isinstance(v, LinspaceSpec) or (isinstance(v, dict) and "num" in v):
+        return "axis:linspace"
+    if isinstance(v, (list, tuple)):
+        return "axis:list"
+    if isinstance(v, (int, float)) and not isinstance(v, bool):
+        return "axis:number"
+    return None
+
+
+Axis = Annotated[
+    Annotated[float, Tag("axis:number")]
+    | Annotated[list[float], Tag("axis:list")]
+    | Annotated[RangeSpec, Tag("axis:range")]
+    | Annotated[LinspaceSpec, Tag("axis:linspace")],
+    Discriminator(
+        _axis_kind,
+        custom_error_type="axis_form",
+        custom_error_message=(
+            "expected a number, a list of numbers, {start, stop, step} or {start, stop, num}"
+        ),
+    ),
+]
 
 
 def axis_values(axis: Axis) -> np.ndarray:
@@ -133,6 +172,24 @@ class RunSettings(_Strict):
     cache_dir: str = Field(".fibersweep-cache", description="flow-field cache directory")
     executor: Literal["local", "dask"] = Field("local", description="local pool or Dask")
     scheduler: str | None = Field(None, description="Dask scheduler address tcp://HOST:PORT")
+    flush_every: int = Field(
+        32, ge=1, description="finished runs per Parquet part file (also flushed on exit)"
+    )
+    flush_seconds: float = Field(
+        30.0, gt=0, description="write a part at least this often while runs finish [s]"
+    )
+    retries: int = Field(
+        2, ge=0, description="re-runs of a task whose worker died (local pool and Dask)"
+    )
+    compact: bool = Field(True, description="merge part files into one at the end of a sweep")
+
+    @model_validator(mode="after")
+    def _scheduler_address(self) -> RunSettings:
+        if self.scheduler is not None and "://" not in self.scheduler:
+            raise ValueError(
+                f"scheduler: expected an address like tcp://HOST:PORT, got {self.scheduler!r}"
+            )
+        return self
 
 
 class Config(_Strict):
@@ -188,7 +245,9 @@ def _model_at(path: tuple) -> type[BaseModel] | None:
 def _describe(err: dict, lines: dict[tuple, int]) -> str:
     loc = tuple(p for p in err["loc"] if not (isinstance(p, str) and p[:1].isupper()))
     # pydantic inserts union-branch names like 'list[float]'; drop them.
-    loc = tuple(p for p in loc if not (isinstance(p, str) and ("[" in p or p in {"float"})))
+    loc = tuple(
+        p for p in loc if not (isinstance(p, str) and ("[" in p or ":" in p or p in {"float"}))
+    )
     dotted = ".".join(str(p) for p in loc) or "<top level>"
     line = None
     for k in range(len(loc), -1, -1):
@@ -200,7 +259,9 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
         parent = _model_at(loc[:-1])
         hint = ""
         if parent is not None:
-            close = difflib.get_close_matches(str(loc[-1]), list(parent.model_fields), n=1)
+            close = difflib.get_close_matches(
+                str(loc[-1]), list(parent.model_fields), n=1, cutoff=0.5
+            )
             if close:
                 hint = f"; did you mean '{close[0]}'?"
             valid = ", ".join(parent.model_fields)

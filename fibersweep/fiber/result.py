@@ -49,8 +49,8 @@ class Trajectory:
     x, y : ndarray, shape (m,)
         Centre of mass [µm].
     theta : ndarray, shape (m,)
-        Angle of the head-to-tail axis from +x, unwrapped [degrees]; the head
-        is the bead that leads at the start.
+        Directed angle of the tail-to-head vector from +x, unwrapped [degrees];
+        the head is the bead that leads at the start (so theta starts at theta0).
     head : ndarray, shape (m, 2)
         Head bead position [µm].
     tail : ndarray, shape (m, 2)
@@ -120,6 +120,12 @@ class RunResult:
     wall_time : float
         Seconds of computation.
     model : str
+    n_beads : int
+        Beads of the fiber (0 when the run did not start).
+    t_end : float
+        Time at the end of the run [s].
+    min_clearance : float
+        Smallest bead-centre distance to the pillar outline minus a, over the run [µm].
     trajectory : Trajectory or None
     """
 
@@ -139,6 +145,9 @@ class RunResult:
     n_steps: int = 0
     wall_time: float = 0.0
     model: str = ""
+    n_beads: int = 0
+    t_end: float = math.nan
+    min_clearance: float = math.nan
     trajectory: Trajectory | None = field(default=None, compare=False, repr=False)
 
     def row(self) -> dict[str, object]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from fibersweep.units import Fluid, Geometry
 
@@ -71,23 +71,34 @@ class FlowSettings(_Strict):
     symmetry: bool = Field(True, description="solve half the depth with a free-slip midplane")
     keep_3d: bool = Field(False, description="keep the full 3D field in the cache")
 
-    @model_validator(mode="after")
-    def _resolution(self) -> FlowSettings:
-        nz = self.geometry.depth / self.dx
-        if nz < MIN_DEPTH_NODES:
+    @field_validator("dx")
+    @classmethod
+    def _resolution(cls, dx: float, info: ValidationInfo) -> float:
+        geom = info.data.get("geometry")
+        if geom is None or dx <= 0:  # geometry invalid (reported on its own) or dx <= 0
+            return dx
+        nz = geom.depth / dx
+        if nz < MIN_DEPTH_NODES - 1e-9:
             raise ValueError(
-                f"dx = {self.dx} µm leaves {nz:g} nodes across the depth "
-                f"{self.geometry.depth} µm; at least {MIN_DEPTH_NODES} are needed"
+                f"dx = {dx} µm leaves {nz:g} nodes across the depth "
+                f"{geom.depth} µm; at least {MIN_DEPTH_NODES} are needed"
             )
         for name in ("width", "depth", "length"):
-            n = getattr(self.geometry, name) / self.dx
+            n = getattr(geom, name) / dx
             if abs(n - round(n)) > 1e-9:
                 raise ValueError(
-                    f"geometry.{name} = {getattr(self.geometry, name)} µm is not a whole "
-                    f"number of dx = {self.dx} µm"
+                    f"geometry.{name} = {getattr(geom, name)} µm is not a whole "
+                    f"number of dx = {dx} µm"
                 )
-        if self.symmetry and round(self.geometry.depth / self.dx) % 2:
+        return dx
+
+    @field_validator("symmetry")
+    @classmethod
+    def _even_depth(cls, symmetry: bool, info: ValidationInfo) -> bool:
+        geom, dx = info.data.get("geometry"), info.data.get("dx")
+        if symmetry and geom is not None and dx is not None and round(geom.depth / dx) % 2:
             raise ValueError(
-                f"symmetry: true needs an even number of nodes across the depth (depth/dx = {nz:g})"
+                "symmetry: true needs an even number of nodes across the depth "
+                f"(depth/dx = {geom.depth / dx:g}); use symmetry: false or another dx"
             )
-        return self
+        return symmetry

@@ -1,0 +1,219 @@
+"""The held-out decision: which effect, if any, explains the gap.
+
+Every fitted candidate is scored on the held-out fibers (not used to fit it)
+against the baseline with the same copies (common random numbers). Its
+per-fiber improvement of the combined score is bootstrapped; the one-sided
+p-value of "no improvement" is Holm-corrected over the candidates. That is the
+penalty for the extra parameter: an effect enters the model only if, out of
+sample, it beats the baseline by more than the noise floor allows. Then:
+
+- no significant improvement -> "unexplained gap in region R, observable O";
+- the best candidate leaves a significant held-out gap (Holm over the
+  observables) -> "unexplained" (it is at most a partial explanation);
+- another candidate also explains the held-out data and is not significantly
+  worse than the best (paired bootstrap) -> "ambiguous between A and B";
+- otherwise the best candidate is named.
+
+The first gate ("is there a gap at all?") is the family-wise test of
+:func:`gap.assess_gap` on all fibers; without it nothing is ever named.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fibersweep.discrepancy.gap import GapResult, paired_improvement
+from fibersweep.discrepancy.stats import bootstrap_mean_ci, holm
+
+__all__ = ["HeldOut", "Verdict", "evaluate_heldout", "decide"]
+
+
+@dataclass(frozen=True)
+class HeldOut:
+    """One fitted candidate on the held-out fibers.
+
+    Attributes
+    ----------
+    name : str
+    value : float
+    improvement : (mean, lo, hi)
+        Per-fiber decrease of the combined score vs the baseline, bootstrap 95 %.
+    p_value, p_holm : float
+        One-sided bootstrap p of "no improvement", raw and Holm-adjusted.
+    significant : bool
+    residual : GapResult
+        Held-out gap with the effect on.
+    explains : bool
+        Significant and no observable's held-out gap remains significant.
+    per_fiber : ndarray, shape (n_heldout,)
+        Per-fiber improvement (for paired comparisons).
+    """
+
+    name: str
+    value: float
+    improvement: tuple[float, float, float]
+    p_value: float
+    p_holm: float
+    significant: bool
+    residual: GapResult
+    explains: bool
+    per_fiber: np.ndarray = field(repr=False)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The workflow's conclusion.
+
+    Attributes
+    ----------
+    kind : {'no significant gap', 'named', 'ambiguous', 'unexplained'}
+    effects : dict name -> fitted value
+        The named effect, or the ambiguous pair; empty otherwise.
+    observable : str
+        The observable with the strongest remaining gap ('' if none).
+    region : str
+        Where that gap lives ('' if none).
+    text : str
+        One sentence for the report.
+    """
+
+    kind: str
+    effects: dict[str, float]
+    observable: str = ""
+    region: str = ""
+    text: str = ""
+
+
+def _boot_p(d: np.ndarray, rng: np.random.Generator, n_boot: int = 4000) -> float:
+    """One-sided bootstrap p-value of mean(d) <= 0."""
+    d = d[np.isfinite(d)]
+    if len(d) == 0:
+        return 1.0
+    means = d[rng.integers(0, len(d), size=(n_boot, len(d)))].mean(axis=1)
+    return float((1 + np.sum(means <= 0.0)) / (1 + n_boot))
+
+
+def evaluate_heldout(
+    fits: Mapping[str, float],
+    base_scores: Mapping[str, np.ndarray],
+    effect_scores: Mapping[str, Mapping[str, np.ndarray]],
+    residuals: Mapping[str, GapResult],
+    rng: np.random.Generator,
+    alpha: float,
+) -> list[HeldOut]:
+    """Held-out comparison of each fitted effect with the baseline.
+
+    Parameters
+    ----------
+    fits : mapping name -> fitted value
+    base_scores : mapping observable -> ndarray (n_heldout,)
+        Weighted observed scores against the baseline copies.
+    effect_scores : mapping name -> (observable -> ndarray (n_heldout,))
+        The same against the effect's copies.
+    residuals : mapping name -> GapResult
+        Held-out gap with each effect on.
+    """
+    names = list(fits)
+    per = {n: paired_improvement(base_scores, effect_scores[n]) for n in names}
+    p = np.array([_boot_p(per[n], rng) for n in names])
+    p_adj = holm(p) if len(p) else p
+    out = []
+    for k, n in enumerate(names):
+        mean, lo, hi = bootstrap_mean_ci(per[n], rng)
+        sig = bool(p_adj[k] <= alpha and mean > 0)
+        out.append(
+            HeldOut(
+                name=n,
+                value=float(fits[n]),
+                improvement=(mean, lo, hi),
+                p_value=float(p[k]),
+                p_holm=float(p_adj[k]),
+                significant=sig,
+                residual=residuals[n],
+                explains=sig and not residuals[n].any,
+                per_fiber=per[n],
+            )
+        )
+    return out
+
+
+def decide(
+    gap: GapResult,
+    heldout: Sequence[HeldOut],
+    region: str,
+    rng: np.random.Generator,
+    alpha: float,
+) -> Verdict:
+    """Apply the decision rule of the module docstring.
+
+    Parameters
+    ----------
+    gap : GapResult
+        Gap on all fibers against the baseline.
+    heldout : sequence of HeldOut
+        Fitted candidates on the held-out fibers.
+    region : str
+        Description of where the baseline gap lives.
+    """
+    if not gap.any:
+        return Verdict(
+            "no significant gap",
+            {},
+            text=f"No observable differs from the baseline beyond its noise floor "
+            f"(Holm, alpha = {alpha:g}).",
+        )
+    top_obs = gap.significant[0]
+    sig = [h for h in heldout if h.significant]
+    if not sig:
+        return Verdict(
+            "unexplained",
+            {},
+            top_obs,
+            region,
+            f"Unexplained gap in {region}, observable {top_obs}: no effect of the library "
+            "improves the held-out fibers significantly.",
+        )
+    best = max(sig, key=lambda h: h.improvement[0])
+    if not best.explains:
+        rest = best.residual.significant
+        obs = rest[0] if rest else top_obs
+        return Verdict(
+            "unexplained",
+            {},
+            obs,
+            region,
+            f"Unexplained gap in {region}, observable {obs}: the best effect, "
+            f"{best.name} = {best.value:.4g}, improves the held-out fibers but leaves a "
+            f"significant gap in {', '.join(rest)}.",
+        )
+    rivals = []
+    for h in sig:
+        if h is best or not h.explains:
+            continue
+        diff = h.per_fiber - best.per_fiber  # > 0 where the rival does better
+        worse_p = _boot_p(-diff, rng)  # p of "rival not worse than best"
+        if worse_p > alpha:
+            rivals.append(h)
+    if rivals:
+        other = max(rivals, key=lambda h: h.improvement[0])
+        return Verdict(
+            "ambiguous",
+            {best.name: best.value, other.name: other.value},
+            top_obs,
+            region,
+            f"Ambiguous between {best.name} = {best.value:.4g} and {other.name} = "
+            f"{other.value:.4g}: both explain the held-out gap and neither is "
+            "significantly better.",
+        )
+    return Verdict(
+        "named",
+        {best.name: best.value},
+        top_obs,
+        region,
+        f"{best.name} = {best.value:.4g} explains the gap (held-out improvement "
+        f"{best.improvement[0]:.3g} [{best.improvement[1]:.3g}, {best.improvement[2]:.3g}], "
+        "no significant gap left).",
+    )

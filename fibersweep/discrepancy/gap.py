@@ -1,0 +1,287 @@
+"""The gap between observations and a model ensemble, per observable, with its significance.
+
+Input is a value matrix per observable (column 0 observed, then the model's
+copies; see :mod:`fibersweep.discrepancy.scores`). For each observable the gap
+is tested with the permutation test of :mod:`fibersweep.discrepancy.stats`
+(noise floor = the model's own copies) and the p-values of all observables are
+Holm-corrected together. Descriptive measures (confusion matrix, Wasserstein
+distance of δ, mismatch rates, paired residuals) go to the report.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy.stats import wasserstein_distance
+
+from fibersweep.discrepancy.scores import (
+    CATEGORICAL,
+    N_CATEGORIES,
+    OBSERVABLES,
+    residual_matrix,
+    score_matrix,
+)
+from fibersweep.discrepancy.stats import (
+    PermTest,
+    bootstrap_mean_ci,
+    excess,
+    holm,
+    permutation_test,
+)
+from fibersweep.fiber.result import CLASSES
+
+__all__ = [
+    "ObservableGap",
+    "GapResult",
+    "value_matrices",
+    "assess_gap",
+    "describe",
+    "feature_vector",
+    "weighted_loss",
+]
+
+
+def value_matrices(
+    observed: pd.DataFrame, copies: Sequence[pd.DataFrame], observables: Sequence[str]
+) -> dict[str, np.ndarray]:
+    """Stack observed values and model copies into per-observable matrices.
+
+    Parameters
+    ----------
+    observed : DataFrame, n rows
+        Canonical measured table (class names, contact bool) or an outcome
+        table from :class:`~fibersweep.discrepancy.simulate.Simulator` (class codes).
+    copies : sequence of DataFrame, each n rows
+        Model outcome tables (class codes, contact 0/1, NaN for failures).
+    observables : sequence of str
+
+    Returns
+    -------
+    dict name -> ndarray, shape (n, 1 + len(copies))
+    """
+    out = {}
+    for name in observables:
+        col = observed[name]
+        if name == "class" and not pd.api.types.is_numeric_dtype(col):
+            lookup = {c: float(i) for i, c in enumerate(CLASSES)}
+            obs = np.array([lookup.get(v, np.nan) for v in col], dtype=np.float64)
+        else:
+            obs = col.to_numpy(dtype=np.float64)
+        mats = [obs] + [c[name].to_numpy(dtype=np.float64) for c in copies]
+        out[name] = np.column_stack(mats)
+    return out
+
+
+@dataclass(frozen=True)
+class ObservableGap:
+    """Gap of one observable.
+
+    Attributes
+    ----------
+    name : str
+    test : PermTest
+        Permutation test of the mean leave-one-out score.
+    p_holm : float
+        Holm-adjusted p-value over the observables tested together.
+    significant : bool
+        p_holm <= alpha.
+    excess : tuple of float
+        (mean, lo, hi): mean per-fiber excess score over the noise floor with
+        its bootstrap 95 % interval (0 = as good as the model's own copies).
+    bias_z : tuple of float
+        z-scores of the signed residual per component (per class for 'class').
+    """
+
+    name: str
+    test: PermTest
+    p_holm: float
+    significant: bool
+    excess: tuple[float, float, float]
+    bias_z: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class GapResult:
+    """Gaps of all observables tested together.
+
+    Attributes
+    ----------
+    gaps : dict name -> ObservableGap
+    alpha : float
+    per_fiber : dict name -> ndarray, shape (n,)
+        Per-fiber excess scores (NaN where undefined), for localisation.
+    """
+
+    gaps: dict[str, ObservableGap]
+    alpha: float
+    per_fiber: dict[str, np.ndarray] = field(repr=False)
+
+    @property
+    def significant(self) -> list[str]:
+        """Observables with a significant gap, strongest first."""
+        sig = [g for g in self.gaps.values() if g.significant]
+        return [g.name for g in sorted(sig, key=lambda g: g.p_holm)]
+
+    @property
+    def any(self) -> bool:
+        return bool(self.significant)
+
+
+def assess_gap(
+    values: Mapping[str, np.ndarray],
+    rng: np.random.Generator,
+    alpha: float = 0.05,
+    n_perm: int = 4999,
+    n_boot: int = 1000,
+) -> GapResult:
+    """Test every observable in ``values`` against the noise floor of the copies.
+
+    Parameters
+    ----------
+    values : mapping name -> ndarray, shape (n, m)
+        From :func:`value_matrices`.
+    rng : numpy.random.Generator
+    alpha : float
+        Family-wise error rate (Holm over the observables).
+    """
+    names = [o for o in OBSERVABLES if o in values]
+    tests: dict[str, PermTest] = {}
+    per_fiber: dict[str, np.ndarray] = {}
+    biases: dict[str, tuple[float, ...]] = {}
+    for name in names:
+        S = score_matrix(name, values[name])
+        tests[name] = permutation_test(S, rng, n_perm=n_perm)
+        per_fiber[name] = excess(S)
+        R = residual_matrix(name, values[name])
+        biases[name] = tuple(
+            permutation_test(R[:, :, c], rng, n_perm=min(n_perm, 999), two_sided=True).z
+            for c in range(R.shape[2])
+        )
+    p = np.array([tests[n].p_value for n in names])
+    p_adj = holm(p) if len(p) else p
+    gaps = {}
+    for k, name in enumerate(names):
+        gaps[name] = ObservableGap(
+            name=name,
+            test=tests[name],
+            p_holm=float(p_adj[k]),
+            significant=bool(p_adj[k] <= alpha and tests[name].n > 0),
+            excess=bootstrap_mean_ci(per_fiber[name], rng, n_boot=n_boot),
+            bias_z=biases[name],
+        )
+    return GapResult(gaps=gaps, alpha=alpha, per_fiber=per_fiber)
+
+
+def feature_vector(gap: GapResult) -> np.ndarray:
+    """Signature of a gap: excess z per observable, then signed bias z per component.
+
+    Shape (len(OBSERVABLES) + 4 + 1 + 4,); observables not present give zeros,
+    so vectors from different data sets are comparable.
+    """
+    parts = []
+    for name in OBSERVABLES:
+        g = gap.gaps.get(name)
+        parts.append(np.array([g.test.z if g else 0.0]))
+    for name in OBSERVABLES:
+        width = N_CATEGORIES[name] if name in CATEGORICAL else 1
+        g = gap.gaps.get(name)
+        parts.append(np.array(g.bias_z) if g else np.zeros(width))
+    v = np.concatenate(parts)
+    return np.where(np.isfinite(v), v, 0.0)
+
+
+def observable_weights(values: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """1 / per-fiber spread of each observable's scores among the model copies.
+
+    Puts scores of different units (nats, degrees, h_obs) on one scale for the
+    combined loss; computed from the baseline copies only (columns 1..m-1).
+    """
+    w = {}
+    for name, V in values.items():
+        S = score_matrix(name, V)[:, 1:]
+        sd = float(np.nanstd(S)) if np.isfinite(S).any() else 0.0
+        w[name] = 1.0 / sd if sd > 0 else 0.0
+    return w
+
+
+def weighted_loss(
+    values: Mapping[str, np.ndarray], weights: Mapping[str, float]
+) -> dict[str, np.ndarray]:
+    """Per-fiber observed score of each observable times its weight, shape (n,) each."""
+    return {n: score_matrix(n, V)[:, 0] * weights.get(n, 0.0) for n, V in values.items()}
+
+
+def paired_improvement(
+    before: Mapping[str, np.ndarray], after: Mapping[str, np.ndarray]
+) -> np.ndarray:
+    """Per-fiber decrease of the weighted loss, summed over observables defined in both.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Positive where the second model scores the observation better.
+    """
+    names = [n for n in before if n in after]
+    n = len(next(iter(before.values())))
+    d = np.zeros(n)
+    for name in names:
+        b, a = before[name], after[name]
+        ok = np.isfinite(b) & np.isfinite(a)
+        d[ok] += b[ok] - a[ok]
+    return d
+
+
+def describe(values: Mapping[str, np.ndarray]) -> dict[str, object]:
+    """Descriptive gap measures for the report (observed vs the model's copies).
+
+    Returns
+    -------
+    dict
+        ``confusion`` (observed class x modal model class counts), ``contact_mismatch``
+        (rate), ``delta_wasserstein``, per continuous observable the paired
+        residual mean and sd (observed minus the copies' mean), ``t_pass_ratio``
+        (median observed / model).
+    """
+    out: dict[str, object] = {}
+    if "class" in values:
+        V = values["class"]
+        k = len(CLASSES)
+        counts = np.stack([(V[:, 1:] == c).sum(axis=1) for c in range(k)], axis=1)
+        modal = np.where(counts.sum(axis=1) > 0, counts.argmax(axis=1), -1)
+        conf = np.zeros((k, k), dtype=int)
+        for o, m in zip(V[:, 0], modal):
+            if np.isfinite(o) and m >= 0:
+                conf[int(o), m] += 1
+        out["confusion"] = {"labels": list(CLASSES), "counts": conf.tolist()}
+        out["class_agreement"] = float(np.trace(conf) / max(conf.sum(), 1))
+    if "contact" in values:
+        V = values["contact"]
+        p = np.nanmean(V[:, 1:], axis=1)
+        ok = np.isfinite(V[:, 0]) & np.isfinite(p)
+        out["contact_mismatch"] = float(np.mean(np.abs(V[ok, 0] - np.round(p[ok]))))
+    for name in ("delta", "theta_c", "y_c", "t_pass"):
+        if name not in values:
+            continue
+        V = values[name]
+        with np.errstate(invalid="ignore"):
+            mean = np.nanmean(np.where(np.isfinite(V[:, 1:]), V[:, 1:], np.nan), axis=1)
+        r = V[:, 0] - mean
+        r = r[np.isfinite(r)]
+        out[f"{name}_residual"] = {
+            "mean": float(r.mean()) if len(r) else None,
+            "sd": float(r.std()) if len(r) > 1 else None,
+            "n": int(len(r)),
+        }
+        if name == "delta":
+            obs = V[:, 0][np.isfinite(V[:, 0])]
+            mod = V[:, 1:][np.isfinite(V[:, 1:])]
+            if len(obs) and len(mod):
+                out["delta_wasserstein"] = float(wasserstein_distance(obs, mod))
+        if name == "t_pass":
+            ratio = V[:, 0] / mean
+            ratio = ratio[np.isfinite(ratio)]
+            out["t_pass_ratio"] = float(np.median(ratio)) if len(ratio) else None
+    return out

@@ -1,0 +1,409 @@
+"""Measured-fiber data: the schema, a validating loader and an atomic writer.
+
+Schema (one row per measured fiber; Parquet ``.parquet`` or CSV ``.csv``)
+------------------------------------------------------------------------
+==========  ========  ==========================================================
+column      required  meaning [unit]
+==========  ========  ==========================================================
+fiber_id    no        any unique label (default: the row number)
+theta0      yes       start angle from +x, counter-clockwise [degrees]
+y0          yes       start centre-of-mass lateral position from the base / h_obs
+length      yes       fiber length / l_obs
+class       yes       Below, Above, Pole-vaulting or Trapping (case-insensitive)
+delta       no        (y_f - y0) / h_obs far downstream; empty (NaN) for Trapping
+contact     no        whether the fiber touched the pillar (bool, 0/1, true/false)
+theta_c     no        fiber angle at first contact [degrees]; NaN without contact
+y_c         no        lateral position of the contact point from the base / h_obs;
+                      NaN without contact
+t_pass      no        time to pass the pillar [s]; NaN for Trapping
+angle_unit  no        'deg' (default) or 'rad' for theta0 and theta_c, same in every row
+==========  ========  ==========================================================
+
+An optional observed column that is absent is simply not tested. An optional
+column that is present must be complete: NaN is allowed only where the quantity
+is undefined (delta and t_pass for Trapping, theta_c and y_c without contact).
+Leave a column out entirely if it was not measured.
+
+Trajectories (optional second table): columns ``fiber_id, t [s], x [µm],
+y [µm], theta [deg]``, rows time-ordered per fiber; every fiber_id must be in
+the fibers table.
+
+Validation never drops a row: every problem raises :class:`InputError` that
+names the column, the rule and the offending rows (first few, 0-based).
+Angles in radians are caught either through ``angle_unit`` or by a heuristic:
+all |theta0| below 0.2 with a non-zero spread (the SPEC's ±10° is ±0.17 rad).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from fibersweep.errors import InputError
+from fibersweep.fiber.result import CLASSES
+
+__all__ = [
+    "START_COLUMNS",
+    "OBSERVED_COLUMNS",
+    "MeasuredData",
+    "load_measured",
+    "validate_measured",
+    "validate_trajectories",
+    "write_table",
+]
+
+log = logging.getLogger(__name__)
+
+START_COLUMNS = ("theta0", "y0", "length")
+OBSERVED_COLUMNS = ("class", "delta", "contact", "theta_c", "y_c", "t_pass")
+TRAJECTORY_COLUMNS = ("fiber_id", "t", "x", "y", "theta")
+
+# Plausible ranges (inclusive); values outside point to a unit error.
+_RANGES = {
+    "theta0": (-90.0, 90.0),
+    "y0": (-6.0, 7.0),  # the SPEC channel spans about -5 .. 5.7 h_obs from the base
+    "length": (0.05, 5.0),
+    "delta": (-10.0, 10.0),
+    "theta_c": (-180.0, 180.0),
+    "y_c": (-0.5, 1.5),
+    "t_pass": (0.0, 1e4),
+}
+_UNIT_HINT = {
+    "y0": "y0 must be in units of h_obs (divide µm by the pillar height)",
+    "length": "length must be in units of l_obs (divide µm by the pillar base length)",
+    "delta": "delta must be in units of h_obs",
+    "y_c": "y_c must be measured from the base in units of h_obs",
+    "t_pass": "t_pass must be in seconds",
+    "theta0": "theta0 must be in degrees",
+    "theta_c": "theta_c must be in degrees",
+}
+_CLASS_LOOKUP = {c.lower(): c for c in CLASSES}
+_BOOL_LOOKUP = {"true": True, "false": False, "1": True, "0": False, "yes": True, "no": False}
+_MAX_ROWS_SHOWN = 8
+
+
+@dataclass(frozen=True)
+class MeasuredData:
+    """Validated measured fibers.
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        One row per fiber, columns ``fiber_id`` + START_COLUMNS + the observed
+        columns present; angles in degrees, ``contact`` bool, ``class`` canonical.
+    observed : tuple of str
+        The observed columns present (subset of OBSERVED_COLUMNS, always 'class').
+    trajectories : pandas.DataFrame or None
+        Validated trajectory table, if given.
+    source : str
+        Where the data came from (for messages and the report).
+    """
+
+    table: pd.DataFrame
+    observed: tuple[str, ...]
+    trajectories: pd.DataFrame | None = None
+    source: str = "measured"
+
+    def __len__(self) -> int:
+        return len(self.table)
+
+    @property
+    def starts(self) -> np.ndarray:
+        """Measured starts, shape (n, 3): theta0 [deg], y0 [/h], length [/l_obs]."""
+        return self.table[list(START_COLUMNS)].to_numpy(dtype=np.float64)
+
+
+def _rows(mask: np.ndarray | pd.Series) -> str:
+    idx = np.flatnonzero(np.asarray(mask))
+    shown = ", ".join(str(i) for i in idx[:_MAX_ROWS_SHOWN])
+    more = f" and {len(idx) - _MAX_ROWS_SHOWN} more" if len(idx) > _MAX_ROWS_SHOWN else ""
+    return f"row{'s' if len(idx) > 1 else ''} {shown}{more}"
+
+
+def _read_table(path: Path) -> pd.DataFrame:
+    suffix = path.suffix.lower()
+    try:
+        if suffix == ".parquet":
+            return pd.read_parquet(path)
+        if suffix == ".csv":
+            return pd.read_csv(path)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{path}: cannot read table: {exc}") from None
+    raise InputError(f"{path}: unknown table format '{suffix}'; use .parquet or .csv")
+
+
+def _to_float(df: pd.DataFrame, col: str, problems: list[str]) -> np.ndarray | None:
+    num = pd.to_numeric(df[col], errors="coerce")
+    bad = num.isna() & df[col].notna()
+    if bad.any():
+        problems.append(f"{col}: not a number in {_rows(bad)}")
+        return None
+    return num.to_numpy(dtype=np.float64)
+
+
+def _to_bool(series: pd.Series, problems: list[str]) -> np.ndarray | None:
+    if series.dtype == bool:
+        return series.to_numpy()
+    out = np.zeros(len(series), dtype=bool)
+    bad = np.zeros(len(series), dtype=bool)
+    for k, v in enumerate(series.tolist()):
+        key = str(v).strip().lower()
+        if isinstance(v, float) and math.isfinite(v) and v in (0.0, 1.0):
+            out[k] = bool(v)
+        elif key in _BOOL_LOOKUP:
+            out[k] = _BOOL_LOOKUP[key]
+        else:
+            bad[k] = True
+    if bad.any():
+        problems.append(f"contact: not a boolean (true/false/0/1) in {_rows(bad)}")
+        return None
+    return out
+
+
+def _angles_to_degrees(df: pd.DataFrame, vals: dict[str, np.ndarray], problems: list[str]) -> None:
+    """Convert radians if ``angle_unit`` says so; otherwise catch radians by their range."""
+    angle_cols = [c for c in ("theta0", "theta_c") if c in vals]
+    if "angle_unit" in df.columns:
+        units = df["angle_unit"].astype(str).str.strip().str.lower()
+        bad = ~units.isin(["deg", "rad"])
+        if bad.any():
+            problems.append(f"angle_unit: must be 'deg' or 'rad' in {_rows(bad)}")
+            return
+        if units.nunique() > 1:
+            problems.append("angle_unit: must be the same in every row (mixed 'deg' and 'rad')")
+            return
+        if units.iloc[0] == "rad":
+            for c in angle_cols:
+                vals[c] = np.degrees(vals[c])
+            log.info("converted theta0/theta_c from radians (angle_unit column)")
+        return
+    th = vals["theta0"]
+    finite = th[np.isfinite(th)]
+    if len(finite) >= 3 and np.max(np.abs(finite)) < 0.2 and np.std(finite) > 0.0:
+        problems.append(
+            "theta0: every |theta0| is below 0.2 with a non-zero spread "
+            f"(max {np.max(np.abs(finite)):.3g}); these look like radians, but degrees "
+            "are expected. Convert to degrees or add a column angle_unit = 'rad'"
+        )
+
+
+def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredData:
+    """Check a measured-fiber table against the schema and canonicalise it.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Raw table (see the module docstring for the schema).
+    source : str
+        Name used in messages.
+
+    Returns
+    -------
+    MeasuredData
+
+    Raises
+    ------
+    InputError
+        Listing every problem found, each naming the column and the rows.
+    """
+    problems: list[str] = []
+    missing = [c for c in (*START_COLUMNS, "class") if c not in df.columns]
+    if missing:
+        raise InputError(
+            f"{source}: missing required column(s) {', '.join(missing)}; "
+            f"the columns present are {', '.join(map(str, df.columns)) or '(none)'}"
+        )
+    known = {"fiber_id", "angle_unit", *START_COLUMNS, *OBSERVED_COLUMNS}
+    extra = [c for c in df.columns if c not in known]
+    if extra:
+        log.info("%s: ignoring extra columns %s", source, extra)
+    if len(df) == 0:
+        raise InputError(f"{source}: the table has no rows")
+    df = df.reset_index(drop=True)
+
+    vals: dict[str, np.ndarray] = {}
+    for col in (*START_COLUMNS, "delta", "theta_c", "y_c", "t_pass"):
+        if col in df.columns:
+            v = _to_float(df, col, problems)
+            if v is not None:
+                vals[col] = v
+    if "theta0" in vals:
+        _angles_to_degrees(df, vals, problems)
+
+    classes = df["class"].astype(str).str.strip().str.lower().map(_CLASS_LOOKUP)
+    bad = classes.isna().to_numpy()
+    if bad.any():
+        problems.append(
+            f"class: unknown value in {_rows(bad)} "
+            f"(e.g. {df['class'][bad].iloc[0]!r}); valid: {', '.join(CLASSES)}"
+        )
+    trapped = (classes == "Trapping").to_numpy()
+    contact = _to_bool(df["contact"], problems) if "contact" in df.columns else None
+
+    # Where NaN is allowed: undefined quantities only.
+    nan_ok = {
+        "delta": trapped,
+        "t_pass": trapped,
+        "theta_c": ~contact if contact is not None else None,
+        "y_c": ~contact if contact is not None else None,
+    }
+    for col, v in vals.items():
+        inf = np.isinf(v)
+        if inf.any():
+            problems.append(f"{col}: infinite value in {_rows(inf)}")
+        nan = np.isnan(v)
+        allowed = nan_ok.get(col)
+        if col in ("theta_c", "y_c") and contact is None:
+            allowed = np.ones_like(nan)  # without a contact column NaN means 'no contact'
+        bad_nan = nan & ~allowed if allowed is not None else nan
+        if bad_nan.any():
+            why = {
+                "delta": "NaN is allowed only for Trapping",
+                "t_pass": "NaN is allowed only for Trapping",
+                "theta_c": "NaN is allowed only without contact",
+                "y_c": "NaN is allowed only without contact",
+            }.get(col, "a value is required")
+            problems.append(
+                f"{col}: missing/NaN value in {_rows(bad_nan)} ({why}; "
+                "leave the column out if it was not measured)"
+            )
+        lo, hi = _RANGES[col]
+        out = np.isfinite(v) & ((v < lo) | (v > hi))
+        if col == "t_pass":
+            out = np.isfinite(v) & ((v <= lo) | (v > hi))
+        if out.any():
+            problems.append(
+                f"{col}: out of range [{lo:g}, {hi:g}] in {_rows(out)} "
+                f"(e.g. {v[out][0]:.4g}); {_UNIT_HINT[col]}"
+            )
+    if contact is not None and "class" in df.columns:
+        must = (classes.isin(["Trapping", "Pole-vaulting"])).to_numpy() & ~contact
+        if must.any():
+            problems.append(
+                f"contact: false for a Trapping or Pole-vaulting fiber in {_rows(must)} "
+                "(both classes require contact)"
+            )
+        for col in ("theta_c", "y_c"):
+            if col in vals:
+                given = np.isfinite(vals[col]) & ~contact
+                if given.any():
+                    problems.append(f"{col}: given for a fiber without contact in {_rows(given)}")
+    if "delta" in vals:
+        given = np.isfinite(vals["delta"]) & trapped
+        if given.any():
+            problems.append(f"delta: given for a Trapping fiber in {_rows(given)} (undefined)")
+
+    if "fiber_id" in df.columns:
+        ids = df["fiber_id"].astype(str)
+        dup = ids.duplicated(keep=False).to_numpy()
+        if dup.any():
+            problems.append(f"fiber_id: duplicated in {_rows(dup)}")
+    else:
+        ids = pd.Series([str(i) for i in range(len(df))])
+
+    if problems:
+        head = f"{source}: {len(problems)} problem{'s' if len(problems) > 1 else ''}"
+        raise InputError(head + "\n" + "\n".join(f"  - {p}" for p in problems))
+
+    out = pd.DataFrame({"fiber_id": ids.to_numpy()})
+    for col in START_COLUMNS:
+        out[col] = vals[col]
+    out["class"] = classes.to_numpy(dtype=object)
+    observed = ["class"]
+    for col in OBSERVED_COLUMNS[1:]:
+        if col == "contact" and contact is not None:
+            out["contact"] = contact
+            observed.append(col)
+        elif col in vals:
+            out[col] = vals[col]
+            observed.append(col)
+    return MeasuredData(table=out, observed=tuple(observed), source=source)
+
+
+def validate_trajectories(traj: pd.DataFrame, fiber_ids: pd.Series, source: str) -> pd.DataFrame:
+    """Check the optional trajectory table (see module docstring).
+
+    Raises
+    ------
+    InputError
+        Missing columns, non-finite values, unknown fiber ids or times that
+        go backwards, each naming the rows.
+    """
+    missing = [c for c in TRAJECTORY_COLUMNS if c not in traj.columns]
+    if missing:
+        raise InputError(f"{source}: trajectories: missing column(s) {', '.join(missing)}")
+    traj = traj.reset_index(drop=True).copy()
+    traj["fiber_id"] = traj["fiber_id"].astype(str)
+    problems = []
+    for col in ("t", "x", "y", "theta"):
+        v = pd.to_numeric(traj[col], errors="coerce").to_numpy(dtype=np.float64)
+        bad = ~np.isfinite(v)
+        if bad.any():
+            problems.append(f"trajectories.{col}: non-finite or non-numeric in {_rows(bad)}")
+        traj[col] = v
+    unknown = ~traj["fiber_id"].isin(set(fiber_ids.astype(str)))
+    if unknown.any():
+        problems.append(f"trajectories.fiber_id: not in the fibers table in {_rows(unknown)}")
+    if not problems:
+        back = (traj.groupby("fiber_id", sort=False)["t"].diff() <= 0).to_numpy()
+        if back.any():
+            problems.append(f"trajectories.t: not increasing within a fiber in {_rows(back)}")
+    if problems:
+        raise InputError(f"{source}: " + "; ".join(problems))
+    return traj
+
+
+def load_measured(path: str | Path, trajectories: str | Path | None = None) -> MeasuredData:
+    """Read and validate a measured-fiber table (and optionally its trajectories).
+
+    Parameters
+    ----------
+    path : path
+        ``.parquet`` or ``.csv`` file following the schema in the module docstring.
+    trajectories : path, optional
+        ``.parquet`` or ``.csv`` trajectory table.
+
+    Raises
+    ------
+    InputError
+        Unreadable file or any schema violation (naming columns and rows).
+    """
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"{p}: no such file")
+    data = validate_measured(_read_table(p), source=str(p))
+    if trajectories is not None:
+        tp = Path(trajectories)
+        if not tp.exists():
+            raise InputError(f"{tp}: no such file")
+        traj = validate_trajectories(_read_table(tp), data.table["fiber_id"], str(tp))
+        data = MeasuredData(data.table, data.observed, traj, data.source)
+    return data
+
+
+def write_table(df: pd.DataFrame, path: str | Path) -> Path:
+    """Write a table atomically (temporary file + ``os.replace``); format from the suffix."""
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix not in (".parquet", ".csv"):
+        raise InputError(f"{p}: unknown table format '{suffix}'; use .parquet or .csv")
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        if suffix == ".parquet":
+            df.to_parquet(tmp, index=False)
+        else:
+            df.to_csv(tmp, index=False)
+        os.replace(tmp, p)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return p

@@ -1,0 +1,173 @@
+"""Per-fiber scores of an observation against an ensemble of model copies.
+
+Everything here works on a value matrix ``V`` of shape (n, m): row i is fiber
+i, column 0 its observed value and columns 1..m-1 the model's jittered copies
+(NaN / -1 where undefined, e.g. δ of a trapped fiber). For each entry the
+*leave-one-out* score of ``V[i, j]`` against the other members of row i is
+computed, giving a score matrix ``S`` of the same shape. Under the null
+hypothesis "the observation is one more draw of the model's copies", the
+columns of a row are exchangeable, so column 0 is a uniformly random pick among
+them; this is what :mod:`fibersweep.discrepancy.stats` permutes.
+
+Scores (lower is better, all proper):
+
+- continuous observables: the *fair* CRPS of an m-member ensemble (Ferro 2014),
+  ``mean_k |x_k - y| - sum_{k != l} |x_k - x_l| / (2 m (m - 1))``, unbiased for
+  the CRPS of the distribution the members come from;
+- categorical observables (class, contact): the log-loss of the additively
+  smoothed ensemble frequency ``(n_c + alpha) / (m + K alpha)``; the smoothing
+  keeps a class the copies never produced at a finite cost.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fibersweep.fiber.result import CLASSES
+
+__all__ = [
+    "OBSERVABLES",
+    "CATEGORICAL",
+    "N_CATEGORIES",
+    "crps_fair_loo",
+    "logloss_loo",
+    "score_matrix",
+    "residual_matrix",
+    "transform",
+]
+
+#: Observables compared, in report order.
+OBSERVABLES = ("class", "contact", "delta", "theta_c", "y_c", "t_pass")
+CATEGORICAL = ("class", "contact")
+N_CATEGORIES = {"class": len(CLASSES), "contact": 2}
+#: Additive smoothing of ensemble frequencies (Jeffreys' 1/2).
+ALPHA = 0.5
+
+
+def transform(name: str, values: np.ndarray) -> np.ndarray:
+    """Value on the scale it is scored on: log time to pass, everything else as is."""
+    v = np.asarray(values, dtype=np.float64)
+    if name == "t_pass":
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(v > 0, np.log(np.where(v > 0, v, 1.0)), np.nan)
+    return v
+
+
+def crps_fair_loo(V: np.ndarray) -> np.ndarray:
+    """Leave-one-out fair CRPS of every member against the rest of its row.
+
+    Parameters
+    ----------
+    V : ndarray, shape (n, m), float
+        NaN marks an undefined value (excluded from the ensemble).
+
+    Returns
+    -------
+    ndarray, shape (n, m)
+        NaN where ``V`` is NaN or fewer than two other members are defined.
+    """
+    V = np.asarray(V, dtype=np.float64)
+    if V.ndim != 2:
+        raise ValueError(f"V must be 2D (fibers, members), got shape {V.shape}")
+    fin = np.isfinite(V)
+    D = np.abs(V[:, :, None] - V[:, None, :])
+    both = fin[:, :, None] & fin[:, None, :]
+    D = np.where(both, D, 0.0)
+    cnt = fin.sum(axis=1, keepdims=True).astype(np.float64)  # (n, 1)
+    row_j = D.sum(axis=2)  # sum_l |V_j - V_l| over defined l
+    pairs = D.sum(axis=(1, 2))[:, None]  # ordered-pair sum over defined members
+    m_other = cnt - 1.0  # members left when j (defined) is held out
+    with np.errstate(divide="ignore", invalid="ignore"):
+        term1 = row_j / m_other
+        pairs_other = pairs - 2.0 * row_j
+        term2 = pairs_other / (2.0 * m_other * (m_other - 1.0))
+        S = term1 - term2
+    S[~fin | (m_other < 2.0)] = np.nan
+    return S
+
+
+def logloss_loo(codes: np.ndarray, n_categories: int, alpha: float = ALPHA) -> np.ndarray:
+    """Leave-one-out log-loss of every member's category against the rest of its row.
+
+    Parameters
+    ----------
+    codes : ndarray, shape (n, m), int
+        Category 0..n_categories-1, or -1 where undefined (failed run).
+    n_categories : int
+    alpha : float
+        Additive smoothing of the leave-one-out frequency.
+
+    Returns
+    -------
+    ndarray, shape (n, m)
+        −log p̂ [nats]; NaN where the code is -1 or no other member is defined.
+    """
+    c = np.asarray(codes)
+    if c.ndim != 2:
+        raise ValueError(f"codes must be 2D (fibers, members), got shape {c.shape}")
+    fin = c >= 0
+    counts = np.stack([(c == k).sum(axis=1) for k in range(n_categories)], axis=1)
+    total = fin.sum(axis=1, keepdims=True)
+    own = np.take_along_axis(counts, np.where(fin, c, 0), axis=1)  # count of own category
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = (own - 1 + alpha) / (total - 1 + n_categories * alpha)
+        S = -np.log(p)
+    S = S.astype(np.float64)
+    S[~fin | (total - 1 < 1)] = np.nan
+    return S
+
+
+def _codes(name: str, V: np.ndarray) -> np.ndarray:
+    v = np.asarray(V, dtype=np.float64)
+    return np.where(np.isfinite(v), v, -1).astype(np.int64)
+
+
+def score_matrix(name: str, V: np.ndarray) -> np.ndarray:
+    """Leave-one-out score matrix of one observable (see module docstring).
+
+    Parameters
+    ----------
+    name : str
+        One of OBSERVABLES. 'class' holds category codes (index in CLASSES) as
+        floats with NaN for failures, 'contact' holds 0/1/NaN.
+    V : ndarray, shape (n, m)
+        Column 0 observed, the rest model copies.
+    """
+    if name in CATEGORICAL:
+        return logloss_loo(_codes(name, V), N_CATEGORIES[name])
+    if name not in OBSERVABLES:
+        raise ValueError(f"unknown observable {name!r}; valid: {', '.join(OBSERVABLES)}")
+    return crps_fair_loo(transform(name, V))
+
+
+def residual_matrix(name: str, V: np.ndarray) -> np.ndarray:
+    """Signed leave-one-out residuals: member minus the mean of the others.
+
+    Returns
+    -------
+    ndarray, shape (n, m, c)
+        c = number of categories for categorical observables (one-hot minus
+        leave-one-out frequency), 1 otherwise. NaN where undefined.
+    """
+    if name in CATEGORICAL:
+        k = N_CATEGORIES[name]
+        c = _codes(name, V)
+        fin = c >= 0
+        onehot = np.stack([(c == q) for q in range(k)], axis=2).astype(np.float64)
+        tot = onehot.sum(axis=1, keepdims=True)
+        n_def = fin.sum(axis=1)[:, None, None].astype(np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            loo = (tot - onehot) / (n_def - 1.0)
+        R = onehot - loo
+        R[~fin] = np.nan
+        R[np.broadcast_to(n_def < 2, R.shape)] = np.nan
+        return R
+    X = transform(name, V)
+    fin = np.isfinite(X)
+    s = np.where(fin, X, 0.0).sum(axis=1, keepdims=True)
+    n_def = fin.sum(axis=1, keepdims=True).astype(np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        loo = (s - np.where(fin, X, 0.0)) / (n_def - 1.0)
+    R = X - loo
+    R[~fin | (n_def < 2)] = np.nan
+    return R[:, :, None]

@@ -1,0 +1,94 @@
+"""Registry of effects: name -> Effect subclass, and the set applied to one run."""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from fibersweep.errors import InputError
+from fibersweep.fiber.effects.base import DynamicsContext, DynamicsParams, Effect
+
+if TYPE_CHECKING:  # pragma: no cover
+    from fibersweep.fiber.result import FiberStart
+    from fibersweep.fiber.settings import FiberSettings
+    from fibersweep.flow.field import FlowField
+    from fibersweep.flow.settings import FlowSettings
+
+__all__ = ["EFFECTS", "EffectSet", "build_effects", "get_effect", "register"]
+
+EFFECTS: dict[str, type[Effect]] = {}
+
+
+def register(cls: type[Effect]) -> type[Effect]:
+    """Class decorator adding an Effect subclass under ``cls.name``."""
+    if not cls.name:
+        raise TypeError(f"{cls.__name__} has no name")
+    if cls.name in EFFECTS and EFFECTS[cls.name] is not cls:
+        raise TypeError(f"effect name {cls.name!r} registered twice")
+    EFFECTS[cls.name] = cls
+    return cls
+
+
+def get_effect(name: str) -> type[Effect]:
+    """The Effect class for ``name``; InputError listing the valid names otherwise."""
+    try:
+        return EFFECTS[name]
+    except KeyError:
+        valid = ", ".join(sorted(EFFECTS))
+        close = difflib.get_close_matches(name, list(EFFECTS), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise InputError(f"effects: unknown effect {name!r}{hint}; valid names: {valid}") from None
+
+
+@dataclass(frozen=True)
+class EffectSet:
+    """The active effects of one run (inactive ones are dropped: they cost nothing)."""
+
+    effects: tuple[Effect, ...] = ()
+
+    def flow(self, flow: FlowSettings) -> FlowSettings:
+        for e in self.effects:
+            flow = e.transform_flow(flow)
+        return flow
+
+    def field(self, field: FlowField) -> FlowField:
+        for e in self.effects:
+            field = e.transform_field(field)
+        return field
+
+    def settings(self, settings: FiberSettings) -> FiberSettings:
+        for e in self.effects:
+            settings = e.transform_settings(settings)
+        return settings
+
+    def start(self, start: FiberStart, rng: np.random.Generator) -> FiberStart:
+        for e in self.effects:
+            start = e.transform_start(start, rng)
+        return start
+
+    def params(self, ctx: DynamicsContext) -> DynamicsParams:
+        p = DynamicsParams(hydro_length=ctx.bead_radius)
+        for e in self.effects:
+            p = e.dynamics(p, ctx)
+        return p
+
+
+def build_effects(spec: Mapping[str, float] | None) -> EffectSet:
+    """Validate ``FiberSettings.effects`` (name -> value) into an :class:`EffectSet`.
+
+    Raises
+    ------
+    InputError
+        Unknown name (listing the valid ones) or a value out of range.
+    """
+    made = []
+    for name, value in (spec or {}).items():
+        cls = get_effect(name)
+        eff = cls(float(value))
+        if eff.active:
+            made.append(eff)
+    return EffectSet(tuple(made))

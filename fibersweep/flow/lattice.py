@@ -1,0 +1,217 @@
+"""D3Q19 lattice constants and the padded grid of the channel with its pillar.
+
+Storage layout
+--------------
+Populations are stored shifted, ``g_q = f_q - w_q`` (float32 keeps the small
+deviations from rest to full precision), as a structure of arrays
+``g[q, z, y, x]`` with x innermost, padded with one ghost layer on every side:
+interior node (i, j, k) of the channel is ``g[:, k + 1, j + 1, i + 1]``.
+Boundaries cost no branch in the bulk loop: the channel walls and the
+specular midplane are resolved per row by a pull table (:func:`pull_sources`:
+where to read each population of a row), periodic x by ghost columns, and the
+pillar by storing in each solid cell the bounce-back value its fluid
+neighbour will pull (:func:`boundary_links`). The y and z ghost layers are
+never read; they keep the indexing simple.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fibersweep.units import Geometry
+
+__all__ = [
+    "E",
+    "W",
+    "OPP",
+    "MIRROR_Z",
+    "Q",
+    "CS2",
+    "Grid",
+    "make_grid",
+    "boundary_links",
+    "pull_sources",
+]
+
+Q = 19
+CS2 = 1.0 / 3.0
+
+# Velocity set: rest, 6 faces, 12 edges; opposite pairs are (1,2), (3,4), ... (17,18).
+E = np.array(
+    [
+        (0, 0, 0),
+        (1, 0, 0),
+        (-1, 0, 0),
+        (0, 1, 0),
+        (0, -1, 0),
+        (0, 0, 1),
+        (0, 0, -1),
+        (1, 1, 0),
+        (-1, -1, 0),
+        (1, -1, 0),
+        (-1, 1, 0),
+        (1, 0, 1),
+        (-1, 0, -1),
+        (1, 0, -1),
+        (-1, 0, 1),
+        (0, 1, 1),
+        (0, -1, -1),
+        (0, 1, -1),
+        (0, -1, 1),
+    ],
+    dtype=np.int64,
+)
+W = np.array([1.0 / 3.0] + [1.0 / 18.0] * 6 + [1.0 / 36.0] * 12)
+
+
+def _index_of(e: np.ndarray) -> int:
+    return int(np.flatnonzero((E == e).all(axis=1))[0])
+
+
+OPP = np.array([_index_of(-E[q]) for q in range(Q)], dtype=np.int64)
+MIRROR_Z = np.array([_index_of(E[q] * np.array([1, 1, -1])) for q in range(Q)], dtype=np.int64)
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The lattice of one flow problem.
+
+    Attributes
+    ----------
+    nx, ny, nz : int
+        Interior node counts (nz is the solved depth: half the channel with symmetry).
+    nz_full : int
+        Nodes across the whole channel depth H_ch / Δx.
+    symmetry : bool
+        True if the top of the solved domain is the free-slip midplane.
+    dx : float
+        Node spacing [µm].
+    solid : ndarray, shape (nx, ny), bool
+        Pillar nodes (node centres strictly inside the triangle); full depth.
+    """
+
+    nx: int
+    ny: int
+    nz: int
+    nz_full: int
+    symmetry: bool
+    dx: float
+    solid: np.ndarray
+
+    @property
+    def padded_shape(self) -> tuple[int, int, int, int]:
+        """Shape of the population array (Q, nz + 2, ny + 2, nx + 2)."""
+        return (Q, self.nz + 2, self.ny + 2, self.nx + 2)
+
+    @property
+    def cells(self) -> int:
+        """Interior lattice cells updated per step."""
+        return self.nx * self.ny * self.nz
+
+
+def make_grid(geometry: Geometry, dx: float, symmetry: bool, pillar: bool = True) -> Grid:
+    """Lattice for ``geometry`` at spacing ``dx`` [µm] (half-way walls on the channel faces)."""
+    nx = int(round(geometry.length / dx))
+    ny = int(round(geometry.width / dx))
+    nz_full = int(round(geometry.depth / dx))
+    nz = nz_full // 2 if symmetry else nz_full
+    x = (np.arange(nx) + 0.5) * dx
+    y = (np.arange(ny) + 0.5) * dx
+    X, Y = np.meshgrid(x, y, indexing="ij")
+    solid = geometry.inside_pillar(X, Y) if pillar else np.zeros((nx, ny), dtype=bool)
+    return Grid(nx, ny, nz, nz_full, symmetry, float(dx), solid)
+
+
+def boundary_links(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
+    """Pillar bounce-back links and the list of solid padded cells.
+
+    Returns
+    -------
+    links : ndarray, shape (n, 4), int64
+        Rows (q, dst, q_src, src): after a step, ``g[q].flat[dst] = g[q_src].flat[src]``
+        with flat indices into one padded (nz+2, ny+2, nx+2) plane; dst is a solid
+        node, src the fluid node t = dst + e_q that will pull it, q_src = opp(q)
+        (half-way bounce-back). With a symmetric top, a fluid node of the top row
+        pulls population q (e_z < 0) specularly as mirror(q) from the in-plane
+        neighbour t − e_q; if that is solid, slot mirror(q) of it gets g[opp q](t).
+    solid_cells : ndarray, shape (m,), int64
+        Flat padded indices of every interior solid cell (reset to rest each step).
+    """
+    nzp, nyp, nxp = grid.nz + 2, grid.ny + 2, grid.nx + 2
+    si, sj = np.nonzero(grid.solid)
+    rows = []
+    cells = []
+    for k in range(grid.nz):
+        base_s = ((k + 1) * nyp + (sj + 1)) * nxp + (si + 1)
+        cells.append(base_s)
+        for q in range(1, Q):
+            ex, ey, ez = E[q]
+            kt = k + ez
+            if kt < 0 or kt >= grid.nz:
+                continue  # target is a wall/ghost row, never a fluid node
+            it = (si + ex) % grid.nx
+            jt = sj + ey
+            ok = (jt >= 0) & (jt < grid.ny)
+            ok[ok] = ~grid.solid[it[ok], jt[ok]]
+            if not ok.any():
+                continue
+            src = ((kt + 1) * nyp + (jt[ok] + 1)) * nxp + (it[ok] + 1)
+            n = int(ok.sum())
+            rows.append(np.column_stack([np.full(n, q), base_s[ok], np.full(n, OPP[q]), src]))
+        if grid.symmetry and k == grid.nz - 1:
+            for q in range(1, Q):
+                ex, ey, ez = E[q]
+                if ez >= 0:
+                    continue
+                it = (si + ex) % grid.nx
+                jt = sj + ey
+                ok = (jt >= 0) & (jt < grid.ny)
+                ok[ok] = ~grid.solid[it[ok], jt[ok]]
+                if not ok.any():
+                    continue
+                src = ((k + 1) * nyp + (jt[ok] + 1)) * nxp + (it[ok] + 1)
+                n = int(ok.sum())
+                rows.append(
+                    np.column_stack(
+                        [np.full(n, MIRROR_Z[q]), base_s[ok], np.full(n, OPP[q]), src]
+                    )
+                )
+    links = np.concatenate(rows).astype(np.int64) if rows else np.zeros((0, 4), np.int64)
+    solid_cells = np.concatenate(cells).astype(np.int64) if cells else np.zeros(0, np.int64)
+    return links, solid_cells
+
+
+def pull_sources(grid: Grid) -> np.ndarray:
+    """Where each row pulls each population from (walls and midplane resolved).
+
+    Returns
+    -------
+    ndarray, shape (nz * ny, 19, 4), int64
+        For row r = k * ny + j and population q: (q_src, z_src, y_src, x_off), padded
+        coordinates, so that population q of interior node i after streaming is
+        ``g[q_src, z_src, y_src, x_off + i]``:
+
+        - interior source: (q, k − e_z, j − e_y, −e_x), i.e. a plain pull;
+        - source beyond a no-slip wall (y, bottom z, top z without symmetry):
+          half-way bounce-back, (opp q, k, j, 0) of the node itself;
+        - source above the symmetric top: specular reflection from the mirror
+          image of the in-plane neighbour, (mirror q, k, j − e_y, −e_x).
+
+        All entries are offset by +1 for the padding.
+    """
+    out = np.zeros((grid.nz * grid.ny, Q, 4), dtype=np.int64)
+    for k in range(grid.nz):
+        for j in range(grid.ny):
+            r = k * grid.ny + j
+            for q in range(Q):
+                ex, ey, ez = E[q]
+                ks, js = k - ez, j - ey
+                if js < 0 or js >= grid.ny or ks < 0 or (ks >= grid.nz and not grid.symmetry):
+                    out[r, q] = (OPP[q], k + 1, j + 1, 1)
+                elif ks >= grid.nz:
+                    out[r, q] = (MIRROR_Z[q], k + 1, js + 1, 1 - ex)
+                else:
+                    out[r, q] = (q, ks + 1, js + 1, 1 - ex)
+    return out

@@ -1,0 +1,121 @@
+"""Chronophotograph of one fiber run: the fiber at regular times over the pillar."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.patches import Polygon  # noqa: E402
+
+from fibersweep.fiber.result import RunResult  # noqa: E402
+from fibersweep.plots.style import CLASS_STYLE, paper_style  # noqa: E402
+from fibersweep.units import Geometry  # noqa: E402
+
+__all__ = ["chronophotograph"]
+
+
+def _window(traj, geometry: Geometry, margin: float) -> np.ndarray:
+    """Samples whose fiber overlaps the x-window around the pillar."""
+    v = geometry.vertices
+    lo, hi = v[:, 0].min() - margin, v[:, 0].max() + margin
+    xs = np.column_stack([traj.head[:, 0], traj.tail[:, 0]])
+    return (xs.max(axis=1) > lo) & (xs.min(axis=1) < hi)
+
+
+def chronophotograph(
+    result: RunResult,
+    geometry: Geometry,
+    path: str | Path,
+    *,
+    snapshots: int = 24,
+    margin: float | None = None,
+) -> Path:
+    """Draw the fiber at ``snapshots`` regular times near the pillar, coloured by time.
+
+    Parameters
+    ----------
+    result : RunResult
+        A run with a recorded trajectory (``record.trajectories``; beads are
+        drawn when recorded, else the straight head-tail segment).
+    geometry : Geometry
+        Channel and pillar of the run.
+    path : str or Path
+        Output image (format from the suffix); written atomically.
+    snapshots : int
+        Fiber positions drawn.
+    margin : float, optional
+        Half-width added around the pillar in x [µm]; default one fiber length + 40 µm.
+
+    Returns
+    -------
+    Path
+    """
+    tr = result.trajectory
+    if tr is None or len(tr.t) < 2:
+        raise ValueError("the run has no recorded trajectory (set record.trajectories)")
+    length = float(np.hypot(*(tr.head[0] - tr.tail[0]))) + 4.0
+    margin = length + 40.0 if margin is None else margin
+    win = _window(tr, geometry, margin)
+    idx = np.flatnonzero(win)
+    if idx.size < 2:
+        idx = np.arange(len(tr.t))
+    t0, t1 = tr.t[idx[0]], tr.t[idx[-1]]
+    times = np.linspace(t0, t1, snapshots)
+    picks = np.unique(np.clip(np.searchsorted(tr.t, times), 0, len(tr.t) - 1))
+    xb, yb = geometry.base_center
+    h = geometry.pillar_height
+    cmap = plt.get_cmap("viridis")
+    norm = plt.Normalize(t0, t1)
+    with paper_style():
+        fig, ax = plt.subplots(figsize=(6.0, 3.6))
+        ax.add_patch(
+            Polygon((geometry.vertices - [xb, yb]) / h, closed=True, fc="0.8", ec="0.3", lw=1.0)
+        )
+        segs = []
+        for k in picks:
+            if tr.beads is not None:
+                pts = tr.beads[k]
+            else:
+                pts = np.vstack([tr.tail[k], tr.head[k]])
+            segs.append((pts - [xb, yb]) / h)
+        lc = LineCollection(segs, cmap=cmap, norm=norm, lw=2.2, capstyle="round")
+        lc.set_array(tr.t[picks])
+        ax.add_collection(lc)
+        hx = (tr.head[picks, 0] - xb) / h
+        hy = (tr.head[picks, 1] - yb) / h
+        ax.scatter(hx, hy, c=tr.t[picks], cmap=cmap, norm=norm, s=9, zorder=3, label="head")
+        sel = slice(idx[0], idx[-1] + 1)
+        ax.plot((tr.x[sel] - xb) / h, (tr.y[sel] - yb) / h, "--", color="0.25", lw=0.9,
+                label="centre of mass")  # fmt: skip
+        if result.contact and np.isfinite(result.y_c):
+            kc = int(np.argmax(tr.contact))
+            ax.plot((tr.x[kc] - xb) / h, (tr.y[kc] - yb) / h, "x", color="C3", ms=6,
+                    label="centre of mass at first contact")  # fmt: skip
+        ax.set_xlim(-margin / h, (2 * (geometry.vertices[1, 0] - xb) + margin) / h)
+        ax.set_aspect("equal")
+        ax.autoscale_view(scalex=False)
+        ax.set_xlabel("x / h_obs (from the base centre)")
+        ax.set_ylabel("y / h_obs (from the base)")
+        st = result.start
+        colour = CLASS_STYLE.get(result.cls, {}).get("color", "0.3")
+        cls = result.cls or f"failed: {result.reason}"
+        ax.set_title(
+            f"θ0 = {st.theta0:g}°, y0/h = {st.y0:g}, L/l_obs = {st.length:g}  →  {cls}"
+            + (f",  δ = {result.delta:.3f}" if np.isfinite(result.delta) else ""),
+            color=colour,
+        )
+        cb = fig.colorbar(lc, ax=ax, shrink=0.8, pad=0.02)
+        cb.set_label("t [s]")
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, frameon=False)
+        out = Path(path)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = out.with_name(f".{out.stem}.tmp{out.suffix}")
+        fig.savefig(tmp)
+        plt.close(fig)
+        tmp.replace(out)
+    return out

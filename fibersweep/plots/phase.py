@@ -1,0 +1,305 @@
+"""Figures of a sweep: phase diagram, δ map, contact map, δ distribution.
+
+All in the SPEC's normalised units: θ0 and θ_c in degrees, y0 and y_c as
+y/h_obs from the pillar base, lengths as L/l_obs. Every figure is written to a
+temporary file and renamed, like the tables.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only; never needs a display
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from matplotlib.colors import Normalize  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
+
+from fibersweep.errors import InputError  # noqa: E402
+from fibersweep.fiber.result import CLASSES  # noqa: E402
+from fibersweep.plots.style import (  # noqa: E402
+    CLASS_STYLE,
+    FAILED_STYLE,
+    UNCLASSIFIED_STYLE,
+    paper_style,
+)
+from fibersweep.sweep.manifest import read_manifest  # noqa: E402
+from fibersweep.sweep.store import read_runs  # noqa: E402
+
+__all__ = [
+    "FORMATS",
+    "contact_figure",
+    "delta_hist_figure",
+    "phase_figure",
+    "plot_all",
+]
+
+log = logging.getLogger(__name__)
+
+FORMATS = ("png", "pdf", "svg")
+WIDTH_IN = 7.0  # two-column figure width [in]
+THETA = r"$\theta_0$ [deg]"
+Y0 = r"$y_0/h_{obs}$"
+
+
+def _lengths(runs: pd.DataFrame) -> list[float]:
+    return sorted(runs["length"].round(6).unique().tolist())
+
+
+def _grid(n: int, panel_h: float = 2.3) -> tuple[Figure, np.ndarray]:
+    nrows = math.ceil(n / 4)
+    ncols = math.ceil(n / nrows)  # balanced rows: 5 panels -> 3 + 2, not 4 + 1
+    fig, axes = plt.subplots(
+        nrows,
+        ncols,
+        figsize=(WIDTH_IN if n > 1 else 4.2, panel_h * nrows + 0.6),
+        sharex=True,
+        sharey=True,
+        squeeze=False,
+    )
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    return fig, axes
+
+
+def _marker_size(panel: pd.DataFrame) -> float:
+    """Markers that fill, but do not overlap on, the sweep's grid."""
+    cells = max(1, panel["theta0"].nunique() * panel["y0"].nunique())
+    return float(np.clip(2400.0 / cells, 5.0, 42.0))
+
+
+def _label_axes(axes: np.ndarray, n: int) -> None:
+    ncols = axes.shape[1]
+    for k, ax in enumerate(axes.flat[:n]):
+        if k % ncols == 0:
+            ax.set_ylabel(Y0)
+        if k >= n - ncols:
+            ax.set_xlabel(THETA)
+            ax.xaxis.set_tick_params(labelbottom=True)
+
+
+def _separatrix(ax: plt.Axes, sep: float | None) -> None:
+    if sep is not None and np.isfinite(sep):
+        ax.axhline(sep, color="0.2", lw=1.0, ls="--", zorder=1)
+
+
+def _style(cls: str) -> dict[str, object]:
+    return CLASS_STYLE.get(cls, UNCLASSIFIED_STYLE)
+
+
+def _present(runs: pd.DataFrame) -> list[str]:
+    """Classes of the ok runs, in CLASSES order, then 'unclassified' if any run has none."""
+    ok = runs.loc[runs["status"] == "ok", "class"]
+    out = [c for c in CLASSES if (ok == c).any()]
+    return out + (["unclassified"] if (~ok.isin(CLASSES)).any() else [])
+
+
+def _of_class(df: pd.DataFrame, cls: str) -> pd.DataFrame:
+    return df[~df["class"].isin(CLASSES)] if cls == "unclassified" else df[df["class"] == cls]
+
+
+def _legend_handles(present: list[str], sep: float | None, failed: bool) -> list[Line2D]:
+    hs = [
+        Line2D([], [], ls="", markersize=6, label=c, **_style(c))  # type: ignore[arg-type]
+        for c in present
+    ]
+    if failed:
+        hs.append(Line2D([], [], ls="", markersize=6, label="failed", **FAILED_STYLE))
+    if sep is not None:
+        hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label=_sep_label(sep)))
+    return hs
+
+
+def _sep_label(sep: float) -> str:
+    return f"separatrix ({sep:.3f})"
+
+
+def phase_figure(runs: pd.DataFrame, separatrix: float | None, by: str = "class") -> Figure:
+    """(θ0, y0/h) phase diagram, one panel per fiber length.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        The runs table (columns theta0, y0, length, class, status, delta).
+    separatrix : float or None
+        Far-upstream y/h of the separatrix streamline.
+    by : {'class', 'delta'}
+        Marker per class, or colour by δ on one colour scale shared by all panels.
+    """
+    lengths = _lengths(runs)
+    fig, axes = _grid(len(lengths))
+    ok = runs["status"] == "ok"
+    fin = runs.loc[ok, "delta"].to_numpy(dtype=float)
+    fin = fin[np.isfinite(fin)]
+    lim = float(np.percentile(np.abs(fin), 99)) if fin.size else 1.0
+    norm = Normalize(-max(lim, 1e-3), max(lim, 1e-3))
+    sc = None
+    present = _present(runs)
+    for ax, L in zip(axes.flat, lengths, strict=False):
+        p = runs[np.isclose(runs["length"], L)]
+        s = _marker_size(p)
+        _separatrix(ax, separatrix)
+        good = p[p["status"] == "ok"]
+        if by == "class":
+            for c in present:
+                q = _of_class(good, c)
+                if len(q):
+                    ax.scatter(q["theta0"], q["y0"], s=s, lw=0.4, edgecolor="k", **_style(c))
+        else:
+            has = good[np.isfinite(good["delta"].to_numpy(dtype=float))]
+            sc = ax.scatter(
+                has["theta0"], has["y0"], c=has["delta"], s=s, cmap="RdBu_r", norm=norm,
+                marker="o", lw=0.3, edgecolor="0.3",
+            )  # fmt: skip
+            trap = good[good["class"] == "Trapping"]
+            if len(trap):
+                ax.scatter(
+                    trap["theta0"], trap["y0"], s=s, marker="D", facecolor="none",
+                    edgecolor="k", lw=0.8,
+                )  # fmt: skip
+        bad = p[p["status"] != "ok"]
+        if len(bad):
+            ax.scatter(bad["theta0"], bad["y0"], s=s, lw=1.0, **FAILED_STYLE)
+        if len(lengths) > 1:
+            ax.set_title(rf"$L/l_{{obs}}$ = {L:.3g}")
+    _label_axes(axes, len(lengths))
+    failed = bool((~ok).any())
+    if by == "class":
+        hs = _legend_handles(present, separatrix, failed)
+        fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)
+    else:
+        visible = [a for a in axes.flat if a.get_visible()]
+        cb = fig.colorbar(sc, ax=visible, shrink=0.9, extend="both")
+        cb.set_label(r"lateral displacement $\delta = (y_f - y_0)/h_{obs}$")
+        hs = []
+        if (runs.loc[ok, "class"] == "Trapping").any():
+            hs.append(
+                Line2D([], [], ls="", marker="D", mfc="none", mec="k", label="Trapping (no δ)")
+            )
+        if failed:
+            hs.append(Line2D([], [], ls="", markersize=6, label="failed", **FAILED_STYLE))
+        if separatrix is not None:
+            hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label=_sep_label(separatrix)))
+        if hs:
+            fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)
+    return fig
+
+
+def contact_figure(runs: pd.DataFrame) -> Figure:
+    """Contact map: fiber angle θ_c and contact point y_c/h at first contact, by class."""
+    fig, ax = plt.subplots(figsize=(5.2, 3.2))
+    c = runs[(runs["status"] == "ok") & runs["contact"].fillna(False).astype(bool)]
+    c = c[np.isfinite(c["theta_c"].to_numpy(dtype=float))]
+    for k in _present(c):
+        q = _of_class(c, k)
+        if len(q):
+            ax.scatter(q["theta_c"], q["y_c"], s=16, lw=0.4, edgecolor="k", label=k, **_style(k))
+    for y, what in ((0.0, "base"), (1.0, "apex")):
+        ax.axhline(y, color="0.6", lw=0.8, ls=":")
+        ax.annotate(what, (1.0, y), xycoords=("axes fraction", "data"), ha="right", va="bottom",
+                    fontsize=7, color="0.4")  # fmt: skip
+    ax.set_xlabel(r"$\theta_c$ at first contact [deg]")
+    ax.set_ylabel(r"$y_c/h_{obs}$ at first contact")
+    nl = runs["length"].nunique()
+    lens = "" if nl <= 1 else f", {nl} lengths"
+    ax.set_title(f"{len(c)} runs with contact{lens}")
+    if len(c):
+        ax.legend(frameon=False, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    else:
+        ax.text(0.5, 0.5, "no run touched the pillar", ha="center", transform=ax.transAxes)
+    return fig
+
+
+def delta_hist_figure(runs: pd.DataFrame) -> Figure:
+    """Distribution of δ for runs with and without contact (counts per bin, log scale)."""
+    fig, ax = plt.subplots(figsize=(4.2, 3.0))
+    ok = runs[(runs["status"] == "ok")]
+    d = ok["delta"].to_numpy(dtype=float)
+    touched = ok["contact"].fillna(False).astype(bool).to_numpy()
+    fin = np.isfinite(d)
+    if not fin.any():
+        ax.text(0.5, 0.5, "no finite δ", ha="center", transform=ax.transAxes)
+        return fig
+    lo, hi = float(d[fin].min()), float(d[fin].max())
+    pad = 0.05 * max(hi - lo, 1e-3)
+    bins = np.linspace(lo - pad, hi + pad, 41)
+    for mask, label, color in (
+        (~touched, "no contact", "#0072B2"),
+        (touched, "contact", "#D55E00"),
+    ):
+        x = d[fin & mask]
+        if x.size:
+            ax.hist(x, bins=bins, histtype="step", lw=1.5, color=color,
+                    label=f"{label}: n = {x.size}, sd = {np.std(x):.3g}")  # fmt: skip
+    ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.yaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel(r"$\delta = (y_f - y_0)/h_{obs}$")
+    ax.set_ylabel("runs per bin")
+    ax.legend(frameon=False, loc="upper right")
+    n_trap = int((ok["class"] == "Trapping").sum())
+    if n_trap:
+        ax.set_title(f"{n_trap} trapped runs have no δ", fontsize=8, color="0.3")
+    return fig
+
+
+def _save(fig: Figure, path: Path, fmt: str) -> Path:
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        fig.savefig(tmp, format=fmt)
+        os.replace(tmp, path)
+    finally:
+        plt.close(fig)
+        if tmp.exists():
+            tmp.unlink()
+    return path
+
+
+def plot_all(results: Path | str, out: Path | str | None = None, fmt: str = "png") -> list[Path]:
+    """Write every figure of a sweep.
+
+    Parameters
+    ----------
+    results : path
+        Output directory of a sweep.
+    out : path, optional
+        Figure folder; default ``RESULTS/figures``.
+    fmt : {'png', 'pdf', 'svg'}
+
+    Returns
+    -------
+    list of Path
+        phase, delta, contact and delta_hist figures.
+
+    Raises
+    ------
+    InputError
+        Unknown format, or no results.
+    """
+    if fmt not in FORMATS:
+        raise InputError(f"--format {fmt!r}: expected one of {', '.join(FORMATS)}")
+    results = Path(results)
+    runs = read_runs(results)
+    if runs.empty:
+        raise InputError(f"{results}: no runs to plot (expected {results}/runs/part-*.parquet)")
+    man = read_manifest(results) or {}
+    sep = man.get("separatrix")
+    out = Path(out) if out is not None else results / "figures"
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    with paper_style():
+        paths.append(_save(phase_figure(runs, sep, "class"), out / f"phase.{fmt}", fmt))
+        paths.append(_save(phase_figure(runs, sep, "delta"), out / f"phase_delta.{fmt}", fmt))
+        paths.append(_save(contact_figure(runs), out / f"contact_map.{fmt}", fmt))
+        paths.append(_save(delta_hist_figure(runs), out / f"delta_hist.{fmt}", fmt))
+    log.info("wrote %d figures to %s", len(paths), out)
+    return paths

@@ -1,0 +1,45 @@
+"""Shared look of the figures: class markers and colours, fonts, sizes."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import matplotlib as mpl
+
+__all__ = ["CLASS_STYLE", "FAILED_STYLE", "UNCLASSIFIED_STYLE", "paper_style"]
+
+# Okabe-Ito colours (colour-blind safe); marker shapes carry the class without colour too.
+CLASS_STYLE: dict[str, dict[str, object]] = {
+    "Below": {"marker": "o", "color": "#0072B2"},
+    "Above": {"marker": "s", "color": "#E69F00"},
+    "Pole-vaulting": {"marker": "^", "color": "#009E73"},
+    "Trapping": {"marker": "D", "color": "#D55E00"},
+}
+FAILED_STYLE: dict[str, object] = {"marker": "x", "color": "0.45"}
+UNCLASSIFIED_STYLE: dict[str, object] = {"marker": "P", "color": "0.6"}
+
+
+@contextmanager
+def paper_style() -> Iterator[None]:
+    """Matplotlib settings for print-sized, readable figures."""
+    rc = {
+        "font.size": 9,
+        "axes.titlesize": 9,
+        "axes.labelsize": 9,
+        "legend.fontsize": 8,
+        "xtick.labelsize": 8,
+        "ytick.labelsize": 8,
+        "axes.linewidth": 0.8,
+        "lines.linewidth": 1.2,
+        "savefig.dpi": 200,
+        "savefig.bbox": "tight",
+        "figure.constrained_layout.use": True,
+        "axes.spines.top": False,
+        "axes.spines.right": False,
+        "mathtext.default": "regular",
+        "pdf.fonttype": 42,
+        "svg.fonttype": "none",
+    }
+    with mpl.rc_context(rc):
+        yield

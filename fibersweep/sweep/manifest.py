@@ -1,0 +1,95 @@
+"""Provenance of a sweep: manifest.json and the compact copy kept in Parquet metadata."""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import platform
+import subprocess
+import sys
+import time
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "MANIFEST",
+    "git_revision",
+    "library_versions",
+    "provenance",
+    "read_manifest",
+    "write_manifest",
+]
+
+log = logging.getLogger(__name__)
+
+MANIFEST = "manifest.json"
+_LIBS = ("numpy", "scipy", "numba", "pandas", "pyarrow", "pydantic", "matplotlib", "distributed")
+
+
+def library_versions() -> dict[str, str]:
+    """Versions of Python and the libraries that can change results or files."""
+    out = {"python": platform.python_version()}
+    for name in _LIBS:
+        try:
+            out[name] = version(name)
+        except PackageNotFoundError:
+            continue
+    return out
+
+
+def git_revision() -> str | None:
+    """Commit of the fibersweep source tree (``+dirty`` if modified), or None."""
+    src = Path(__file__).resolve().parents[2]
+    try:
+        rev = subprocess.run(
+            ["git", "-C", str(src), "rev-parse", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(src), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return rev + ("+dirty" if dirty else "") if rev else None
+
+
+def provenance(flow_key: str) -> dict[str, Any]:
+    """Package version, git revision, flow-field hash, library versions, host and time."""
+    from fibersweep import __version__
+
+    return {
+        "fibersweep": __version__,
+        "git": git_revision(),
+        "flow_key": flow_key,
+        "libraries": library_versions(),
+        "host": platform.node(),
+        "argv": sys.argv,
+        "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
+
+
+def read_manifest(out: Path) -> dict[str, Any] | None:
+    """The manifest of an output directory, or None if there is none."""
+    p = Path(out) / MANIFEST
+    if not p.exists():
+        return None
+    return json.loads(p.read_text())
+
+
+def write_manifest(out: Path, manifest: dict[str, Any]) -> Path:
+    """Write manifest.json atomically."""
+    p = Path(out) / MANIFEST
+    p.parent.mkdir(parents=True, exist_ok=True)
+    tmp = p.with_name(f".{MANIFEST}.tmp-{os.getpid()}")
+    tmp.write_text(json.dumps(manifest, indent=2, sort_keys=True, default=str) + "\n")
+    os.replace(tmp, p)
+    return p

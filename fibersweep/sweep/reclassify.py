@@ -1,0 +1,162 @@
+"""Re-label stored runs from their trajectories with new thresholds (no simulation)."""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from fibersweep.errors import InputError
+from fibersweep.fiber.result import CLASSES, Trajectory
+from fibersweep.fiber.settings import ClassifySettings
+from fibersweep.flow.settings import FlowSettings
+from fibersweep.sweep.manifest import read_manifest, write_manifest
+from fibersweep.sweep.store import (
+    RUNS_DIR,
+    list_parts,
+    part_name,
+    read_runs,
+    read_trajectories,
+    runs_table,
+    write_table_atomic,
+)
+
+__all__ = ["Reclassified", "class_counts", "reclassify", "thresholds_for", "trajectory_from_frame"]
+
+log = logging.getLogger(__name__)
+
+COUNTS_FILE = "counts.csv"
+
+
+@dataclass(frozen=True)
+class Reclassified:
+    """Outcome of :func:`reclassify`."""
+
+    n_runs: int
+    n_changed: int
+    counts: pd.DataFrame
+    counts_path: Path
+
+
+def thresholds_for(
+    out: Path, base: ClassifySettings | None = None, **overrides: float | None
+) -> ClassifySettings:
+    """Thresholds: ``base`` (or the stored config's), then the non-None ``overrides``."""
+    if base is None:
+        man = read_manifest(Path(out)) or {}
+        stored = man.get("config", {}).get("fiber", {}).get("classify")
+        base = ClassifySettings.model_validate(stored) if stored else ClassifySettings()
+    upd = {k: v for k, v in overrides.items() if v is not None}
+    try:
+        return ClassifySettings.model_validate({**base.model_dump(), **upd})
+    except Exception as exc:
+        raise InputError(f"classification thresholds: {exc}") from None
+
+
+def trajectory_from_frame(df: pd.DataFrame) -> Trajectory:
+    """Rebuild a :class:`Trajectory` from its stored samples (one id, sorted by sample)."""
+
+    def col(name: str) -> np.ndarray:
+        return df[name].to_numpy(dtype=np.float64)
+
+    beads = None
+    if "beads" in df and df["beads"].notna().all():
+        flat = np.stack([np.asarray(b, dtype=np.float64) for b in df["beads"]])
+        beads = flat.reshape(len(df), -1, 2)
+    return Trajectory(
+        t=col("t"),
+        x=col("x"),
+        y=col("y"),
+        theta=col("theta"),
+        head=np.column_stack([col("head_x"), col("head_y")]),
+        tail=np.column_stack([col("tail_x"), col("tail_y")]),
+        head_speed=col("head_speed"),
+        com_speed=col("com_speed"),
+        contact=df["contact"].to_numpy(dtype=bool),
+        beads=beads,
+    )
+
+
+def class_counts(runs: pd.DataFrame) -> pd.DataFrame:
+    """Runs per class (ok runs) and failures, with fractions; columns class, runs, fraction."""
+    ok = runs[runs["status"] == "ok"]
+    rows = [(c, int((ok["class"] == c).sum())) for c in CLASSES]
+    # ok runs the thresholds cannot place (e.g. a trap no longer long enough to count)
+    other = int((~ok["class"].isin(CLASSES)).sum())
+    if other:
+        rows.append(("unclassified", other))
+    rows.append(("failed", int((runs["status"] != "ok").sum())))
+    df = pd.DataFrame(rows, columns=["class", "runs"])
+    total = max(1, int(df["runs"].sum()))
+    df["fraction"] = (df["runs"] / total).round(4)
+    return df
+
+
+def reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
+    """Re-classify every stored trajectory and rewrite the runs table atomically.
+
+    Runs without a stored trajectory keep their class (their count is logged);
+    a run re-labelled Trapping gets δ = NaN (no displacement is defined).
+
+    Raises
+    ------
+    InputError
+        No results, or no trajectories were recorded.
+    """
+    from fibersweep.analysis.classify import classify
+
+    out = Path(out)
+    man = read_manifest(out)
+    runs = read_runs(out)
+    if man is None or runs.empty:
+        raise InputError(f"{out}: no sweep results here (expected manifest.json and runs/)")
+    flow = FlowSettings.model_validate(man["config"]["flow"])
+    geometry = flow.geometry.to_geometry()
+    u_center = flow.fluid.u_center
+    ok = runs["status"] == "ok"
+    traj = read_trajectories(out, list(runs.loc[ok, "id"]))
+    if traj.empty:
+        raise InputError(
+            f"{out}: no trajectories were recorded; set fiber.record.trajectories: true "
+            "and run the sweep again"
+        )
+    groups = dict(tuple(traj.groupby("id", sort=False)))
+    new_cls = runs["class"].copy()
+    missing = 0
+    for i in np.flatnonzero(ok.to_numpy()):
+        rid = runs.at[i, "id"]
+        if rid not in groups:
+            missing += 1
+            continue
+        new_cls.iat[i] = classify(
+            trajectory_from_frame(groups[rid].sort_values("sample")), geometry, u_center, thresholds
+        )
+    if missing:
+        log.warning("%d ok runs have no stored trajectory and keep their class", missing)
+    changed = int((new_cls != runs["class"]).sum())
+    runs = runs.assign(**{"class": new_cls})
+    runs.loc[runs["class"] == "Trapping", "delta"] = math.nan
+    old_parts = list_parts(out / RUNS_DIR)
+    meta = {
+        "flow_key": man.get("provenance", {}).get("flow_key"),
+        "classify": thresholds.model_dump(),
+    }
+    write_table_atomic(
+        runs_table(runs.to_dict("records"), meta),
+        out / RUNS_DIR / part_name("-classified"),
+    )
+    for p in old_parts:
+        p.unlink(missing_ok=True)
+    counts = class_counts(runs)
+    counts_path = out / COUNTS_FILE
+    tmp = counts_path.with_name(f".{COUNTS_FILE}.tmp")
+    counts.to_csv(tmp, index=False)
+    tmp.replace(counts_path)
+    man["config"]["fiber"]["classify"] = thresholds.model_dump(mode="json")
+    man["counts"] = {c: int(n) for c, n in zip(counts["class"], counts["runs"], strict=True)}
+    write_manifest(out, man)
+    return Reclassified(len(runs), changed, counts, counts_path)

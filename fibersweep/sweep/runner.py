@@ -1,0 +1,229 @@
+"""Run a sweep: flow field from the cache, tasks to an executor, rows to Parquet.
+
+One code path for the bookkeeping whatever the executor: outcomes stream back
+from :mod:`fibersweep.sweep.executors` and are written here, with the same
+atomic part files, resume and retry logic.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections import Counter
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from fibersweep.config import Config
+from fibersweep.fiber.result import CLASSES
+from fibersweep.sweep.executors import make_executor
+from fibersweep.sweep.manifest import provenance, read_manifest, write_manifest
+from fibersweep.sweep.plan import SweepPlan, move_aside, plan_sweep, result_settings
+from fibersweep.sweep.store import PartWriter, clean_temporaries, compact, read_runs
+from fibersweep.sweep.worker import SweepTask, WorkerSpec, failed_row, init_worker, run_task
+
+__all__ = [
+    "SweepSummary",
+    "estimate_run_s",
+    "flow_field_for",
+    "flow_key_for",
+    "prepare",
+    "run_sweep",
+]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class SweepSummary:
+    """What one ``run_sweep`` call did.
+
+    Attributes
+    ----------
+    out : Path
+    ran : int
+        Runs finished in this call (ok or failed).
+    counts : Counter
+        Runs per class in this call ('failed' for failures).
+    table_counts : dict
+        Runs per class in the whole table afterwards.
+    failed : int
+        Failed runs in the whole table afterwards.
+    wall_s : float
+        Seconds spent running tasks.
+    interrupted : bool
+    """
+
+    out: Path
+    ran: int = 0
+    counts: Counter = field(default_factory=Counter)
+    table_counts: dict[str, int] = field(default_factory=dict)
+    failed: int = 0
+    wall_s: float = 0.0
+    interrupted: bool = False
+    failures: list[str] = field(default_factory=list)
+
+
+def flow_field_for(cfg: Config, *, mmap: bool = True) -> tuple[Any, Any]:
+    """The flow field of a config from the cache (computed once if missing)."""
+    from fibersweep.flow.cache import get_flow_field
+
+    return get_flow_field(cfg.flow, cfg.run.cache_dir, mmap=mmap)
+
+
+def flow_key_for(cfg: Config) -> tuple[str, bool]:
+    """The flow-field key of a config and whether the field is cached (computes nothing)."""
+    from fibersweep.flow.cache import MANIFEST, cache_key
+
+    key = cache_key(cfg.flow)
+    # A complete cache entry is flow-<key>/ with its manifest written last.
+    return key, (Path(cfg.run.cache_dir) / f"flow-{key}" / MANIFEST).exists()
+
+
+def estimate_run_s(cfg: Config, todo: list[SweepTask]) -> float | None:
+    """Seconds per run, timed here on the middle to-do point after one warm-up run."""
+    from fibersweep.fiber.result import FiberStart
+    from fibersweep.fiber.run import simulate
+
+    fieldobj, _ = flow_field_for(cfg)
+    t = todo[len(todo) // 2]
+    start = FiberStart(theta0=t.theta0, y0=t.y0, length=t.length)
+    simulate(fieldobj, cfg.fiber, start)  # compiles
+    t0 = time.perf_counter()
+    simulate(fieldobj, cfg.fiber, start)
+    return time.perf_counter() - t0
+
+
+def prepare(
+    cfg: Config, *, resume: bool = True, retry_failed: bool = False
+) -> tuple[Any, Any, SweepPlan]:
+    """Field, cache info and plan of a sweep (computes the field if it is not cached)."""
+    fieldobj, info = flow_field_for(cfg)
+    plan = plan_sweep(cfg, info.key, resume=resume, retry_failed=retry_failed)
+    return fieldobj, info, plan
+
+
+def _separatrix(fieldobj: Any, info: Any, out: Path) -> float | None:
+    old = read_manifest(out) or {}
+    if old.get("provenance", {}).get("flow_key") == info.key and "separatrix" in old:
+        return old["separatrix"]
+    try:
+        from fibersweep.sweep.separatrix import separatrix_y
+
+        return float(separatrix_y(fieldobj))
+    except Exception as exc:  # a figure aid: never stop a sweep over it
+        log.warning("separatrix not computed: %s", exc)
+        return None
+
+
+def run_sweep(
+    cfg: Config,
+    *,
+    resume: bool = True,
+    retry_failed: bool = False,
+    progress: Callable[[Mapping[str, Any]], None] | None = None,
+    on_plan: Callable[[SweepPlan], None] | None = None,
+) -> SweepSummary:
+    """Run every to-do point of a sweep and record it.
+
+    Parameters
+    ----------
+    cfg : Config
+        Resolved config (``cfg.run`` says workers, executor, output).
+    resume, retry_failed : bool
+        See :func:`fibersweep.sweep.plan.plan_sweep`.
+    progress : callable, optional
+        Called with each finished row (for a progress bar).
+    on_plan : callable, optional
+        Called with the plan before anything runs.
+
+    Returns
+    -------
+    SweepSummary
+        ``interrupted`` is set (and the exception re-raised) on Ctrl-C; every run
+        finished before it is on disk.
+    """
+    out = Path(cfg.run.output)
+    fieldobj, info, plan = prepare(cfg, resume=resume, retry_failed=retry_failed)
+    if on_plan is not None:
+        on_plan(plan)
+    if plan.fresh:
+        move_aside(out)
+    out.mkdir(parents=True, exist_ok=True)
+    clean_temporaries(out)
+    prov = provenance(info.key)
+    manifest = {
+        "config": cfg.model_dump(mode="json"),
+        "result_settings": result_settings(cfg, info.key),
+        "provenance": prov,
+        "flow_cache": str(getattr(info, "path", "")),
+        "separatrix": _separatrix(fieldobj, info, out),
+        "sweep_size": len(plan.tasks),
+        "state": "running",
+    }
+    write_manifest(out, manifest)
+    meta = {"fibersweep": prov["fibersweep"], "git": prov["git"], "flow_key": info.key}
+    summary = SweepSummary(out=out)
+    spec = WorkerSpec(
+        flow_json=cfg.flow.model_dump_json(),
+        field_path=str(Path(info.path).resolve()),
+        flow_key=info.key,
+        fiber_json=cfg.fiber.model_dump_json(),
+        log_level=logging.getLogger("fibersweep").getEffectiveLevel(),
+    )
+    ex = make_executor(cfg.run.executor, cfg.run.workers, cfg.run.scheduler, cfg.run.retries)
+    # Dask workers keep their own signal handling; pool workers leave Ctrl-C to us.
+    initargs = (spec, cfg.run.executor == "local")
+    by_key: dict[str, SweepTask] = {t.key: t for t in plan.todo}
+    keep_traj = cfg.fiber.record.trajectories
+    t0 = time.perf_counter()
+    state = "stopped"
+    writer = PartWriter(out, meta, cfg.run.flush_every, cfg.run.flush_seconds)
+    try:
+        if plan.todo:
+            for oc in ex.run(run_task, plan.todo, init_worker, initargs):
+                if oc.value is not None:
+                    row, traj = dict(oc.value["row"]), oc.value["trajectory"]
+                    row["attempts"] = oc.attempts
+                else:
+                    row, traj = failed_row(by_key[oc.key], oc.error, oc.attempts), None
+                writer.add(row, traj if keep_traj else None)
+                summary.ran += 1
+                label = row["class"] if row["status"] == "ok" else "failed"
+                summary.counts[label] += 1
+                if row["status"] != "ok":
+                    summary.failures.append(f"{row['id']}: {row['reason']}")
+                if progress is not None:
+                    progress(row)
+    except KeyboardInterrupt:
+        summary.interrupted = True
+        state = "interrupted"
+        raise
+    except BaseException:
+        state = "stopped"
+        raise
+    else:
+        state = "complete"
+    finally:
+        writer.flush()
+        summary.wall_s = time.perf_counter() - t0
+        if state == "complete" and cfg.run.compact:
+            compact(out, meta)
+        table = read_runs(out)
+        ok = table[table["status"] == "ok"]
+        summary.table_counts = {c: int((ok["class"] == c).sum()) for c in CLASSES}
+        other = int((~ok["class"].isin(CLASSES)).sum())
+        if other:
+            summary.table_counts["unclassified"] = other
+        summary.failed = int((table["status"] != "ok").sum())
+        manifest.update(
+            state=state,
+            finished=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+            counts=summary.table_counts,
+            failed=summary.failed,
+            rows=len(table),
+        )
+        write_manifest(out, manifest)
+    log.info("sweep done: %d runs in %.1f s", summary.ran, summary.wall_s)
+    return summary

@@ -1,0 +1,194 @@
+"""What runs inside a worker process: open the field once, then run fibers.
+
+:func:`init_worker` is the process-pool initializer and the body of the Dask
+worker plugin: it opens the cached flow field memory-mapped (every worker on a
+machine shares the same pages) and runs one short fiber so Numba compiles (or
+loads its on-disk cache) once per worker, not once per run. :func:`run_task`
+then runs one fiber and returns plain, picklable data. Any exception in a run
+becomes a failed row with its reason: one bad run never stops a sweep.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import socket
+import time
+import traceback
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = ["SweepTask", "WorkerSpec", "init_worker", "run_task", "failed_row"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class SweepTask:
+    """One fiber run to do (picklable, small).
+
+    Attributes
+    ----------
+    key : str
+        Content-addressed run id.
+    theta0, y0, length : float
+        Start angle [deg], y0/h_obs, L/l_obs.
+    """
+
+    key: str
+    theta0: float
+    y0: float
+    length: float
+
+
+@dataclass(frozen=True)
+class WorkerSpec:
+    """Everything a worker needs to set itself up (JSON strings: cheap to ship).
+
+    Attributes
+    ----------
+    flow_json : str
+        ``FlowSettings`` as JSON.
+    field_path : str
+        The flow field's cache entry (a directory of .npy files), on a path the
+        workers can read; opened memory-mapped, never recomputed by a worker.
+    flow_key : str
+        The field's cache key.
+    fiber_json : str
+        ``FiberSettings`` as JSON.
+    warm : bool
+        Run one short fiber at start-up so Numba compiles before the first task.
+    log_level : int
+        Logging level in the worker (its stderr is the parent's).
+    """
+
+    flow_json: str
+    field_path: str
+    flow_key: str
+    fiber_json: str
+    warm: bool = True
+    log_level: int = logging.WARNING
+
+
+_STATE: dict[str, Any] = {}
+
+
+def _worker_name() -> str:
+    return f"{socket.gethostname()}:{os.getpid()}"
+
+
+def init_worker(spec: WorkerSpec, ignore_sigint: bool = True) -> None:
+    """Open the cached field memory-mapped and warm Numba, once per process.
+
+    Parameters
+    ----------
+    spec : WorkerSpec
+    ignore_sigint : bool
+        Leave Ctrl-C to the parent, which stops the pool cleanly.
+    """
+    if ignore_sigint:
+        try:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        except ValueError:  # not the main thread (e.g. a Dask worker thread)
+            pass
+    if _STATE.get("spec") == spec:
+        return
+    if not logging.getLogger().handlers:  # a fresh spawned process: log like the parent
+        logging.basicConfig(
+            level=spec.log_level,
+            format="%(asctime)s %(name)s[%(process)d] %(levelname)s: %(message)s",
+        )
+    from fibersweep.fiber.settings import FiberSettings
+    from fibersweep.flow.cache import load_entry
+    from fibersweep.flow.settings import FlowSettings
+
+    t0 = time.perf_counter()
+    flow = FlowSettings.model_validate_json(spec.flow_json)
+    # The parent verified the entry's checksums; workers only map it.
+    field = load_entry(spec.field_path, flow, mmap=True, verify=False)
+    fiber = FiberSettings.model_validate_json(spec.fiber_json)
+    _STATE.clear()
+    _STATE.update(spec=spec, field=field, fiber=fiber, n_tasks=0)
+    t1 = time.perf_counter()
+    if spec.warm:
+        _warm(field, fiber)
+    log.info(
+        "worker %s ready: field %.2f s, warm-up %.2f s",
+        _worker_name(),
+        t1 - t0,
+        time.perf_counter() - t1,
+    )
+
+
+def _warm(field: Any, fiber: Any) -> None:
+    """Compile the fiber kernels by running a short fiber far from the pillar."""
+    from fibersweep.fiber.result import FiberStart
+    from fibersweep.fiber.run import simulate
+
+    short = fiber.model_copy(
+        update={"step": fiber.step.model_copy(update={"t_max": 0.01})}, deep=True
+    )
+    try:
+        simulate(field, short, FiberStart(theta0=0.0, y0=2.0, length=0.5))
+    except Exception as exc:  # a warm-up problem must not hide the real runs' errors
+        log.warning("warm-up run raised %s: %s", type(exc).__name__, exc)
+
+
+def failed_row(task: SweepTask, reason: str, attempts: int = 1) -> dict[str, Any]:
+    """The row recorded for a run that did not finish."""
+    return {
+        "id": task.key,
+        "theta0": task.theta0,
+        "y0": task.y0,
+        "length": task.length,
+        "class": "",
+        "status": "failed",
+        "reason": reason,
+        "contact": False,
+        "n_steps": 0,
+        "wall_time": 0.0,
+        "worker": "",
+        "attempts": attempts,
+        "finished_at": time.time(),
+    }
+
+
+def run_task(task: SweepTask) -> dict[str, Any]:
+    """Run one fiber in this worker.
+
+    Returns
+    -------
+    dict
+        ``{"row": dict of scalars, "trajectory": dict of arrays or None}``.
+    """
+    if not _STATE:
+        raise RuntimeError("worker not initialised: init_worker was not called")
+    from fibersweep.fiber.result import FiberStart
+    from fibersweep.fiber.run import simulate
+
+    start = FiberStart(theta0=task.theta0, y0=task.y0, length=task.length)
+    t0 = time.perf_counter()
+    c0 = time.process_time()
+    try:
+        res = simulate(_STATE["field"], _STATE["fiber"], start)
+    except Exception as exc:
+        log.warning("run %s raised: %s", task.key, traceback.format_exc(limit=3))
+        row = failed_row(task, f"exception {type(exc).__name__}: {exc}")
+        row.update(wall_time=time.perf_counter() - t0, worker=_worker_name())
+        return {"row": row, "trajectory": None}
+    _STATE["n_tasks"] += 1
+    row = res.row()
+    row.update(
+        id=task.key,
+        wall_time=float(row.get("wall_time") or time.perf_counter() - t0),
+        worker=_worker_name(),
+        attempts=1,
+        finished_at=time.time(),
+        # CPU seconds of this run: with wall_time, shows whether the machine was shared.
+        cpu_time=time.process_time() - c0,
+    )
+    traj = res.trajectory.columns() if res.trajectory is not None else None
+    if traj is not None and res.trajectory.beads is not None:
+        traj = {**traj, "beads": res.trajectory.beads}
+    return {"row": row, "trajectory": traj}

@@ -1,0 +1,53 @@
+"""Shared pytest fixtures.
+
+Flow fields (issue 2) are computed once per machine and kept in a repo-local,
+git-ignored cache (``.fibersweep-cache/tests``; override with the environment
+variable ``FIBERSWEEP_TEST_CACHE``), so repeated local runs load them in
+milliseconds. A cold computation costs: ``coarse_field`` (SPEC geometry,
+dx = 4 µm, 600 x 200 x 5 half-depth nodes) about 1 min on the 2-core machine;
+``small_field`` (400 x 800 µm channel, dx = 4 µm) about a sixth of that.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from fibersweep.flow.settings import FlowSettings, GeometrySettings
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="session")
+def flow_cache_dir() -> Path:
+    """Directory of the shared test flow-field cache."""
+    path = Path(os.environ.get("FIBERSWEEP_TEST_CACHE", REPO / ".fibersweep-cache" / "tests"))
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+COARSE_SETTINGS = FlowSettings(dx=4.0)
+SMALL_SETTINGS = FlowSettings(
+    geometry=GeometrySettings(width=400.0, depth=40.0, length=800.0, pillar_height=75.0),
+    dx=4.0,
+)
+
+
+@pytest.fixture(scope="session")
+def coarse_field(flow_cache_dir):
+    """FlowField of the SPEC geometry at dx = 4 µm (TRT, symmetric half depth), µm/s."""
+    from fibersweep.flow.cache import get_flow_field
+
+    field, _ = get_flow_field(COARSE_SETTINGS, flow_cache_dir)
+    return field
+
+
+@pytest.fixture(scope="session")
+def small_field(flow_cache_dir):
+    """FlowField of a smaller channel (W 400, L 800, H 40 µm, h_obs 75 µm) at dx = 4 µm."""
+    from fibersweep.flow.cache import get_flow_field
+
+    field, _ = get_flow_field(SMALL_SETTINGS, flow_cache_dir)
+    return field

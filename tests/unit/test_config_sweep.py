@@ -1,0 +1,91 @@
+"""Config schema: sweep axes in three forms, errors a user can act on (path, line, hint)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fibersweep.config import ConfigError, load_config, parse_config
+
+
+def _write(tmp_path, text):
+    p = tmp_path / "c.yaml"
+    p.write_text(text)
+    return p
+
+
+def test_axes_list_range_linspace(tmp_path):
+    cfg = load_config(
+        _write(
+            tmp_path,
+            "sweep:\n"
+            "  theta0: {start: -10, stop: 10, step: 5}\n"
+            "  y0: {start: 0.3, stop: 0.45, num: 4}\n"
+            "  length: [0.8, 1.2]\n",
+        )
+    )
+    starts = cfg.sweep.starts()
+    assert len(starts) == 5 * 4 * 2
+    th = sorted({s.theta0 for s in starts})
+    assert th == [-10.0, -5.0, 0.0, 5.0, 10.0]
+    np.testing.assert_allclose(sorted({s.y0 for s in starts}), [0.3, 0.35, 0.4, 0.45], atol=1e-12)
+    # a range whose stop is not hit exactly by float steps still includes it (0.1 * 3 != 0.3)
+    cfg2 = parse_config({"sweep": {"y0": {"start": 0.0, "stop": 0.3, "step": 0.1}}})
+    assert len({s.y0 for s in cfg2.sweep.starts()}) == 4
+
+
+def test_defaults_and_run_section():
+    cfg = parse_config({})
+    assert cfg.run.workers == 2 and cfg.run.executor == "local"
+    assert cfg.fiber.record.trajectories is False
+    assert len(cfg.sweep.starts()) == 1
+
+
+def test_unknown_key_names_path_line_and_suggestion(tmp_path):
+    p = _write(tmp_path, "flow:\n  dx: 4\nsweep:\n  theta0: [0]\n  y00: 0.4\n")
+    with pytest.raises(ConfigError) as ei:
+        load_config(p)
+    msg = str(ei.value)
+    assert "sweep.y00 (line 5): unknown key; did you mean 'y0'?" in msg
+    assert "Valid keys here: theta0, y0, length" in msg
+
+
+def test_bad_values_say_expected_and_given(tmp_path):
+    p = _write(
+        tmp_path,
+        "run:\n  workers: 0\nsweep:\n  theta0: hello\n  length: {start: 2, stop: 1, step: 0.1}\n",
+    )
+    with pytest.raises(ConfigError) as ei:
+        load_config(p)
+    msg = str(ei.value)
+    assert "run.workers (line 2): Input should be greater than or equal to 1; given 0" in msg
+    assert "sweep.theta0 (line 4): expected a number, a list of numbers" in msg
+    assert "sweep.length (line 5): empty range: start 2.0 > stop 1.0" in msg
+    assert len(ei.value.problems) == 3, ei.value.problems
+
+
+def test_nested_misspelling_and_yaml_syntax(tmp_path):
+    with pytest.raises(ConfigError, match=r"fiber\.contact\.chii \(line 3\).*did you mean 'chi'"):
+        load_config(_write(tmp_path, "fiber:\n  contact:\n    chii: 1.2\n"))
+    with pytest.raises(ConfigError, match="invalid YAML"):
+        load_config(_write(tmp_path, "sweep: [1, 2\n"))
+    with pytest.raises(ConfigError, match="cannot read config"):
+        load_config(tmp_path / "missing.yaml")
+
+
+@pytest.mark.parametrize("name", ["quick.yaml", "paper.yaml"])
+def test_shipped_configs_are_valid(name):
+    from pathlib import Path
+
+    cfg = load_config(Path(__file__).parents[2] / "configs" / name)
+    n = len(cfg.sweep.starts())
+    assert n >= 20
+    if name == "paper.yaml":
+        th = [s.theta0 for s in cfg.sweep.starts()]
+        y0 = [s.y0 for s in cfg.sweep.starts()]
+        L = [s.length for s in cfg.sweep.starts()]
+        assert (min(th), max(th)) == (-10.0, 10.0)
+        assert (min(y0), max(y0)) == (0.0, 1.0)
+        assert (min(L), max(L)) == (0.5, 1.4)
+        assert cfg.flow.dx == 2.0
+        assert 1200 <= n <= 1400, n

@@ -1,0 +1,101 @@
+"""The measured-data schema: validation messages name the column and the rows; nothing is dropped."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from fibersweep.discrepancy.schema import load_measured, validate_measured, write_table
+from fibersweep.errors import InputError
+
+
+def _table(n: int = 6) -> pd.DataFrame:
+    rng = np.random.default_rng(0)
+    cls = ["Below", "Above", "Pole-vaulting", "Trapping", "Above", "Below"][:n]
+    contact = [False, True, True, True, False, True][:n]
+    return pd.DataFrame(
+        {
+            "theta0": rng.uniform(-10, 10, n),
+            "y0": rng.uniform(0, 1, n),
+            "length": rng.uniform(0.5, 1.4, n),
+            "class": cls,
+            "delta": [0.01, 0.2, 0.3, np.nan, 0.0, -0.05][:n],
+            "contact": contact,
+            "theta_c": [np.nan, 10.0, -20.0, 5.0, np.nan, 30.0][:n],
+            "y_c": [np.nan, 0.5, 0.2, 0.3, np.nan, 0.1][:n],
+            "t_pass": [1.2, 1.3, 1.6, np.nan, 1.2, 1.4][:n],
+        }
+    )
+
+
+def test_valid_table_round_trips_parquet_and_csv(tmp_path):
+    df = _table()
+    for suffix in (".parquet", ".csv"):
+        p = write_table(df, tmp_path / f"m{suffix}")
+        m = load_measured(p)
+        assert len(m) == len(df)  # nothing dropped
+        assert m.observed == ("class", "delta", "contact", "theta_c", "y_c", "t_pass")
+        assert m.table["contact"].dtype == bool
+        np.testing.assert_allclose(m.starts, df[["theta0", "y0", "length"]].to_numpy())
+
+
+def test_missing_column_is_named():
+    with pytest.raises(InputError, match="missing required column.*y0"):
+        validate_measured(_table().drop(columns=["y0"]))
+
+
+def test_radians_are_caught_and_angle_unit_converts():
+    df = _table()
+    df["theta0"] = np.radians(df["theta0"])
+    with pytest.raises(InputError, match="look like radians"):
+        validate_measured(df)
+    df["theta_c"] = np.radians(df["theta_c"])
+    df["angle_unit"] = "rad"
+    m = validate_measured(df)
+    np.testing.assert_allclose(m.table["theta0"], np.degrees(df["theta0"]))
+    np.testing.assert_allclose(m.table["theta_c"], np.degrees(df["theta_c"]))
+
+
+def test_out_of_range_and_non_finite_name_rows():
+    df = _table()
+    df.loc[2, "y0"] = 30.0  # µm instead of h_obs
+    df.loc[4, "length"] = np.inf
+    with pytest.raises(InputError) as exc:
+        validate_measured(df)
+    msg = str(exc.value)
+    assert "y0: out of range" in msg and "row 2" in msg and "h_obs" in msg
+    assert "length: infinite value in row 4" in msg
+
+
+def test_nan_only_where_undefined():
+    df = _table()
+    df.loc[0, "delta"] = np.nan  # a Below fiber must have delta
+    df.loc[1, "theta_c"] = np.nan  # contact without contact angle
+    df.loc[0, "theta_c"] = 3.0  # contact angle without contact
+    with pytest.raises(InputError) as exc:
+        validate_measured(df)
+    msg = str(exc.value)
+    assert "delta: missing/NaN value in row 0" in msg
+    assert "theta_c: missing/NaN value in row 1" in msg
+    assert "theta_c: given for a fiber without contact in row 0" in msg
+
+
+def test_bad_class_and_inconsistent_contact():
+    df = _table()
+    df.loc[1, "class"] = "sideways"
+    df.loc[2, "contact"] = False  # Pole-vaulting requires contact
+    df.loc[2, ["theta_c", "y_c"]] = np.nan
+    with pytest.raises(InputError) as exc:
+        validate_measured(df)
+    msg = str(exc.value)
+    assert "class: unknown value in row 1" in msg and "Pole-vaulting" in msg
+    assert "contact: false for a Trapping or Pole-vaulting fiber in row 2" in msg
+
+
+def test_class_names_are_case_insensitive_and_optional_columns_optional():
+    df = _table()[["theta0", "y0", "length", "class"]].copy()
+    df["class"] = df["class"].str.upper()
+    m = validate_measured(df)
+    assert m.observed == ("class",)
+    assert m.table["class"].iloc[2] == "Pole-vaulting"

@@ -1,0 +1,100 @@
+"""Classification rules on synthetic trajectories, and thinning."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fibersweep.analysis.classify import classify, longest_run
+from fibersweep.analysis.observables import fiber_angle, take, thin_indices
+from fibersweep.fiber.result import Trajectory
+from fibersweep.fiber.settings import ClassifySettings
+from fibersweep.units import Geometry
+
+GEO = Geometry()
+U = 600.0
+TH = ClassifySettings()
+XC, YC = GEO.centroid
+
+
+def _traj(t, x, y, theta, head_speed, com_speed, contact) -> Trajectory:
+    m = len(t)
+    z = np.zeros((m, 2))
+    return Trajectory(
+        t=np.asarray(t, float), x=np.asarray(x, float), y=np.asarray(y, float),
+        theta=np.asarray(theta, float), head=z, tail=z,
+        head_speed=np.asarray(head_speed, float), com_speed=np.asarray(com_speed, float),
+        contact=np.asarray(contact, bool),
+    )  # fmt: skip
+
+
+def _passing(dy, theta_end=0.0, head_min=100.0, contact=False, m=401):
+    t = np.linspace(0, 2, m)
+    x = XC - 300 + 600 * t / 2
+    y = np.full(m, YC + dy)
+    theta = np.linspace(0, theta_end, m)
+    hs = np.full(m, 300.0)
+    c = np.zeros(m, bool)
+    if contact:
+        c[150:250] = True
+        hs[200] = head_min
+    return _traj(t, x, y, theta, hs, np.full(m, 300.0), c)
+
+
+def test_above_below_by_side_of_centroid():
+    assert classify(_passing(+40), GEO, U, TH) == "Above"
+    assert classify(_passing(-40), GEO, U, TH) == "Below"
+    # reversed flow: crossing in −x
+    tr = _passing(+40)
+    rev = _traj(tr.t, tr.x[::-1], tr.y, tr.theta, tr.head_speed, tr.com_speed, tr.contact)
+    assert classify(rev, GEO, -U, TH) == "Above"
+
+
+def test_pole_vault_needs_blocked_head_and_swap():
+    assert classify(_passing(40, 180, head_min=1.0, contact=True), GEO, U, TH) == "Pole-vaulting"
+    # head not blocked (above 0.01 U = 6 µm/s): the side decides
+    assert classify(_passing(40, 180, head_min=50.0, contact=True), GEO, U, TH) == "Above"
+    # ... unless the threshold is raised: re-classification without simulating
+    loose = ClassifySettings(head_blocked_speed=0.1)
+    assert classify(_passing(40, 180, head_min=50.0, contact=True), GEO, U, loose) == (
+        "Pole-vaulting"
+    )
+    # blocked but no swap
+    assert classify(_passing(-40, 30, head_min=1.0, contact=True), GEO, U, TH) == "Below"
+
+
+def test_trapping_needs_contact_and_stop_for_trap_time():
+    t = np.linspace(0, 5, 501)
+    x = np.full(501, XC - 50)
+    y = np.full(501, YC)
+    slow = np.full(501, 1.0)
+    contact = t > 1.0
+    tr = _traj(t, x, y, np.zeros(501), slow, slow, contact)
+    assert classify(tr, GEO, U, TH) == "Trapping"  # 4 s stopped in contact >= 2 s
+    assert classify(tr, GEO, U, ClassifySettings(trap_time=4.5)) == ""  # never crossed
+    tr2 = _traj(t, x, y, np.zeros(501), slow, slow, t > 3.5)
+    assert classify(tr2, GEO, U, TH) == ""
+
+
+def test_longest_run():
+    t = np.arange(10.0)
+    m = np.array([0, 1, 1, 0, 1, 1, 1, 1, 0, 1], bool)
+    assert longest_run(t, m) == 3.0
+    assert longest_run(t, np.zeros(10, bool)) == 0.0
+
+
+def test_thinning_keeps_what_classification_needs():
+    tr = _passing(40, 180, head_min=1.0, contact=True, m=20001)
+    idx = thin_indices(tr, 200, U, TH)
+    assert idx[0] == 0 and idx[-1] == len(tr.t) - 1
+    assert len(idx) <= 200 + 2
+    thin = take(tr, idx)
+    assert thin.head_speed.min() == 1.0  # the blocked-head sample survives
+    assert classify(thin, GEO, U, TH) == classify(tr, GEO, U, TH) == "Pole-vaulting"
+
+
+@pytest.mark.parametrize(
+    "theta, expect", [(0.0, 0.0), (170.0, -10.0), (-100.0, 80.0), (90.0, 90.0), (-90.0, 90.0)]
+)
+def test_fiber_angle(theta, expect):
+    assert fiber_angle(theta) == pytest.approx(expect)

@@ -1,0 +1,79 @@
+"""Executors: every task exactly once, failures reported, crashes survived (real processes)."""
+
+from __future__ import annotations
+
+import pytest
+from _sweep_helpers import Job, init, square
+
+from fibersweep.errors import InputError, SolverError
+from fibersweep.sweep.executors import LocalExecutor, make_executor
+
+
+def _collect(ex, jobs, **kw):
+    outs = list(ex.run(square, jobs, **kw))
+    keys = [o.key for o in outs]
+    assert sorted(keys) == sorted(j.key for j in jobs), "each task exactly once"
+    return {o.key: o for o in outs}
+
+
+@pytest.fixture(scope="module")
+def jobs():
+    return [Job(f"k{i}", float(i), sleep=0.05) for i in range(8)]
+
+
+def test_local_runs_every_task_once_with_initializer(jobs, tmp_path):
+    ex = LocalExecutor(workers=2)
+    res = _collect(ex, jobs, initializer=init, initargs=("T", str(tmp_path)))
+    for j in jobs:
+        assert res[j.key].error == ""
+        assert res[j.key].value["x2"] == j.x**2
+        assert res[j.key].value["tag"] == "T"
+    # The initializer ran once per worker process, not once per task.
+    assert len(list(tmp_path.glob("init-*"))) == 2
+    assert len({o.value["pid"] for o in res.values()}) <= 2
+
+
+def test_local_exception_is_an_outcome_not_a_stop(tmp_path):
+    jobs = [Job("a", 1.0), Job("bad", 2.0, action="raise"), Job("c", 3.0)]
+    res = _collect(LocalExecutor(workers=2), jobs)
+    assert res["a"].error == "" and res["c"].error == ""
+    assert "ValueError: bad job bad" in res["bad"].error
+
+
+def test_local_worker_crash_once_is_retried(tmp_path):
+    """A worker killed mid-sweep (os._exit) breaks the pool; its tasks are re-run, none lost."""
+    marker = tmp_path / "died"
+    jobs = [Job(f"k{i}", float(i), sleep=0.05) for i in range(6)]
+    jobs.insert(3, Job("dies", 9.0, sleep=0.05, action=f"die-once:{marker}"))
+    ex = LocalExecutor(workers=2, retries=2)
+    res = _collect(ex, jobs)
+    assert marker.exists()
+    assert all(o.error == "" for o in res.values()), {k: o.error for k, o in res.items()}
+    assert res["dies"].value["x2"] == 81.0
+    assert res["dies"].attempts == 2
+    assert ex.pools_started == 2
+
+
+def test_local_poison_task_fails_alone(tmp_path):
+    """A task that always kills its worker is reported failed; its neighbours are not blamed."""
+    jobs = [Job(f"k{i}", float(i), sleep=0.02) for i in range(4)] + [
+        Job("poison", 0.0, action="die")
+    ]
+    ex = LocalExecutor(workers=2, retries=1)
+    res = _collect(ex, jobs)
+    assert "BrokenProcessPool" in res["poison"].error
+    assert res["poison"].attempts == 2
+    assert all(res[f"k{i}"].error == "" for i in range(4))
+
+
+def test_local_broken_initializer_stops_with_its_reason():
+    ex = LocalExecutor(workers=1, retries=0)
+    with pytest.raises(SolverError, match="worker set-up failed.*TypeError"):
+        list(ex.run(square, [Job("a", 1.0)], initializer=init, initargs=(1, "/nonexistent/x")))
+
+
+def test_registry_fails_loudly():
+    with pytest.raises(InputError, match="valid: local, dask"):
+        make_executor("slurm", 2)
+    with pytest.raises(InputError, match="--scheduler needs --executor dask"):
+        make_executor("local", 2, scheduler="tcp://127.0.0.1:8786")

@@ -1,0 +1,115 @@
+"""Physical checks of the flow past the pillar (SPEC section 2)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fibersweep.flow.analysis import fore_aft_asymmetry, peak_speeds, separatrix
+from fibersweep.flow.analytic import duct_velocity
+from fibersweep.flow.settings import FlowSettings, GeometrySettings
+from fibersweep.flow.solver import field_from_solution, solve_lattice
+
+SMALL = GeometrySettings(width=200.0, depth=40.0, length=400.0, pillar_height=75.0)
+
+
+@pytest.fixture(scope="module")
+def small_half():
+    """3D lattice solution of a small pillar channel (half depth, symmetric), dx = 4 µm."""
+    settings = FlowSettings(geometry=SMALL, dx=4.0, tolerance=1e-7)
+    return settings, solve_lattice(settings)
+
+
+def test_mass_flux_constant_along_x(small_half):
+    # Steady mass conservation: the x-momentum flux Σ_yz ρ ux through every
+    # x-plane is the same. Tolerance 1e-4 relative (measured 4e-6; the
+    # residual is the convergence tolerance and float32 storage).
+    _, sol = small_half
+    rho = 1.0 + sol.rho
+    flux = (rho * sol.u[0]).sum(axis=(0, 1))
+    assert np.ptp(flux) / flux.mean() < 1e-4, np.ptp(flux) / flux.mean()
+    # the pillar really is there: the flux passes around it
+    assert sol.grid.solid.sum() > 100
+
+
+def test_half_depth_with_symmetry_plane_equals_full_depth(small_half):
+    # The midplane field of the half-depth solve with a free-slip top equals that
+    # of the full-depth solve; tolerance 1e-4 U_center (measured ~1e-6).
+    settings, sol = small_half
+    full_settings = settings.model_copy(update={"symmetry": False})
+    full = solve_lattice(full_settings)
+    f_half = field_from_solution(settings, sol)
+    f_full = field_from_solution(full_settings, full)
+    u = settings.fluid.u_center
+    assert np.abs(f_half.ux - f_full.ux).max() < 1e-4 * u
+    assert np.abs(f_half.uy - f_full.uy).max() < 1e-4 * u
+    # full-depth 3D field is symmetric about the midplane
+    nz = full.grid.nz
+    assert np.abs(full.u[0:2] - full.u[0:2, ::-1]).max() < 1e-5 * np.abs(full.u[0]).max()
+    assert nz == 2 * sol.grid.nz
+
+
+def test_solid_nodes_at_rest_and_no_slip(coarse_field):
+    f = coarse_field
+    assert f.solid.sum() > 0
+    assert np.all(f.ux[f.solid] == 0.0) and np.all(f.uy[f.solid] == 0.0)
+    # the IB-interpolated velocity at the pillar centroid (kernel support inside
+    # the solid) is exactly zero too
+    xc, yc = f.geometry.centroid
+    assert np.all(f.velocity(np.array([[xc, yc]])) == 0.0)
+    # (no-slip at walls is validated quantitatively by the duct tests)
+
+
+def test_scaled_to_u_center_and_far_field_is_duct_flow(coarse_field):
+    # Far from the pillar the midplane field is the duct profile averaged in z with
+    # the IB weights φ(±1/2) = 0.4268, φ(±3/2) = 0.0732, scaled so that the
+    # centreline speed at z = H/2 is U_center. Tolerance 1 % of U_center
+    # (lattice error at 10 nodes across the depth is ~0.4 %).
+    f = coarse_field
+    g = f.geometry
+    assert f.meta["u_center_reached"] == pytest.approx(f.fluid.u_center, rel=1e-9)
+    i_far = int(np.argmin(np.abs(f.x_nodes - (g.base_center[0] + g.length / 2) % g.length)))
+    y = f.y_nodes
+    mid = g.depth / 2.0
+    zs = mid + f.dx * np.array([-1.5, -0.5, 0.5, 1.5])
+    w = 0.25 * (1.0 + np.cos(np.pi * (zs - mid) / (2.0 * f.dx)))
+    assert w.sum() == pytest.approx(1.0)
+    prof = sum(wk * duct_velocity(y, zk, g.width, g.depth, 1.0) for wk, zk in zip(w, zs))
+    centre = duct_velocity(np.array(g.width / 2), np.array(mid), g.width, g.depth, 1.0)
+    expect = prof / centre * f.fluid.u_center
+    assert np.abs(f.ux[i_far] - expect).max() < 1e-2 * f.fluid.u_center
+    assert np.abs(f.uy[i_far]).max() < 1e-3 * f.fluid.u_center
+
+
+def test_fore_aft_symmetry(coarse_field):
+    # Stokes flow past a pillar symmetric about x = x_c: |u| is fore-aft symmetric.
+    # Tolerance 2e-3 U_center (measured 5e-4: lattice Re ~ 0.02 and convergence).
+    assert fore_aft_asymmetry(coarse_field) < 2e-3
+
+
+def test_separatrix_far_upstream_near_one_third(coarse_field):
+    # SPEC: the streamline ending on the upstream face sits near y/h_obs ≈ 1/3 far
+    # upstream (an independent BGK check gave 0.36). Accept 0.30..0.40.
+    # Measured: 0.342 (TRT, dx = 4 µm).
+    sep = separatrix(coarse_field)
+    assert 0.30 < sep.y_far_over_h < 0.40, sep
+    # the flux below the pillar is the same in every column through it (2D
+    # continuity of the z-averaged field); tolerance 1 % (measured 0.1 %)
+    assert sep.psi_spread < 1e-2, sep
+
+
+def test_peak_speeds_in_the_gaps(coarse_field):
+    # SPEC: about 1.5 U_center just above the apex. Accept 1.3..1.7 (measured 1.50).
+    # Below the flat base no peak can be slower than the mean speed there, fixed
+    # by mass balance: flux below the pillar / gap width (measured peak 1.22,
+    # mean ~1.1; see the report about the SPEC's "1.5 below the base").
+    f = coarse_field
+    above, below = peak_speeds(f)
+    assert 1.3 < above < 1.7, above
+    sep = separatrix(f)
+    gap = f.geometry.base_center[1]
+    mean_below = sep.psi / gap / f.fluid.u_center
+    assert below > mean_below > 0.9, (below, mean_below)
+    assert math.isfinite(below) and below < 1.7
