@@ -97,8 +97,9 @@ def flow(
         typer.echo(f"cache: {'hit' if info.hit else 'miss (computed)'}  {info.path}")
         typer.echo(f"grid: {nx} x {ny} x {nz} nodes ({depth}), dx = {cfg.flow.dx:g} µm")
         conv = "converged" if info.converged else "NOT converged (max_steps reached)"
+        coarse = f" (after {info.coarse_steps} on coarser grids)" if info.coarse_steps else ""
         typer.echo(
-            f"solver: {cfg.flow.collision.upper()}, {info.steps} steps, {conv}, "
+            f"solver: {cfg.flow.collision.upper()}, {info.steps} steps{coarse}, {conv}, "
             f"relative change per check {info.residual:.2e} (tolerance {cfg.flow.tolerance:g})"
         )
         typer.echo(
@@ -505,9 +506,7 @@ def synth(
 def discrepancy(
     measured: Annotated[Path, typer.Argument(help="Measured fibers (.parquet or .csv).")],
     config: ConfigArg,
-    output: Annotated[Path, typer.Option("--output", "-o", help="Report folder.")] = Path(
-        "report"
-    ),
+    output: Annotated[Path, typer.Option("--output", "-o", help="Report folder.")] = Path("report"),
     budget: Annotated[int | None, typer.Option(help="Most simulations in total.")] = None,
     seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
     copies: Annotated[int, typer.Option(help="Jittered baseline copies per fiber.")] = 4,

@@ -47,6 +47,7 @@ def measure(name: str, workers: int, tasks, spec) -> dict:
     steady = (len(stamps) - 1) / (stamps[-1] - stamps[0]) if len(stamps) > 1 else float("nan")
     return {
         "name": f"{name} x{workers}",
+        "workers": workers,
         "n": len(stamps),
         "total_s": total,
         "startup_s": stamps[0] - t0 - run_s[0],
@@ -85,12 +86,14 @@ def main() -> None:
     print(f"load average before: {os.getloadavg()[0]:.2f} (2 cores; > 2 means a shared machine)")
     print(
         f"{'executor':<10}{'runs':>6}{'total s':>10}{'start-up s':>12}{'runs/s':>9}"
-        f"{'wall/run':>10}{'cpu/run':>9}"
+        f"{'wall/run':>10}{'cpu/run':>9}{'cpu use':>9}"
     )
     for r in results:
+        # cpu use: fraction of each worker's time spent computing runs (1.0 = a free core each)
+        use = r["steady_rps"] * r["mean_cpu_s"] / r["workers"]
         print(
             f"{r['name']:<10}{r['n']:>6}{r['total_s']:>10.2f}{r['startup_s']:>12.2f}"
-            f"{r['steady_rps']:>9.2f}{r['mean_run_s']:>10.3f}{r['mean_cpu_s']:>9.3f}"
+            f"{r['steady_rps']:>9.2f}{r['mean_run_s']:>10.3f}{r['mean_cpu_s']:>9.3f}{use:>9.2f}"
         )
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     l1, l2 = results[0], results[1]

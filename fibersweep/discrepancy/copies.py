@@ -13,7 +13,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.noise import N_DRAWS, NoiseModel
 from fibersweep.discrepancy.simulate import Simulator
 
 __all__ = ["CopyMaker"]
@@ -46,12 +46,12 @@ class CopyMaker:
         return len(self.starts)
 
     def draws(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(jittered starts (n, 3), run seeds (n,), measurement-noise normals (n, 4)) of copy k."""
+        """(jittered starts (n, 3), run seeds (n,), measurement-noise normals) of copy k."""
         if k not in self._draws:
             rng = np.random.default_rng([self.seed, 7919, k])
             starts = self.noise.jitter_starts(self.starts, rng)
             seeds = rng.integers(0, 2**31 - 1, size=self.n)
-            z = rng.standard_normal((self.n, 4))
+            z = rng.standard_normal((self.n, N_DRAWS))
             self._draws[k] = (starts, seeds, z)
         return self._draws[k]
 

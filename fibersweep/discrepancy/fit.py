@@ -10,9 +10,10 @@ measured gap's.
 Fit: the parameter minimises the combined score of the fit fibers'
 observations against ``fit_copies`` copies made with the effect on (common
 random numbers, so the baseline value 0 is one more point of the same
-curve): a coarse grid over the bounds, then a bounded Brent refinement
-(:func:`scipy.optimize.minimize_scalar`) around the best grid point, within a
-fixed number of evaluations.
+curve): bounded Brent minimisation (:func:`scipy.optimize.minimize_scalar`)
+over the effect's interval (for a signed effect the half its signature
+points to) within a fixed number of simulated evaluations; the baseline value
+0 is always a candidate, so a fit never does worse than no effect.
 """
 
 from __future__ import annotations
@@ -128,12 +129,6 @@ def rank_effects(
     return sorted(out, key=lambda s: -s.cosine)
 
 
-def _grid(c: Candidate) -> list[float]:
-    if c.signed:
-        return [c.lo, c.lo / 2.0, c.hi / 2.0, c.hi]
-    return [c.hi / 4.0, c.hi / 2.0, c.hi]
-
-
 def fit_effect(
     cand: Candidate,
     maker: CopyMaker,
@@ -143,6 +138,7 @@ def fit_effect(
     observables: Sequence[str],
     weights: Mapping[str, float],
     max_evals: int,
+    side: float = 0.0,
 ) -> Fit:
     """Fit the value of one effect on the fit fibers.
 
@@ -154,9 +150,13 @@ def fit_effect(
         The baseline copies 0..fit_copies-1 restricted to ``rows`` (the value 0).
     max_evals : int
         Simulated evaluations allowed (each is len(rows) x fit_copies runs).
+    side : float
+        For a signed effect, the sign of the best-matching probe (0: search both).
     """
     k_fit = len(base_copies)
-    seen: dict[float, float] = {0.0: combined_loss(value_matrices(observed, base_copies, observables), weights)}
+    seen: dict[float, float] = {
+        0.0: combined_loss(value_matrices(observed, base_copies, observables), weights)
+    }
 
     def loss(v: float) -> float:
         v = float(v)
@@ -166,26 +166,23 @@ def fit_effect(
         if len(seen) - 1 >= max_evals:
             # Budget spent: this point is unknown; report the worst seen so Brent moves away.
             return max(seen.values())
-        copies = [maker.copy(k, {cand.name: v}, rows, desc=f"fit {cand.name}={v:.4g}") for k in range(k_fit)]
+        copies = [
+            maker.copy(k, {cand.name: v}, rows, desc=f"fit {cand.name}={v:.4g}")
+            for k in range(k_fit)
+        ]
         seen[v] = combined_loss(value_matrices(observed, copies, observables), weights)
         return seen[v]
 
-    grid = [0.0] + _grid(cand)
-    for v in grid[1:]:
-        if len(seen) - 1 < max_evals:
-            loss(v)
-    pts = sorted(seen)
-    i = int(np.argmin([seen[p] for p in pts]))
-    left = pts[i - 1] if i > 0 else cand.lo
-    right = pts[i + 1] if i + 1 < len(pts) else cand.hi
-    remaining = max_evals - (len(seen) - 1)
-    if remaining >= 2 and right > left:
-        minimize_scalar(
-            loss,
-            bounds=(left, right),
-            method="bounded",
-            options={"maxiter": remaining, "xatol": 1e-3 * (cand.hi - cand.lo)},
-        )
+    lo, hi = cand.lo, cand.hi
+    if cand.signed and side != 0.0:
+        # the signature already told the sign: search that half only
+        lo, hi = (0.0, cand.hi) if side > 0 else (cand.lo, 0.0)
+    minimize_scalar(
+        loss,
+        bounds=(lo, hi),
+        method="bounded",
+        options={"maxiter": max_evals, "xatol": 1e-3 * (cand.hi - cand.lo)},
+    )
     best = min(seen, key=lambda p: (seen[p], abs(p)))
     evals = tuple(sorted(seen.items()))
     log.info("fit %s: %.4g (loss %.4g vs baseline %.4g)", cand.name, best, seen[best], seen[0.0])

@@ -252,7 +252,7 @@ def describe(values: Mapping[str, np.ndarray]) -> dict[str, object]:
         counts = np.stack([(V[:, 1:] == c).sum(axis=1) for c in range(k)], axis=1)
         modal = np.where(counts.sum(axis=1) > 0, counts.argmax(axis=1), -1)
         conf = np.zeros((k, k), dtype=int)
-        for o, m in zip(V[:, 0], modal):
+        for o, m in zip(V[:, 0], modal, strict=True):
             if np.isfinite(o) and m >= 0:
                 conf[int(o), m] += 1
         out["confusion"] = {"labels": list(CLASSES), "counts": conf.tolist()}
@@ -262,12 +262,15 @@ def describe(values: Mapping[str, np.ndarray]) -> dict[str, object]:
         p = np.nanmean(V[:, 1:], axis=1)
         ok = np.isfinite(V[:, 0]) & np.isfinite(p)
         out["contact_mismatch"] = float(np.mean(np.abs(V[ok, 0] - np.round(p[ok]))))
-    for name in ("delta", "theta_c", "y_c", "t_pass"):
+    for name in ("delta", "theta_c", "y_c", "t_pass", "dwell"):
         if name not in values:
             continue
         V = values[name]
-        with np.errstate(invalid="ignore"):
-            mean = np.nanmean(np.where(np.isfinite(V[:, 1:]), V[:, 1:], np.nan), axis=1)
+        fin = np.isfinite(V[:, 1:])
+        cnt = fin.sum(axis=1)
+        mean = np.where(
+            cnt > 0, np.where(fin, V[:, 1:], 0.0).sum(axis=1) / np.maximum(cnt, 1), np.nan
+        )
         r = V[:, 0] - mean
         r = r[np.isfinite(r)]
         out[f"{name}_residual"] = {

@@ -17,7 +17,10 @@ import pandas as pd
 
 from fibersweep.errors import InputError
 
-__all__ = ["NoiseModel"]
+__all__ = ["NoiseModel", "N_DRAWS"]
+
+#: Standard normal draws per fiber for the outcome noise (delta, theta_c, y_c, t_pass, dwell).
+N_DRAWS = 5
 
 
 @dataclass(frozen=True)
@@ -39,7 +42,10 @@ class NoiseModel:
     y_c : float
         Contact position [/h_obs].
     t_pass : float
-        Relative error of the time to pass (log-normal) [-].
+        Relative error of the time to pass (log-normal) [-]; 0.01 is about one
+        frame at 100 fps over a 1 s track.
+    dwell : float
+        Error of the time from first contact to passing [s] (one frame at 100 fps).
     """
 
     theta0: float = 1.0
@@ -48,7 +54,8 @@ class NoiseModel:
     delta: float = 0.01
     theta_c: float = 1.0
     y_c: float = 0.01
-    t_pass: float = 0.02
+    t_pass: float = 0.01
+    dwell: float = 0.01
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -89,26 +96,26 @@ class NoiseModel:
         Parameters
         ----------
         outcomes : DataFrame
-            Columns delta, theta_c, y_c, t_pass (others are kept as they are).
+            Columns delta, theta_c, y_c, t_pass, dwell (others are kept as they are).
         rng : numpy.random.Generator, optional
             Source of the noise, if ``z`` is not given.
-        z : ndarray, shape (n, 4), optional
-            Standard normal draws to use (delta, theta_c, y_c, t_pass).
+        z : ndarray, shape (n, 5), optional
+            Standard normal draws to use (delta, theta_c, y_c, t_pass, dwell).
         """
         out = outcomes.copy()
         n = len(out)
         if z is None:
             if rng is None:
                 raise ValueError("observe needs rng or z")
-            z = rng.standard_normal((n, 4))
+            z = rng.standard_normal((n, N_DRAWS))
         z = np.asarray(z, dtype=np.float64)
-        if z.shape != (n, 4):
-            raise ValueError(f"z must have shape ({n}, 4), got {z.shape}")
+        if z.shape != (n, N_DRAWS):
+            raise ValueError(f"z must have shape ({n}, {N_DRAWS}), got {z.shape}")
         for k, col in enumerate(("delta", "theta_c", "y_c")):
             if col in out:
                 out[col] = out[col].to_numpy(dtype=np.float64) + getattr(self, col) * z[:, k]
         if "t_pass" in out:
-            out["t_pass"] = out["t_pass"].to_numpy(dtype=np.float64) * np.exp(
-                self.t_pass * z[:, 3]
-            )
+            out["t_pass"] = out["t_pass"].to_numpy(dtype=np.float64) * np.exp(self.t_pass * z[:, 3])
+        if "dwell" in out:
+            out["dwell"] = out["dwell"].to_numpy(dtype=np.float64) + self.dwell * z[:, 4]
         return out

@@ -31,8 +31,12 @@ from fibersweep.fiber.result import CLASSES
 
 __all__ = ["summary", "write_report"]
 
-_COLORS = {"Below": "tab:blue", "Above": "tab:orange", "Pole-vaulting": "tab:green",
-           "Trapping": "tab:red"}  # fmt: skip
+_COLORS = {
+    "Below": "tab:blue",
+    "Above": "tab:orange",
+    "Pole-vaulting": "tab:green",
+    "Trapping": "tab:red",
+}
 
 
 def _atomic_write(path: Path, data: str | bytes) -> None:
@@ -87,14 +91,12 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         for name, b in before.items():
             a = after.get(name)
             bm, am = b["excess"]["mean"], a["excess"]["mean"] if a else None
-            shrink[name] = (
-                (am / bm) if (am is not None and bm is not None and bm > 0) else None
-            )
+            shrink[name] = (am / bm) if (am is not None and bm is not None and bm > 0) else None
         ho.append(
             {
                 "effect": h.name,
                 "value": h.value,
-                "improvement": dict(zip(("mean", "lo95", "hi95"), h.improvement)),
+                "improvement": dict(zip(("mean", "lo95", "hi95"), h.improvement, strict=True)),
                 "p": h.p_value,
                 "p_holm": h.p_holm,
                 "significant": h.significant,
@@ -104,24 +106,38 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
             }
         )
     out = {
-        "verdict": {"kind": v.kind, "effects": v.effects, "observable": v.observable,
-                    "region": v.region, "text": v.text},  # fmt: skip
+        "verdict": {
+            "kind": v.kind,
+            "effects": v.effects,
+            "observable": v.observable,
+            "region": v.region,
+            "text": v.text,
+        },
         "n_fibers": len(res.observed),
         "n_heldout": len(res.heldout_rows),
         "observables": list(res.observables),
         "alpha": res.settings.alpha,
         "gap": _gap_dict(res.gap),
         "descriptive": res.descriptive,
-        "region": {"where": res.region.describe(), "n": res.region.n,
-                   "mean_excess": res.region.mean_excess, "share": res.region.share},  # fmt: skip
+        "region": {
+            "where": res.region.describe(),
+            "n": res.region.n,
+            "mean_excess": res.region.mean_excess,
+            "share": res.region.share,
+        },
         "region_by_observable": {k: r.describe() for k, r in res.region_by_observable.items()},
         "signatures": [
             {"effect": s.name, "probe": s.probe, "cosine": s.cosine, "strength": s.strength}
             for s in res.signatures
         ],
         "fits": [
-            {"effect": f.name, "value": f.value, "loss": f.loss, "loss_baseline": f.loss0,
-             "evaluations": [list(e) for e in f.evaluations]}  # fmt: skip
+            {
+                "effect": f.name,
+                "value": f.value,
+                "loss": f.loss,
+                "loss_baseline": f.loss0,
+                "evaluations": [list(e) for e in f.evaluations],
+            }
             for f in res.fits
         ],
         "heldout_gap_before": before,
@@ -131,12 +147,16 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "failed_runs": res.failed_runs,
         "seconds": res.seconds,
         "settings": {
-            "copies": res.plan.copies, "fit_copies": res.plan.fit_copies,
-            "candidates": res.plan.candidates, "fit_evals": res.plan.fit_evals,
-            "seed": res.settings.seed, "budget": res.settings.budget,
-            "noise": {k: getattr(res.settings.noise, k)
-                      for k in res.settings.noise.__dataclass_fields__},
-        },  # fmt: skip
+            "copies": res.plan.copies,
+            "fit_copies": res.plan.fit_copies,
+            "candidates": res.plan.candidates,
+            "fit_evals": res.plan.fit_evals,
+            "seed": res.settings.seed,
+            "budget": res.settings.budget,
+            "noise": {
+                k: getattr(res.settings.noise, k) for k in res.settings.noise.__dataclass_fields__
+            },
+        },
     }
     return _clean(out)
 
@@ -163,14 +183,21 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
     held = res.heldout_rows
     o_ho = obs.iloc[held].reset_index(drop=True)
     cls_obs = value_matrices(o_ho, [], ["class"])["class"][:, 0]
-    panels = [("measured", cls_obs),
-              ("baseline model", res.baseline_copies[0]["class"].to_numpy()[held])]  # fmt: skip
+    panels = [
+        ("measured", cls_obs),
+        ("baseline model", res.baseline_copies[0]["class"].to_numpy()[held]),
+    ]
     if effect and effect in res.effect_copies:
         panels.append((f"with {effect}", res.effect_copies[effect][0]["class"].to_numpy()))
     fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), sharey=True)
-    for ax, (title, codes) in zip(np.atleast_1d(axes), panels):
-        ax.scatter(o_ho["theta0"], o_ho["y0"], c=_class_colors(codes),
-                   s=12 + 30 * (o_ho["length"] - 0.4), edgecolors="none")  # fmt: skip
+    for ax, (title, codes) in zip(np.atleast_1d(axes), panels, strict=True):
+        ax.scatter(
+            o_ho["theta0"],
+            o_ho["y0"],
+            c=_class_colors(codes),
+            s=12 + 30 * (o_ho["length"] - 0.4),
+            edgecolors="none",
+        )
         ax.set_title(f"{title} (held-out)")
         ax.set_xlabel("θ0 [deg]")
     np.atleast_1d(axes)[0].set_ylabel("y0 / h_obs")
@@ -184,7 +211,7 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
     exc = _combined_excess(res.gap, res.weights)
     th, y0, L = (obs[c].to_numpy(dtype=np.float64) for c in ("theta0", "y0", "length"))
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.8))
-    for ax, (x, xl) in zip(axes, ((th, "θ0 [deg]"), (L, "L / l_obs"))):
+    for ax, (x, xl) in zip(axes, ((th, "θ0 [deg]"), (L, "L / l_obs")), strict=True):
         xe = np.linspace(np.nanmin(x), np.nanmax(x) + 1e-9, 6)
         ye = np.linspace(np.nanmin(y0), np.nanmax(y0) + 1e-9, 8)
         m, c = binned_map(x, y0, exc, xe, ye)
@@ -245,8 +272,9 @@ def _markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
     for name, g in s["gap"].items():
         e = g["excess"]
         lines.append(
-            f"| {name} | {g['n']} | {_fmt(g['statistic'], '.4g')} | {_fmt(g['noise_floor'], '.4g')} "
-            f"| {_fmt(g['z'], '.2f')} | {_fmt(g['p_holm'], '.3g')} | "
+            f"| {name} | {g['n']} | {_fmt(g['statistic'], '.4g')} "
+            f"| {_fmt(g['noise_floor'], '.4g')} | {_fmt(g['z'], '.2f')} "
+            f"| {_fmt(g['p_holm'], '.3g')} | "
             f"{'**yes**' if g['significant'] else 'no'} | {_fmt(e['mean'], '.3g')} "
             f"[{_fmt(e['lo95'], '.3g')}, {_fmt(e['hi95'], '.3g')}] |"
         )
@@ -254,9 +282,11 @@ def _markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
     lines += ["", "Descriptive measures (observed vs the model's copies):", ""]
     if "confusion" in d:
         labels = d["confusion"]["labels"]
-        lines += ["| observed \\ model | " + " | ".join(labels) + " |",
-                  "|---" * (len(labels) + 1) + "|"]  # fmt: skip
-        for lab, row in zip(labels, d["confusion"]["counts"]):
+        lines += [
+            "| observed \\ model | " + " | ".join(labels) + " |",
+            "|---" * (len(labels) + 1) + "|",
+        ]
+        for lab, row in zip(labels, d["confusion"]["counts"], strict=True):
             lines.append(f"| {lab} | " + " | ".join(str(c) for c in row) + " |")
         lines.append("")
     for k, val in d.items():
@@ -273,15 +303,24 @@ def _markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
     for obs, where in s["region_by_observable"].items():
         lines.append(f"- {obs}: {where}")
     if s["signatures"]:
-        lines += ["", "## Effects ranked by signature", "",
-                  "| effect | probe | cosine with the gap | signature strength |",
-                  "|---|---|---|---|"]  # fmt: skip
+        lines += [
+            "",
+            "## Effects ranked by signature",
+            "",
+            "| effect | probe | cosine with the gap | signature strength |",
+            "|---|---|---|---|",
+        ]
         for r in s["signatures"]:
-            lines.append(f"| {r['effect']} | {r['probe']:g} | {r['cosine']:.2f} | "
-                         f"{r['strength']:.1f} |")  # fmt: skip
-        lines += ["", "## Fits (fit split) and held-out decision", "",
-                  "| effect | fitted value | held-out improvement [95 % CI] | p (Holm) | "
-                  "explains |", "|---|---|---|---|---|"]  # fmt: skip
+            lines.append(
+                f"| {r['effect']} | {r['probe']:g} | {r['cosine']:.2f} | {r['strength']:.1f} |"
+            )
+        lines += [
+            "",
+            "## Fits (fit split) and held-out decision",
+            "",
+            "| effect | fitted value | held-out improvement [95 % CI] | p (Holm) | explains |",
+            "|---|---|---|---|---|",
+        ]
         for h in s["heldout"]:
             im = h["improvement"]
             lines.append(
@@ -291,9 +330,13 @@ def _markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
         for h in s["heldout"]:
             if h["effect"] not in v["effects"]:
                 continue
-            lines += ["", f"### Held-out gap before / after {h['effect']}", "",
-                      "| observable | before [95 % CI] | after [95 % CI] | after/before |",
-                      "|---|---|---|---|"]  # fmt: skip
+            lines += [
+                "",
+                f"### Held-out gap before / after {h['effect']}",
+                "",
+                "| observable | before [95 % CI] | after [95 % CI] | after/before |",
+                "|---|---|---|---|",
+            ]
             for name, b in s["heldout_gap_before"].items():
                 a = h["gap_after"].get(name, {}).get("excess", {})
                 be = b["excess"]

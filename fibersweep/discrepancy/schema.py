@@ -16,12 +16,16 @@ theta_c     no        fiber angle at first contact [degrees]; NaN without contac
 y_c         no        lateral position of the contact point from the base / h_obs;
                       NaN without contact
 t_pass      no        time to pass the pillar [s]; NaN for Trapping
+t_contact   no        time of first contact on the clock of t_pass [s]; NaN without
+                      contact. With t_pass it gives the observable ``dwell``
+                      = t_pass - t_contact (contact to passing)
 angle_unit  no        'deg' (default) or 'rad' for theta0 and theta_c, same in every row
 ==========  ========  ==========================================================
 
 An optional observed column that is absent is simply not tested. An optional
 column that is present must be complete: NaN is allowed only where the quantity
-is undefined (delta and t_pass for Trapping, theta_c and y_c without contact).
+is undefined (delta and t_pass for Trapping, theta_c, y_c and t_contact without
+contact).
 Leave a column out entirely if it was not measured.
 
 Trajectories (optional second table): columns ``fiber_id, t [s], x [µm],
@@ -62,7 +66,7 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 START_COLUMNS = ("theta0", "y0", "length")
-OBSERVED_COLUMNS = ("class", "delta", "contact", "theta_c", "y_c", "t_pass")
+OBSERVED_COLUMNS = ("class", "delta", "contact", "theta_c", "y_c", "t_pass", "t_contact")
 TRAJECTORY_COLUMNS = ("fiber_id", "t", "x", "y", "theta")
 
 # Plausible ranges (inclusive); values outside point to a unit error.
@@ -74,6 +78,7 @@ _RANGES = {
     "theta_c": (-180.0, 180.0),
     "y_c": (-0.5, 1.5),
     "t_pass": (0.0, 1e4),
+    "t_contact": (0.0, 1e4),
 }
 _UNIT_HINT = {
     "y0": "y0 must be in units of h_obs (divide µm by the pillar height)",
@@ -81,6 +86,7 @@ _UNIT_HINT = {
     "delta": "delta must be in units of h_obs",
     "y_c": "y_c must be measured from the base in units of h_obs",
     "t_pass": "t_pass must be in seconds",
+    "t_contact": "t_contact must be in seconds",
     "theta0": "theta0 must be in degrees",
     "theta_c": "theta_c must be in degrees",
 }
@@ -99,7 +105,8 @@ class MeasuredData:
         One row per fiber, columns ``fiber_id`` + START_COLUMNS + the observed
         columns present; angles in degrees, ``contact`` bool, ``class`` canonical.
     observed : tuple of str
-        The observed columns present (subset of OBSERVED_COLUMNS, always 'class').
+        The observables present (always 'class'; 'dwell' when t_pass and
+        t_contact are both given).
     trajectories : pandas.DataFrame or None
         Validated trajectory table, if given.
     source : str
@@ -229,7 +236,7 @@ def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredDat
     df = df.reset_index(drop=True)
 
     vals: dict[str, np.ndarray] = {}
-    for col in (*START_COLUMNS, "delta", "theta_c", "y_c", "t_pass"):
+    for col in (*START_COLUMNS, "delta", "theta_c", "y_c", "t_pass", "t_contact"):
         if col in df.columns:
             v = _to_float(df, col, problems)
             if v is not None:
@@ -253,6 +260,7 @@ def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredDat
         "t_pass": trapped,
         "theta_c": ~contact if contact is not None else None,
         "y_c": ~contact if contact is not None else None,
+        "t_contact": ~contact if contact is not None else None,
     }
     for col, v in vals.items():
         inf = np.isinf(v)
@@ -260,7 +268,7 @@ def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredDat
             problems.append(f"{col}: infinite value in {_rows(inf)}")
         nan = np.isnan(v)
         allowed = nan_ok.get(col)
-        if col in ("theta_c", "y_c") and contact is None:
+        if col in ("theta_c", "y_c", "t_contact") and contact is None:
             allowed = np.ones_like(nan)  # without a contact column NaN means 'no contact'
         bad_nan = nan & ~allowed if allowed is not None else nan
         if bad_nan.any():
@@ -269,6 +277,7 @@ def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredDat
                 "t_pass": "NaN is allowed only for Trapping",
                 "theta_c": "NaN is allowed only without contact",
                 "y_c": "NaN is allowed only without contact",
+                "t_contact": "NaN is allowed only without contact",
             }.get(col, "a value is required")
             problems.append(
                 f"{col}: missing/NaN value in {_rows(bad_nan)} ({why}; "
@@ -276,7 +285,7 @@ def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredDat
             )
         lo, hi = _RANGES[col]
         out = np.isfinite(v) & ((v < lo) | (v > hi))
-        if col == "t_pass":
+        if col in ("t_pass", "t_contact"):
             out = np.isfinite(v) & ((v <= lo) | (v > hi))
         if out.any():
             problems.append(
@@ -290,11 +299,16 @@ def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredDat
                 f"contact: false for a Trapping or Pole-vaulting fiber in {_rows(must)} "
                 "(both classes require contact)"
             )
-        for col in ("theta_c", "y_c"):
+        for col in ("theta_c", "y_c", "t_contact"):
             if col in vals:
                 given = np.isfinite(vals[col]) & ~contact
                 if given.any():
                     problems.append(f"{col}: given for a fiber without contact in {_rows(given)}")
+    if "t_contact" in vals and "t_pass" in vals:
+        late = np.isfinite(vals["t_contact"]) & np.isfinite(vals["t_pass"])
+        late &= vals["t_contact"] > vals["t_pass"]
+        if late.any():
+            problems.append(f"t_contact: later than t_pass in {_rows(late)}")
     if "delta" in vals:
         given = np.isfinite(vals["delta"]) & trapped
         if given.any():
@@ -321,6 +335,11 @@ def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredDat
         if col == "contact" and contact is not None:
             out["contact"] = contact
             observed.append(col)
+        elif col == "t_contact" and col in vals:
+            out["t_contact"] = vals[col]
+            if "t_pass" in vals:  # the observable is the time from contact to passing
+                out["dwell"] = vals["t_pass"] - vals["t_contact"]
+                observed.append("dwell")
         elif col in vals:
             out[col] = vals[col]
             observed.append(col)

@@ -37,7 +37,7 @@ __all__ = [
 ]
 
 #: Observables compared, in report order.
-OBSERVABLES = ("class", "contact", "delta", "theta_c", "y_c", "t_pass")
+OBSERVABLES = ("class", "contact", "delta", "theta_c", "y_c", "t_pass", "dwell")
 CATEGORICAL = ("class", "contact")
 N_CATEGORIES = {"class": len(CLASSES), "contact": 2}
 #: Additive smoothing of ensemble frequencies (Jeffreys' 1/2).

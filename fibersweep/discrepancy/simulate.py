@@ -31,7 +31,7 @@ __all__ = ["OUTCOME_COLUMNS", "Simulator", "BudgetExhausted", "outcome_row"]
 
 log = logging.getLogger(__name__)
 
-OUTCOME_COLUMNS = ("class", "contact", "delta", "theta_c", "y_c", "t_pass")
+OUTCOME_COLUMNS = ("class", "contact", "delta", "theta_c", "y_c", "t_pass", "dwell", "t_contact")
 _CLASS_CODE = {c: i for i, c in enumerate(CLASSES)}
 
 _WORKER: dict[str, Any] = {}
@@ -51,6 +51,9 @@ def outcome_row(result: Any) -> dict[str, Any]:
         "theta_c": float(result.theta_c) if ok and result.contact else math.nan,
         "y_c": float(result.y_c) if ok and result.contact else math.nan,
         "t_pass": float(result.t_pass) if ok else math.nan,
+        # time from first contact to passing the pillar (contact fibers that pass)
+        "dwell": float(result.t_pass - result.t_contact) if ok and result.contact else math.nan,
+        "t_contact": float(result.t_contact) if ok and result.contact else math.nan,
         "status": "ok" if ok else "failed",
         "reason": "" if ok else (result.reason or f"class {result.cls!r}"),
     }
@@ -86,7 +89,7 @@ def _run_chunk(
         if hasattr(e, "transform_outcome")
     ]
     out = []
-    for i, s, seed in zip(idx, starts, seeds):
+    for i, s, seed in zip(idx, starts, seeds, strict=True):
         start = FiberStart(theta0=float(s[0]), y0=float(s[1]), length=float(s[2]))
         try:
             res = simulate(field, settings, start, rng_seed=int(seed))
@@ -198,7 +201,9 @@ class Simulator:
         starts = np.asarray(starts, dtype=np.float64)
         seeds = np.asarray(seeds, dtype=np.int64)
         if starts.ndim != 2 or starts.shape[1] != 3 or len(seeds) != len(starts):
-            raise ValueError(f"starts (n, 3) and seeds (n,) expected: {starts.shape}, {seeds.shape}")
+            raise ValueError(
+                f"starts (n, 3) and seeds (n,) expected: {starts.shape}, {seeds.shape}"
+            )
         effects = {k: float(v) for k, v in (effects or {}).items() if float(v) != 0.0}
         build_effects({**self.settings.effects, **effects})  # unknown names fail here
         n = len(starts)
@@ -237,5 +242,11 @@ class Simulator:
         nf = int((df["status"] != "ok").sum())
         if nf:
             self.failed += nf
-            log.warning("%s: %d of %d runs failed (%s)", desc, nf, n, df["reason"][df["status"] != "ok"].iloc[0])
+            log.warning(
+                "%s: %d of %d runs failed (%s)",
+                desc,
+                nf,
+                n,
+                df["reason"][df["status"] != "ok"].iloc[0],
+            )
         return df

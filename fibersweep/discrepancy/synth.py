@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.noise import N_DRAWS, NoiseModel
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
@@ -93,7 +93,7 @@ def synthesize(
     true = lo + (hi - lo) * rng.random((n, 3))
     reported = noise.jitter_starts(true, rng)
     seeds = rng.integers(0, 2**31 - 1, size=n)
-    z = rng.standard_normal((n, 4))
+    z = rng.standard_normal((n, N_DRAWS))
     effects = {**fiber.effects, **effects}  # hidden effects on top of the config's own
     with Simulator(field, fiber, workers=workers, progress=progress) as sim:
         raw = sim.run(true, effects, seeds, desc="synth")
@@ -111,6 +111,10 @@ def synthesize(
             "theta_c": obs["theta_c"].to_numpy(),
             "y_c": obs["y_c"].to_numpy(),
             "t_pass": obs["t_pass"].to_numpy(),
+            # first contact on the same clock: t_pass - dwell (both as measured)
+            "t_contact": np.where(
+                np.isfinite(obs["dwell"]), obs["t_pass"] - obs["dwell"], obs["t_contact"]
+            ),
         }
     )
     # A passing fiber whose rear never crossed the pillar line within the run has no
@@ -126,8 +130,9 @@ def synthesize(
         for i in np.flatnonzero(~keep)
     ]
     if failures:
-        log.warning("synth: %d of %d runs failed and are left out (listed in the truth)",
-                    len(failures), n)  # fmt: skip
+        log.warning(
+            "synth: %d of %d runs failed and are left out (listed in the truth)", len(failures), n
+        )
     table = table[keep].reset_index(drop=True)
     validate_measured(table, source="synth")  # the writer's own output must follow the schema
     truth = {

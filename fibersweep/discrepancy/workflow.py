@@ -2,10 +2,12 @@
 
 :func:`run_discrepancy` is the library entry point of ``fibersweep discrepancy``.
 It simulates (1) ``copies`` jittered baseline copies of every measured fiber,
-(2) tests the gap per observable against them, (3) localises it, (4) probes,
-ranks and fits the library's effects on a fit split, (5) compares the fitted
-effects with the baseline on the held-out split and decides. The simulation
-count is planned up front and never exceeds ``budget``.
+(2) tests the gap per observable against them, (3) localises it, (4) probes
+and ranks the library's effects on one half of the fibers, (5) fits the best
+few on each half and scores each half with the value fitted on the other
+(two-fold cross-fitting: every fiber is held out once), compares with the
+baseline and decides. The simulation count is planned up front and never
+exceeds ``budget``.
 """
 
 from __future__ import annotations
@@ -59,8 +61,6 @@ class DiscrepancySettings:
         Effects fitted (the best-matching signatures).
     fit_evals : int
         Simulated evaluations per 1D fit.
-    holdout : float
-        Fraction of fibers held out for the decision.
     alpha : float
         Family-wise error rate of every test.
     budget : int or None
@@ -78,7 +78,6 @@ class DiscrepancySettings:
     fit_copies: int = 2
     candidates: int = 3
     fit_evals: int = 5
-    holdout: float = 0.5
     alpha: float = 0.05
     budget: int | None = None
     seed: int = 0
@@ -90,10 +89,9 @@ class DiscrepancySettings:
     def __post_init__(self) -> None:
         checks = {
             "copies": self.copies >= 2,
-            "fit_copies": self.fit_copies >= 1,
+            "fit_copies": self.fit_copies >= 2,  # the fair CRPS needs two members
             "candidates": self.candidates >= 1,
             "fit_evals": self.fit_evals >= 1,
-            "holdout": 0.1 <= self.holdout <= 0.9,
             "alpha": 0.0 < self.alpha < 0.5,
             "workers": self.workers >= 1,
         }
@@ -113,16 +111,15 @@ class Plan:
     candidates: int
     fit_evals: int
     probes: int
-    n_fit: int
-    n_heldout: int
 
     def cost(self, n: int) -> dict[str, int]:
-        """Runs per step for n fibers."""
+        """Most runs per step for n fibers (two folds of n/2 for the fits)."""
+        half = (n + 1) // 2
         return {
             "baseline": n * self.copies,
-            "probes": self.probes * self.n_fit,
-            "fits": self.candidates * self.fit_evals * self.fit_copies * self.n_fit,
-            "heldout": self.candidates * self.copies * self.n_heldout,
+            "probes": self.probes * half,
+            "fits": 2 * self.candidates * self.fit_evals * self.fit_copies * half,
+            "heldout": self.candidates * self.copies * n,
         }
 
     def total(self, n: int) -> int:
@@ -137,17 +134,19 @@ def plan_budget(n: int, s: DiscrepancySettings, candidates: list[Candidate]) -> 
     InputError
         If even the smallest plan (2 copies, one candidate, one evaluation) does not fit.
     """
-    n_held = max(1, int(round(n * s.holdout)))
-    n_fit = n - n_held
     probes = sum(len(c.probes) for c in candidates)
-    plan = Plan(s.copies, s.fit_copies, min(s.candidates, len(candidates)), s.fit_evals,
-                probes, n_fit, n_held)  # fmt: skip
+    plan = Plan(s.copies, s.fit_copies, min(s.candidates, len(candidates)), s.fit_evals, probes)
     if s.budget is None:
         return plan
     shrink = [
-        ("fit_evals", 3), ("fit_copies", 1), ("candidates", 2), ("fit_evals", 2),
-        ("copies", 3), ("candidates", 1), ("fit_evals", 1), ("copies", 2),
-    ]  # fmt: skip
+        ("fit_evals", 3),
+        ("candidates", 2),
+        ("fit_evals", 2),
+        ("copies", 3),
+        ("candidates", 1),
+        ("fit_evals", 1),
+        ("copies", 2),
+    ]
     for attr, v in shrink:
         if plan.total(n) <= s.budget:
             return plan
@@ -181,7 +180,7 @@ class DiscrepancyResult:
     observed: pd.DataFrame
     baseline_copies: list[pd.DataFrame]
     effect_copies: dict[str, list[pd.DataFrame]]
-    heldout_rows: np.ndarray
+    heldout_rows: np.ndarray  # fibers scored out of sample (all of them, by cross-fitting)
     weights: dict[str, float]
     settings: DiscrepancySettings
     observables: tuple[str, ...]
@@ -247,19 +246,24 @@ def run_discrepancy(
     observed = measured.table.reset_index(drop=True)
     rng = np.random.default_rng([s.seed, 11])
     perm = rng.permutation(n)
-    held = np.sort(perm[: plan.n_heldout])
-    fit_rows = np.sort(perm[plan.n_heldout :])
+    folds = [np.sort(perm[: n // 2]), np.sort(perm[n // 2 :])]
+    extra_values: dict[str, list[float]] = {}
 
     with Simulator(field_, fiber, workers=s.workers, budget=s.budget, progress=progress) as sim:
         maker = CopyMaker(measured.starts, s.noise, s.seed, sim)
         # (1) noise floor: jittered baseline copies
-        base = [maker.copy(k, None, desc=f"baseline copy {k + 1}/{plan.copies}")
-                for k in range(plan.copies)]  # fmt: skip
+        base = [
+            maker.copy(k, None, desc=f"baseline copy {k + 1}/{plan.copies}")
+            for k in range(plan.copies)
+        ]
         values = value_matrices(observed, base, obs_names)
         weights = observable_weights(values)
         # (2) gap per observable
         gap = assess_gap(values, rng, alpha=s.alpha, n_perm=s.n_perm)
         desc = describe(values)
+        # fits and the held-out decision score the observables with a gap (less noise);
+        # the residual check after an effect still looks at all of them
+        w_gap = {o: (w if o in gap.significant else 0.0) for o, w in weights.items()}
         # (3) where it lives
         X = _features(observed)
         region = find_region(X, _combined_excess(gap, weights))
@@ -272,37 +276,64 @@ def run_discrepancy(
         before_ho: GapResult | None = None
         effect_copies: dict[str, list[pd.DataFrame]] = {}
         if gap.any:
-            # (4) rank by signature on the fit split, fit the best few there
-            base_fit = _subset(base, fit_rows)
+            # (4) rank by signature on fold 0's fit half; fit the best few on each fold
+            base_fit = _subset(base, folds[1])
             signatures = rank_effects(
-                feature_vector(gap), candidates, maker, base_fit, fit_rows, obs_names,
-                probe_copy=plan.copies + 1, rng=rng,
-            )  # fmt: skip
+                feature_vector(gap),
+                candidates,
+                maker,
+                base_fit,
+                folds[1],
+                obs_names,
+                probe_copy=plan.copies + 1,
+                rng=rng,
+            )
             chosen = [sg for sg in signatures if sg.cosine > 0][: plan.candidates]
-            obs_fit = observed.iloc[fit_rows].reset_index(drop=True)
-            for sg in chosen:
-                cand = next(c for c in candidates if c.name == sg.name)
-                fits.append(
-                    fit_effect(cand, maker, obs_fit, base_fit[: plan.fit_copies], fit_rows,
-                               obs_names, weights, plan.fit_evals)  # fmt: skip
-                )
-            # (5) held-out comparison
-            obs_ho = observed.iloc[held].reset_index(drop=True)
-            base_ho = _subset(base, held)
-            v_before = value_matrices(obs_ho, base_ho, obs_names)
-            before_ho = assess_gap(v_before, rng, alpha=s.alpha, n_perm=s.n_perm)
-            base_scores = weighted_loss(v_before, weights)
+            # (5) cross-fitting: fibers of fold f are scored with the value fitted on
+            # the other fold, so every fiber is held out exactly once.
+            fold_values: dict[str, list[float]] = {}
+            for f_idx in range(len(folds)):
+                train = folds[1 - f_idx]
+                obs_tr = observed.iloc[train].reset_index(drop=True)
+                base_tr = _subset(base, train)[: plan.fit_copies]
+                for sg in chosen:
+                    cand = next(c for c in candidates if c.name == sg.name)
+                    fit = fit_effect(
+                        cand,
+                        maker,
+                        obs_tr,
+                        base_tr,
+                        train,
+                        obs_names,
+                        w_gap,
+                        plan.fit_evals,
+                        side=float(np.sign(sg.probe)),
+                    )
+                    fits.append(fit)
+                    fold_values.setdefault(sg.name, []).append(fit.value)
+            before_ho = gap  # every fiber is held out once: the 'before' gap is the full gap
+            base_scores = weighted_loss(values, w_gap)
             eff_scores, residuals, fitted = {}, {}, {}
-            for f in fits:
-                if f.value == 0.0:
-                    continue  # the fit kept the baseline: nothing to add
-                cps = [maker.copy(k, {f.name: f.value}, held, desc=f"held-out {f.name}")
-                       for k in range(plan.copies)]  # fmt: skip
-                effect_copies[f.name] = cps
-                v_after = value_matrices(obs_ho, cps, obs_names)
-                eff_scores[f.name] = weighted_loss(v_after, weights)
-                residuals[f.name] = assess_gap(v_after, rng, alpha=s.alpha, n_perm=s.n_perm)
-                fitted[f.name] = f.value
+            for name, vals in fold_values.items():
+                if all(v == 0.0 for v in vals):
+                    continue  # both folds kept the baseline: nothing to add
+                parts = [[None] * len(folds) for _ in range(plan.copies)]
+                for f_idx, held in enumerate(folds):
+                    for k in range(plan.copies):
+                        parts[k][f_idx] = maker.copy(
+                            k, {name: vals[f_idx]}, held, desc=f"held-out {name}"
+                        )
+                cps = []
+                for k in range(plan.copies):
+                    df = pd.concat(parts[k], ignore_index=True)
+                    order = np.argsort(np.concatenate(folds))
+                    cps.append(df.iloc[order].reset_index(drop=True))
+                effect_copies[name] = cps
+                v_after = value_matrices(observed, cps, obs_names)
+                eff_scores[name] = weighted_loss(v_after, w_gap)
+                residuals[name] = assess_gap(v_after, rng, alpha=s.alpha, n_perm=s.n_perm)
+                fitted[name] = float(np.mean(vals))
+                extra_values[name] = [float(v) for v in vals]
             heldout = evaluate_heldout(fitted, base_scores, eff_scores, residuals, rng, s.alpha)
         verdict = decide(gap, heldout, region_text, rng, s.alpha)
         used, failed = sim.used, sim.failed
@@ -324,8 +355,9 @@ def run_discrepancy(
         observed=observed,
         baseline_copies=base,
         effect_copies=effect_copies,
-        heldout_rows=held,
+        heldout_rows=np.arange(n),
         weights=weights,
         settings=s,
         observables=obs_names,
+        extra={"fold_values": extra_values},
     )

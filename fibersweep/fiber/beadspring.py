@@ -23,78 +23,19 @@ from fibersweep.errors import InputError
 from fibersweep.fiber import kparams as K
 from fibersweep.fiber import record as R
 from fibersweep.fiber.contact import pillar_forces
+from fibersweep.fiber.elastic import elastic_forces
 from fibersweep.fiber.mobility import _rpy_fill, body_mobility, fiber_offsets
+from fibersweep.fiber.rigid import coulomb_friction
 from fibersweep.flow.field import interpolate_ib
 
 __all__ = [
     "DEFAULT_DT",
-    "elastic_energy",
-    "elastic_forces",
     "integrate_bead_spring",
     "run_bead_spring",
 ]
 
 DEFAULT_DT = 5e-5  # s; see run_bead_spring and the dt-convergence test
 CHUNK = 20_000
-
-
-@nb.njit(cache=True)
-def elastic_energy(x: np.ndarray, y: np.ndarray, a: float, S: float, B: float) -> float:
-    """H [pN·µm] of beads at (x, y) [µm] with stretching S [pN] and bending B [pN·µm²]."""
-    n = x.shape[0]
-    e = 0.0
-    for i in range(1, n):
-        ln = math.hypot(x[i] - x[i - 1], y[i] - y[i - 1])
-        e += S / (4.0 * a) * (ln - 2.0 * a) ** 2
-    for i in range(1, n - 1):
-        ax = x[i] - x[i - 1]
-        ay = y[i] - y[i - 1]
-        bx = x[i + 1] - x[i]
-        by = y[i + 1] - y[i]
-        c = (ax * bx + ay * by) / (math.hypot(ax, ay) * math.hypot(bx, by))
-        e += B / (2.0 * a) * (1.0 - c)
-    return e
-
-
-@nb.njit(cache=True)
-def elastic_forces(
-    x: np.ndarray, y: np.ndarray, a: float, S: float, B: float, fx: np.ndarray, fy: np.ndarray
-) -> None:
-    """F = −∇H into fx, fy [pN] (overwritten)."""
-    n = x.shape[0]
-    for i in range(n):
-        fx[i] = 0.0
-        fy[i] = 0.0
-    for i in range(1, n):
-        tx = x[i] - x[i - 1]
-        ty = y[i] - y[i - 1]
-        ln = math.hypot(tx, ty)
-        g = S / (2.0 * a) * (ln - 2.0 * a) / ln  # dH/dt_i = g t_i
-        fx[i] -= g * tx
-        fy[i] -= g * ty
-        fx[i - 1] += g * tx
-        fy[i - 1] += g * ty
-    kb = B / (2.0 * a)
-    for i in range(1, n - 1):
-        ax = x[i] - x[i - 1]
-        ay = y[i] - y[i - 1]
-        bx = x[i + 1] - x[i]
-        by = y[i + 1] - y[i]
-        la = math.hypot(ax, ay)
-        lb = math.hypot(bx, by)
-        c = (ax * bx + ay * by) / (la * lb)
-        # d(t̂a·t̂b)/dta = (t̂b − c t̂a)/|ta|; dH = −kb d(c)
-        gax = -kb * (bx / lb - c * ax / la) / la
-        gay = -kb * (by / lb - c * ay / la) / la
-        gbx = -kb * (ax / la - c * bx / lb) / lb
-        gby = -kb * (ay / la - c * by / lb) / lb
-        # ta = r_i − r_{i−1}, tb = r_{i+1} − r_i
-        fx[i] -= gax - gbx
-        fy[i] -= gay - gby
-        fx[i - 1] += gax
-        fy[i - 1] += gay
-        fx[i + 1] -= gbx
-        fy[i + 1] -= gby
 
 
 @nb.njit(cache=True)
@@ -113,58 +54,18 @@ def _forces(x, y, prm, verts, pbx, pby, curves, fx, fy, cfx, cfy, st, dist):
 
 @nb.njit(cache=True)
 def _velocity(x, y, ux, uy, dx, prm, verts, pbx, pby, curves, mob, u, f, fx, fy, cfx, cfy, st,
-              dist, vprev, s_off, nm, fric):  # fmt: skip
+              dist, s_off, pm, nm, fric):  # fmt: skip
     """f(q) = u + M F at (x, y) into f (2n); M into mob. Returns (any_c, cx, cy).
 
-    Friction (if on): for each contacting bead, the tangential velocity it would
-    have without friction is estimated from the last velocity ``vprev`` minus
-    the effect of the last friction force ``fric`` (per bead, along t̂); the new
-    friction opposes it, capped by the force that stops it when the fiber moves
-    as the rigid body with mobility ``nm`` and offsets ``s_off`` (the rigid
-    model's cap; the fiber is nearly rigid). ``fric`` is updated.
+    Friction (if on) is the rigid model's (:func:`rigid.coulomb_friction`) for
+    the rigid body the nearly rigid fiber moves as: body axis from tail to head,
+    offsets ``s_off``, body-frame ``pm`` (P) and ``nm`` (N); the frictionless
+    body velocity is P u_b + N (F_c, τ_c). ``fric`` receives the tangential forces.
     """
     n = x.shape[0]
     a = prm[K.P_A]
     interpolate_ib(ux, uy, dx, x, y, u)
     any_c, cx, cy = _forces(x, y, prm, verts, pbx, pby, curves, fx, fy, cfx, cfy, st, dist)
-    mu_f = prm[K.P_MU_F]
-    if any_c and mu_f > 0.0:
-        ax_ = x[n - 1] - x[0]
-        ay_ = y[n - 1] - y[0]
-        la = math.hypot(ax_, ay_)
-        ca = ax_ / la
-        sa = ay_ / la
-        # Coulomb friction against the bead's last velocity, capped to stop, never reverse.
-        for i in range(n):
-            fn = math.hypot(cfx[i], cfy[i])
-            if fn == 0.0:
-                continue
-            tx = -cfy[i] / fn
-            ty = cfx[i] / fn
-            vt_last = vprev[2 * i] * tx + vprev[2 * i + 1] * ty
-            # m_t = t̂ᵀ K_i N K_iᵀ t̂ in the body frame (t̂ rotated by the fiber angle)
-            kx = ca * tx + sa * ty
-            ky = -sa * tx + ca * ty
-            kz = s_off[i] * ky
-            mt = (
-                kx * (nm[0, 0] * kx + nm[0, 1] * ky + nm[0, 2] * kz)
-                + ky * (nm[1, 0] * kx + nm[1, 1] * ky + nm[1, 2] * kz)
-                + kz * (nm[2, 0] * kx + nm[2, 1] * ky + nm[2, 2] * kz)
-            )
-            vt = vt_last - mt * fric[i]
-            ft = min(mu_f * fn, abs(vt) / mt)
-            ft = -ft if vt > 0.0 else ft
-            fric[i] = ft
-            fx[i] += ft * tx
-            fy[i] += ft * ty
-    if not any_c or mu_f <= 0.0:
-        for i in range(n):
-            fric[i] = 0.0
-    else:
-        for i in range(n):
-            if cfx[i] == 0.0 and cfy[i] == 0.0:
-                fric[i] = 0.0
-    _rpy_fill(x, y, a, prm[K.P_MU], mob)
     vs = prm[K.P_VSCALE]
     hs = prm[K.P_HYD_S]
     for i in range(n):
@@ -173,6 +74,45 @@ def _velocity(x, y, ux, uy, dx, prm, verts, pbx, pby, curves, mob, u, f, fx, fy,
             fac *= 1.0 - hs * math.exp(-max(dist[i] - a, 0.0) / prm[K.P_HYD_L])
         f[2 * i] = fac * u[i, 0]
         f[2 * i + 1] = fac * u[i, 1]
+    mu_f = prm[K.P_MU_F]
+    if any_c and mu_f > 0.0:
+        # Friction as for the rigid body the (nearly rigid) fiber moves as: body frame
+        # from the end-to-end axis, frictionless body velocity P u_b + N (F_c, τ_c).
+        ex = x[n - 1] - x[0]
+        ey = y[n - 1] - y[0]
+        le = math.hypot(ex, ey)
+        c = ex / le
+        sn = ey / le
+        xm = 0.0
+        ym = 0.0
+        for i in range(n):
+            xm += x[i] / n
+            ym += y[i] / n
+        vbx = 0.0
+        vby = 0.0
+        om = 0.0
+        fbx = 0.0
+        fby = 0.0
+        tq = 0.0
+        for i in range(n):
+            ubx = c * f[2 * i] + sn * f[2 * i + 1]
+            uby = -sn * f[2 * i] + c * f[2 * i + 1]
+            vbx += pm[0, 2 * i] * ubx + pm[0, 2 * i + 1] * uby
+            vby += pm[1, 2 * i] * ubx + pm[1, 2 * i + 1] * uby
+            om += pm[2, 2 * i] * ubx + pm[2, 2 * i + 1] * uby
+            fbx += c * cfx[i] + sn * cfy[i]
+            fby += -sn * cfx[i] + c * cfy[i]
+            tq += s_off[i] * (c * cfy[i] - sn * cfx[i])
+        vbx += nm[0, 0] * fbx + nm[0, 1] * fby + nm[0, 2] * tq
+        vby += nm[1, 0] * fbx + nm[1, 1] * fby + nm[1, 2] * tq
+        om += nm[2, 0] * fbx + nm[2, 1] * fby + nm[2, 2] * tq
+        coulomb_friction(c, sn, s_off, nm, cfx, cfy, mu_f, vbx, vby, om, fric)
+        for i in range(n):
+            fn = math.hypot(cfx[i], cfy[i])
+            if fn > 0.0:
+                fx[i] += fric[i] * (-cfy[i] / fn)
+                fy[i] += fric[i] * (cfx[i] / fn)
+    _rpy_fill(x, y, a, prm[K.P_MU], mob)
     for r in range(2 * n):
         acc = 0.0
         for j in range(n):
@@ -244,7 +184,7 @@ def _jacobian(x, y, prm, verts, pbx, pby, curves, jac, fx, fy, gx, gy, st):
 
 @nb.njit(cache=True)
 def integrate_bead_spring(q, qprev, state, ux, uy, dx, verts, pbx, pby, curves, prm, stride,
-                          rec, brec, s_off, nm):  # fmt: skip
+                          rec, brec, s_off, pm, nm):  # fmt: skip
     """Advance a bead-spring fiber with fixed Δt until a stop condition or ``rec`` is full.
 
     Parameters
@@ -259,8 +199,8 @@ def integrate_bead_spring(q, qprev, state, ux, uy, dx, verts, pbx, pby, curves, 
     rec : ndarray, shape (cap, record.NCOLS)
     brec : ndarray, shape (cap, n, 2)
         Bead positions of each recorded row.
-    s_off, nm : ndarray, shapes (n,), (3, 3)
-        Rigid-body bead offsets and body mobility (friction cap only).
+    s_off, pm, nm : ndarray, shapes (n,), (3, 2n), (3, 3)
+        Rigid-body bead offsets, P and N (friction only).
 
     Returns
     -------
@@ -299,6 +239,7 @@ def integrate_bead_spring(q, qprev, state, ux, uy, dx, verts, pbx, pby, curves, 
     rows = 0
     code = R.CHUNK_FULL
     last_contact = -1.0
+    last_stopped = -1.0
     if have_prev:
         for k in range(n2):
             v[k] = (q[k] - qprev[k]) / dt
@@ -311,7 +252,7 @@ def integrate_bead_spring(q, qprev, state, ux, uy, dx, verts, pbx, pby, curves, 
             y[i] = qs[2 * i + 1]
         any_c, cx, cy = _velocity(
             x, y, ux, uy, dx, prm, verts, pbx, pby, curves, mob, u, f, fx, fy, cfx, cfy, st,
-            dist, v, s_off, nm, fric,
+            dist, s_off, pm, nm, fric,
         )  # fmt: skip
         min_d = 1e300
         for i in range(n):
@@ -334,7 +275,45 @@ def integrate_bead_spring(q, qprev, state, ux, uy, dx, verts, pbx, pby, curves, 
             vyc += v[2 * i + 1] / n
         com_speed = math.hypot(vxc, vyc)
         cflag = 1.0 if any_c else 0.0
-        if step % stride == 0 or cflag != last_contact:
+        stopped = any_c and com_speed < prm[K.P_TRAP_SPEED] and have_prev
+        # Stop tests (on the state about to be recorded).
+        code = R.CHUNK_FULL
+        finite = True
+        for k in range(n2):
+            if not math.isfinite(q[k]):
+                finite = False
+        out = False
+        for i in range(n):
+            if q[2 * i + 1] < prm[K.P_Y_LO] or q[2 * i + 1] > prm[K.P_Y_HI]:
+                out = True
+        if stopped:
+            if not math.isfinite(stopped_since):
+                stopped_since = t
+        else:
+            stopped_since = math.nan
+        if not finite:
+            code = R.NAN
+        elif min_d < 0.5 * a:
+            code = R.PENETRATION
+        elif out:
+            code = R.WALL
+        elif stopped and t - stopped_since >= prm[K.P_TRAP_TIME]:
+            code = R.TRAPPED
+        elif mode == 0 and min(hx, tx) > prm[K.P_X_STOP]:
+            code = R.PASSED
+        elif mode == 1 and t >= prm[K.P_T_STOP] - 0.5 * dt:
+            code = R.TIME_REACHED
+        elif t >= prm[K.P_T_MAX]:
+            code = R.TIME_LIMIT
+        # Record every `stride` steps, at every change of the contact or stopped flag,
+        # and the final state, so that classify() on the record sees what the kernel saw.
+        sflag = 1.0 if stopped else 0.0
+        if (
+            step % stride == 0
+            or cflag != last_contact
+            or sflag != last_stopped
+            or code != R.CHUNK_FULL
+        ):
             r = rec[rows]
             r[R.T] = t
             r[R.XC] = xc
@@ -362,41 +341,8 @@ def integrate_bead_spring(q, qprev, state, ux, uy, dx, verts, pbx, pby, curves, 
                 brec[rows, i, 1] = q[2 * i + 1]
             rows += 1
         last_contact = cflag
-        # Stop tests.
-        finite = True
-        for k in range(n2):
-            if not math.isfinite(q[k]):
-                finite = False
-        if not finite:
-            code = R.NAN
-            break
-        if min_d < 0.5 * a:
-            code = R.PENETRATION
-            break
-        out = False
-        for i in range(n):
-            if q[2 * i + 1] < prm[K.P_Y_LO] or q[2 * i + 1] > prm[K.P_Y_HI]:
-                out = True
-        if out:
-            code = R.WALL
-            break
-        if any_c and com_speed < prm[K.P_TRAP_SPEED] and have_prev:
-            if not math.isfinite(stopped_since):
-                stopped_since = t
-            if t - stopped_since >= prm[K.P_TRAP_TIME]:
-                code = R.TRAPPED
-                break
-        else:
-            stopped_since = math.nan
-        if mode == 0:
-            if min(hx, tx) > prm[K.P_X_STOP]:
-                code = R.PASSED
-                break
-        elif t >= prm[K.P_T_STOP] - 0.5 * dt:
-            code = R.TIME_REACHED
-            break
-        if t >= prm[K.P_T_MAX]:
-            code = R.TIME_LIMIT
+        last_stopped = sflag
+        if code != R.CHUNK_FULL:
             break
         # Linearly implicit step.
         _jacobian(x, y, prm, verts, pbx, pby, curves, jac, gx, gy, cfx, cfy, st)
@@ -472,7 +418,7 @@ def run_bead_spring(setup, prm: np.ndarray, x0: float, y0: float, th0: float, be
         brec = np.empty((CHUNK, n, 2))
         rows, code = integrate_bead_spring(
             q, qprev, state, ux, uy, float(f.dx), pil.vertices, pbx, pby, pil.curves, prm,
-            stride, rec, brec, bm.offsets, bm.N,
+            stride, rec, brec, bm.offsets, bm.P, bm.N,
         )  # fmt: skip
         recs.append(rec[:rows])
         brecs.append(brec[:rows])

@@ -28,13 +28,77 @@ from fibersweep.fiber import record as R
 from fibersweep.fiber.contact import pillar_forces
 from fibersweep.flow.field import interpolate_ib
 
-__all__ = ["integrate_rigid", "rigid_velocity", "seed_numba"]
+__all__ = ["coulomb_friction", "integrate_rigid", "rigid_velocity", "seed_numba"]
 
 
 @nb.njit(cache=True)
 def seed_numba(seed: int) -> None:
     """Seed Numba's own random generator (used for Brownian increments)."""
     np.random.seed(seed)  # noqa: NPY002 - Numba has its own per-thread RNG
+
+
+@nb.njit(cache=True)
+def coulomb_friction(c, sn, s, nm, fx, fy, mu_f, vbx, vby, om, ft):
+    """Coulomb friction on the contacting beads of a rigid fiber (projected Gauss-Seidel).
+
+    Each bead's tangential force (along t̂ = ẑ × n̂, n̂ the direction of its
+    contact force) is set to stop its tangential motion, clipped to ±μ_f |F_n|
+    (stick or slide); the normal forces are fixed. All in the body frame.
+
+    Parameters
+    ----------
+    c, sn : float
+        cos and sin of the fiber angle.
+    s : ndarray, shape (n,)
+        Bead offsets [µm].
+    nm : ndarray, shape (3, 3)
+        Body mobility N.
+    fx, fy : ndarray, shape (n,)
+        Contact forces (lab frame) [pN].
+    mu_f : float
+        Friction coefficient.
+    vbx, vby, om : float
+        Frictionless body velocity (body frame) [µm/s, rad/s].
+    ft : ndarray, shape (n,)
+        Written with each bead's tangential force along its t̂ [pN].
+
+    Returns
+    -------
+    (vbx, vby, om)
+        Body velocity with friction (body frame).
+    """
+    n = s.shape[0]
+    for i in range(n):
+        ft[i] = 0.0
+    for _ in range(30):
+        change = 0.0
+        for i in range(n):
+            fnx = c * fx[i] + sn * fy[i]
+            fny = -sn * fx[i] + c * fy[i]
+            fn = math.sqrt(fnx * fnx + fny * fny)
+            if fn == 0.0:
+                continue
+            tx = -fny / fn
+            ty = fnx / fn
+            vt = vbx * tx + (vby + om * s[i]) * ty
+            # m_t = t̂ᵀ K_i N K_iᵀ t̂ with K_iᵀ t̂ = (tx, ty, s_i ty)
+            kz = s[i] * ty
+            g0 = nm[0, 0] * tx + nm[0, 1] * ty + nm[0, 2] * kz
+            g1 = nm[1, 0] * tx + nm[1, 1] * ty + nm[1, 2] * kz
+            g2 = nm[2, 0] * tx + nm[2, 1] * ty + nm[2, 2] * kz
+            mt = tx * g0 + ty * g1 + kz * g2
+            lim = mu_f * fn
+            new = min(lim, max(-lim, ft[i] - vt / mt))
+            d = new - ft[i]
+            if d != 0.0:
+                ft[i] = new
+                vbx += g0 * d
+                vby += g1 * d
+                om += g2 * d
+                change = max(change, abs(d) / lim)
+        if change < 1e-6:
+            break
+    return vbx, vby, om
 
 
 @nb.njit(cache=True)
@@ -139,39 +203,7 @@ def rigid_velocity(
         om += nm[2, 0] * fbx + nm[2, 1] * fby + nm[2, 2] * tq
         mu_f = prm[K.P_MU_F]
         if mu_f > 0.0:
-            # Coulomb friction on the contacting beads, solved jointly by projected
-            # Gauss-Seidel: each bead's tangential force is set to stop its tangential
-            # motion, clipped to ±μ_f |F_n| (stick or slide); the normal forces are fixed.
-            for i in range(n):
-                ft_[i] = 0.0
-            for _ in range(30):
-                change = 0.0
-                for i in range(n):
-                    fnx = c * fx[i] + sn * fy[i]
-                    fny = -sn * fx[i] + c * fy[i]
-                    fn = math.sqrt(fnx * fnx + fny * fny)
-                    if fn == 0.0:
-                        continue
-                    tx = -fny / fn
-                    ty = fnx / fn
-                    vt = vbx * tx + (vby + om * s[i]) * ty
-                    # m_t = t̂ᵀ K_i N K_iᵀ t̂ with K_iᵀ t̂ = (tx, ty, s_i ty)
-                    kz = s[i] * ty
-                    g0 = nm[0, 0] * tx + nm[0, 1] * ty + nm[0, 2] * kz
-                    g1 = nm[1, 0] * tx + nm[1, 1] * ty + nm[1, 2] * kz
-                    g2 = nm[2, 0] * tx + nm[2, 1] * ty + nm[2, 2] * kz
-                    mt = tx * g0 + ty * g1 + kz * g2
-                    lim = mu_f * fn
-                    new = min(lim, max(-lim, ft_[i] - vt / mt))
-                    d = new - ft_[i]
-                    if d != 0.0:
-                        ft_[i] = new
-                        vbx += g0 * d
-                        vby += g1 * d
-                        om += g2 * d
-                        change = max(change, abs(d) / lim)
-                if change < 1e-6:
-                    break
+            vbx, vby, om = coulomb_friction(c, sn, s, nm, fx, fy, mu_f, vbx, vby, om, ft_)
     vx = c * vbx - sn * vby
     vy = sn * vbx + c * vby
     return vx, vy, om, any_c, cx, cy, min_d, stiff

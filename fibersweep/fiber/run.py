@@ -7,10 +7,10 @@ a module-level function (picklable), Numba kernels compiled once per process
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -25,154 +25,18 @@ from fibersweep.analysis.observables import (
 )
 from fibersweep.errors import InputError
 from fibersweep.fiber import record as R
-from fibersweep.fiber.contact import Pillar, make_pillar, outline_distance
-from fibersweep.fiber.effects import DynamicsContext, DynamicsParams, build_effects
-from fibersweep.fiber.kparams import pack
 from fibersweep.fiber.mobility import body_mobility, fiber_offsets
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
 from fibersweep.fiber.rigid import integrate_rigid, seed_numba
 from fibersweep.fiber.settings import FiberSettings
+from fibersweep.fiber.setup import Setup, kernel_params, prepare
 from fibersweep.flow.field import FlowField
 
-__all__ = ["Setup", "prepare", "simulate", "simulate_for", "simulate_reversible"]
+__all__ = ["simulate", "simulate_for", "simulate_reversible"]
 
 log = logging.getLogger(__name__)
 
 CHUNK = 20_000  # record rows per kernel call
-MIN_BEADS = 2
-
-
-@dataclass(frozen=True)
-class Setup:
-    """Everything a kernel needs for one run, validated.
-
-    Attributes
-    ----------
-    field : FlowField
-        The (effect-transformed) field.
-    settings : FiberSettings
-    start : FiberStart
-    n : int
-        Beads.
-    x0, y0_abs, th0 : float
-        Start centre [µm] and directed angle of the axis towards bead n-1 [rad]
-        (bead n-1 is the head: the one that leads).
-    pillar : Pillar
-    params : DynamicsParams
-    u_center : float
-        Signed centreline speed of the field [µm/s].
-    """
-
-    field: FlowField
-    settings: FiberSettings
-    start: FiberStart
-    n: int
-    x0: float
-    y0_abs: float
-    th0: float
-    pillar: Pillar
-    params: DynamicsParams
-    u_center: float
-
-
-def _finite(name: str, value: float) -> None:
-    if not math.isfinite(value):
-        raise InputError(f"{name}: must be finite, got {value!r}")
-
-
-def prepare(
-    field: FlowField, settings: FiberSettings, start: FiberStart, rng: np.random.Generator
-) -> Setup:
-    """Apply effects and check the start; InputError naming the parameter when it is bad."""
-    effects = build_effects(settings.effects)
-    field = effects.field(field)
-    settings = effects.settings(settings)
-    start = effects.start(start, rng)
-    for name in ("theta0", "y0", "length"):
-        _finite(name, float(getattr(start, name)))
-    geo = field.geometry
-    a = settings.bead_radius
-    u_center = float(field.fluid.u_center)
-    _finite("u_center", u_center)
-    if u_center == 0.0:
-        raise InputError("u_center: the field has zero speed")
-    length_um = start.length * geo.pillar_base_length
-    n = int(round(length_um / (2.0 * a)))
-    if start.length <= 0 or n < MIN_BEADS:
-        raise InputError(
-            f"length: L/l_obs = {start.length} is {length_um:.3g} µm, {n} bead(s) of "
-            f"radius {a} µm; at least {MIN_BEADS} beads are needed"
-        )
-    if length_um < 2.0 * field.dx:
-        raise InputError(
-            f"length: L = {length_um:.3g} µm is shorter than two grid spacings "
-            f"(dx = {field.dx} µm): the flow field cannot resolve it"
-        )
-    x0 = geo.length / 4.0 if settings.x0 is None else float(settings.x0)
-    _finite("x0", x0)
-    y0_abs = geo.y_from_base(start.y0)
-    th0 = math.radians(start.theta0)
-    if math.cos(th0) < 0.0:  # keep bead n-1 as the leading bead (the head)
-        th0 += math.pi
-    s = fiber_offsets(n, a)
-    bx = x0 + s * math.cos(th0)
-    by = y0_abs + s * math.sin(th0)
-    if by.min() - a <= 0.0 or by.max() + a >= geo.width:
-        raise InputError(
-            f"y0: y0/h = {start.y0} with theta0 = {start.theta0}° puts beads outside the "
-            f"channel (bead y from {by.min():.1f} to {by.max():.1f} µm, width {geo.width} µm)"
-        )
-    if bx.min() - a <= 0.0 or bx.max() + a >= geo.length:
-        raise InputError(f"x0: the fiber at x0 = {x0} µm does not fit in the channel length")
-    f_ref = settings.contact.f_ref or 6.0 * math.pi * field.fluid.viscosity * a * abs(u_center)
-    pillar = make_pillar(geo, settings.contact, a, f_ref)
-    for xb, yb in zip(bx, by, strict=True):
-        d = outline_distance(float(xb), float(yb), pillar.vertices)
-        if d < pillar.r_cut:
-            raise InputError(
-                f"y0: the start (theta0 = {start.theta0}°, y0/h = {start.y0}, x0 = {x0} µm) "
-                f"overlaps the pillar (bead at {d:.2f} µm from its outline)"
-            )
-    ctx = DynamicsContext(bead_radius=a, dx=float(field.dx), depth=geo.depth)
-    params = effects.params(ctx)
-    return Setup(field, settings, start, n, x0, y0_abs, th0, pillar, params, u_center)
-
-
-def kernel_params(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> np.ndarray:
-    """The kparams vector of a run."""
-    st = setup.settings
-    geo = setup.field.geometry
-    p = setup.params
-    a = st.bead_radius
-    u = abs(setup.u_center)
-    x_pass = float(setup.pillar.vertices[:, 0].max())
-    return pack(
-        a=a,
-        kind=setup.pillar.kind,
-        r_cut=setup.pillar.r_cut,
-        r_eq=setup.pillar.r_eq,
-        f_ref=setup.pillar.f_ref,
-        vscale=p.velocity_scale,
-        mu_f=p.friction,
-        hyd_s=p.hydro_strength,
-        hyd_l=p.hydro_length,
-        kT=p.kT,
-        max_disp=st.step.max_displacement,
-        contact_disp=st.step.contact_displacement,
-        dt_max=st.classify.trap_time / 20.0,
-        t_max=st.step.t_max,
-        x_stop=x_pass + st.step.x_end,
-        t_stop=t_stop,
-        mode=mode,
-        trap_speed=st.classify.trap_speed * u,
-        trap_time=st.classify.trap_time,
-        y_lo=a,
-        y_hi=geo.width - a,
-        dt=st.step.dt if st.step.dt is not None else math.nan,
-        stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²
-        bend=st.young_modulus * math.pi * a**4 / 4.0,
-        mu=setup.field.fluid.viscosity,
-    )
 
 
 def _run_rigid(
@@ -255,9 +119,9 @@ def _result(
             th = rec[idx, R.TH]
             bx = rec[idx, R.XC][:, None] + np.cos(th)[:, None] * s[None, :]
             by = rec[idx, R.YC][:, None] + np.sin(th)[:, None] * s[None, :]
-            kept = take(traj, idx).__class__(**{**kept.__dict__, "beads": np.stack([bx, by], -1)})
+            kept = dataclasses.replace(kept, beads=np.stack([bx, by], -1))
         elif not st.record.all_beads and kept.beads is not None:
-            kept = kept.__class__(**{**kept.__dict__, "beads": None})
+            kept = dataclasses.replace(kept, beads=None)
         common["trajectory"] = kept
     if code < 0:
         return RunResult(status="failed", reason=R.STOP_REASONS[code], **common)

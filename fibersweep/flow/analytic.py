@@ -46,8 +46,10 @@ def duct_velocity(
         n = 2 * k + 1
         c = n * math.pi / (2.0 * a)
         # cosh ratio written with exponentials to avoid overflow for wide ducts
-        ratio = np.exp(c * (np.abs(yt) - b)) * (1.0 + np.exp(-2.0 * c * np.abs(yt))) / (
-            1.0 + math.exp(-2.0 * c * b)
+        ratio = (
+            np.exp(c * (np.abs(yt) - b))
+            * (1.0 + np.exp(-2.0 * c * np.abs(yt)))
+            / (1.0 + math.exp(-2.0 * c * b))
         )
         total += (-1.0) ** k / n**3 * (1.0 - ratio) * np.cos(c * zt)
     return 16.0 * a * a * g_over_nu / math.pi**3 * total
@@ -55,4 +57,6 @@ def duct_velocity(
 
 def duct_center_velocity(width: float, depth: float, g_over_nu: float) -> float:
     """Velocity at the duct centre (y = width/2, z = depth/2)."""
-    return float(duct_velocity(np.array(width / 2.0), np.array(depth / 2.0), width, depth, g_over_nu))
+    return float(
+        duct_velocity(np.array(width / 2.0), np.array(depth / 2.0), width, depth, g_over_nu)
+    )

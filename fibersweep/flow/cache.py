@@ -52,11 +52,14 @@ class CacheInfo:
     hit : bool
         True if loaded from the cache, False if computed now.
     steps, converged, residual, seconds :
-        Solver report of the run that produced the entry (seconds of that run).
+        Solver report of the run that produced the entry: steps on the final
+        grid, convergence there, and the seconds of the whole solve.
     u_center_reached : float
         Midplane centreline speed far from the pillar in the stored field [µm/s].
     grid : tuple of int
         (nx, ny, nz solved, nz full depth).
+    coarse_steps : int
+        Steps spent on coarser grids for the initial guess (nested solve).
     """
 
     key: str
@@ -68,6 +71,7 @@ class CacheInfo:
     seconds: float
     u_center_reached: float
     grid: tuple[int, ...]
+    coarse_steps: int = 0
 
 
 def cache_key(settings: FlowSettings) -> str:
@@ -152,9 +156,10 @@ def _info(field: FlowField, key: str, path: Path, hit: bool) -> CacheInfo:
         steps=int(rep["steps"]),
         converged=bool(rep["converged"]),
         residual=float(rep["residual"]),
-        seconds=float(rep["seconds"]),
+        seconds=float(rep["seconds"]) + float(rep.get("coarse_seconds", 0.0)),
         u_center_reached=float(field.meta["u_center_reached"]),
         grid=tuple(int(v) for v in rep["grid"]),
+        coarse_steps=int(rep.get("coarse_steps", 0)),
     )
 
 

@@ -23,7 +23,7 @@ __all__ = [
     "fill_pillar",
     "fill_periodic",
     "moments",
-    "init_equilibrium",
+    "init_populations",
 ]
 
 _W0 = np.float32(1.0 / 3.0)
@@ -251,18 +251,42 @@ def moments(
 
 
 @nb.njit(cache=True, parallel=True)
-def init_equilibrium(g: np.ndarray, u: np.ndarray, w: np.ndarray, ex, ey, ez) -> None:
-    """Set interior populations to the shifted equilibrium of (ρ = 1, u).
+def init_populations(
+    g: np.ndarray,
+    u: np.ndarray,
+    drho: np.ndarray,
+    grad: np.ndarray,
+    omega_p: float,
+    w: np.ndarray,
+    ex: np.ndarray,
+    ey: np.ndarray,
+    ez: np.ndarray,
+) -> None:
+    """Set interior populations to the post-collision state of a given flow.
+
+    Equilibrium of (ρ = 1 + δρ, u) plus the Chapman-Enskog non-equilibrium part
+    f¹_q = −3 τ w_q ρ Q_q:∇u (Q = e e − c_s² I), as left by a collision:
+    g_q = f^eq_q − w_q + (1 − ω+) f¹_q. Starting without f¹ would release the
+    whole shear stress as a pressure pulse that takes hundreds of steps to damp.
 
     Parameters
     ----------
     g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
     u : ndarray, shape (3, nz, ny, nx), float64
         Lattice velocity.
+    drho : ndarray, shape (nz, ny, nx), float64
+        Density deviation δρ.
+    grad : ndarray, shape (3, 3, nz, ny, nx), float64
+        grad[a, b] = ∂_a u_b.
+    omega_p : float
+        Relaxation rate of the even moments (τ = 1/ω+).
     w : ndarray, shape (19,), float64
         Lattice weights.
+    ex, ey, ez : ndarray, shape (19,), int64
+        Lattice velocities.
     """
     nz, ny, nx = g.shape[1] - 2, g.shape[2] - 2, g.shape[3] - 2
+    tau = 1.0 / omega_p
     for r in nb.prange(nz * ny):
         z = r // ny
         y = r - z * ny
@@ -270,7 +294,35 @@ def init_equilibrium(g: np.ndarray, u: np.ndarray, w: np.ndarray, ex, ey, ez) ->
             ux = u[0, z, y, x]
             uy = u[1, z, y, x]
             uz = u[2, z, y, x]
+            d = drho[z, y, x]
+            rho = 1.0 + d
             usq = ux * ux + uy * uy + uz * uz
+            div = grad[0, 0, z, y, x] + grad[1, 1, z, y, x] + grad[2, 2, z, y, x]
             for q in range(19):
-                eu = ex[q] * ux + ey[q] * uy + ez[q] * uz
-                g[q, z + 1, y + 1, x + 1] = w[q] * (3.0 * eu + 4.5 * eu * eu - 1.5 * usq)
+                e0, e1, e2 = ex[q], ey[q], ez[q]
+                eu = e0 * ux + e1 * uy + e2 * uz
+                # Q:∇u = e_a e_b ∂_a u_b − c_s² ∇·u
+                qs = (
+                    e0
+                    * (
+                        e0 * grad[0, 0, z, y, x]
+                        + e1 * grad[0, 1, z, y, x]
+                        + e2 * grad[0, 2, z, y, x]
+                    )
+                    + e1
+                    * (
+                        e0 * grad[1, 0, z, y, x]
+                        + e1 * grad[1, 1, z, y, x]
+                        + e2 * grad[1, 2, z, y, x]
+                    )
+                    + e2
+                    * (
+                        e0 * grad[2, 0, z, y, x]
+                        + e1 * grad[2, 1, z, y, x]
+                        + e2 * grad[2, 2, z, y, x]
+                    )
+                    - div / 3.0
+                )
+                feq = w[q] * (d + rho * (3.0 * eu + 4.5 * eu * eu - 1.5 * usq))
+                fneq = -3.0 * tau * w[q] * rho * qs
+                g[q, z + 1, y + 1, x + 1] = feq + (1.0 - omega_p) * fneq

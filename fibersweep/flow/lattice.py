@@ -139,7 +139,7 @@ def boundary_links(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
     solid_cells : ndarray, shape (m,), int64
         Flat padded indices of every interior solid cell (reset to rest each step).
     """
-    nzp, nyp, nxp = grid.nz + 2, grid.ny + 2, grid.nx + 2
+    nyp, nxp = grid.ny + 2, grid.nx + 2
     si, sj = np.nonzero(grid.solid)
     rows = []
     cells = []
@@ -174,9 +174,7 @@ def boundary_links(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
                 src = ((k + 1) * nyp + (jt[ok] + 1)) * nxp + (it[ok] + 1)
                 n = int(ok.sum())
                 rows.append(
-                    np.column_stack(
-                        [np.full(n, MIRROR_Z[q]), base_s[ok], np.full(n, OPP[q]), src]
-                    )
+                    np.column_stack([np.full(n, MIRROR_Z[q]), base_s[ok], np.full(n, OPP[q]), src])
                 )
     links = np.concatenate(rows).astype(np.int64) if rows else np.zeros((0, 4), np.int64)
     solid_cells = np.concatenate(cells).astype(np.int64) if cells else np.zeros(0, np.int64)

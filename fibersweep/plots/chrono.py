@@ -64,6 +64,12 @@ def chronophotograph(
     idx = np.flatnonzero(win)
     if idx.size < 2:
         idx = np.arange(len(tr.t))
+    moving = tr.com_speed > 0.01 * float(np.max(tr.com_speed))
+    if not moving[idx[-1]] and moving[idx].any():
+        # a fiber that stops (trapped): end the window shortly after it stops
+        last = idx[np.flatnonzero(moving[idx])[-1]]
+        stop_t = tr.t[last] + 0.1 * (tr.t[last] - tr.t[idx[0]])
+        idx = idx[tr.t[idx] <= stop_t]
     t0, t1 = tr.t[idx[0]], tr.t[idx[-1]]
     times = np.linspace(t0, t1, snapshots)
     picks = np.unique(np.clip(np.searchsorted(tr.t, times), 0, len(tr.t) - 1))
@@ -111,7 +117,7 @@ def chronophotograph(
         )
         cb = fig.colorbar(lc, ax=ax, shrink=0.8, pad=0.02)
         cb.set_label("t [s]")
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, frameon=False)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.3), ncol=3, frameon=False)
         out = Path(path)
         out.parent.mkdir(parents=True, exist_ok=True)
         tmp = out.with_name(f".{out.stem}.tmp{out.suffix}")

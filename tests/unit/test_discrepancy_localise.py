@@ -11,7 +11,12 @@ def test_tree_finds_planted_band():
     rng = np.random.default_rng(0)
     n = 200
     X = np.column_stack(
-        [rng.uniform(-10, 10, n), rng.uniform(0, 1, n), rng.uniform(0.5, 1.4, n), rng.random(n) < 0.5]
+        [
+            rng.uniform(-10, 10, n),
+            rng.uniform(0, 1, n),
+            rng.uniform(0.5, 1.4, n),
+            rng.random(n) < 0.5,
+        ]
     ).astype(float)
     inside = (X[:, 1] >= 0.3) & (X[:, 1] < 0.5)
     excess = rng.normal(0, 0.1, n) + 1.0 * inside

@@ -1,4 +1,4 @@
-"""The measured-data schema: validation messages name the column and the rows; nothing is dropped."""
+"""Measured-data schema: messages name the column and the rows; nothing is dropped."""
 
 from __future__ import annotations
 
@@ -25,6 +25,7 @@ def _table(n: int = 6) -> pd.DataFrame:
             "theta_c": [np.nan, 10.0, -20.0, 5.0, np.nan, 30.0][:n],
             "y_c": [np.nan, 0.5, 0.2, 0.3, np.nan, 0.1][:n],
             "t_pass": [1.2, 1.3, 1.6, np.nan, 1.2, 1.4][:n],
+            "t_contact": [np.nan, 1.1, 1.2, 1.0, np.nan, 1.3][:n],
         }
     )
 
@@ -35,7 +36,8 @@ def test_valid_table_round_trips_parquet_and_csv(tmp_path):
         p = write_table(df, tmp_path / f"m{suffix}")
         m = load_measured(p)
         assert len(m) == len(df)  # nothing dropped
-        assert m.observed == ("class", "delta", "contact", "theta_c", "y_c", "t_pass")
+        assert m.observed == ("class", "delta", "contact", "theta_c", "y_c", "t_pass", "dwell")
+        np.testing.assert_allclose(m.table["dwell"], df["t_pass"] - df["t_contact"])
         assert m.table["contact"].dtype == bool
         np.testing.assert_allclose(m.starts, df[["theta0", "y0", "length"]].to_numpy())
 

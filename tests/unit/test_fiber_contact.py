@@ -7,12 +7,11 @@ import math
 import numpy as np
 import pytest
 
+from fibersweep.fiber.bezier import bezier_nearest, cubic_real_roots
 from fibersweep.fiber.contact import (
     ROUGH,
     SMOOTH,
-    _bezier_nearest,
     contact_forces,
-    cubic_real_roots,
     make_pillar,
     outline_distance,
     pillar_forces,
@@ -54,7 +53,7 @@ def test_bezier_nearest_against_brute_force():
             + s[:, None] ** 2 * ctrl[2]
         )
         d_ref = np.min(np.hypot(*(curve - p).T))
-        _, _, d, _ = _bezier_nearest(p[0], p[1], ctrl, roots)
+        _, _, d, _ = bezier_nearest(p[0], p[1], ctrl, roots)
         assert d == pytest.approx(d_ref, abs=1e-6)  # brute force on 2e5 samples
 
 

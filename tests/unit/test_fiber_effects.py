@@ -139,3 +139,31 @@ def test_pillar_hydro_slows_beads_near_the_pillar():
     v = body_mobility(n, 2.0, 0.34).P @ ub
     assert speeds[0] == pytest.approx(600.0, rel=1e-12)
     assert speeds[1] == pytest.approx(math.hypot(v[0], v[1]), rel=1e-9)
+
+
+def test_coulomb_friction_sticks_or_slides():
+    """One contacting bead (the head) with its contact force along +y (body frame = lab,
+    θ = 0): strong friction stops its tangential (x) motion exactly; weak friction gives
+    |F_t| = μ F_n and only slows it. Tolerances: round-off."""
+    from fibersweep.fiber.mobility import fiber_offsets
+    from fibersweep.fiber.rigid import coulomb_friction
+
+    n = 8
+    s = fiber_offsets(n, 2.0)
+    nm = body_mobility(n, 2.0, 0.34).N
+    fx = np.zeros(n)
+    fy = np.zeros(n)
+    fy[-1] = 100.0
+    ft = np.zeros(n)
+    v0 = (50.0, 0.0, 0.3)  # frictionless body velocity: head slides along +x
+
+    def head_vx(v):
+        return v[0]  # Ω ẑ × (s, 0) has no x part
+
+    v = coulomb_friction(1.0, 0.0, s, nm, fx, fy, 1000.0, *v0, ft)  # needs ~3600 pN
+    assert head_vx(v) == pytest.approx(0.0, abs=1e-9)
+    assert abs(ft[-1]) == pytest.approx(50.0 / nm[0, 0], rel=1e-12) and abs(ft[-1]) < 1e5
+    v = coulomb_friction(1.0, 0.0, s, nm, fx, fy, 0.01, *v0, ft)
+    assert abs(ft[-1]) == pytest.approx(0.01 * 100.0, rel=1e-12)
+    assert 0.0 < head_vx(v) < 50.0
+    assert ft[:-1].tolist() == [0.0] * (n - 1)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from fibersweep.errors import InputError
-from fibersweep.fiber.beadspring import elastic_energy, elastic_forces
+from fibersweep.fiber.elastic import elastic_energy, elastic_forces
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
 from fibersweep.fiber.settings import FiberSettings

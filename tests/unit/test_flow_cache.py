@@ -117,4 +117,21 @@ def test_entry_installed_concurrently_is_kept_or_replaced_atomically(tmp_path, m
     field, info = get_flow_field(TINY, tmp_path)
     assert _entries(tmp_path) == [f"flow-{info.key}"]
     cache.load_entry(info.path, TINY)  # verifies every checksum
-    np.testing.assert_array_equal(np.asarray(field.ux), np.asarray(get_flow_field(TINY, tmp_path)[0].ux))
+    np.testing.assert_array_equal(
+        np.asarray(field.ux), np.asarray(get_flow_field(TINY, tmp_path)[0].ux)
+    )
+
+
+def test_keep_3d_stores_the_full_depth_field(tmp_path):
+    settings = TINY.model_copy(update={"keep_3d": True})
+    f1, info = get_flow_field(settings, tmp_path)
+    f2, _ = get_flow_field(settings, tmp_path)
+    assert isinstance(f2.u3d, np.memmap) and f2.u3d.shape == (3, 8, 10, 12)
+    u = np.asarray(f2.u3d)
+    # mirror symmetric about the midplane: ux, uy even, uz odd
+    np.testing.assert_array_equal(u[:2], u[:2, ::-1])
+    np.testing.assert_array_equal(u[2], -u[2, ::-1])
+    # its IB average at z = H/2 is the stored midplane field
+    w = 0.25 * (1 + np.cos(np.pi * np.array([1.5, 0.5, 0.5, 1.5]) / 2))
+    mid = np.tensordot(w, u[0, 2:6], axes=1).T
+    np.testing.assert_allclose(mid, np.asarray(f2.ux), rtol=1e-12, atol=1e-12)

@@ -70,9 +70,7 @@ def test_missing_config_exits_2(tmp_path):
     assert res.exit_code == 2 and "cannot read config" in res.output
 
 
-@pytest.mark.parametrize(
-    ("bad", "message"), [(np.nan, "non-finite"), (0.3, "Mach too high")]
-)
+@pytest.mark.parametrize(("bad", "message"), [(np.nan, "non-finite"), (0.3, "Mach too high")])
 def test_diverging_solver_raises_solver_error(bad, message):
     # A blown-up state (NaN, or a lattice speed far above the Mach limit) must stop
     # the solver with a SolverError (CLI exit 1), never return a garbage field.

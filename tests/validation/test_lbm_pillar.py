@@ -76,7 +76,9 @@ def test_scaled_to_u_center_and_far_field_is_duct_flow(coarse_field):
     zs = mid + f.dx * np.array([-1.5, -0.5, 0.5, 1.5])
     w = 0.25 * (1.0 + np.cos(np.pi * (zs - mid) / (2.0 * f.dx)))
     assert w.sum() == pytest.approx(1.0)
-    prof = sum(wk * duct_velocity(y, zk, g.width, g.depth, 1.0) for wk, zk in zip(w, zs))
+    prof = sum(
+        wk * duct_velocity(y, zk, g.width, g.depth, 1.0) for wk, zk in zip(w, zs, strict=True)
+    )
     centre = duct_velocity(np.array(g.width / 2), np.array(mid), g.width, g.depth, 1.0)
     expect = prof / centre * f.fluid.u_center
     assert np.abs(f.ux[i_far] - expect).max() < 1e-2 * f.fluid.u_center
@@ -85,8 +87,10 @@ def test_scaled_to_u_center_and_far_field_is_duct_flow(coarse_field):
 
 def test_fore_aft_symmetry(coarse_field):
     # Stokes flow past a pillar symmetric about x = x_c: |u| is fore-aft symmetric.
-    # Tolerance 2e-3 U_center (measured 5e-4: lattice Re ~ 0.02 and convergence).
-    assert fore_aft_asymmetry(coarse_field) < 2e-3
+    # Tolerance 5e-4 U_center. Measured 5e-5; the residual asymmetry is the
+    # lattice's own inertia (it scales as 1/ν and with the lattice speed: 5e-4
+    # at U_lattice = 1e-4, 5e-5 at the 1e-5 used), Re_lattice ~ 2e-3.
+    assert fore_aft_asymmetry(coarse_field) < 5e-4
 
 
 def test_separatrix_far_upstream_near_one_third(coarse_field):

@@ -1,10 +1,13 @@
 """``friction``: Coulomb friction on the pillar surface (value = coefficient μ_f ≥ 0).
 
 Each fiber bead in contact gets, besides its repulsion F_n, a tangential force
-opposing its tangential velocity, of magnitude min(μ_f |F_n|, the force that
-stops the tangential motion of that bead) — so strong friction sticks instead
-of reversing the motion. Works on both pillars; on the rough pillar it adds to
-the roughness the discrete pillar beads already give.
+F_t with |F_t| ≤ μ_f |F_n| that opposes its tangential motion and at most stops
+it (stick) — never reverses it. Rigid model: the tangential forces of all
+contacting beads are solved together (projected Gauss-Seidel on the rigid-body
+mobility, normal forces fixed). Bead-spring model: the same solve for the rigid
+body the (nearly rigid) fiber moves as, body axis from tail to head. Works on
+both pillars; on the rough pillar it adds to the roughness the discrete pillar
+beads already give. The source's trapping example needs μ_f ≈ 0.3 at dx = 4 µm.
 """
 
 from __future__ import annotations

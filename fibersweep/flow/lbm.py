@@ -1,0 +1,319 @@
+"""The D3Q19 lattice-Boltzmann time loop: steady state of the pillar channel in lattice units.
+
+The flow is driven by a uniform body force along x (periodic ends). The lattice
+speed is kept tiny (``U_LATTICE``) so the lattice Reynolds number is far below
+one and the quadratic terms of the equilibrium are negligible: the result is
+Stokes flow, linear in the force, rescaled later (:mod:`fibersweep.flow.solver`).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, replace
+
+import numba
+import numpy as np
+
+from fibersweep.errors import SolverError
+from fibersweep.flow import kernels
+from fibersweep.flow.analytic import duct_center_velocity, duct_velocity
+from fibersweep.flow.initial import hele_shaw_guess
+from fibersweep.flow.lattice import E, Grid, W, boundary_links, make_grid, pull_sources
+from fibersweep.flow.prolong import prolong
+from fibersweep.flow.settings import FlowSettings
+
+__all__ = [
+    "SOLVER_VERSION",
+    "U_LATTICE",
+    "MACH_LIMIT",
+    "SolveReport",
+    "LatticeSolution",
+    "choose_tau",
+    "solve_lattice",
+    "solve_nested",
+    "coarser_settings",
+]
+
+log = logging.getLogger(__name__)
+
+SOLVER_VERSION = "d3q19-trt-guo-2"
+U_LATTICE = 1e-5  # duct centre speed in lattice units: Mach ~ 2e-5, lattice Re ~ 2e-3
+MACH_LIMIT = 0.1  # |u| in lattice units above this means divergence
+SERIAL_BELOW_CELLS = 250_000  # smaller grids run on one thread (fork/join costs more)
+
+
+@dataclass(frozen=True)
+class SolveReport:
+    """What the solver did.
+
+    Attributes
+    ----------
+    steps : int
+        LBM steps taken.
+    converged : bool
+        True if the relative change per check fell below the tolerance.
+    residual : float
+        Last relative change of the velocity field per check.
+    seconds : float
+        Wall time of the time loop [s].
+    mlups : float
+        Million lattice-cell updates per second of the whole loop.
+    tau : float
+        Relaxation time of the even moments (τ = 3ν + 1/2).
+    omega_minus : float
+        Relaxation rate of the odd moments.
+    force : float
+        Body force density along x [lattice units].
+    grid : tuple of int
+        Interior nodes solved (nx, ny, nz) and nz of the full depth.
+    coarse_steps, coarse_seconds : int, float
+        Steps and time spent on coarser grids to build the initial guess.
+    """
+
+    steps: int
+    converged: bool
+    residual: float
+    seconds: float
+    mlups: float
+    tau: float
+    omega_minus: float
+    force: float
+    grid: tuple[int, int, int, int]
+    coarse_steps: int = 0
+    coarse_seconds: float = 0.0
+
+
+@dataclass(frozen=True)
+class LatticeSolution:
+    """Raw lattice result: velocity (3, nz, ny, nx) in lattice units, grid, report."""
+
+    u: np.ndarray
+    rho: np.ndarray
+    grid: Grid
+    report: SolveReport
+
+
+def choose_tau(grid: Grid) -> float:
+    """Relaxation time that converges fast.
+
+    The slowest transient is the pressure (density) field: sound waves of the
+    longest wavelength damped by Hele-Shaw friction γ ≈ 12ν/H². Critical damping,
+    γ ≈ 2 c_s k_min, equilibrates it fastest; it also keeps the z-diffusion
+    time H²/(π²ν) short. τ is clipped to [0.6, 1.5].
+    """
+    k_min = 2.0 * math.pi / max(grid.nx, 2 * grid.ny)
+    nu = 2.0 * k_min / math.sqrt(3.0) * grid.nz_full**2 / 12.0
+    return float(min(max(3.0 * nu + 0.5, 0.6), 1.5))
+
+
+def _rates(settings: FlowSettings, grid: Grid) -> tuple[float, float, float]:
+    tau = settings.tau if settings.tau is not None else choose_tau(grid)
+    omega_p = 1.0 / tau
+    if settings.collision == "bgk":
+        return tau, omega_p, omega_p
+    # Λ = (1/ω+ − 1/2)(1/ω− − 1/2)
+    omega_m = 1.0 / (settings.magic / (tau - 0.5) + 0.5)
+    return tau, omega_p, omega_m
+
+
+def _duct_guess(grid: Grid, g_over_nu: float) -> np.ndarray:
+    """Duct profile in lattice units, shape (3, nz, ny, nx), zero in the pillar."""
+    y = np.arange(grid.ny) + 0.5
+    z = np.arange(grid.nz) + 0.5
+    prof = duct_velocity(y[None, :], z[:, None], grid.ny, grid.nz_full, g_over_nu)
+    u = np.zeros((3, grid.nz, grid.ny, grid.nx))
+    u[0] = prof[:, :, None]
+    u[0][:, grid.solid.T] = 0.0
+    return u
+
+
+def _velocity_gradient(u: np.ndarray, grid: Grid) -> np.ndarray:
+    """∂_a u_b, shape (3, 3, nz, ny, nx), by central differences.
+
+    Ghost values: periodic in x, antisymmetric (u = 0 half-way) across walls,
+    mirror (ux, uy even, uz odd) across a symmetric top. Pillar nodes hold u = 0,
+    which makes the difference at a fluid node next to the pillar one-sided-like.
+    """
+    grad = np.empty((3, 3, *u.shape[1:]))
+    for b in range(3):
+        c = u[b]
+        gx = 0.5 * (np.roll(c, -1, axis=2) - np.roll(c, 1, axis=2))
+        py = np.concatenate([-c[:, :1], c, -c[:, -1:]], axis=1)
+        gy = 0.5 * (py[:, 2:] - py[:, :-2])
+        top = (1.0 if b < 2 else -1.0) if grid.symmetry else -1.0
+        pz = np.concatenate([-c[:1], c, top * c[-1:]], axis=0)
+        gz = 0.5 * (pz[2:] - pz[:-2])
+        grad[0, b], grad[1, b], grad[2, b] = gx, gy, gz
+    return grad
+
+
+def solve_lattice(
+    settings: FlowSettings,
+    pillar: bool = True,
+    initial: np.ndarray | None = None,
+    initial_rho: np.ndarray | None = None,
+    threads: int | None = None,
+) -> LatticeSolution:
+    """Run the LBM to steady state.
+
+    Parameters
+    ----------
+    settings : FlowSettings
+        Geometry, resolution, collision model, τ, tolerance, limits.
+    pillar : bool
+        False solves the empty duct (validation).
+    initial : ndarray, shape (3, nz, ny, nx), optional
+        Initial lattice velocity; default is the duct profile, under the 2D
+        Hele-Shaw flow around the pillar (:mod:`fibersweep.flow.initial`).
+    initial_rho : ndarray, shape (nz, ny, nx), optional
+        Initial density deviation δρ; default 0, or the Hele-Shaw pressure with
+        the default velocity.
+    threads : int, optional
+        Numba threads; default 1 below ``SERIAL_BELOW_CELLS`` cells, else all.
+
+    Raises
+    ------
+    SolverError
+        If the field becomes non-finite or faster than Mach ``MACH_LIMIT``.
+    """
+    geom = settings.geometry.to_geometry()
+    grid = make_grid(geom, settings.dx, settings.symmetry, pillar=pillar)
+    tau, omega_p, omega_m = _rates(settings, grid)
+    nu = (tau - 0.5) / 3.0
+    # body force giving U_LATTICE at the centre of the empty duct (ρ = 1)
+    fx = U_LATTICE / duct_center_velocity(grid.ny, grid.nz_full, 1.0) * nu
+    if initial is None and grid.solid.any():
+        u0, hs_rho = hele_shaw_guess(grid, fx, fx / nu)
+        initial_rho = hs_rho if initial_rho is None else initial_rho
+    elif initial is None:
+        u0 = _duct_guess(grid, fx / nu)
+    else:
+        u0 = np.asarray(initial, dtype=np.float64)
+    if u0.shape != (3, grid.nz, grid.ny, grid.nx):
+        raise ValueError(
+            f"initial must have shape {(3, grid.nz, grid.ny, grid.nx)}, got {u0.shape}"
+        )
+    shape3 = (grid.nz, grid.ny, grid.nx)
+    rho0 = np.zeros(shape3) if initial_rho is None else np.asarray(initial_rho, np.float64)
+    if rho0.shape != shape3:
+        raise ValueError(f"initial_rho must have shape {shape3}, got {rho0.shape}")
+    previous_threads = numba.get_num_threads()
+    n_threads = threads or (1 if grid.cells < SERIAL_BELOW_CELLS else previous_threads)
+    numba.set_num_threads(n_threads)
+    try:
+        return _run(settings, grid, u0, rho0, fx, tau, omega_p, omega_m)
+    finally:
+        numba.set_num_threads(previous_threads)
+
+
+def _run(settings, grid, u0, rho0, fx, tau, omega_p, omega_m) -> LatticeSolution:
+    """Time loop of :func:`solve_lattice` (arguments as computed there)."""
+    links, solid_cells = boundary_links(grid)
+    sources = pull_sources(grid)
+    ex, ey, ez = (np.ascontiguousarray(E[:, k]) for k in range(3))
+    g = np.zeros(grid.padded_shape, dtype=np.float32)
+    gn = np.zeros_like(g)
+    kernels.init_populations(g, u0, rho0, _velocity_gradient(u0, grid), omega_p, W, ex, ey, ez)
+    kernels.fill_periodic(g)
+    kernels.fill_pillar(g, solid_cells, links)
+    fluid = ~grid.solid.T[None, :, :]  # (1, ny, nx) broadcast over z
+    mom = np.zeros((4, grid.nz, grid.ny, grid.nx))
+    kernels.moments(g, sources, fx, ex, ey, ez, mom)
+    u_prev = mom[1:3].copy()
+    check = settings.check_every
+    steps = 0
+    residual = math.inf
+    converged = False
+    t0 = time.perf_counter()
+    while steps < settings.max_steps:
+        n = min(check, settings.max_steps - steps)
+        for _ in range(n):
+            kernels.stream_collide(g, gn, sources, fx, omega_p, omega_m)
+            kernels.fill_pillar(gn, solid_cells, links)
+            g, gn = gn, g
+        steps += n
+        kernels.moments(g, sources, fx, ex, ey, ez, mom)
+        uxy = mom[1:3] * fluid
+        speed_max = float(np.sqrt((mom[1:4] ** 2).sum(axis=0) * fluid).max())
+        if not math.isfinite(speed_max):
+            raise SolverError(
+                f"LBM diverged: non-finite velocity after {steps} steps (tau={tau:g})"
+            )
+        if speed_max > MACH_LIMIT:
+            raise SolverError(
+                f"LBM diverged: lattice speed {speed_max:.3g} > {MACH_LIMIT} (Mach too high) "
+                f"after {steps} steps (tau={tau:g})"
+            )
+        residual = float(np.linalg.norm(uxy - u_prev) / max(np.linalg.norm(uxy), 1e-300))
+        u_prev = uxy.copy()
+        log.debug("step %d residual %.3e", steps, residual)
+        if residual < settings.tolerance:
+            converged = True
+            break
+    seconds = time.perf_counter() - t0
+    u = mom[1:4] * fluid
+    report = SolveReport(
+        steps=steps,
+        converged=converged,
+        residual=residual,
+        seconds=seconds,
+        mlups=grid.cells * steps / max(seconds, 1e-12) / 1e6,
+        tau=tau,
+        omega_minus=omega_m,
+        force=fx,
+        grid=(grid.nx, grid.ny, grid.nz, grid.nz_full),
+    )
+    log.info(
+        "LBM %s steps, converged=%s, residual %.2e, %.1f s, %.1f MLUPS",
+        steps,
+        converged,
+        residual,
+        seconds,
+        report.mlups,
+    )
+    return LatticeSolution(u=u, rho=mom[0].copy(), grid=grid, report=report)
+
+
+def coarser_settings(settings: FlowSettings) -> FlowSettings | None:
+    """The same problem at 2 Δx if that grid is valid (≥ 8 depth nodes, whole counts)."""
+    try:
+        return FlowSettings.model_validate({**settings.model_dump(), "dx": 2.0 * settings.dx})
+    except ValueError:
+        return None
+
+
+def solve_nested(settings: FlowSettings, threads: int | None = None) -> LatticeSolution:
+    """Solve on 2 Δx first (recursively) and start from its interpolated solution.
+
+    On the finer grid the flow then only has to correct the discretisation
+    difference, which takes far fewer steps than starting from the duct profile
+    (the slow transient, the Hele-Shaw pressure equilibration around the
+    pillar, is already done on the cheap grid).
+    """
+    coarse_settings = coarser_settings(settings)
+    if coarse_settings is None:
+        return solve_lattice(settings, threads=threads)
+    coarse = solve_nested(coarse_settings, threads=threads)
+    fine_grid = make_grid(settings.geometry.to_geometry(), settings.dx, settings.symmetry)
+    tau, _, _ = _rates(settings, fine_grid)
+    nu = (tau - 0.5) / 3.0
+    fx = U_LATTICE / duct_center_velocity(fine_grid.ny, fine_grid.nz_full, 1.0) * nu
+    density_scale = fx / coarse.report.force * (coarse.grid.dx / fine_grid.dx)
+    u0, rho0 = prolong(coarse.u, coarse.rho, coarse.grid, fine_grid, density_scale)
+    fine = solve_lattice(settings, initial=u0, initial_rho=rho0, threads=threads)
+    c = coarse.report
+    report = replace(
+        fine.report,
+        coarse_steps=c.steps + c.coarse_steps,
+        coarse_seconds=c.seconds + c.coarse_seconds,
+    )
+    log.info(
+        "nested solve: %d steps at dx=%g, then %d at dx=%g",
+        coarse.report.steps,
+        coarse.grid.dx,
+        fine.report.steps,
+        fine_grid.dx,
+    )
+    return replace(fine, report=report)

@@ -1,0 +1,90 @@
+"""Decision rule and budget planning of the discrepancy workflow (no simulations)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fibersweep.discrepancy.decide import decide, evaluate_heldout
+from fibersweep.discrepancy.gap import assess_gap
+from fibersweep.discrepancy.library import LIBRARY, get_candidates
+from fibersweep.discrepancy.workflow import DiscrepancySettings, plan_budget
+from fibersweep.errors import InputError
+
+
+def _gap(shift: float, seed: int):
+    """A real GapResult on 60 fibers x 5 members, observation shifted by ``shift`` sd."""
+    rng = np.random.default_rng(seed)
+    V = rng.standard_normal((60, 5))
+    V[:, 0] += shift
+    return assess_gap({"delta": V}, rng, n_perm=999, n_boot=200)
+
+
+def _heldout(improvements: dict[str, np.ndarray], residual_shift: dict[str, float]):
+    rng = np.random.default_rng(0)
+    n = len(next(iter(improvements.values())))
+    base = {"delta": np.full(n, 1.0)}
+    eff = {k: {"delta": 1.0 - d} for k, d in improvements.items()}
+    res = {k: _gap(residual_shift[k], 1 + i) for i, k in enumerate(improvements)}
+    fits = {k: 0.1 for k in improvements}
+    return evaluate_heldout(fits, base, eff, res, rng, alpha=0.05)
+
+
+def test_no_gap_names_nothing_whatever_the_fits_say():
+    rng = np.random.default_rng(1)
+    ho = _heldout({"friction": rng.normal(1.0, 0.1, 60)}, {"friction": 0.0})
+    v = decide(_gap(0.0, 3), ho, "somewhere", rng, 0.05)
+    assert v.kind == "no significant gap" and v.effects == {}
+
+
+def test_clear_winner_is_named():
+    rng = np.random.default_rng(2)
+    ho = _heldout(
+        {"friction": rng.normal(1.0, 0.3, 60), "pillar_hydro": rng.normal(0.1, 0.3, 60)},
+        {"friction": 0.0, "pillar_hydro": 0.0},
+    )
+    v = decide(_gap(1.5, 4), ho, "y0 < 0.4", rng, 0.05)
+    assert v.kind == "named" and list(v.effects) == ["friction"]
+
+
+def test_partial_explanation_is_unexplained():
+    rng = np.random.default_rng(3)
+    ho = _heldout({"friction": rng.normal(1.0, 0.3, 60)}, {"friction": 1.5})
+    v = decide(_gap(1.5, 5), ho, "y0 < 0.4", rng, 0.05)
+    assert v.kind == "unexplained" and v.effects == {} and v.region == "y0 < 0.4"
+
+
+def test_no_improvement_is_unexplained():
+    rng = np.random.default_rng(4)
+    ho = _heldout({"friction": rng.normal(0.0, 0.3, 60)}, {"friction": 1.5})
+    v = decide(_gap(1.5, 6), ho, "R", rng, 0.05)
+    assert v.kind == "unexplained"
+    assert "observable delta" in v.text
+
+
+def test_two_equally_good_effects_are_ambiguous():
+    rng = np.random.default_rng(5)
+    d = rng.normal(1.0, 0.3, 60)
+    ho = _heldout(
+        {"inlet_speed": d + rng.normal(0, 0.05, 60), "off_midplane": d + rng.normal(0, 0.05, 60)},
+        {"inlet_speed": 0.0, "off_midplane": 0.0},
+    )
+    v = decide(_gap(1.5, 7), ho, "R", rng, 0.05)
+    assert v.kind == "ambiguous" and set(v.effects) == {"inlet_speed", "off_midplane"}
+
+
+def test_budget_plan_shrinks_and_refuses_too_small():
+    cands = get_candidates()
+    full = plan_budget(100, DiscrepancySettings(), cands)
+    small = plan_budget(100, DiscrepancySettings(budget=2000), cands)
+    assert small.total(100) <= 2000 < full.total(100)
+    assert small.copies >= 2
+    with pytest.raises(InputError, match="budget"):
+        plan_budget(100, DiscrepancySettings(budget=150), cands)
+
+
+def test_library_rejects_unknown_names_listing_valid_ones():
+    with pytest.raises(InputError, match="valid: .*friction"):
+        get_candidates(["frictoin"])
+    for c in LIBRARY.values():
+        assert c.lo <= 0.0 <= c.hi and all(c.lo <= p <= c.hi for p in c.probes)

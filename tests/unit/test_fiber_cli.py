@@ -1,0 +1,50 @@
+"""`fibersweep simulate` and the chronophotograph."""
+
+from __future__ import annotations
+
+from typer.testing import CliRunner
+
+from fibersweep.cli import app
+
+
+def _config(tmp_path, flow_cache_dir, extra: str = "") -> str:
+    p = tmp_path / "c.yaml"
+    p.write_text(f"flow:\n  dx: 4.0\nrun:\n  cache_dir: {flow_cache_dir}\n{extra}")
+    return str(p)
+
+
+def test_simulate_prints_class_and_plots(tmp_path, flow_cache_dir, coarse_field):
+    cfg = _config(tmp_path, flow_cache_dir, "fiber:\n  effects: {friction: 0.3}\n")
+    png = tmp_path / "chrono.png"
+    res = CliRunner().invoke(
+        app,
+        ["simulate", cfg, "--theta0", "-3.7", "--y0", "0.373", "--length", "0.82",
+         "--plot", str(png)],
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    assert "class: Pole-vaulting" in res.output
+    assert "contact: yes" in res.output and "delta: 0.1" in res.output
+    assert png.exists() and png.stat().st_size > 10_000
+
+
+def test_simulate_bad_input_exit_2(tmp_path, flow_cache_dir, coarse_field):
+    cfg = _config(tmp_path, flow_cache_dir)
+    res = CliRunner().invoke(
+        app, ["simulate", cfg, "--theta0", "0", "--y0", "0.5", "--length", "0.01"]
+    )
+    assert res.exit_code == 2
+    assert "length" in res.output
+    res = CliRunner().invoke(
+        app,
+        ["simulate", cfg, "--theta0", "0", "--y0", "0.5", "--length", "1", "--model", "soft"],
+    )
+    assert res.exit_code == 2 and "--model" in res.output
+
+
+def test_simulate_reversible(tmp_path, flow_cache_dir, coarse_field):
+    cfg = _config(tmp_path, flow_cache_dir)
+    res = CliRunner().invoke(
+        app, ["simulate", cfg, "--theta0", "5", "--y0", "0.8", "--length", "1", "--reversible"]
+    )
+    assert res.exit_code == 0, res.output
+    assert "class: Above" in res.output and "reversed flow: returns within" in res.output

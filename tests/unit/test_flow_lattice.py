@@ -1,0 +1,138 @@
+"""D3Q19 lattice constants, pull table, pillar links, prolongation, midplane weights."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fibersweep.flow.lattice import (
+    CS2,
+    MIRROR_Z,
+    OPP,
+    E,
+    Q,
+    W,
+    boundary_links,
+    make_grid,
+    pull_sources,
+)
+from fibersweep.flow.prolong import prolong
+from fibersweep.flow.solver import midplane_weights
+from fibersweep.units import Geometry
+
+SMALL = Geometry(width=40.0, depth=32.0, length=48.0, pillar_height=12.0)
+
+
+def test_d3q19_moments_are_isotropic_to_fourth_order():
+    # Σw = 1, Σw e = 0, Σw e_a e_b = c_s² δ_ab, Σw e_a e_b e_c = 0,
+    # Σw e_a e_b e_c e_d = c_s⁴ (δ_ab δ_cd + δ_ac δ_bd + δ_ad δ_bc) (exact, to 1e-15).
+    e = E.astype(float)
+    d = np.eye(3)
+    assert Q == 19 and W.sum() == pytest.approx(1.0, abs=1e-15)
+    np.testing.assert_allclose(np.einsum("q,qa->a", W, e), 0, atol=1e-15)
+    np.testing.assert_allclose(np.einsum("q,qa,qb->ab", W, e, e), CS2 * d, atol=1e-15)
+    np.testing.assert_allclose(np.einsum("q,qa,qb,qc->abc", W, e, e, e), 0, atol=1e-15)
+    iso = CS2**2 * (
+        np.einsum("ab,cd->abcd", d, d)
+        + np.einsum("ac,bd->abcd", d, d)
+        + np.einsum("ad,bc->abcd", d, d)
+    )
+    m4 = np.einsum("q,qa,qb,qc,qd->abcd", W, e, e, e, e)
+    np.testing.assert_allclose(m4, iso, atol=1e-15)
+
+
+def test_opposite_and_mirror_indices():
+    np.testing.assert_array_equal(E[OPP], -E)
+    np.testing.assert_array_equal(E[MIRROR_Z], E * np.array([1, 1, -1]))
+    np.testing.assert_array_equal(OPP[OPP], np.arange(Q))
+    np.testing.assert_array_equal(MIRROR_Z[MIRROR_Z], np.arange(Q))
+
+
+@pytest.mark.parametrize("symmetry", [True, False])
+def test_pull_table_follows_the_boundary_rules(symmetry):
+    grid = make_grid(SMALL, 4.0, symmetry)
+    src = pull_sources(grid)
+    nz, ny = grid.nz, grid.ny
+    for k in range(nz):
+        for j in range(ny):
+            for q in range(Q):
+                ex, ey, ez = E[q]
+                qs, zs, ys, xo = src[k * ny + j, q]
+                if not (0 <= j - ey < ny) or k - ez < 0 or (k - ez >= nz and not symmetry):
+                    assert (qs, zs, ys, xo) == (OPP[q], k + 1, j + 1, 1)  # bounce-back
+                elif k - ez >= nz:
+                    assert (qs, zs, ys, xo) == (MIRROR_Z[q], k + 1, j - ey + 1, 1 - ex)
+                else:
+                    assert (qs, zs, ys, xo) == (q, k - ez + 1, j - ey + 1, 1 - ex)
+
+
+def test_pillar_links_cover_every_fluid_solid_link():
+    # Brute force: every (fluid node t, q) whose pull source t − e_q is solid must
+    # find, at that solid slot, the bounce-back value g[opp q](t).
+    grid = make_grid(SMALL, 2.0, symmetry=True)
+    links, cells = boundary_links(grid)
+    g = np.random.default_rng(0).random(grid.padded_shape).astype(np.float32)
+    flat = g.reshape(Q, -1)
+    flat[:, cells] = 0.0
+    for q, dst, qs, s in links:
+        flat[q, dst] = flat[qs, s]
+    src = pull_sources(grid)
+    checked = 0
+    for k in range(grid.nz):
+        for j in range(grid.ny):
+            for i in range(grid.nx):
+                if grid.solid[i, j]:
+                    continue
+                for q in range(Q):
+                    qs, zs, ys, xo = src[k * grid.ny + j, q]
+                    xs = xo + i
+                    ii = (xs - 1) % grid.nx
+                    jj = ys - 1
+                    if 0 <= jj < grid.ny and grid.solid[ii, jj]:
+                        want = g[OPP[q], k + 1, j + 1, i + 1]
+                        assert g[qs, zs, ys, xs] == want
+                        checked += 1
+    assert checked > 50
+    assert len(np.unique(cells)) == grid.solid.sum() * grid.nz
+
+
+def test_prolong_keeps_linear_fields_and_boundary_conditions():
+    coarse = make_grid(SMALL, 4.0, symmetry=True, pillar=False)
+    fine = make_grid(SMALL, 2.0, symmetry=True, pillar=False)
+    z = (np.arange(coarse.nz) + 0.5)[:, None, None] * coarse.dx
+    y = (np.arange(coarse.ny) + 0.5)[None, :, None] * coarse.dx
+    x = (np.arange(coarse.nx) + 0.5)[None, None, :] * coarse.dx
+    # ux linear in y inside (exact for trilinear interpolation away from walls)
+    u = np.zeros((3, coarse.nz, coarse.ny, coarse.nx))
+    u[0] = (y + 0 * z + 0 * x) * 1e-3
+    rho = np.broadcast_to(2e-4 * np.cos(2 * np.pi * x / SMALL.length), u[0].shape)
+    uf, rf = prolong(u, rho, coarse, fine, density_scale=0.5)
+    yf = (np.arange(fine.ny) + 0.5) * fine.dx
+    inner = (yf > coarse.dx / 2) & (yf < SMALL.width - coarse.dx / 2)
+    # away from the walls a linear field is reproduced exactly (z: all but the
+    # bottom fine layer; the top is the free-slip plane, where ux is mirrored)
+    np.testing.assert_allclose(
+        uf[0][1:, inner, :],
+        np.broadcast_to((yf[inner] * 1e-3)[None, :, None], uf[0][1:, inner].shape),
+    )
+    # no-slip bottom wall: the fine node at dx_f/2 gets half the coarse node at dx_c/2
+    np.testing.assert_allclose(uf[0][0, inner, :], 0.5 * uf[0][1, inner, :] * 1.0)
+    assert np.all(uf[1:] == 0)
+    # δρ: mean-free, scaled by density_scale
+    assert abs(rf.mean()) < 1e-15 and 0.9e-4 < np.abs(rf).max() <= 1e-4 + 1e-12
+
+
+def test_midplane_weights_are_the_ib_kernel_at_half_depth():
+    # Half-way nodes at (k + 1/2) Δx and the midplane H/2 between two nodes:
+    # weights φ(±1/2) = 0.4268, φ(±3/2) = 0.0732, summing to 1 (SPEC kernel).
+    for symmetry in (True, False):
+        grid = make_grid(Geometry(), 4.0, symmetry)
+        w = dict(midplane_weights(grid))
+        phi = lambda r: 0.25 * (1 + np.cos(np.pi * r / 2))  # noqa: E731
+        assert w == pytest.approx(
+            {3: 2 * phi(1.5), 4: 2 * phi(0.5)}
+            if symmetry
+            else {3: phi(1.5), 4: phi(0.5), 5: phi(0.5), 6: phi(1.5)}
+        )
+        assert sum(w.values()) == pytest.approx(1.0, abs=1e-12)
+        assert phi(0.5) == pytest.approx(0.4268, abs=1e-4)

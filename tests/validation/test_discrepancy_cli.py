@@ -1,0 +1,67 @@
+"""``fibersweep synth`` and ``fibersweep discrepancy`` end to end, and their input errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from fibersweep.cli import app
+
+
+@pytest.fixture()
+def config(tmp_path, flow_cache_dir, coarse_field):
+    # coarse_field makes sure the SPEC field at dx = 4 µm is in the shared test cache
+    p = tmp_path / "cfg.yaml"
+    p.write_text(
+        "sweep:\n"
+        "  theta0: {start: -10, stop: 10, num: 3}\n"
+        "  y0: {start: 0.15, stop: 0.65, num: 3}\n"
+        "  length: {start: 0.5, stop: 1.4, num: 3}\n"
+        f"run:\n  cache_dir: {flow_cache_dir}\n  workers: 1\n"
+    )
+    return p
+
+
+def test_synth_then_discrepancy_writes_the_report(tmp_path, config):
+    runner = CliRunner()
+    measured = tmp_path / "m.parquet"
+    r = runner.invoke(app, ["synth", str(config), "--n", "12", "--seed", "3", "-o", str(measured)])
+    assert r.exit_code == 0, r.output
+    truth = json.loads((tmp_path / "m.truth.json").read_text())
+    assert truth["effects"] == {} and truth["n_written"] + len(truth["failed"]) == 12
+    table = pd.read_parquet(measured)
+    assert "effects" not in table.columns and len(table) == truth["n_written"]
+    assert table["y0"].between(0.1, 0.7).all()  # the sweep box plus noise
+    out = tmp_path / "report"
+    r = runner.invoke(
+        app, ["discrepancy", str(measured), str(config), "-o", str(out), "--copies", "2"]
+    )
+    assert r.exit_code == 0, r.output
+    s = json.loads((out / "summary.json").read_text())
+    assert s["verdict"]["kind"] == "no significant gap"
+    assert s["simulations"] == 2 * len(table)
+    assert (out / "report.md").read_text().startswith("# Discrepancy report")
+    assert (out / "residual_map.png").stat().st_size > 0
+    assert not list(out.glob("updated_config*.yaml"))
+
+
+def test_bad_inputs_exit_2_with_a_named_problem(tmp_path, config):
+    runner = CliRunner()
+    r = runner.invoke(app, ["synth", str(config), "--effect", "frictoin=0.3", "-o", "x.parquet"])
+    assert r.exit_code == 2 and "friction" in r.output and "valid names" in r.output
+    rng = np.random.default_rng(0)
+    bad = tmp_path / "rad.csv"
+    pd.DataFrame(
+        {
+            "theta0": np.radians(rng.uniform(-10, 10, 10)),
+            "y0": rng.uniform(0, 1, 10),
+            "length": rng.uniform(0.5, 1.4, 10),
+            "class": "Below",
+        }
+    ).to_csv(bad, index=False)
+    r = runner.invoke(app, ["discrepancy", str(bad), str(config), "-o", str(tmp_path / "r")])
+    assert r.exit_code == 2 and "radians" in r.output

@@ -1,0 +1,145 @@
+"""The discrepancy workflow on data with a hidden effect (synth -> discrepancy), coarse grid.
+
+The fast tests (CI) use 24 fibers and a reduced plan; the slow ones use the
+default plan on 60 fibers and every library effect at a realistic magnitude.
+The label is never given to the workflow: it only sees the synthesised table.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fibersweep.config import Config, load_config
+from fibersweep.discrepancy.report import write_report
+from fibersweep.discrepancy.schema import validate_measured
+from fibersweep.discrepancy.synth import synthesize
+from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
+from fibersweep.fiber.settings import ContactSettings, FiberSettings
+
+# Starts around the pillar (the contact window of the SPEC and beyond).
+BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
+FAST = dict(copies=3, fit_copies=2, candidates=2, fit_evals=4, n_perm=1999)
+
+
+def _run(field, hidden, n, seed, fiber_truth=None, workers=2, **kw):
+    truth_fiber = fiber_truth or FiberSettings()
+    table, _ = synthesize(
+        field, truth_fiber, BOX, n, hidden, seed=seed, workers=workers, progress=False
+    )
+    data = validate_measured(table)
+    settings = DiscrepancySettings(seed=seed, workers=workers, **kw)
+    return run_discrepancy(data, field, FiberSettings(), settings, progress=False)
+
+
+def test_no_effect_gives_no_significant_gap(coarse_field):
+    res = _run(coarse_field, {}, 24, seed=11, workers=1, **FAST)  # in-process: no pool start
+    assert res.verdict.kind == "no significant gap", res.verdict.text
+    assert res.verdict.effects == {}
+    # nothing beyond the noise floor: only the baseline copies were simulated
+    assert res.simulations == 24 * 3
+
+
+def test_hidden_inlet_speed_is_named_recovered_and_closes_the_gap(coarse_field, tmp_path):
+    # 8 % faster flow: t_pass shorter by 7 %, against 1 % timing noise.
+    res = _run(
+        coarse_field,
+        {"inlet_speed": 0.08},
+        20,
+        seed=12,
+        effects=("inlet_speed", "friction", "pillar_scale"),
+        **FAST,
+    )
+    assert res.verdict.kind == "named", res.verdict.text
+    assert list(res.verdict.effects) == ["inlet_speed"]
+    # fit on 10 fibers x 2 copies, 4 Brent steps: within 0.02 of the truth (25 %)
+    assert res.verdict.effects["inlet_speed"] == pytest.approx(0.08, abs=0.02)
+    h = next(h for h in res.heldout if h.name == "inlet_speed")
+    before = res.gap.gaps["t_pass"].excess[0]
+    after = h.residual.gaps["t_pass"].excess[0]
+    assert before > 0 and after <= 0.5 * before
+    assert res.simulations <= res.plan.total(20)
+    # the report: JSON for scripts, the updated config loads and carries the effect
+    s = write_report(res, tmp_path, Config().model_dump(mode="json"))
+    assert s["verdict"]["kind"] == "named" and s["simulations"] == res.simulations
+    cfg = load_config(tmp_path / "updated_config.yaml")
+    assert cfg.fiber.effects == pytest.approx({"inlet_speed": res.verdict.effects["inlet_speed"]})
+    for fig in ("phase_before_after.png", "residual_map.png", "gap_before_after.png"):
+        assert (tmp_path / fig).stat().st_size > 0
+
+
+# ----------------------------------------------------------------------------- slow
+
+
+REALISTIC = {
+    "friction": 0.5,
+    "inlet_speed": 0.05,
+    "start_noise": 3.0,
+    "pillar_scale": 0.1,
+}
+# Stated recovery tolerances (relative to the truth), from the fit resolution of
+# 30 fibers x 2 copies per fold: speed scales are read off every fiber's time,
+# contact effects only off the ~40 % of fibers that touch the pillar.
+TOLERANCE = {
+    "friction": 0.5,
+    "inlet_speed": 0.3,
+    "start_noise": 0.5,
+    "pillar_scale": 0.5,
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(REALISTIC))
+def test_library_effect_is_named_and_recovered(coarse_field, name):
+    value = REALISTIC[name]
+    res = _run(coarse_field, {name: value}, 60, seed=21)
+    assert res.verdict.kind == "named", res.verdict.text
+    assert list(res.verdict.effects) == [name]
+    assert res.verdict.effects[name] == pytest.approx(value, rel=TOLERANCE[name])
+    h = next(h for h in res.heldout if h.name == name)
+    for obs in res.gap.significant:
+        before = res.gap.gaps[obs].excess[0]
+        assert h.residual.gaps[obs].excess[0] <= 0.5 * before, obs
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, value", [("pillar_hydro", 0.2), ("brownian", 1.0)])
+def test_effects_below_the_noise_floor_name_nothing_else(coarse_field, name, value):
+    # At these magnitudes the model's observables move by ~1 % of their noise
+    # (pillar_hydro: dwell +1 %; Brownian at 295 K in glycerol: < 0.1 µm): the
+    # honest answer is "no significant gap"; any name must be the true one.
+    v = _run(coarse_field, {name: value}, 60, seed=61).verdict
+    assert v.kind in ("no significant gap", "named"), v.text
+    if v.kind == "named":
+        assert list(v.effects) == [name]
+
+
+@pytest.mark.slow
+def test_false_alarm_rate_over_seeds(coarse_field):
+    # alpha = 0.05 family-wise: 5 seeds with no effect may give at most one alarm
+    # (P(>= 2 of 5) = 2.3 % if calibrated), and never a named effect.
+    kinds = [_run(coarse_field, {}, 40, seed=s, **FAST).verdict for s in range(31, 36)]
+    assert sum(v.kind != "no significant gap" for v in kinds) <= 1
+    assert all(v.kind != "named" for v in kinds)
+
+
+@pytest.mark.slow
+def test_effect_outside_the_library_is_not_named(coarse_field):
+    # a larger contact cutoff (chi 1.5 instead of 1.1) is no library effect
+    res = _run(
+        coarse_field, {}, 60, seed=41, fiber_truth=FiberSettings(contact=ContactSettings(chi=1.5))
+    )
+    assert res.verdict.kind in ("unexplained", "no significant gap"), res.verdict.text
+
+
+@pytest.mark.slow
+def test_look_alike_effects_are_never_one_wrong_name(coarse_field):
+    # off_midplane and inlet_speed < 0 both slow the fiber uniformly
+    res = _run(coarse_field, {"off_midplane": 0.15}, 60, seed=51)
+    v = res.verdict
+    assert v.kind in ("named", "ambiguous"), v.text
+    if v.kind == "named":
+        assert list(v.effects) == ["off_midplane"]
+    else:
+        assert "off_midplane" in v.effects
+    assert np.isfinite(list(v.effects.values())).all()
