@@ -5,12 +5,12 @@ noisy machine:
 
 - the memory bandwidth of a large stream copy (numpy, and a Numba prange copy
   with 1 and N threads), counted as bytes read + bytes written;
-- the MLUPS of one LBM step (stream_collide + pillar fill) on the SPEC channel
-  at dx = 4 µm (half depth: 600 x 200 x 5 = 600 k cells), with 1 and N threads;
+- the MLUPS of the LBM steps (kernel + pillar fix-ups) on the SPEC channel at
+  dx = 4 µm (half depth: 600 x 200 x 5 = 600 k cells), with 1 and N threads,
+  for the in-place AA kernel (default) and the two-array pull kernel;
 - the fraction of the roofline reached: bandwidth / bytes per cell update.
-  The kernel streams between two float32 arrays: 19 x 4 B read + 19 x 4 B
-  written, plus 19 x 4 B of write-allocate reads when stores are not
-  streaming stores (228 B); 152 B is the ideal in-place figure.
+  AA: 19 x 4 B read + 19 x 4 B written in place (152 B). Pull: the same plus
+  19 x 4 B of write-allocate reads of the second array (228 B).
 
 Usage: python scripts/bench_lbm.py [--steps 30] [--dx 4]
 """
@@ -23,8 +23,8 @@ import time
 import numba
 import numpy as np
 
-from fibersweep.flow import kernels
-from fibersweep.flow.lattice import boundary_links, make_grid, pull_sources
+from fibersweep.flow.lattice import make_grid
+from fibersweep.flow.steppers import make_stepper
 from fibersweep.units import Geometry
 
 
@@ -56,22 +56,17 @@ def bandwidth(nbytes: int, threads: int | None) -> float:
     return 2 * a.nbytes / dt / 1e9
 
 
-def mlups(dx: float, steps: int, threads: int) -> float:
+def mlups(dx: float, steps: int, threads: int, kernel: str) -> float:
+    """Cell updates per second of ``kernel`` ("aa" or "pull") incl. its pillar fix-ups."""
     numba.set_num_threads(threads)
     grid = make_grid(Geometry(), dx, symmetry=True)
-    links, cells = boundary_links(grid)
-    src = pull_sources(grid)
-    g = np.zeros(grid.padded_shape, dtype=np.float32)
-    gn = np.zeros_like(g)
-
-    def run() -> None:
-        nonlocal g, gn
-        for _ in range(steps):
-            kernels.stream_collide(g, gn, src, 1e-6, 1.25, 1.1)
-            kernels.fill_pillar(gn, cells, links)
-            g, gn = gn, g
-
-    dt = _best(run, 3)
+    shape = (grid.nz, grid.ny, grid.nx)
+    u0 = np.zeros((3, *shape))
+    stepper = make_stepper(
+        kernel, grid, u0, np.zeros(shape), np.zeros((3, 3, *shape)), 1e-6, 1.25, 1.1
+    )
+    steps += steps % 2
+    dt = _best(lambda: stepper.advance(steps), 3)
     return grid.cells * steps / dt / 1e6
 
 
@@ -95,14 +90,15 @@ def main() -> None:
     bw = max([bw_np, *bws.values()])
     grid = make_grid(Geometry(), args.dx, symmetry=True)
     print(f"LBM grid: {grid.nx} x {grid.ny} x {grid.nz} = {grid.cells / 1e6:.2f} M cells, float32")
-    for t in threads:
-        m = mlups(args.dx, args.steps, t)
-        bw_t = max(bws[t], bw_np if t == n_max else bws[t])
-        print(
-            f"LBM {t} thread(s): {m:7.1f} MLUPS; roofline at {bw_t:.1f} GB/s: "
-            f"{bw_t * 1e3 / 228:6.1f} MLUPS (228 B/cell) -> {m * 228 / (bw_t * 1e3):5.1%}, "
-            f"{bw_t * 1e3 / 152:6.1f} MLUPS (152 B/cell) -> {m * 152 / (bw_t * 1e3):5.1%}"
-        )
+    for kernel, nbytes_cell in (("aa", 152), ("pull", 228)):
+        for t in threads:
+            m = mlups(args.dx, args.steps, t, kernel)
+            bw_t = bws[t]
+            print(
+                f"LBM {kernel:4s} {t} thread(s): {m:7.1f} MLUPS; roofline {nbytes_cell} B/cell "
+                f"at {bw_t:.1f} GB/s = {bw_t * 1e3 / nbytes_cell:6.1f} MLUPS -> "
+                f"{m * nbytes_cell / (bw_t * 1e3):5.1%}"
+            )
     print(f"best measured bandwidth {bw:.1f} GB/s")
 
 

@@ -125,6 +125,10 @@ def run_scenario(name: str, field, n: int, seed: int, workers: int) -> dict:
             a = h.residual.gaps[obs].excess[0]
             ratios[obs] = a / b if b > 0 else None
         row["gap_after_over_before"] = ratios
+        w = res.weights
+        tot_b = sum(w[o] * res.gap.gaps[o].excess[0] for o in res.gap.significant)
+        tot_a = sum(w[o] * h.residual.gaps[o].excess[0] for o in res.gap.significant)
+        row["combined_after_over_before"] = tot_a / tot_b if tot_b > 0 else None
     return row
 
 

@@ -4,8 +4,9 @@ Flow fields (issue 2) are computed once per machine and kept in a repo-local,
 git-ignored cache (``.fibersweep-cache/tests``; override with the environment
 variable ``FIBERSWEEP_TEST_CACHE``), so repeated local runs load them in
 milliseconds. A cold computation costs: ``coarse_field`` (SPEC geometry,
-dx = 4 µm, 600 x 200 x 5 half-depth nodes) about 1 min on the 2-core machine;
-``small_field`` (400 x 800 µm channel, dx = 4 µm) about a sixth of that.
+dx = 4 µm, 600 x 200 x 5 half-depth nodes, 1800 steps) about 30 s on the loaded
+2-core machine (≈ 15 s on free cores); ``small_field`` (400 x 800 µm channel,
+dx = 4 µm) about a sixth of that.
 """
 
 from __future__ import annotations

@@ -14,6 +14,11 @@ sample, it beats the baseline by more than the noise floor allows. Then:
   worse than the best (paired bootstrap) -> "ambiguous between A and B";
 - otherwise the best candidate is named.
 
+Adequacy ("no significant gap left") is checked with the effect at the value
+fitted on all fibers (:func:`workflow.run_discrepancy` refits the significant
+candidates), so that a poor fit on one half does not hide a right effect; the
+out-of-sample improvement above is what guards against over-fitting.
+
 The first gate ("is there a gap at all?") is the family-wise test of
 :func:`gap.assess_gap` on all fibers; without it nothing is ever named.
 """
@@ -45,9 +50,10 @@ class HeldOut:
         One-sided bootstrap p of "no improvement", raw and Holm-adjusted.
     significant : bool
     residual : GapResult
-        Held-out gap with the effect on.
+        Cross-fitted (out-of-sample) gap with the effect on.
     explains : bool
-        Significant and no observable's held-out gap remains significant.
+        Significant and no observable's gap remains significant with the effect
+        at its final value (``final`` when given, else ``residual``).
     per_fiber : ndarray, shape (n_heldout,)
         Per-fiber improvement (for paired comparisons).
     """
@@ -61,6 +67,7 @@ class HeldOut:
     residual: GapResult
     explains: bool
     per_fiber: np.ndarray = field(repr=False)
+    final: GapResult | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -178,7 +185,7 @@ def decide(
         )
     best = max(sig, key=lambda h: h.improvement[0])
     if not best.explains:
-        rest = best.residual.significant
+        rest = (best.final or best.residual).significant
         obs = rest[0] if rest else top_obs
         return Verdict(
             "unexplained",

@@ -139,6 +139,7 @@ def fit_effect(
     weights: Mapping[str, float],
     max_evals: int,
     side: float = 0.0,
+    bounds: tuple[float, float] | None = None,
 ) -> Fit:
     """Fit the value of one effect on the fit fibers.
 
@@ -152,6 +153,8 @@ def fit_effect(
         Simulated evaluations allowed (each is len(rows) x fit_copies runs).
     side : float
         For a signed effect, the sign of the best-matching probe (0: search both).
+    bounds : (lo, hi), optional
+        Search interval instead of the candidate's (e.g. around earlier fits).
     """
     k_fit = len(base_copies)
     seen: dict[float, float] = {
@@ -173,8 +176,8 @@ def fit_effect(
         seen[v] = combined_loss(value_matrices(observed, copies, observables), weights)
         return seen[v]
 
-    lo, hi = cand.lo, cand.hi
-    if cand.signed and side != 0.0:
+    lo, hi = bounds if bounds is not None else (cand.lo, cand.hi)
+    if bounds is None and cand.signed and side != 0.0:
         # the signature already told the sign: search that half only
         lo, hi = (0.0, cand.hi) if side > 0 else (cand.lo, 0.0)
     minimize_scalar(

@@ -117,5 +117,6 @@ class NoiseModel:
         if "t_pass" in out:
             out["t_pass"] = out["t_pass"].to_numpy(dtype=np.float64) * np.exp(self.t_pass * z[:, 3])
         if "dwell" in out:
-            out["dwell"] = out["dwell"].to_numpy(dtype=np.float64) + self.dwell * z[:, 4]
+            # reflected at 0: a measured contact never comes after the pass
+            out["dwell"] = np.abs(out["dwell"].to_numpy(dtype=np.float64) + self.dwell * z[:, 4])
         return out

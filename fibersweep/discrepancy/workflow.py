@@ -61,6 +61,8 @@ class DiscrepancySettings:
         Effects fitted (the best-matching signatures).
     fit_evals : int
         Simulated evaluations per 1D fit.
+    refits : int
+        Significant candidates refitted on all fibers for the adequacy check.
     alpha : float
         Family-wise error rate of every test.
     budget : int or None
@@ -78,6 +80,7 @@ class DiscrepancySettings:
     fit_copies: int = 2
     candidates: int = 3
     fit_evals: int = 5
+    refits: int = 2
     alpha: float = 0.05
     budget: int | None = None
     seed: int = 0
@@ -92,6 +95,7 @@ class DiscrepancySettings:
             "fit_copies": self.fit_copies >= 2,  # the fair CRPS needs two members
             "candidates": self.candidates >= 1,
             "fit_evals": self.fit_evals >= 1,
+            "refits": self.refits >= 1,
             "alpha": 0.0 < self.alpha < 0.5,
             "workers": self.workers >= 1,
         }
@@ -111,6 +115,7 @@ class Plan:
     candidates: int
     fit_evals: int
     probes: int
+    refits: int = 2
 
     def cost(self, n: int) -> dict[str, int]:
         """Most runs per step for n fibers (two folds of n/2 for the fits)."""
@@ -120,6 +125,7 @@ class Plan:
             "probes": self.probes * half,
             "fits": 2 * self.candidates * self.fit_evals * self.fit_copies * half,
             "heldout": self.candidates * self.copies * n,
+            "refits": self.refits * (self.fit_evals * self.fit_copies + self.copies) * n,
         }
 
     def total(self, n: int) -> int:
@@ -135,10 +141,13 @@ def plan_budget(n: int, s: DiscrepancySettings, candidates: list[Candidate]) -> 
         If even the smallest plan (2 copies, one candidate, one evaluation) does not fit.
     """
     probes = sum(len(c.probes) for c in candidates)
-    plan = Plan(s.copies, s.fit_copies, min(s.candidates, len(candidates)), s.fit_evals, probes)
+    plan = Plan(
+        s.copies, s.fit_copies, min(s.candidates, len(candidates)), s.fit_evals, probes, s.refits
+    )
     if s.budget is None:
         return plan
     shrink = [
+        ("refits", 1),
         ("fit_evals", 3),
         ("candidates", 2),
         ("fit_evals", 2),
@@ -335,6 +344,51 @@ def run_discrepancy(
                 fitted[name] = float(np.mean(vals))
                 extra_values[name] = [float(v) for v in vals]
             heldout = evaluate_heldout(fitted, base_scores, eff_scores, residuals, rng, s.alpha)
+            # (6) adequacy: refit the significant candidates on all fibers, near their
+            # fold values, and test the gap left with the effect at that value
+            sig = sorted((h for h in heldout if h.significant), key=lambda h: -h.improvement[0])
+            final = {}
+            for h in sig[: plan.refits]:
+                cand = next(c for c in candidates if c.name == h.name)
+                vals = extra_values[h.name]
+                pad = 0.25 * (cand.hi - cand.lo)
+                bounds = (max(cand.lo, min(vals) - pad), min(cand.hi, max(vals) + pad))
+                fit = fit_effect(
+                    cand,
+                    maker,
+                    observed,
+                    base[: plan.fit_copies],
+                    np.arange(n),
+                    obs_names,
+                    w_gap,
+                    plan.fit_evals,
+                    bounds=bounds,
+                )
+                fits.append(fit)
+                if fit.value == 0.0:
+                    final[h.name] = (0.0, gap)
+                    continue
+                cps = [
+                    maker.copy(k, {h.name: fit.value}, desc=f"final {h.name}")
+                    for k in range(plan.copies)
+                ]
+                v_final = value_matrices(observed, cps, obs_names)
+                final[h.name] = (
+                    fit.value,
+                    assess_gap(v_final, rng, alpha=s.alpha, n_perm=s.n_perm),
+                )
+                effect_copies[h.name] = cps
+            heldout = [
+                replace(
+                    h,
+                    value=final[h.name][0],
+                    final=final[h.name][1],
+                    explains=h.significant and not final[h.name][1].any,
+                )
+                if h.name in final
+                else replace(h, explains=False)
+                for h in heldout
+            ]
         verdict = decide(gap, heldout, region_text, rng, s.alpha)
         used, failed = sim.used, sim.failed
 

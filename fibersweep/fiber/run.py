@@ -84,6 +84,16 @@ def _seed(rng: np.random.Generator, setup: Setup) -> None:
         seed_numba(int(rng.integers(0, 2**31 - 1)))
 
 
+def _steps(settings: FiberSettings, rec: np.ndarray) -> int:
+    """Time steps taken: one record row per step (rigid) or t_end / Δt (bead-spring)."""
+    if settings.model == "rigid":
+        return int(len(rec) - 1)
+    from fibersweep.fiber.beadspring import DEFAULT_DT
+
+    dt = settings.step.dt if settings.step.dt is not None else DEFAULT_DT
+    return int(round(float(rec[-1, R.T]) / dt))
+
+
 def _result(
     setup: Setup, rec: np.ndarray, beads: np.ndarray | None, code: int, wall: float
 ) -> RunResult:
@@ -92,7 +102,7 @@ def _result(
     traj = trajectory_from_record(rec, beads)
     common = dict(
         start=setup.start,
-        n_steps=int(len(rec) - 1),
+        n_steps=_steps(st, rec),
         wall_time=wall,
         model=st.model,
         n_beads=setup.n,

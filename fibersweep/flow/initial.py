@@ -18,7 +18,7 @@ import scipy.sparse.linalg as spla
 from fibersweep.flow.analytic import duct_velocity
 from fibersweep.flow.lattice import Grid
 
-__all__ = ["hele_shaw_pressure", "hele_shaw_guess"]
+__all__ = ["hele_shaw_pressure", "hele_shaw_guess", "duct_guess", "velocity_gradient"]
 
 
 def hele_shaw_pressure(solid: np.ndarray, fx: float) -> tuple[np.ndarray, np.ndarray]:
@@ -105,3 +105,34 @@ def hele_shaw_guess(grid: Grid, fx: float, g_over_nu: float) -> tuple[np.ndarray
     u[1] = duct[:, :, None] * rel[1].T[None]
     drho = np.broadcast_to(3.0 * p.T[None], (grid.nz, grid.ny, grid.nx)).copy()
     return u, drho
+
+
+def duct_guess(grid: Grid, g_over_nu: float) -> np.ndarray:
+    """Duct profile in lattice units, shape (3, nz, ny, nx), zero in the pillar."""
+    y = np.arange(grid.ny) + 0.5
+    z = np.arange(grid.nz) + 0.5
+    prof = duct_velocity(y[None, :], z[:, None], grid.ny, grid.nz_full, g_over_nu)
+    u = np.zeros((3, grid.nz, grid.ny, grid.nx))
+    u[0] = prof[:, :, None]
+    u[0][:, grid.solid.T] = 0.0
+    return u
+
+
+def velocity_gradient(u: np.ndarray, grid: Grid) -> np.ndarray:
+    """∂_a u_b, shape (3, 3, nz, ny, nx), by central differences.
+
+    Ghost values: periodic in x, antisymmetric (u = 0 half-way) across walls,
+    mirror (ux, uy even, uz odd) across a symmetric top. Pillar nodes hold u = 0,
+    which makes the difference at a fluid node next to the pillar one-sided-like.
+    """
+    grad = np.empty((3, 3, *u.shape[1:]))
+    for b in range(3):
+        c = u[b]
+        gx = 0.5 * (np.roll(c, -1, axis=2) - np.roll(c, 1, axis=2))
+        py = np.concatenate([-c[:, :1], c, -c[:, -1:]], axis=1)
+        gy = 0.5 * (py[:, 2:] - py[:, :-2])
+        top = (1.0 if b < 2 else -1.0) if grid.symmetry else -1.0
+        pz = np.concatenate([-c[:1], c, top * c[-1:]], axis=0)
+        gz = 0.5 * (pz[2:] - pz[:-2])
+        grad[0, b], grad[1, b], grad[2, b] = gx, gy, gz
+    return grad

@@ -48,6 +48,62 @@ def _pair(gi, gj, w, eu, ef, d, rho, usq15, uf3, wp, wm, sp, sm):
 CHUNK = 128  # x-cells per block: 19 x 128 float32 = 9.7 kB stays in L1
 
 
+@nb.njit(inline="always", fastmath=True)
+def _collide_block(b, n, F, half_f, wp, wm, sp, sm):
+    """Collide the first ``n`` cells of a (19, CHUNK) float32 block in place.
+
+    TRT (BGK if wp == wm), second-order equilibrium, Guo forcing ``F`` along x;
+    ``half_f`` = F/2 is the half-force velocity shift, ``sp``/``sm`` = 1 − ω±/2.
+    """
+    one = np.float32(1.0)
+    zero = np.float32(0.0)
+    for i in range(n):
+        f0 = b[0, i]
+        f1 = b[1, i]
+        f2 = b[2, i]
+        f3 = b[3, i]
+        f4 = b[4, i]
+        f5 = b[5, i]
+        f6 = b[6, i]
+        f7 = b[7, i]
+        f8 = b[8, i]
+        f9 = b[9, i]
+        f10 = b[10, i]
+        f11 = b[11, i]
+        f12 = b[12, i]
+        f13 = b[13, i]
+        f14 = b[14, i]
+        f15 = b[15, i]
+        f16 = b[16, i]
+        f17 = b[17, i]
+        f18 = b[18, i]
+        d = (
+            f0 + f1 + f2 + f3 + f4 + f5 + f6 + f7 + f8 + f9
+            + f10 + f11 + f12 + f13 + f14 + f15 + f16 + f17 + f18
+        )  # fmt: skip
+        rho = one + d
+        inv = one / rho
+        jx = f1 - f2 + f7 - f8 + f9 - f10 + f11 - f12 + f13 - f14
+        jy = f3 - f4 + f7 - f8 - f9 + f10 + f15 - f16 + f17 - f18
+        jz = f5 - f6 + f11 - f12 - f13 + f14 + f15 - f16 - f17 + f18
+        ux = (jx + half_f) * inv
+        uy = jy * inv
+        uz = jz * inv
+        usq15 = np.float32(1.5) * (ux * ux + uy * uy + uz * uz)
+        uf3 = np.float32(3.0) * ux * F
+        e0 = _W0 * (d - rho * usq15)  # rest population: even part only
+        b[0, i] = f0 - wp * (f0 - e0) - sp * _W0 * uf3  # S_0 = -w_0 3 u.F
+        b[1, i], b[2, i] = _pair(f1, f2, _W1, ux, F, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[3, i], b[4, i] = _pair(f3, f4, _W1, uy, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[5, i], b[6, i] = _pair(f5, f6, _W1, uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[7, i], b[8, i] = _pair(f7, f8, _W2, ux + uy, F, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[9, i], b[10, i] = _pair(f9, f10, _W2, ux - uy, F, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[11, i], b[12, i] = _pair(f11, f12, _W2, ux + uz, F, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[13, i], b[14, i] = _pair(f13, f14, _W2, ux - uz, F, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[15, i], b[16, i] = _pair(f15, f16, _W2, uy + uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[17, i], b[18, i] = _pair(f17, f18, _W2, uy - uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
+
+
 @nb.njit(cache=True, parallel=True, fastmath=True)
 def stream_collide(
     g: np.ndarray,
@@ -89,8 +145,6 @@ def stream_collide(
     sm = np.float32(1.0 - 0.5 * omega_m)
     F = np.float32(fx)
     half_f = np.float32(0.5 * fx)
-    one = np.float32(1.0)
-    zero = np.float32(0.0)
     for r in nb.prange(nrows):
         z = r // ny + 1
         y = r - (z - 1) * ny + 1
@@ -105,63 +159,7 @@ def stream_collide(
                 bq = b[q]
                 for i in range(n):
                     bq[i] = src[off + i]
-            for i in range(n):
-                f0 = b[0, i]
-                f1 = b[1, i]
-                f2 = b[2, i]
-                f3 = b[3, i]
-                f4 = b[4, i]
-                f5 = b[5, i]
-                f6 = b[6, i]
-                f7 = b[7, i]
-                f8 = b[8, i]
-                f9 = b[9, i]
-                f10 = b[10, i]
-                f11 = b[11, i]
-                f12 = b[12, i]
-                f13 = b[13, i]
-                f14 = b[14, i]
-                f15 = b[15, i]
-                f16 = b[16, i]
-                f17 = b[17, i]
-                f18 = b[18, i]
-                d = (
-                    f0 + f1 + f2 + f3 + f4 + f5 + f6 + f7 + f8 + f9
-                    + f10 + f11 + f12 + f13 + f14 + f15 + f16 + f17 + f18
-                )  # fmt: skip
-                rho = one + d
-                inv = one / rho
-                jx = f1 - f2 + f7 - f8 + f9 - f10 + f11 - f12 + f13 - f14
-                jy = f3 - f4 + f7 - f8 - f9 + f10 + f15 - f16 + f17 - f18
-                jz = f5 - f6 + f11 - f12 - f13 + f14 + f15 - f16 - f17 + f18
-                ux = (jx + half_f) * inv
-                uy = jy * inv
-                uz = jz * inv
-                usq15 = np.float32(1.5) * (ux * ux + uy * uy + uz * uz)
-                uf3 = np.float32(3.0) * ux * F
-                e0 = _W0 * (d - rho * usq15)  # rest population: even part only
-                b[0, i] = f0 - wp * (f0 - e0) - sp * _W0 * uf3  # S_0 = -w_0 3 u.F
-                b[1, i], b[2, i] = _pair(f1, f2, _W1, ux, F, d, rho, usq15, uf3, wp, wm, sp, sm)
-                b[3, i], b[4, i] = _pair(f3, f4, _W1, uy, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
-                b[5, i], b[6, i] = _pair(f5, f6, _W1, uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
-                b[7, i], b[8, i] = _pair(
-                    f7, f8, _W2, ux + uy, F, d, rho, usq15, uf3, wp, wm, sp, sm
-                )
-                b[9, i], b[10, i] = _pair(
-                    f9, f10, _W2, ux - uy, F, d, rho, usq15, uf3, wp, wm, sp, sm
-                )
-                b[11, i], b[12, i] = _pair(
-                    f11, f12, _W2, ux + uz, F, d, rho, usq15, uf3, wp, wm, sp, sm
-                )
-                b[13, i], b[14, i] = _pair(
-                    f13, f14, _W2, ux - uz, F, d, rho, usq15, uf3, wp, wm, sp, sm
-                )
-                b[15, i], b[16, i] = _pair(
-                    f15, f16, _W2, uy + uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm
-                )
-                b[17, i], b[18, i] = _pair(
-                    f17, f18, _W2, uy - uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm
-                )
+            _collide_block(b, n, F, half_f, wp, wm, sp, sm)
             o = np.uint64(1 + c0)
             for q in range(19):
                 dst = gn[q, z, y]
@@ -257,16 +255,17 @@ def init_populations(
     drho: np.ndarray,
     grad: np.ndarray,
     omega_p: float,
+    post_collision: bool,
     w: np.ndarray,
     ex: np.ndarray,
     ey: np.ndarray,
     ez: np.ndarray,
 ) -> None:
-    """Set interior populations to the post-collision state of a given flow.
+    """Set interior populations to the state of a given flow (after or before a collision).
 
     Equilibrium of (ρ = 1 + δρ, u) plus the Chapman-Enskog non-equilibrium part
-    f¹_q = −3 τ w_q ρ Q_q:∇u (Q = e e − c_s² I), as left by a collision:
-    g_q = f^eq_q − w_q + (1 − ω+) f¹_q. Starting without f¹ would release the
+    f¹_q = −3 τ w_q ρ Q_q:∇u (Q = e e − c_s² I): after a collision
+    g_q = f^eq_q − w_q + (1 − ω+) f¹_q, before it f^eq_q − w_q + f¹_q. Without f¹ the
     whole shear stress as a pressure pulse that takes hundreds of steps to damp.
 
     Parameters
@@ -280,6 +279,10 @@ def init_populations(
         grad[a, b] = ∂_a u_b.
     omega_p : float
         Relaxation rate of the even moments (τ = 1/ω+).
+    post_collision : bool
+        True: the state a collision leaves (two-array pull kernel stores these);
+        False: the state before a collision, f^eq + f¹ (the AA kernel's even step
+        starts from it).
     w : ndarray, shape (19,), float64
         Lattice weights.
     ex, ey, ez : ndarray, shape (19,), int64
@@ -287,6 +290,7 @@ def init_populations(
     """
     nz, ny, nx = g.shape[1] - 2, g.shape[2] - 2, g.shape[3] - 2
     tau = 1.0 / omega_p
+    keep = 1.0 - omega_p if post_collision else 1.0
     for r in nb.prange(nz * ny):
         z = r // ny
         y = r - z * ny
@@ -325,4 +329,4 @@ def init_populations(
                 )
                 feq = w[q] * (d + rho * (3.0 * eu + 4.5 * eu * eu - 1.5 * usq))
                 fneq = -3.0 * tau * w[q] * rho * qs
-                g[q, z + 1, y + 1, x + 1] = feq + (1.0 - omega_p) * fneq
+                g[q, z + 1, y + 1, x + 1] = feq + keep * fneq

@@ -33,6 +33,8 @@ __all__ = [
     "make_grid",
     "boundary_links",
     "pull_sources",
+    "aa_tables",
+    "aa_links",
 ]
 
 Q = 19
@@ -213,3 +215,99 @@ def pull_sources(grid: Grid) -> np.ndarray:
                 else:
                     out[r, q] = (q, ks + 1, js + 1, 1 - ex)
     return out
+
+
+def aa_tables(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
+    """Gather and scatter tables of the odd AA step (walls and midplane resolved).
+
+    After an even step, node x holds its post-collision f*_p in its slot opp(p).
+    In the odd step node (i, j, k) gathers population q from
+
+    - interior x − e_q: slot opp(q) there, (opp q, k − e_z, j − e_y, 1 − e_x);
+    - beyond a no-slip wall: its own f*_{opp q} (bounce-back), slot q of itself;
+    - above the symmetric top: the mirror image of the in-plane neighbour,
+      f*_{mirror q} at (i − e_x, j − e_y, k), slot opp(mirror q) there;
+
+    and pushes its f*_q to
+
+    - interior x + e_q: slot q there, (q, k + e_z, j + e_y, 1 + e_x);
+    - beyond a no-slip wall: back to itself as opp(q), slot opp(q) of itself;
+    - above the symmetric top: to (i + e_x, j + e_y, k) as mirror(q).
+
+    Returns
+    -------
+    gather, scatter : ndarray, shape (nz * ny, 19, 4), int64
+        (slot, z, y, x_off) in padded coordinates for cell 0 of each row.
+    """
+    gather = np.zeros((grid.nz * grid.ny, Q, 4), dtype=np.int64)
+    scatter = np.zeros_like(gather)
+    for k in range(grid.nz):
+        for j in range(grid.ny):
+            r = k * grid.ny + j
+            for q in range(Q):
+                ex, ey, ez = (int(v) for v in E[q])
+                for sign, table in ((-1, gather), (1, scatter)):
+                    kk, jj = k + sign * ez, j + sign * ey
+                    wall = jj < 0 or jj >= grid.ny or kk < 0
+                    wall |= kk >= grid.nz and not grid.symmetry
+                    if sign < 0:
+                        if wall:
+                            table[r, q] = (q, k + 1, j + 1, 1)
+                        elif kk >= grid.nz:
+                            table[r, q] = (OPP[MIRROR_Z[q]], k + 1, jj + 1, 1 - ex)
+                        else:
+                            table[r, q] = (OPP[q], kk + 1, jj + 1, 1 - ex)
+                    elif wall:
+                        table[r, q] = (OPP[q], k + 1, j + 1, 1)
+                    elif kk >= grid.nz:
+                        table[r, q] = (MIRROR_Z[q], k + 1, jj + 1, 1 + ex)
+                    else:
+                        table[r, q] = (q, kk + 1, jj + 1, 1 + ex)
+    return gather, scatter
+
+
+def aa_links(grid: Grid, gather: np.ndarray, scatter: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Pillar bounce-back copies around the odd AA step.
+
+    Returns
+    -------
+    before : ndarray, shape (n, 4), int64
+        Applied after the even step: a fluid node that will gather population q
+        from a pillar cell s finds there its own f*_{opp q} (bounce-back), i.e.
+        rows (slot, s, q, x) meaning ``g[slot].flat[s] = g[q].flat[x]``.
+    after : ndarray, shape (m, 4), int64
+        Applied after the odd step: what a fluid node pushed into a pillar cell
+        comes back to it as opp(q): rows (opp q, x, slot, s).
+    solid_cells : ndarray, shape (p,), int64
+        Flat indices (one padded plane) of the pillar cells, reset after ``after``.
+    Flat indices are into one padded (nz + 2, ny + 2, nx + 2) plane.
+    """
+    nyp, nxp = grid.ny + 2, grid.nx + 2
+    fi, fj = np.nonzero(~grid.solid)
+    before, after = [], []
+    for k in range(grid.nz):
+        rows = k * grid.ny + fj
+        x_flat = ((k + 1) * nyp + (fj + 1)) * nxp + (fi + 1)
+        for q in range(Q):
+            for table, out in ((gather, before), (scatter, after)):
+                slot, zs, ys, xo = (table[rows, q, c] for c in range(4))
+                ii = (fi + xo - 1) % grid.nx  # interior x of the cell read/written
+                jj = ys - 1
+                hit = (jj >= 0) & (jj < grid.ny)
+                hit[hit] = grid.solid[ii[hit], jj[hit]]
+                if not hit.any():
+                    continue
+                s_flat = (zs[hit] * nyp + ys[hit]) * nxp + (ii[hit] + 1)
+                n = int(hit.sum())
+                if out is before:
+                    out.append(np.column_stack([slot[hit], s_flat, np.full(n, q), x_flat[hit]]))
+                else:
+                    out.append(
+                        np.column_stack([np.full(n, OPP[q]), x_flat[hit], slot[hit], s_flat])
+                    )
+    _, solid_cells = boundary_links(grid)
+
+    def stack(parts: list) -> np.ndarray:
+        return np.concatenate(parts).astype(np.int64) if parts else np.zeros((0, 4), np.int64)
+
+    return stack(before), stack(after), solid_cells

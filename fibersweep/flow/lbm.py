@@ -17,12 +17,12 @@ import numba
 import numpy as np
 
 from fibersweep.errors import SolverError
-from fibersweep.flow import kernels
-from fibersweep.flow.analytic import duct_center_velocity, duct_velocity
-from fibersweep.flow.initial import hele_shaw_guess
-from fibersweep.flow.lattice import E, Grid, W, boundary_links, make_grid, pull_sources
+from fibersweep.flow.analytic import duct_center_velocity
+from fibersweep.flow.initial import duct_guess, hele_shaw_guess, velocity_gradient
+from fibersweep.flow.lattice import Grid, make_grid
 from fibersweep.flow.prolong import prolong
 from fibersweep.flow.settings import FlowSettings
+from fibersweep.flow.steppers import make_stepper
 
 __all__ = [
     "SOLVER_VERSION",
@@ -42,6 +42,8 @@ SOLVER_VERSION = "d3q19-trt-guo-2"
 U_LATTICE = 1e-5  # duct centre speed in lattice units: Mach ~ 2e-5, lattice Re ~ 2e-3
 MACH_LIMIT = 0.1  # |u| in lattice units above this means divergence
 SERIAL_BELOW_CELLS = 250_000  # smaller grids run on one thread (fork/join costs more)
+DEFAULT_KERNEL = "aa"
+REPROBE_EVERY = 10  # check intervals between re-timing the other thread counts
 
 
 @dataclass(frozen=True)
@@ -70,6 +72,8 @@ class SolveReport:
         Interior nodes solved (nx, ny, nz) and nz of the full depth.
     coarse_steps, coarse_seconds : int, float
         Steps and time spent on coarser grids to build the initial guess.
+    threads : int
+        Thread count that was fastest (and used most) in the time loop.
     """
 
     steps: int
@@ -83,6 +87,7 @@ class SolveReport:
     grid: tuple[int, int, int, int]
     coarse_steps: int = 0
     coarse_seconds: float = 0.0
+    threads: int = 1
 
 
 @dataclass(frozen=True)
@@ -118,43 +123,13 @@ def _rates(settings: FlowSettings, grid: Grid) -> tuple[float, float, float]:
     return tau, omega_p, omega_m
 
 
-def _duct_guess(grid: Grid, g_over_nu: float) -> np.ndarray:
-    """Duct profile in lattice units, shape (3, nz, ny, nx), zero in the pillar."""
-    y = np.arange(grid.ny) + 0.5
-    z = np.arange(grid.nz) + 0.5
-    prof = duct_velocity(y[None, :], z[:, None], grid.ny, grid.nz_full, g_over_nu)
-    u = np.zeros((3, grid.nz, grid.ny, grid.nx))
-    u[0] = prof[:, :, None]
-    u[0][:, grid.solid.T] = 0.0
-    return u
-
-
-def _velocity_gradient(u: np.ndarray, grid: Grid) -> np.ndarray:
-    """∂_a u_b, shape (3, 3, nz, ny, nx), by central differences.
-
-    Ghost values: periodic in x, antisymmetric (u = 0 half-way) across walls,
-    mirror (ux, uy even, uz odd) across a symmetric top. Pillar nodes hold u = 0,
-    which makes the difference at a fluid node next to the pillar one-sided-like.
-    """
-    grad = np.empty((3, 3, *u.shape[1:]))
-    for b in range(3):
-        c = u[b]
-        gx = 0.5 * (np.roll(c, -1, axis=2) - np.roll(c, 1, axis=2))
-        py = np.concatenate([-c[:, :1], c, -c[:, -1:]], axis=1)
-        gy = 0.5 * (py[:, 2:] - py[:, :-2])
-        top = (1.0 if b < 2 else -1.0) if grid.symmetry else -1.0
-        pz = np.concatenate([-c[:1], c, top * c[-1:]], axis=0)
-        gz = 0.5 * (pz[2:] - pz[:-2])
-        grad[0, b], grad[1, b], grad[2, b] = gx, gy, gz
-    return grad
-
-
 def solve_lattice(
     settings: FlowSettings,
     pillar: bool = True,
     initial: np.ndarray | None = None,
     initial_rho: np.ndarray | None = None,
     threads: int | None = None,
+    kernel: str = DEFAULT_KERNEL,
 ) -> LatticeSolution:
     """Run the LBM to steady state.
 
@@ -171,7 +146,11 @@ def solve_lattice(
         Initial density deviation δρ; default 0, or the Hele-Shaw pressure with
         the default velocity.
     threads : int, optional
-        Numba threads; default 1 below ``SERIAL_BELOW_CELLS`` cells, else all.
+        Numba threads; default 1 below ``SERIAL_BELOW_CELLS`` cells, else the
+        faster of all and one, measured while running.
+    kernel : {"aa", "pull"}
+        In-place AA pattern (default, 152 B per cell update) or the two-array
+        pull kernel (228 B). Both give the same field to float32 rounding.
 
     Raises
     ------
@@ -188,7 +167,7 @@ def solve_lattice(
         u0, hs_rho = hele_shaw_guess(grid, fx, fx / nu)
         initial_rho = hs_rho if initial_rho is None else initial_rho
     elif initial is None:
-        u0 = _duct_guess(grid, fx / nu)
+        u0 = duct_guess(grid, fx / nu)
     else:
         u0 = np.asarray(initial, dtype=np.float64)
     if u0.shape != (3, grid.nz, grid.ny, grid.nx):
@@ -200,41 +179,62 @@ def solve_lattice(
     if rho0.shape != shape3:
         raise ValueError(f"initial_rho must have shape {shape3}, got {rho0.shape}")
     previous_threads = numba.get_num_threads()
-    n_threads = threads or (1 if grid.cells < SERIAL_BELOW_CELLS else previous_threads)
-    numba.set_num_threads(n_threads)
+    if threads:
+        candidates = [threads]
+    elif grid.cells < SERIAL_BELOW_CELLS or previous_threads == 1:
+        candidates = [1]
+    else:
+        candidates = [previous_threads, 1]  # chosen by measurement in _run
     try:
-        return _run(settings, grid, u0, rho0, fx, tau, omega_p, omega_m)
+        return _run(settings, grid, u0, rho0, fx, tau, omega_p, omega_m, candidates, kernel)
     finally:
         numba.set_num_threads(previous_threads)
 
 
-def _run(settings, grid, u0, rho0, fx, tau, omega_p, omega_m) -> LatticeSolution:
-    """Time loop of :func:`solve_lattice` (arguments as computed there)."""
-    links, solid_cells = boundary_links(grid)
-    sources = pull_sources(grid)
-    ex, ey, ez = (np.ascontiguousarray(E[:, k]) for k in range(3))
-    g = np.zeros(grid.padded_shape, dtype=np.float32)
-    gn = np.zeros_like(g)
-    kernels.init_populations(g, u0, rho0, _velocity_gradient(u0, grid), omega_p, W, ex, ey, ez)
-    kernels.fill_periodic(g)
-    kernels.fill_pillar(g, solid_cells, links)
+def _run(
+    settings, grid, u0, rho0, fx, tau, omega_p, omega_m, candidates, kernel
+) -> LatticeSolution:
+    """Time loop of :func:`solve_lattice` (arguments as computed there).
+
+    With several thread counts in ``candidates`` each is timed over one check
+    interval, the fastest is used, and the others are re-timed every
+    ``REPROBE_EVERY`` intervals: on a machine shared with other jobs one thread
+    can beat two (each step ends in a barrier that waits for the slowest thread).
+    """
+    timing: dict[int, float] = {}
+    interval = 0
+    stepper = make_stepper(
+        kernel, grid, u0, rho0, velocity_gradient(u0, grid), fx, omega_p, omega_m
+    )
     fluid = ~grid.solid.T[None, :, :]  # (1, ny, nx) broadcast over z
     mom = np.zeros((4, grid.nz, grid.ny, grid.nx))
-    kernels.moments(g, sources, fx, ex, ey, ez, mom)
+    stepper.moments(mom)
     u_prev = mom[1:3].copy()
-    check = settings.check_every
+    mult = stepper.step_multiple
+    check = -(-settings.check_every // mult) * mult  # whole step pairs for AA
     steps = 0
     residual = math.inf
     converged = False
     t0 = time.perf_counter()
     while steps < settings.max_steps:
-        n = min(check, settings.max_steps - steps)
-        for _ in range(n):
-            kernels.stream_collide(g, gn, sources, fx, omega_p, omega_m)
-            kernels.fill_pillar(gn, solid_cells, links)
-            g, gn = gn, g
+        n = max(mult, min(check, (settings.max_steps - steps) // mult * mult))
+        if interval < len(candidates):
+            use = candidates[interval]
+        else:
+            best = min(timing, key=timing.get)
+            others = [c for c in candidates if c != best]
+            use = (
+                others[(interval // REPROBE_EVERY) % len(others)]
+                if (others and interval % REPROBE_EVERY == 0)
+                else best
+            )
+        numba.set_num_threads(use)
+        t_int = time.perf_counter()
+        stepper.advance(n)
+        timing[use] = (time.perf_counter() - t_int) / n
+        interval += 1
         steps += n
-        kernels.moments(g, sources, fx, ex, ey, ez, mom)
+        stepper.moments(mom)
         uxy = mom[1:3] * fluid
         speed_max = float(np.sqrt((mom[1:4] ** 2).sum(axis=0) * fluid).max())
         if not math.isfinite(speed_max):
@@ -264,14 +264,16 @@ def _run(settings, grid, u0, rho0, fx, tau, omega_p, omega_m) -> LatticeSolution
         omega_minus=omega_m,
         force=fx,
         grid=(grid.nx, grid.ny, grid.nz, grid.nz_full),
+        threads=min(timing, key=timing.get),
     )
     log.info(
-        "LBM %s steps, converged=%s, residual %.2e, %.1f s, %.1f MLUPS",
+        "LBM %s steps, converged=%s, residual %.2e, %.1f s, %.1f MLUPS, %s thread(s)",
         steps,
         converged,
         residual,
         seconds,
         report.mlups,
+        report.threads,
     )
     return LatticeSolution(u=u, rho=mom[0].copy(), grid=grid, report=report)
 

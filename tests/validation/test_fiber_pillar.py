@@ -173,6 +173,36 @@ def _classes_around_the_separatrix(field) -> None:
     assert simulate(field, base, FiberStart(-3.7, ys + 0.04, 0.82)).cls == "Above"
 
 
+SOURCE_SEPARATRIX = 0.36  # SPEC section 2: the independent coarse check's separatrix
+
+
+def _worked_examples_relative_to_separatrix(field) -> None:
+    """The worked examples placed at the same distance from *this* field's separatrix
+    as from the source's (0.36 h, the SPEC's independent check): y0' = y0 − (0.36 − y_s).
+    Baseline model, no friction: θ0 = −3.7° pole-vaults after touching the upstream face
+    low down with θ_c < 0 (SPEC contact map: 0.1 ≤ y_c ≤ 0.4); θ0 = 8° is trapped on the
+    upstream corner (y_c ≈ 0), tilted toward the top (θ_c > 30°)."""
+    from fibersweep.sweep.separatrix import separatrix_y
+
+    shift = SOURCE_SEPARATRIX - separatrix_y(field)
+    r = simulate(field, BASE, FiberStart(-3.7, 0.373 - shift, 0.82))
+    assert r.cls == "Pole-vaulting", r
+    assert r.theta_c < 0 and 0.05 <= r.y_c <= 0.4
+    assert r.delta > 0.1  # a clear lateral shift
+    r = simulate(field, BASE, FiberStart(8.0, 0.351 - shift, 0.75))
+    assert r.cls == "Trapping", r
+    assert r.y_c == pytest.approx(0.0, abs=0.02) and r.theta_c > 30.0
+
+
+def test_worked_examples_relative_to_separatrix(coarse_field):
+    _worked_examples_relative_to_separatrix(coarse_field)
+
+
+@pytest.mark.slow
+def test_worked_examples_relative_to_separatrix_at_source_resolution(fine_field):
+    _worked_examples_relative_to_separatrix(fine_field)
+
+
 def test_classes_around_the_separatrix(coarse_field):
     _classes_around_the_separatrix(coarse_field)
 

@@ -24,7 +24,7 @@ def small_half():
 
 def test_mass_flux_constant_along_x(small_half):
     # Steady mass conservation: the x-momentum flux Σ_yz ρ ux through every
-    # x-plane is the same. Tolerance 1e-4 relative (measured 4e-6; the
+    # x-plane is the same. Tolerance 1e-4 relative (measured 4e-7; the
     # residual is the convergence tolerance and float32 storage).
     _, sol = small_half
     rho = 1.0 + sol.rho
@@ -36,7 +36,7 @@ def test_mass_flux_constant_along_x(small_half):
 
 def test_half_depth_with_symmetry_plane_equals_full_depth(small_half):
     # The midplane field of the half-depth solve with a free-slip top equals that
-    # of the full-depth solve; tolerance 1e-4 U_center (measured ~1e-6).
+    # of the full-depth solve; tolerance 1e-4 U_center (measured 4e-7).
     settings, sol = small_half
     full_settings = settings.model_copy(update={"symmetry": False})
     full = solve_lattice(full_settings)

@@ -1,0 +1,36 @@
+"""Batch runner of the discrepancy workflow: budget, failures recorded, effects validated."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fibersweep.discrepancy.simulate import BudgetExhausted, Simulator
+from fibersweep.errors import InputError
+from fibersweep.fiber.settings import FiberSettings
+from fibersweep.flow.field import FlowField
+from fibersweep.units import Geometry
+
+
+@pytest.fixture(scope="module")
+def uniform_field():
+    g = Geometry()
+    return FlowField.from_function(lambda X, Y: (600.0 + 0 * X, 0 * X), g, 8.0)
+
+
+def test_budget_is_enforced_before_running(uniform_field):
+    with Simulator(uniform_field, FiberSettings(), workers=1, budget=3, progress=False) as sim:
+        with pytest.raises(BudgetExhausted, match="only 3"):
+            sim.run(np.zeros((4, 3)) + [0, 0.1, 1.0], {}, np.arange(4))
+        assert sim.used == 0
+
+
+def test_bad_start_is_a_recorded_failure_and_unknown_effect_an_input_error(uniform_field):
+    with Simulator(uniform_field, FiberSettings(), workers=1, progress=False) as sim:
+        starts = np.array([[0.0, -2.0, 1.0], [0.0, 9.0, 1.0]])  # the second is outside the channel
+        df = sim.run(starts, {}, np.arange(2))
+        assert list(df["status"]) == ["ok", "failed"]
+        assert "y0" in df["reason"][1] and np.isnan(df["delta"][1])
+        assert sim.used == 2 and sim.failed == 1
+        with pytest.raises(InputError, match="valid names"):
+            sim.run(starts, {"fricton": 0.2}, np.arange(2))
