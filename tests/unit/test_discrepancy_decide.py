@@ -38,10 +38,11 @@ def test_no_gap_names_nothing_whatever_the_fits_say():
 
 
 def test_clear_winner_is_named():
+    # the runner-up improves too but leaves a gap: it does not make the verdict ambiguous
     rng = np.random.default_rng(2)
     ho = _heldout(
-        {"friction": rng.normal(1.0, 0.3, 60), "pillar_hydro": rng.normal(0.1, 0.3, 60)},
-        {"friction": 0.0, "pillar_hydro": 0.0},
+        {"friction": rng.normal(1.0, 0.3, 60), "pillar_hydro": rng.normal(0.3, 0.3, 60)},
+        {"friction": 0.0, "pillar_hydro": 1.5},
     )
     v = decide(_gap(1.5, 4), ho, "y0 < 0.4", rng, 0.05)
     assert v.kind == "named" and list(v.effects) == ["friction"]
