@@ -109,7 +109,7 @@ def _separatrix(fieldobj: Any, info: Any, out: Path) -> float | None:
     if old.get("provenance", {}).get("flow_key") == info.key and "separatrix" in old:
         return old["separatrix"]
     try:
-        from fibersweep.sweep.separatrix import separatrix_y
+        from fibersweep.flow.streamlines import separatrix_y
 
         return float(separatrix_y(fieldobj))
     except Exception as exc:  # a figure aid: never stop a sweep over it

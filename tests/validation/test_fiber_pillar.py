@@ -162,7 +162,7 @@ def _classes_around_the_separatrix(field) -> None:
     y0 = y_s + 0.005), Below / Above outside the bands. The band edges were measured by
     scanning y0 in steps of 0.005 h at dx = 2 and 4 µm (issue notes); the points sit
     inside them with ≥ 0.008 h to spare."""
-    from fibersweep.sweep.separatrix import separatrix_y
+    from fibersweep.flow.streamlines import separatrix_y
 
     ys = separatrix_y(field)
     base = FiberSettings()
@@ -182,7 +182,7 @@ def _worked_examples_relative_to_separatrix(field) -> None:
     Baseline model, no friction: θ0 = −3.7° pole-vaults after touching the upstream face
     low down with θ_c < 0 (SPEC contact map: 0.1 ≤ y_c ≤ 0.4); θ0 = 8° is trapped on the
     upstream corner (y_c ≈ 0), tilted toward the top (θ_c > 30°)."""
-    from fibersweep.sweep.separatrix import separatrix_y
+    from fibersweep.flow.streamlines import separatrix_y
 
     shift = SOURCE_SEPARATRIX - separatrix_y(field)
     r = simulate(field, BASE, FiberStart(-3.7, 0.373 - shift, 0.82))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fibersweep.flow.analysis import fore_aft_asymmetry, peak_speeds, separatrix
+from fibersweep.flow.analysis import flux_separatrix, fore_aft_asymmetry, peak_speeds
 from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.solver import field_from_solution, solve_lattice, solve_nested
 
@@ -36,8 +36,8 @@ def test_spec_channel_at_source_resolution(coarse_field):
     # peak 1.5 ± 0.2 U_center; fore-aft symmetric within 5e-4 U_center.
     settings = FlowSettings(dx=2.0)
     fine = field_from_solution(settings, solve_nested(settings))
-    s2 = separatrix(fine).y_far_over_h
-    s4 = separatrix(coarse_field).y_far_over_h
+    s2 = flux_separatrix(fine).y_far_over_h
+    s4 = flux_separatrix(coarse_field).y_far_over_h
     assert 0.30 < s2 < 0.40 and abs(s2 - s4) < 0.02, (s2, s4)
     above, _ = peak_speeds(fine)
     assert 1.3 < above < 1.7, above

@@ -1,4 +1,4 @@
-"""The separatrix: far-upstream y/h_obs of the streamline that ends on the pillar.
+"""The separatrix by streamline tracing (canonical): far-upstream y/h_obs of its streamline.
 
 Streamlines of the midplane field below the separatrix pass under the pillar's
 base, those above it pass over the apex; the one in between ends at the

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from fibersweep.flow.field import FlowField
-from fibersweep.sweep.separatrix import separatrix_y, trace_sides
+from fibersweep.flow.streamlines import separatrix_y, trace_sides
 from fibersweep.units import Geometry
 
 
