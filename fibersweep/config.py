@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import difflib
 import itertools
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -200,6 +201,30 @@ class Config(_Strict):
     sweep: SweepSettings = SweepSettings()
     run: RunSettings = RunSettings()
 
+    @model_validator(mode="after")
+    def _starts_fit(self) -> Config:
+        """Every sweep point must be a fiber the grid resolves, in the channel, off the pillar.
+
+        Checked here, before any flow field is computed, with the same check a run
+        makes (:func:`fibersweep.fiber.setup.check_start`); effects that move the
+        start (start noise, pillar scale) are applied per run and checked there.
+        """
+        from fibersweep.fiber.setup import check_start  # numba-backed: import lazily
+
+        geo = self.flow.geometry.to_geometry()
+        bad: dict[str, str] = {}
+        for start in self.sweep.starts():
+            try:
+                check_start(geo, self.flow.dx, self.fiber, start)
+            except InputError as exc:
+                name, _, msg = str(exc).partition(": ")
+                axis = name if name in ("theta0", "y0", "length") else "y0"
+                bad.setdefault(axis, msg)  # first problem per axis is enough to act on
+        if bad:
+            axis, msg = next(iter(bad.items()))
+            raise ValueError(f"sweep.{axis}: {msg}")
+        return self
+
 
 # --------------------------------------------------------------------------- loading
 
@@ -248,6 +273,12 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
     loc = tuple(
         p for p in loc if not (isinstance(p, str) and ("[" in p or ":" in p or p in {"float"}))
     )
+    msg = err["msg"].removeprefix("Value error, ")
+    named = re.match(r"^([a-z_0-9]+(?:\.[a-z_0-9]+)+): (.*)$", msg, flags=re.S)
+    if named and not loc:
+        # A whole-config check that names its field: report it at that field.
+        loc = tuple(named.group(1).split("."))
+        msg = named.group(2)
     dotted = ".".join(str(p) for p in loc) or "<top level>"
     line = None
     for k in range(len(loc), -1, -1):
@@ -269,7 +300,6 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
         return f"{dotted}{where}: unknown key{hint}"
     given = err.get("input")
     given_s = "" if isinstance(given, dict) else f"; given {given!r}"
-    msg = err["msg"].removeprefix("Value error, ")
     return f"{dotted}{where}: {msg}{given_s}"
 
 

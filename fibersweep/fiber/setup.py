@@ -15,8 +15,9 @@ from fibersweep.fiber.mobility import fiber_offsets
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
+from fibersweep.units import Geometry
 
-__all__ = ["MIN_BEADS", "Setup", "kernel_params", "prepare"]
+__all__ = ["MIN_BEADS", "Setup", "kernel_arrays", "kernel_params", "prepare"]
 
 MIN_BEADS = 2
 
@@ -59,22 +60,57 @@ def _finite(name: str, value: float) -> None:
         raise InputError(f"{name}: must be finite, got {value!r}")
 
 
-def prepare(
-    field: FlowField, settings: FiberSettings, start: FiberStart, rng: np.random.Generator
-) -> Setup:
-    """Apply effects and check the start; InputError naming the parameter when it is bad."""
-    effects = build_effects(settings.effects)
-    field = effects.field(field)
-    settings = effects.settings(settings)
-    start = effects.start(start, rng)
+@dataclass(frozen=True)
+class StartPlacement:
+    """Where a checked start puts the fiber.
+
+    Attributes
+    ----------
+    n : int
+        Beads.
+    x0, y0_abs : float
+        Centre of mass [µm].
+    th0 : float
+        Directed angle of the axis towards bead n-1, the head [rad].
+    """
+
+    n: int
+    x0: float
+    y0_abs: float
+    th0: float
+
+
+def check_start(
+    geo: Geometry,
+    dx: float,
+    settings: FiberSettings,
+    start: FiberStart,
+    pillar: Pillar | None = None,
+) -> StartPlacement:
+    """Check that a start is a fiber the grid resolves, in the channel, clear of the pillar.
+
+    Needs only the geometry and grid spacing, so a config can be checked before
+    any flow field exists.
+
+    Parameters
+    ----------
+    geo : Geometry
+    dx : float
+        Grid spacing of the flow field [µm].
+    settings : FiberSettings
+    start : FiberStart
+    pillar : Pillar, optional
+        The run's pillar; built from ``settings.contact`` when omitted (only its
+        outline and cutoff are used here).
+
+    Raises
+    ------
+    InputError
+        Naming the parameter (theta0, y0, length or x0) that is bad.
+    """
     for name in ("theta0", "y0", "length"):
         _finite(name, float(getattr(start, name)))
-    geo = field.geometry
     a = settings.bead_radius
-    u_center = float(field.fluid.u_center)
-    _finite("u_center", u_center)
-    if u_center == 0.0:
-        raise InputError("u_center: the field has zero speed")
     length_um = start.length * geo.pillar_base_length
     n = int(round(length_um / (2.0 * a)))
     if start.length <= 0 or n < MIN_BEADS:
@@ -82,10 +118,10 @@ def prepare(
             f"length: L/l_obs = {start.length} is {length_um:.3g} µm, {n} bead(s) of "
             f"radius {a} µm; at least {MIN_BEADS} beads are needed"
         )
-    if length_um < 2.0 * field.dx:
+    if length_um < 2.0 * dx:
         raise InputError(
             f"length: L = {length_um:.3g} µm is shorter than two grid spacings "
-            f"(dx = {field.dx} µm): the flow field cannot resolve it"
+            f"(dx = {dx} µm): the flow field cannot resolve it"
         )
     x0 = geo.length / 4.0 if settings.x0 is None else float(settings.x0)
     _finite("x0", x0)
@@ -103,8 +139,8 @@ def prepare(
         )
     if bx.min() - a <= 0.0 or bx.max() + a >= geo.length:
         raise InputError(f"x0: the fiber at x0 = {x0} µm does not fit in the channel length")
-    f_ref = settings.contact.f_ref or 6.0 * math.pi * field.fluid.viscosity * a * abs(u_center)
-    pillar = make_pillar(geo, settings.contact, a, f_ref)
+    if pillar is None:
+        pillar = make_pillar(geo, settings.contact, a, 1.0)  # force scale unused here
     for xb, yb in zip(bx, by, strict=True):
         d = outline_distance(float(xb), float(yb), pillar.vertices)
         if d < pillar.r_cut:
@@ -112,9 +148,40 @@ def prepare(
                 f"y0: the start (theta0 = {start.theta0}°, y0/h = {start.y0}, x0 = {x0} µm) "
                 f"overlaps the pillar (bead at {d:.2f} µm from its outline)"
             )
+    return StartPlacement(n, x0, y0_abs, th0)
+
+
+def prepare(
+    field: FlowField, settings: FiberSettings, start: FiberStart, rng: np.random.Generator
+) -> Setup:
+    """Apply effects and check the start; InputError naming the parameter when it is bad."""
+    effects = build_effects(settings.effects)
+    field = effects.field(field)
+    settings = effects.settings(settings)
+    start = effects.start(start, rng)
+    geo = field.geometry
+    a = settings.bead_radius
+    u_center = float(field.fluid.u_center)
+    _finite("u_center", u_center)
+    if u_center == 0.0:
+        raise InputError("u_center: the field has zero speed")
+    f_ref = settings.contact.f_ref or 6.0 * math.pi * field.fluid.viscosity * a * abs(u_center)
+    pillar = make_pillar(geo, settings.contact, a, f_ref)
+    place = check_start(geo, float(field.dx), settings, start, pillar)
     ctx = DynamicsContext(bead_radius=a, dx=float(field.dx), depth=geo.depth)
     params = effects.params(ctx)
-    return Setup(field, settings, start, n, x0, y0_abs, th0, pillar, params, u_center)
+    return Setup(
+        field,
+        settings,
+        start,
+        place.n,
+        place.x0,
+        place.y0_abs,
+        place.th0,
+        pillar,
+        params,
+        u_center,
+    )
 
 
 def kernel_params(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> np.ndarray:
@@ -151,4 +218,19 @@ def kernel_params(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> np.n
         stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²
         bend=st.young_modulus * math.pi * a**4 / 4.0,
         mu=setup.field.fluid.viscosity,
+    )
+
+
+def kernel_arrays(setup: Setup) -> tuple:
+    """(ux, uy, dx, verts, pbx, pby, curves): the field and pillar as the integrators read them."""
+    f = setup.field
+    pil = setup.pillar
+    return (
+        np.ascontiguousarray(f.ux, dtype=np.float64),
+        np.ascontiguousarray(f.uy, dtype=np.float64),
+        float(f.dx),
+        pil.vertices,
+        np.ascontiguousarray(pil.beads[:, 0]),
+        np.ascontiguousarray(pil.beads[:, 1]),
+        pil.curves,
     )

@@ -89,3 +89,31 @@ def test_shipped_configs_are_valid(name):
         assert (min(L), max(L)) == (0.5, 1.4)
         assert cfg.flow.dx == 2.0
         assert 1200 <= n <= 1400, n
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("sweep:\n  y0: [0.3, 1e9]\n", "sweep.y0 (line 2): y0/h = 1000000000.0"),
+        ("sweep:\n  y0: 0.5\n  length: 0.01\n", "sweep.length (line 3): L/l_obs = 0.01"),
+        # Centre on the pillar's centroid: the start overlaps the pillar.
+        ("sweep:\n  y0: 0.333\n", None),
+    ],
+)
+def test_sweep_points_are_checked_before_any_flow_is_computed(tmp_path, text, expected):
+    """Starts outside the channel, unresolvable lengths: config error at the sweep field."""
+    p = _write(tmp_path, text)
+    if expected is None:
+        assert load_config(p).sweep.starts()  # a valid start far upstream of the pillar
+        return
+    with pytest.raises(ConfigError) as ei:
+        load_config(p)
+    assert expected in str(ei.value)
+    assert len(ei.value.problems) == 1
+
+
+def test_start_on_the_pillar_is_a_config_error(tmp_path):
+    # x0 at the pillar's centre puts every bead of a centred fiber inside it.
+    p = _write(tmp_path, "fiber:\n  x0: 1200\nsweep:\n  y0: 0.333\n")
+    with pytest.raises(ConfigError, match=r"sweep\.y0 \(line 4\): .*overlaps the pillar"):
+        load_config(p)
