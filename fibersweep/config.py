@@ -218,11 +218,12 @@ class Config(_Strict):
                 check_start(geo, self.flow.dx, self.fiber, start)
             except InputError as exc:
                 name, _, msg = str(exc).partition(": ")
-                axis = name if name in ("theta0", "y0", "length") else "y0"
-                bad.setdefault(axis, msg)  # first problem per axis is enough to act on
+                # x0 is a fiber setting; the other names are sweep axes.
+                path = "fiber.x0" if name == "x0" else f"sweep.{name}"
+                bad.setdefault(path, msg)  # first problem per field is enough to act on
         if bad:
-            axis, msg = next(iter(bad.items()))
-            raise ValueError(f"sweep.{axis}: {msg}")
+            path, msg = next(iter(bad.items()))
+            raise ValueError(f"{path}: {msg}")
         return self
 
 

@@ -101,6 +101,11 @@ class Geometry:
         xc, yb = self.base_center
         return xc, yb + self.pillar_height / 3.0
 
+    @property
+    def x_far(self) -> float:
+        """x [µm] farthest from the pillar along the periodic channel (half a period away)."""
+        return (self.base_center[0] + self.length / 2.0) % self.length
+
     def y_from_base(self, y_over_h: float) -> float:
         """Absolute y [µm] of a lateral position quoted as y/h_obs from the base line."""
         return self.base_center[1] + y_over_h * self.pillar_height

@@ -25,7 +25,8 @@ from fibersweep.fiber import record as R
 from fibersweep.fiber.contact import pillar_forces
 from fibersweep.fiber.elastic import elastic_forces
 from fibersweep.fiber.mobility import _rpy_fill, body_mobility, fiber_offsets
-from fibersweep.fiber.rigid import coulomb_friction
+from fibersweep.fiber.rigid import body_velocity, coulomb_friction
+from fibersweep.fiber.setup import kernel_arrays
 from fibersweep.flow.field import interpolate_ib
 
 __all__ = [
@@ -83,29 +84,7 @@ def _velocity(x, y, ux, uy, dx, prm, verts, pbx, pby, curves, mob, u, f, fx, fy,
         le = math.hypot(ex, ey)
         c = ex / le
         sn = ey / le
-        xm = 0.0
-        ym = 0.0
-        for i in range(n):
-            xm += x[i] / n
-            ym += y[i] / n
-        vbx = 0.0
-        vby = 0.0
-        om = 0.0
-        fbx = 0.0
-        fby = 0.0
-        tq = 0.0
-        for i in range(n):
-            ubx = c * f[2 * i] + sn * f[2 * i + 1]
-            uby = -sn * f[2 * i] + c * f[2 * i + 1]
-            vbx += pm[0, 2 * i] * ubx + pm[0, 2 * i + 1] * uby
-            vby += pm[1, 2 * i] * ubx + pm[1, 2 * i + 1] * uby
-            om += pm[2, 2 * i] * ubx + pm[2, 2 * i + 1] * uby
-            fbx += c * cfx[i] + sn * cfy[i]
-            fby += -sn * cfx[i] + c * cfy[i]
-            tq += s_off[i] * (c * cfy[i] - sn * cfx[i])
-        vbx += nm[0, 0] * fbx + nm[0, 1] * fby + nm[0, 2] * tq
-        vby += nm[1, 0] * fbx + nm[1, 1] * fby + nm[1, 2] * tq
-        om += nm[2, 0] * fbx + nm[2, 1] * fby + nm[2, 2] * tq
+        vbx, vby, om = body_velocity(c, sn, s_off, pm, nm, f, cfx, cfy, True)
         coulomb_friction(c, sn, s_off, nm, cfx, cfy, mu_f, vbx, vby, om, fric)
         for i in range(n):
             fn = math.hypot(cfx[i], cfy[i])
@@ -405,21 +384,15 @@ def run_bead_spring(setup, prm: np.ndarray, x0: float, y0: float, th0: float, be
     q = np.ascontiguousarray(beads0, dtype=np.float64).reshape(-1).copy()
     qprev = q.copy()
     state = np.array([0.0, math.nan, 0.0, th0, 0.0])
-    f = setup.field
-    pil = setup.pillar
-    ux = np.ascontiguousarray(f.ux, dtype=np.float64)
-    uy = np.ascontiguousarray(f.uy, dtype=np.float64)
-    pbx = np.ascontiguousarray(pil.beads[:, 0])
-    pby = np.ascontiguousarray(pil.beads[:, 1])
-    bm = body_mobility(n, float(st.bead_radius), float(f.fluid.viscosity))
+    arrays = kernel_arrays(setup)
+    bm = body_mobility(n, float(st.bead_radius), float(setup.field.fluid.viscosity))
     recs, brecs = [], []
     while True:
         rec = np.empty((CHUNK, R.NCOLS))
         brec = np.empty((CHUNK, n, 2))
         rows, code = integrate_bead_spring(
-            q, qprev, state, ux, uy, float(f.dx), pil.vertices, pbx, pby, pil.curves, prm,
-            stride, rec, brec, bm.offsets, bm.P, bm.N,
-        )  # fmt: skip
+            q, qprev, state, *arrays, prm, stride, rec, brec, bm.offsets, bm.P, bm.N
+        )
         recs.append(rec[:rows])
         brecs.append(brec[:rows])
         if code != R.CHUNK_FULL:

@@ -61,6 +61,12 @@ P_STRETCH = 22
 P_BEND = 23
 P_MU = 24
 
+# The kernels read the P_* constants (Numba needs them as plain globals); keep
+# them in step with NAMES, which pack() fills.
+_WRONG = [n for n in NAMES if globals().get(f"P_{n.upper()}") != IDX[n]]
+if _WRONG:
+    raise ImportError(f"kparams: P_* constants out of step with NAMES for {_WRONG}")
+
 
 def pack(**values: float) -> np.ndarray:
     """Float64 vector with every name in NAMES set (missing names: NaN)."""

@@ -8,7 +8,7 @@ dataset) and the analysis (which re-classifies from the trajectory).
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Literal
 
 import numpy as np
@@ -152,13 +152,14 @@ class RunResult:
 
     def row(self) -> dict[str, object]:
         """Flat scalar columns for the results table (one row per run)."""
-        d = asdict(self)
+        # Not asdict(): it would deep-copy the trajectory only to drop it.
+        d = {f.name: getattr(self, f.name) for f in fields(self)}
         d.pop("trajectory")
         start = d.pop("start")
         return {
-            "theta0": start["theta0"],
-            "y0": start["y0"],
-            "length": start["length"],
+            "theta0": start.theta0,
+            "y0": start.y0,
+            "length": start.length,
             "class": d.pop("cls"),
             **d,
         }

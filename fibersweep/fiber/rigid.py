@@ -28,13 +28,60 @@ from fibersweep.fiber import record as R
 from fibersweep.fiber.contact import pillar_forces
 from fibersweep.flow.field import interpolate_ib
 
-__all__ = ["coulomb_friction", "integrate_rigid", "rigid_velocity", "seed_numba"]
+__all__ = ["body_velocity", "coulomb_friction", "integrate_rigid", "rigid_velocity", "seed_numba"]
 
 
 @nb.njit(cache=True)
 def seed_numba(seed: int) -> None:
     """Seed Numba's own random generator (used for Brownian increments)."""
     np.random.seed(seed)  # noqa: NPY002 - Numba has its own per-thread RNG
+
+
+@nb.njit(cache=True)
+def body_velocity(c, sn, s, pm, nm, ub, fx, fy, with_force):
+    """Body-frame velocity P u_b + N (F_b, τ) of a rigid fiber of beads at offsets ``s``.
+
+    Parameters
+    ----------
+    c, sn : float
+        cos and sin of the fiber angle.
+    s : ndarray, shape (n,)
+        Bead offsets along the axis [µm].
+    pm, nm : ndarray, shapes (3, 2n), (3, 3)
+        Body-frame P and N.
+    ub : ndarray, shape (2n,)
+        Background velocities of the beads, lab frame (x0, y0, x1, ...) [µm/s].
+    fx, fy : ndarray, shape (n,)
+        Forces on the beads, lab frame [pN]; used only when ``with_force``.
+    with_force : bool
+
+    Returns
+    -------
+    (vbx, vby, om)
+        Body velocity (body frame) [µm/s, rad/s].
+    """
+    n = s.shape[0]
+    vbx = 0.0
+    vby = 0.0
+    om = 0.0
+    for i in range(n):
+        ubx = c * ub[2 * i] + sn * ub[2 * i + 1]
+        uby = -sn * ub[2 * i] + c * ub[2 * i + 1]
+        vbx += pm[0, 2 * i] * ubx + pm[0, 2 * i + 1] * uby
+        vby += pm[1, 2 * i] * ubx + pm[1, 2 * i + 1] * uby
+        om += pm[2, 2 * i] * ubx + pm[2, 2 * i + 1] * uby
+    if with_force:
+        fbx = 0.0
+        fby = 0.0
+        tq = 0.0
+        for i in range(n):
+            fbx += c * fx[i] + sn * fy[i]
+            fby += -sn * fx[i] + c * fy[i]
+            tq += s[i] * (c * fy[i] - sn * fx[i])
+        vbx += nm[0, 0] * fbx + nm[0, 1] * fby + nm[0, 2] * tq
+        vby += nm[1, 0] * fbx + nm[1, 1] * fby + nm[1, 2] * tq
+        om += nm[2, 0] * fbx + nm[2, 1] * fby + nm[2, 2] * tq
+    return vbx, vby, om
 
 
 @nb.njit(cache=True)
@@ -172,9 +219,6 @@ def rigid_velocity(
     vscale = prm[K.P_VSCALE]
     hyd_s = prm[K.P_HYD_S]
     a = prm[K.P_A]
-    vbx = 0.0
-    vby = 0.0
-    om = 0.0
     min_d = 1e300
     stiff = 0.0
     for i in range(n):
@@ -182,25 +226,13 @@ def rigid_velocity(
         if hyd_s > 0.0:
             gap = max(dist[i] - a, 0.0)
             f *= 1.0 - hyd_s * math.exp(-gap / prm[K.P_HYD_L])
-        ubx = f * (c * u[i, 0] + sn * u[i, 1])
-        uby = f * (-sn * u[i, 0] + c * u[i, 1])
-        vbx += pm[0, 2 * i] * ubx + pm[0, 2 * i + 1] * uby
-        vby += pm[1, 2 * i] * ubx + pm[1, 2 * i + 1] * uby
-        om += pm[2, 2 * i] * ubx + pm[2, 2 * i + 1] * uby
+        u[i, 0] *= f
+        u[i, 1] *= f
         if dist[i] < min_d:
             min_d = dist[i]
         stiff += st[i]
+    vbx, vby, om = body_velocity(c, sn, s, pm, nm, u.reshape(2 * n), fx, fy, any_c)
     if any_c:
-        fbx = 0.0
-        fby = 0.0
-        tq = 0.0
-        for i in range(n):
-            fbx += c * fx[i] + sn * fy[i]
-            fby += -sn * fx[i] + c * fy[i]
-            tq += s[i] * (c * fy[i] - sn * fx[i])
-        vbx += nm[0, 0] * fbx + nm[0, 1] * fby + nm[0, 2] * tq
-        vby += nm[1, 0] * fbx + nm[1, 1] * fby + nm[1, 2] * tq
-        om += nm[2, 0] * fbx + nm[2, 1] * fby + nm[2, 2] * tq
         mu_f = prm[K.P_MU_F]
         if mu_f > 0.0:
             vbx, vby, om = coulomb_friction(c, sn, s, nm, fx, fy, mu_f, vbx, vby, om, ft_)

@@ -29,7 +29,7 @@ from fibersweep.fiber.mobility import body_mobility, fiber_offsets
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
 from fibersweep.fiber.rigid import integrate_rigid, seed_numba
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.fiber.setup import Setup, kernel_params, prepare
+from fibersweep.fiber.setup import Setup, kernel_arrays, kernel_params, prepare
 from fibersweep.flow.field import FlowField
 
 __all__ = ["simulate", "simulate_for", "simulate_reversible"]
@@ -44,20 +44,14 @@ def _run_rigid(
 ) -> tuple[np.ndarray, None, int]:
     st = setup.settings
     bm = body_mobility(setup.n, float(st.bead_radius), float(setup.field.fluid.viscosity))
-    f = setup.field
-    pil = setup.pillar
-    ux = np.ascontiguousarray(f.ux, dtype=np.float64)
-    uy = np.ascontiguousarray(f.uy, dtype=np.float64)
-    pbx = np.ascontiguousarray(pil.beads[:, 0])
-    pby = np.ascontiguousarray(pil.beads[:, 1])
+    arrays = kernel_arrays(setup)
     state = np.array([0.0, x0, y0, th0, math.nan])
     chunks = []
     while True:
         rec = np.empty((CHUNK, R.NCOLS))
         rows, code = integrate_rigid(
-            state, bm.offsets, bm.P, bm.N, bm.chol, bm.tip_mobility, ux, uy, float(f.dx),
-            pil.vertices, pbx, pby, pil.curves, prm, rec,
-        )  # fmt: skip
+            state, bm.offsets, bm.P, bm.N, bm.chol, bm.tip_mobility, *arrays, prm, rec
+        )
         chunks.append(rec[:rows])
         if code != R.CHUNK_FULL:
             return np.concatenate(chunks), None, code

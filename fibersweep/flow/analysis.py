@@ -89,8 +89,7 @@ def flux_separatrix(field: FlowField) -> Separatrix:
         raise ValueError("field has no pillar nodes; no separatrix")
     psi_s = float(q.mean())
     geom = field.geometry
-    x_far = (geom.base_center[0] - geom.length / 2.0) % geom.length
-    i_far = int(np.argmin(np.abs(field.x_nodes - x_far)))
+    i_far = int(np.argmin(np.abs(field.x_nodes - geom.x_far)))
     psi = stream_function(field)[i_far]
     y = field.y_nodes
     y_s = float(np.interp(psi_s, psi, y))

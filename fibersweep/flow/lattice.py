@@ -145,39 +145,31 @@ def boundary_links(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
     si, sj = np.nonzero(grid.solid)
     rows = []
     cells = []
+
+    def add_links(slot: int, q: int, base_s: np.ndarray, kt: int) -> None:
+        """Rows (slot, solid cell, opp(q), fluid source in layer kt) for fluid in-plane targets."""
+        ex, ey, _ = E[q]
+        it = (si + ex) % grid.nx
+        jt = sj + ey
+        ok = (jt >= 0) & (jt < grid.ny)
+        ok[ok] = ~grid.solid[it[ok], jt[ok]]
+        if not ok.any():
+            return
+        src = ((kt + 1) * nyp + (jt[ok] + 1)) * nxp + (it[ok] + 1)
+        n = int(ok.sum())
+        rows.append(np.column_stack([np.full(n, slot), base_s[ok], np.full(n, OPP[q]), src]))
+
     for k in range(grid.nz):
         base_s = ((k + 1) * nyp + (sj + 1)) * nxp + (si + 1)
         cells.append(base_s)
         for q in range(1, Q):
-            ex, ey, ez = E[q]
-            kt = k + ez
-            if kt < 0 or kt >= grid.nz:
-                continue  # target is a wall/ghost row, never a fluid node
-            it = (si + ex) % grid.nx
-            jt = sj + ey
-            ok = (jt >= 0) & (jt < grid.ny)
-            ok[ok] = ~grid.solid[it[ok], jt[ok]]
-            if not ok.any():
-                continue
-            src = ((kt + 1) * nyp + (jt[ok] + 1)) * nxp + (it[ok] + 1)
-            n = int(ok.sum())
-            rows.append(np.column_stack([np.full(n, q), base_s[ok], np.full(n, OPP[q]), src]))
+            kt = k + E[q][2]
+            if 0 <= kt < grid.nz:  # otherwise the target is a wall/ghost row, never fluid
+                add_links(q, q, base_s, kt)
         if grid.symmetry and k == grid.nz - 1:
             for q in range(1, Q):
-                ex, ey, ez = E[q]
-                if ez >= 0:
-                    continue
-                it = (si + ex) % grid.nx
-                jt = sj + ey
-                ok = (jt >= 0) & (jt < grid.ny)
-                ok[ok] = ~grid.solid[it[ok], jt[ok]]
-                if not ok.any():
-                    continue
-                src = ((k + 1) * nyp + (jt[ok] + 1)) * nxp + (it[ok] + 1)
-                n = int(ok.sum())
-                rows.append(
-                    np.column_stack([np.full(n, MIRROR_Z[q]), base_s[ok], np.full(n, OPP[q]), src])
-                )
+                if E[q][2] < 0:
+                    add_links(MIRROR_Z[q], q, base_s, k)
     links = np.concatenate(rows).astype(np.int64) if rows else np.zeros((0, 4), np.int64)
     solid_cells = np.concatenate(cells).astype(np.int64) if cells else np.zeros(0, np.int64)
     return links, solid_cells

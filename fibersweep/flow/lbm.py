@@ -113,14 +113,20 @@ def choose_tau(grid: Grid) -> float:
     return float(min(max(3.0 * nu + 0.5, 0.6), 1.5))
 
 
-def _rates(settings: FlowSettings, grid: Grid) -> tuple[float, float, float]:
+def _rates(settings: FlowSettings, grid: Grid) -> tuple[float, float, float, float]:
+    """(τ, ω+, ω−, body force fx) of ``settings`` on ``grid``.
+
+    fx gives the centre speed U_LATTICE in the empty duct (ρ = 1).
+    """
     tau = settings.tau if settings.tau is not None else choose_tau(grid)
+    nu = (tau - 0.5) / 3.0
+    fx = U_LATTICE / duct_center_velocity(grid.ny, grid.nz_full, 1.0) * nu
     omega_p = 1.0 / tau
     if settings.collision == "bgk":
-        return tau, omega_p, omega_p
+        return tau, omega_p, omega_p, fx
     # Λ = (1/ω+ − 1/2)(1/ω− − 1/2)
     omega_m = 1.0 / (settings.magic / (tau - 0.5) + 0.5)
-    return tau, omega_p, omega_m
+    return tau, omega_p, omega_m, fx
 
 
 def solve_lattice(
@@ -159,10 +165,8 @@ def solve_lattice(
     """
     geom = settings.geometry.to_geometry()
     grid = make_grid(geom, settings.dx, settings.symmetry, pillar=pillar)
-    tau, omega_p, omega_m = _rates(settings, grid)
+    tau, omega_p, omega_m, fx = _rates(settings, grid)
     nu = (tau - 0.5) / 3.0
-    # body force giving U_LATTICE at the centre of the empty duct (ρ = 1)
-    fx = U_LATTICE / duct_center_velocity(grid.ny, grid.nz_full, 1.0) * nu
     if initial is None and grid.solid.any():
         u0, hs_rho = hele_shaw_guess(grid, fx, fx / nu)
         initial_rho = hs_rho if initial_rho is None else initial_rho
@@ -266,6 +270,14 @@ def _run(
         grid=(grid.nx, grid.ny, grid.nz, grid.nz_full),
         threads=min(timing, key=timing.get),
     )
+    if not converged:
+        log.warning(
+            "LBM not converged after max_steps = %d (residual %.2e > tolerance %.1e); "
+            "the field is kept and cached as it is",
+            steps,
+            residual,
+            settings.tolerance,
+        )
     log.info(
         "LBM %s steps, converged=%s, residual %.2e, %.1f s, %.1f MLUPS, %s thread(s)",
         steps,
@@ -299,9 +311,7 @@ def solve_nested(settings: FlowSettings, threads: int | None = None) -> LatticeS
         return solve_lattice(settings, threads=threads)
     coarse = solve_nested(coarse_settings, threads=threads)
     fine_grid = make_grid(settings.geometry.to_geometry(), settings.dx, settings.symmetry)
-    tau, _, _ = _rates(settings, fine_grid)
-    nu = (tau - 0.5) / 3.0
-    fx = U_LATTICE / duct_center_velocity(fine_grid.ny, fine_grid.nz_full, 1.0) * nu
+    fx = _rates(settings, fine_grid)[3]
     density_scale = fx / coarse.report.force * (coarse.grid.dx / fine_grid.dx)
     u0, rho0 = prolong(coarse.u, coarse.rho, coarse.grid, fine_grid, density_scale)
     fine = solve_lattice(settings, initial=u0, initial_rho=rho0, threads=threads)

@@ -13,7 +13,7 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
 from fibersweep.fiber.result import RunResult  # noqa: E402
-from fibersweep.plots.style import CLASS_STYLE, paper_style  # noqa: E402
+from fibersweep.plots.style import CLASS_STYLE, paper_style, save_figure  # noqa: E402
 from fibersweep.units import Geometry  # noqa: E402
 
 __all__ = ["chronophotograph"]
@@ -118,10 +118,4 @@ def chronophotograph(
         cb = fig.colorbar(lc, ax=ax, shrink=0.8, pad=0.02)
         cb.set_label("t [s]")
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.3), ncol=3, frameon=False)
-        out = Path(path)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        tmp = out.with_name(f".{out.stem}.tmp{out.suffix}")
-        fig.savefig(tmp)
-        plt.close(fig)
-        tmp.replace(out)
-    return out
+        return save_figure(fig, path)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +9,7 @@ import numpy as np
 from fibersweep.flow.analysis import flux_separatrix, stream_function
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.streamlines import separatrix_y
+from fibersweep.plots.style import save_figure
 
 __all__ = ["plot_flow"]
 
@@ -96,7 +95,7 @@ def plot_flow(field: FlowField, path: str | Path, *, half_window: float | None =
     ax2 = fig.add_subplot(gs[1, 1])
     i = int(np.argmin(np.abs(x - xc)))
     ax2.plot(y, ux[i], lw=1.2, label="through the apex")
-    i_far = int(np.argmin(np.abs(x - (xc - geom.length / 2.0) % geom.length)))
+    i_far = int(np.argmin(np.abs(x - geom.x_far)))
     ax2.plot(y, ux[i_far], lw=1.0, ls="--", label="far from the pillar")
     yb = geom.base_center[1]
     ax2.axvspan(yb, yb + geom.pillar_height, color="0.8", label="pillar")
@@ -106,16 +105,4 @@ def plot_flow(field: FlowField, path: str | Path, *, half_window: float | None =
     ax2.grid(alpha=0.3)
     ax2.legend(fontsize=9)
 
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=out.suffix, dir=out.parent)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=130)
-        os.chmod(tmp, 0o644)  # mkstemp creates 0600
-        os.replace(tmp, out)
-    finally:
-        plt.close(fig)
-        if os.path.exists(tmp):
-            os.remove(tmp)
-    return out
+    return save_figure(fig, path, dpi=130)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import logging
 import math
-import os
 from pathlib import Path
 
 import matplotlib
@@ -31,6 +30,7 @@ from fibersweep.plots.style import (  # noqa: E402
     FAILED_STYLE,
     UNCLASSIFIED_STYLE,
     paper_style,
+    save_figure,
 )
 from fibersweep.sweep.manifest import read_manifest  # noqa: E402
 from fibersweep.sweep.store import read_runs  # noqa: E402
@@ -252,18 +252,6 @@ def delta_hist_figure(runs: pd.DataFrame) -> Figure:
     return fig
 
 
-def _save(fig: Figure, path: Path, fmt: str) -> Path:
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        fig.savefig(tmp, format=fmt)
-        os.replace(tmp, path)
-    finally:
-        plt.close(fig)
-        if tmp.exists():
-            tmp.unlink()
-    return path
-
-
 def plot_all(results: Path | str, out: Path | str | None = None, fmt: str = "png") -> list[Path]:
     """Write every figure of a sweep.
 
@@ -296,10 +284,14 @@ def plot_all(results: Path | str, out: Path | str | None = None, fmt: str = "png
     out = Path(out) if out is not None else results / "figures"
     out.mkdir(parents=True, exist_ok=True)
     paths = []
+    figures = {
+        "phase": lambda: phase_figure(runs, sep, "class"),
+        "phase_delta": lambda: phase_figure(runs, sep, "delta"),
+        "contact_map": lambda: contact_figure(runs),
+        "delta_hist": lambda: delta_hist_figure(runs),
+    }
     with paper_style():
-        paths.append(_save(phase_figure(runs, sep, "class"), out / f"phase.{fmt}", fmt))
-        paths.append(_save(phase_figure(runs, sep, "delta"), out / f"phase_delta.{fmt}", fmt))
-        paths.append(_save(contact_figure(runs), out / f"contact_map.{fmt}", fmt))
-        paths.append(_save(delta_hist_figure(runs), out / f"delta_hist.{fmt}", fmt))
+        for name, make in figures.items():
+            paths.append(save_figure(make(), out / f"{name}.{fmt}", format=fmt))
     log.info("wrote %d figures to %s", len(paths), out)
     return paths

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
 
 import matplotlib as mpl
 
-__all__ = ["CLASS_STYLE", "FAILED_STYLE", "UNCLASSIFIED_STYLE", "paper_style"]
+__all__ = ["CLASS_STYLE", "FAILED_STYLE", "UNCLASSIFIED_STYLE", "paper_style", "save_figure"]
 
 # Okabe-Ito colours (colour-blind safe); marker shapes carry the class without colour too.
 CLASS_STYLE: dict[str, dict[str, object]] = {
@@ -43,3 +46,24 @@ def paper_style() -> Iterator[None]:
     }
     with mpl.rc_context(rc):
         yield
+
+
+def save_figure(fig: Any, path: str | Path, **savefig_kw: Any) -> Path:
+    """Write ``fig`` to ``path`` atomically (temporary file, then rename) and close it.
+
+    The format is the path's suffix unless ``format=`` is given; other keywords
+    go to ``Figure.savefig``.
+    """
+    import matplotlib.pyplot as plt
+
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    savefig_kw.setdefault("format", out.suffix.lstrip(".").lower() or None)
+    tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
+    try:
+        fig.savefig(tmp, **savefig_kw)
+        os.replace(tmp, out)
+    finally:
+        plt.close(fig)
+        tmp.unlink(missing_ok=True)
+    return out

@@ -183,18 +183,27 @@ class LocalExecutor:
             inflight: dict[Future, Any] = {}
             progressed = False
             crashed: list[Any] = []
+            broken = False  # submit() found the pool already broken
             try:
-                while (fresh or suspects or inflight) and not crashed:
-                    if suspects:
-                        if not inflight:
-                            t = suspects.popleft()
-                            inflight[pool.submit(guarded_call, fn, t)] = t
-                    else:
-                        while fresh and len(inflight) < self.cap:
-                            t = fresh.popleft()
-                            inflight[pool.submit(guarded_call, fn, t)] = t
+                while (fresh or suspects or inflight) and not (crashed or broken):
+                    # A task leaves its queue only once submit() accepted it: a worker
+                    # that died since the last wait makes submit() raise, and the task,
+                    # which never started, stays queued for the next pool, without a strike.
+                    try:
+                        if suspects:
+                            if not inflight:
+                                inflight[pool.submit(guarded_call, fn, suspects[0])] = suspects[0]
+                                suspects.popleft()
+                        else:
+                            while fresh and len(inflight) < self.cap:
+                                inflight[pool.submit(guarded_call, fn, fresh[0])] = fresh[0]
+                                fresh.popleft()
+                    except BrokenProcessPool:
+                        broken = True
+                    if not inflight:
+                        break
                     done, _ = wait(list(inflight), return_when=FIRST_COMPLETED)
-                    if any(isinstance(f.exception(), BrokenProcessPool) for f in done):
+                    if broken or any(isinstance(f.exception(), BrokenProcessPool) for f in done):
                         wait(list(inflight))  # the rest fail at once (or had finished)
                         done = set(inflight)
                     for f in done:
@@ -210,7 +219,7 @@ class LocalExecutor:
                             yield Outcome(t.key, f.result(), "", strikes[t.key] + 1)
             finally:
                 self._stop(pool)
-            if not crashed:
+            if not (crashed or broken):
                 continue
             alone = len(crashed) == 1
             barren = 0 if progressed else barren + 1
@@ -299,10 +308,7 @@ class DaskExecutor:
 
         client, cluster = self._client()
         try:
-            if initializer is not None:
-                client.register_plugin(InitPlugin(initializer, initargs), name="fibersweep-init")
-            else:
-                client.register_plugin(InitPlugin(None, ()), name="fibersweep-init")
+            client.register_plugin(InitPlugin(initializer, initargs), name="fibersweep-init")
             by_key = {}
             futures = []
             for t in tasks:

@@ -200,9 +200,6 @@ def run_sweep(
         summary.interrupted = True
         state = "interrupted"
         raise
-    except BaseException:
-        state = "stopped"
-        raise
     else:
         state = "complete"
     finally:

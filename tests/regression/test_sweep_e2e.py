@@ -252,15 +252,20 @@ def test_changed_settings_are_detected(reference, tmp_path):
 
 
 def test_failed_runs_are_recorded_and_retried(tmp_path, coarse_field, flow_cache_dir):
-    # y0/h = 6 puts the fiber outside the 800 µm channel: that run must fail, not the sweep.
-    sweep = "sweep:\n  theta0: [0.0]\n  y0: [0.9, 6.0]\n  length: [0.6]\n"
-    cfg = _config(tmp_path, flow_cache_dir, "fail", sweep=sweep)
+    # A start that only fails at run time (bad starts are config errors, exit 2): with
+    # trap_time beyond t_max the fiber trapped at (8°, 0.3) runs out of time ('time
+    # limit'), while the one at y0/h = 0.9 passes Above. The failure must be recorded
+    # and the sweep go on; --retry-failed re-runs only that run, without duplicates.
+    extra = "  classify:\n    trap_time: 100.0\n  step:\n    t_max: 5.0\n"
+    sweep = "sweep:\n  theta0: [8.0]\n  y0: [0.3, 0.9]\n  length: [1.0]\n"
+    cfg = _config(tmp_path, flow_cache_dir, "fail", extra=extra, sweep=sweep)
     res, text = _invoke("run", cfg)
     assert res.exit_code == 1, text
     df = read_runs(tmp_path / "fail")
     bad = df[df["status"] == "failed"]
-    assert len(df) == 2 and len(bad) == 1 and bad["y0"].iloc[0] == 6.0
-    assert "InputError" in bad["reason"].iloc[0]
+    assert len(df) == 2 and len(bad) == 1 and bad["y0"].iloc[0] == 0.3
+    assert "time limit" in bad["reason"].iloc[0]
+    assert (df[df["status"] == "ok"]["class"] == "Above").all()
     res, text = _invoke("run", cfg, "--retry-failed")
     assert res.exit_code == 1 and "to do now 1" in text, text
     assert len(read_runs(tmp_path / "fail")) == 2

@@ -117,3 +117,9 @@ def test_start_on_the_pillar_is_a_config_error(tmp_path):
     p = _write(tmp_path, "fiber:\n  x0: 1200\nsweep:\n  y0: 0.333\n")
     with pytest.raises(ConfigError, match=r"sweep\.y0 \(line 4\): .*overlaps the pillar"):
         load_config(p)
+
+
+def test_fiber_that_does_not_fit_the_channel_length_names_fiber_x0(tmp_path):
+    p = _write(tmp_path, "fiber:\n  x0: 1\nsweep:\n  y0: 0.9\n")
+    with pytest.raises(ConfigError, match=r"fiber\.x0 \(line 2\): the fiber at x0 = 1"):
+        load_config(p)

@@ -54,6 +54,29 @@ def test_local_worker_crash_once_is_retried(tmp_path):
     assert ex.pools_started == 2
 
 
+def test_local_pool_broken_at_submit_requeues_the_task(monkeypatch):
+    """A worker that dies between two submissions makes submit() raise: nothing lost, no strike."""
+    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures.process import BrokenProcessPool
+
+    real_submit = ProcessPoolExecutor.submit
+    calls = {"n": 0}
+
+    def submit(self, *args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise BrokenProcessPool("simulated: a worker died since the last wait")
+        return real_submit(self, *args, **kwargs)
+
+    monkeypatch.setattr(ProcessPoolExecutor, "submit", submit)
+    jobs = [Job(f"k{i}", float(i), sleep=0.02) for i in range(6)]
+    ex = LocalExecutor(workers=2, retries=2)
+    res = _collect(ex, jobs)
+    assert all(o.error == "" for o in res.values()), {k: o.error for k, o in res.items()}
+    assert all(o.attempts == 1 for o in res.values()), "a task that never started has no strike"
+    assert ex.pools_started == 2
+
+
 def test_local_poison_task_fails_alone(tmp_path):
     """A task that always kills its worker is reported failed; its neighbours are not blamed."""
     jobs = [Job(f"k{i}", float(i), sleep=0.02) for i in range(4)] + [
