@@ -285,6 +285,8 @@ def _print_plan(plan, workers: int) -> None:
 
 
 def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
+    from dataclasses import replace
+
     from fibersweep.sweep.plan import plan_sweep
     from fibersweep.sweep.runner import estimate_run_s, flow_key_for
 
@@ -296,7 +298,8 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     if per_run is None and cached and plan.todo:
         per_run = estimate_run_s(cfg, plan.todo)
         how = "timed on one run of this sweep"
-    est = None if per_run is None else per_run * len(plan.todo) / cfg.run.workers
+    # same rule as SweepPlan.estimate_s: no more workers busy than runs to do
+    est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(cfg.run.workers)
     typer.echo(
         f"  flow field: {'cached' if cached else 'NOT cached (it is computed first)'}; "
         f"estimate {_fmt_s(est)} on {cfg.run.workers} workers"
@@ -419,6 +422,8 @@ def classify(
     typer.echo(f"re-classified {res.n_runs} runs ({res.n_changed} changed) with {th}")
     typer.echo(res.counts.to_string(index=False))
     typer.echo(f"wrote {res.counts_path}")
+    for w in res.warnings:
+        typer.secho(f"warning: {w}", err=True, fg=typer.colors.YELLOW)
 
 
 @app.command("plot-phase")

@@ -40,6 +40,29 @@ class Reclassified:
     n_changed: int
     counts: pd.DataFrame
     counts_path: Path
+    warnings: tuple[str, ...] = ()
+
+
+def _beyond_simulated(
+    thresholds: ClassifySettings, simulated: ClassifySettings, n_unclassified: int
+) -> tuple[str, ...]:
+    """Why runs may be unclassifiable: the runs stopped on the *simulated* trap rule.
+
+    A run ends once it has been stopped in contact for the simulated trap_time, so a
+    longer trap_time (or a stricter trap_speed) asks about time that was never simulated.
+    """
+    if (
+        thresholds.trap_time <= simulated.trap_time
+        and thresholds.trap_speed >= simulated.trap_speed
+    ):
+        return ()
+    return (
+        f"the runs were simulated with the trap stop rule trap_time = {simulated.trap_time} s, "
+        f"trap_speed = {simulated.trap_speed}: a run stopped in contact that long ended there, "
+        f"so trap_time = {thresholds.trap_time} s / trap_speed = {thresholds.trap_speed} cannot "
+        f"be decided from its trajectory ({n_unclassified} runs unclassified). To decide them, "
+        "set fiber.classify to the new values and run the sweep again with --no-resume.",
+    )
 
 
 def thresholds_for(
@@ -115,6 +138,9 @@ def reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     if man is None or runs.empty:
         raise InputError(f"{out}: no sweep results here (expected manifest.json and runs/)")
     flow = FlowSettings.model_validate(man["config"]["flow"])
+    # The thresholds the runs were simulated with (the trap rule also stops a run);
+    # kept apart from the config's, which later re-classifications overwrite.
+    simulated = man.setdefault("simulated_classify", man["config"]["fiber"]["classify"])
     geometry = flow.geometry.to_geometry()
     u_center = flow.fluid.u_center
     ok = runs["status"] == "ok"
@@ -159,4 +185,8 @@ def reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     man["config"]["fiber"]["classify"] = thresholds.model_dump(mode="json")
     man["counts"] = {c: int(n) for c, n in zip(counts["class"], counts["runs"], strict=True)}
     write_manifest(out, man)
-    return Reclassified(len(runs), changed, counts, counts_path)
+    unclassified = int(((runs["status"] == "ok") & ~runs["class"].isin(CLASSES)).sum())
+    warnings = _beyond_simulated(
+        thresholds, ClassifySettings.model_validate(simulated), unclassified
+    )
+    return Reclassified(len(runs), changed, counts, counts_path, warnings)

@@ -197,13 +197,17 @@ def test_classify_round_trip_and_plots(reference, tmp_path):
     assert (mid.loc[~trapped, "class"] == before.loc[~trapped, "class"]).all()
     counts = pd.read_csv(out / "counts.csv")
     assert counts.set_index("class").loc["Trapping", "runs"] == 0
+    # The runs stopped after the simulated 2 s trap window: the user is told why the
+    # trapped runs are now unclassified and how to decide them.
+    assert "warning: the runs were simulated with the trap stop rule trap_time = 2.0" in text
+    assert "--no-resume" in text
     # Thresholds from a config file give the same answer as from the command line.
     thr = tmp_path / "thr.yaml"
     thr.write_text("fiber:\n  classify:\n    trap_time: 1000.0\n")
     res, text = _invoke("classify", out, "--config", thr)
     assert res.exit_code == 0 and "(0 changed)" in text, text
     res, text = _invoke("classify", out, "--trap-time", "2.0")
-    assert res.exit_code == 0, text
+    assert res.exit_code == 0 and "warning" not in text, text
     after = read_runs(out)
     assert (after["class"] == before["class"]).all(), "same thresholds, same classes"
     assert len(list_parts(out / RUNS_DIR)) == 1
