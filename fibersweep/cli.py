@@ -7,10 +7,10 @@ config errors) exits 2, a failed computation (:class:`FibersweepError`) exits 1.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, TypeVar
+from typing import Annotated
 
 import typer
 
@@ -23,8 +23,6 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
     add_completion=False,
 )
-
-T = TypeVar("T")
 
 ConfigArg = Annotated[Path, typer.Argument(help="YAML config file.", show_default=False)]
 Verbose = Annotated[bool, typer.Option("--verbose", "-v", help="Log progress details.")]
@@ -54,11 +52,6 @@ def _load(path: Path):
     from fibersweep.config import load_config
 
     return load_config(path)
-
-
-def _call(fn: Callable[[], T]) -> T:
-    with _errors():
-        return fn()
 
 
 @app.callback()
