@@ -49,8 +49,7 @@ LIBRARY: dict[str, Candidate] = {
     c.name: c
     for c in (
         Candidate("friction", 0.0, 1.0, (0.5,), 0.4, "Coulomb coefficient on the pillar"),
-        # weak in this model: a bead touching the pillar slows, the fiber barely does
-        Candidate("pillar_hydro", 0.0, 0.9, (0.6,), 0.1, "slow-down of a bead touching the pillar"),
+        Candidate("pillar_hydro", 0.0, 3.0, (1.0,), 0.5, "multiplier on the Faxén pillar drag"),
         Candidate("off_midplane", 0.0, 0.35, (0.25,), 0.15, "offset from the midplane / depth"),
         Candidate("brownian", 0.0, 2.0e4, (1.0e4,), 1.0, "multiplier on kT at 295 K"),
         Candidate("inlet_speed", -0.3, 0.3, (-0.15, 0.15), 0.1, "relative speed error"),

@@ -28,15 +28,9 @@ from fibersweep.discrepancy.gap import GapResult
 from fibersweep.discrepancy.localise import binned_map
 from fibersweep.discrepancy.workflow import DiscrepancyResult, _combined_excess
 from fibersweep.fiber.result import CLASSES
+from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, save_figure
 
 __all__ = ["summary", "write_report"]
-
-_COLORS = {
-    "Below": "tab:blue",
-    "Above": "tab:orange",
-    "Pole-vaulting": "tab:green",
-    "Trapping": "tab:red",
-}
 
 
 def _atomic_write(path: Path, data: str | bytes) -> None:
@@ -166,8 +160,17 @@ def _fmt(x: Any, spec: str = ".3g") -> str:
     return "–" if x is None else format(x, spec)
 
 
-def _class_colors(codes: np.ndarray) -> list[str]:
-    return [_COLORS[CLASSES[int(c)]] if np.isfinite(c) else "lightgrey" for c in codes]
+def _class_groups(codes: np.ndarray) -> list[tuple[str, dict[str, object], np.ndarray]]:
+    """(label, marker style, row mask) per class present, failed runs last (plots/style)."""
+    out = []
+    for k, name in enumerate(CLASSES):
+        mask = codes == k
+        if mask.any():
+            out.append((name, CLASS_STYLE[name], mask))
+    bad = ~np.isfinite(codes)
+    if bad.any():
+        out.append(("failed", FAILED_STYLE, bad))
+    return out
 
 
 def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]:
@@ -191,22 +194,31 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
     if effect and effect in res.effect_copies:
         panels.append((f"with {effect}", res.effect_copies[effect][0]["class"].to_numpy()))
     fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), sharey=True)
+    size = (12 + 30 * (o_ho["length"] - 0.4)).to_numpy()
+    seen: dict[str, dict[str, object]] = {}
     for ax, (title, codes) in zip(np.atleast_1d(axes), panels, strict=True):
-        ax.scatter(
-            o_ho["theta0"],
-            o_ho["y0"],
-            c=_class_colors(codes),
-            s=12 + 30 * (o_ho["length"] - 0.4),
-            edgecolors="none",
-        )
+        codes = np.asarray(codes, dtype=np.float64)
+        for name, style, mask in _class_groups(codes):
+            ax.scatter(
+                o_ho["theta0"][mask],
+                o_ho["y0"][mask],
+                s=size[mask],
+                marker=style["marker"],
+                color=style["color"],
+                edgecolors="0.2" if name != "failed" else None,
+                linewidths=0.3,
+            )
+            seen[name] = style
         ax.set_title(f"{title} (held-out)")
         ax.set_xlabel("θ0 [deg]")
     np.atleast_1d(axes)[0].set_ylabel("y0 / h_obs")
-    handles = [Line2D([], [], marker="o", ls="", color=c, label=k) for k, c in _COLORS.items()]
-    fig.legend(handles=handles, loc="lower center", ncol=4, frameon=False)
+    handles = [
+        Line2D([], [], ls="", markersize=6, label=k, **st)  # type: ignore[arg-type]
+        for k, st in seen.items()
+    ]
+    fig.legend(handles=handles, loc="lower center", ncol=len(handles), frameon=False)
     fig.tight_layout(rect=(0, 0.08, 1, 1))
-    fig.savefig(out / "phase_before_after.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, out / "phase_before_after.png", dpi=110)
     made.append("phase_before_after.png")
 
     exc = _combined_excess(res.gap, res.weights)
@@ -223,8 +235,7 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
         fig.colorbar(im, ax=ax, label="mean excess score (weighted)")
     fig.suptitle("Where the measurement sits worse than the model's own copies")
     fig.tight_layout()
-    fig.savefig(out / "residual_map.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, out / "residual_map.png", dpi=110)
     made.append("residual_map.png")
 
     if res.heldout_before is not None and effect:
@@ -249,8 +260,7 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
             ax.set_ylabel("out-of-sample excess score\n/ spread of the copies (95 % CI)")
             ax.legend(frameon=False)
             fig.tight_layout()
-            fig.savefig(out / "gap_before_after.png", dpi=110)
-            plt.close(fig)
+            save_figure(fig, out / "gap_before_after.png", dpi=110)
             made.append("gap_before_after.png")
     return made
 

@@ -73,7 +73,6 @@ def _init(field: FlowField, settings: FiberSettings) -> None:
 def _run_chunk(
     task: tuple[np.ndarray, np.ndarray, dict[str, float], np.ndarray],
 ) -> list[tuple[int, dict[str, Any]]]:
-    from fibersweep.fiber.effects import build_effects
     from fibersweep.fiber.run import simulate
 
     idx, starts, effects, seeds = task
@@ -82,20 +81,12 @@ def _run_chunk(
     # the batch's effects come on top of those the baseline config already has
     effects = {**base.effects, **effects}
     settings = base.model_copy(update={"effects": effects})
-    # optional hook of nuisance effects that change units (pillar_scale)
-    to_nominal = [
-        e.transform_outcome
-        for e in build_effects(effects).effects
-        if hasattr(e, "transform_outcome")
-    ]
     out = []
     for i, s, seed in zip(idx, starts, seeds, strict=True):
         start = FiberStart(theta0=float(s[0]), y0=float(s[1]), length=float(s[2]))
         try:
             res = simulate(field, settings, start, rng_seed=int(seed))
             row = outcome_row(res)
-            for hook in to_nominal:
-                row = hook(row)
         except Exception as exc:  # recorded, not dropped: the run failed (or bad start)
             row = _failed(f"{type(exc).__name__}: {exc}")
         out.append((int(i), row))

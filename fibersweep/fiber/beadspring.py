@@ -27,6 +27,7 @@ from fibersweep.fiber.elastic import elastic_forces
 from fibersweep.fiber.mobility import _rpy_fill, body_mobility, fiber_offsets
 from fibersweep.fiber.rigid import body_velocity, coulomb_friction
 from fibersweep.fiber.setup import kernel_arrays
+from fibersweep.fiber.wallhydro import mobility_with_wall_drag, wall_drag
 from fibersweep.flow.field import interpolate_ib
 
 __all__ = [
@@ -58,6 +59,10 @@ def _velocity(x, y, ux, uy, dx, prm, verts, pbx, pby, curves, mob, u, f, fx, fy,
               dist, s_off, pm, nm, fric):  # fmt: skip
     """f(q) = u + M F at (x, y) into f (2n); M into mob. Returns (any_c, cx, cy).
 
+    With ``pillar_hydro`` on, f = (I + M Z)⁻¹ u + M' F and mob holds M'
+    (:func:`wallhydro.mobility_with_wall_drag`); friction then still uses the
+    baseline rigid-body N.
+
     Friction (if on) is the rigid model's (:func:`rigid.coulomb_friction`) for
     the rigid body the nearly rigid fiber moves as: body axis from tail to head,
     offsets ``s_off``, body-frame ``pm`` (P) and ``nm`` (N); the frictionless
@@ -68,13 +73,9 @@ def _velocity(x, y, ux, uy, dx, prm, verts, pbx, pby, curves, mob, u, f, fx, fy,
     interpolate_ib(ux, uy, dx, x, y, u)
     any_c, cx, cy = _forces(x, y, prm, verts, pbx, pby, curves, fx, fy, cfx, cfy, st, dist)
     vs = prm[K.P_VSCALE]
-    hs = prm[K.P_HYD_S]
     for i in range(n):
-        fac = vs
-        if hs > 0.0:
-            fac *= 1.0 - hs * math.exp(-max(dist[i] - a, 0.0) / prm[K.P_HYD_L])
-        f[2 * i] = fac * u[i, 0]
-        f[2 * i + 1] = fac * u[i, 1]
+        f[2 * i] = vs * u[i, 0]
+        f[2 * i + 1] = vs * u[i, 1]
     mu_f = prm[K.P_MU_F]
     if any_c and mu_f > 0.0:
         # Friction as for the rigid body the (nearly rigid) fiber moves as: body frame
@@ -92,6 +93,11 @@ def _velocity(x, y, ux, uy, dx, prm, verts, pbx, pby, curves, mob, u, f, fx, fy,
                 fx[i] += fric[i] * (-cfy[i] / fn)
                 fy[i] += fric[i] * (cfx[i] / fn)
     _rpy_fill(x, y, a, prm[K.P_MU], mob)
+    hs = prm[K.P_HYD_S]
+    if hs > 0.0:
+        zeta = np.empty(n)
+        if wall_drag(dist, a, hs, prm[K.P_HYD_L], prm[K.P_MU], zeta) > 0:
+            mobility_with_wall_drag(mob, zeta, f)  # f = (I + MZ)⁻¹u; the step uses M'
     for r in range(2 * n):
         acc = 0.0
         for j in range(n):

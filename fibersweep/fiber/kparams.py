@@ -14,8 +14,8 @@ NAMES = (
     "f_ref",  # contact force scale [pN]
     "vscale",  # factor on the background velocity
     "mu_f",  # friction coefficient
-    "hyd_s",  # near-pillar slow-down strength
-    "hyd_l",  # its decay length [µm]
+    "hyd_s",  # pillar wall-drag strength (multiplier on the Faxén drag)
+    "hyd_l",  # its screening length [µm]
     "kT",  # thermal energy [pN µm]
     "max_disp",  # largest bead move per step far from the pillar [µm]
     "contact_disp",  # largest bead move per step near the pillar [µm]

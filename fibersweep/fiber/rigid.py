@@ -26,6 +26,7 @@ import numpy as np
 from fibersweep.fiber import kparams as K
 from fibersweep.fiber import record as R
 from fibersweep.fiber.contact import pillar_forces
+from fibersweep.fiber.wallhydro import rigid_wall_velocity, wall_drag
 from fibersweep.flow.field import interpolate_ib
 
 __all__ = ["body_velocity", "coulomb_friction", "integrate_rigid", "rigid_velocity", "seed_numba"]
@@ -217,25 +218,27 @@ def rigid_velocity(
         dist,
     )
     vscale = prm[K.P_VSCALE]
-    hyd_s = prm[K.P_HYD_S]
-    a = prm[K.P_A]
     min_d = 1e300
     stiff = 0.0
     for i in range(n):
-        f = vscale
-        if hyd_s > 0.0:
-            gap = max(dist[i] - a, 0.0)
-            f *= 1.0 - hyd_s * math.exp(-gap / prm[K.P_HYD_L])
-        u[i, 0] *= f
-        u[i, 1] *= f
+        u[i, 0] *= vscale
+        u[i, 1] *= vscale
         if dist[i] < min_d:
             min_d = dist[i]
         stiff += st[i]
-    vbx, vby, om = body_velocity(c, sn, s, pm, nm, u.reshape(2 * n), fx, fy, any_c)
+    ub = u.reshape(2 * n)
+    vbx, vby, om = body_velocity(c, sn, s, pm, nm, ub, fx, fy, any_c)
+    nm_eff = nm
+    hyd_s = prm[K.P_HYD_S]
+    if hyd_s > 0.0:
+        zeta = np.empty(n)
+        if wall_drag(dist, prm[K.P_A], hyd_s, prm[K.P_HYD_L], prm[K.P_MU], zeta) > 0:
+            nm_eff = np.empty((3, 3))
+            vbx, vby, om = rigid_wall_velocity(s, nm, zeta, vbx, vby, om, nm_eff)
     if any_c:
         mu_f = prm[K.P_MU_F]
         if mu_f > 0.0:
-            vbx, vby, om = coulomb_friction(c, sn, s, nm, fx, fy, mu_f, vbx, vby, om, ft_)
+            vbx, vby, om = coulomb_friction(c, sn, s, nm_eff, fx, fy, mu_f, vbx, vby, om, ft_)
     vx = c * vbx - sn * vby
     vy = sn * vbx + c * vby
     return vx, vy, om, any_c, cx, cy, min_d, stiff

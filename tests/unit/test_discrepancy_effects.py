@@ -9,7 +9,7 @@ import pytest
 
 from fibersweep.errors import InputError
 from fibersweep.fiber.effects import build_effects
-from fibersweep.fiber.result import FiberStart
+from fibersweep.fiber.result import FiberStart, RunResult
 
 
 def test_start_noise_has_the_stated_spread():
@@ -33,10 +33,28 @@ def test_pillar_scale_is_a_change_of_units_about_the_centroid():
     assert eff.transform_start(FiberStart(0.0, 1 / 3, 1.0), rng).y0 == pytest.approx(1 / 3)
     s = eff.transform_start(FiberStart(0.0, 0.8, 1.1), rng)
     assert s.length == pytest.approx(1.1 / 1.1)
-    # a lateral position maps back: nominal y -> real y' -> nominal via the outcome hook
-    row = eff.transform_outcome({"y_c": s.y0, "delta": 0.2})
-    assert row["y_c"] == pytest.approx(0.8)
-    assert row["delta"] == pytest.approx(0.2 * (1 + eps))
+    # a lateral position maps back: nominal y -> real y' -> nominal via the result hook,
+    # which also reports the start that was asked for
+    asked = FiberStart(0.0, 0.8, 1.1)
+    res = RunResult(start=s, status="ok", cls="Above", delta=0.2, contact=True, y_c=s.y0)
+    back = eff.transform_result(res, asked)
+    assert back.y_c == pytest.approx(0.8)
+    assert back.delta == pytest.approx(0.2 * (1 + eps))
+    assert back.start == asked
+
+
+def test_simulate_reports_pillar_scale_runs_in_nominal_units(small_field):
+    # a run with pillar_scale = ε is the nominal run at the transformed start, its δ
+    # rescaled by 1 + ε; simulate() itself returns the nominal start (round-off)
+    from fibersweep.fiber.run import simulate
+    from fibersweep.fiber.settings import FiberSettings
+
+    eps, asked = 0.1, FiberStart(2.0, 0.9, 0.8)
+    scaled = simulate(small_field, FiberSettings(effects={"pillar_scale": eps}), asked)
+    moved = build_effects({"pillar_scale": eps}).effects[0].transform_start(asked, None)
+    plain = simulate(small_field, FiberSettings(), moved)
+    assert scaled.start == asked and plain.start == moved
+    assert scaled.delta == pytest.approx(plain.delta * (1 + eps), rel=1e-12)
 
 
 def test_out_of_range_values_name_the_effect():

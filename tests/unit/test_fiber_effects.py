@@ -40,7 +40,7 @@ def test_zero_effects_are_dropped_and_baseline_params():
     "name, value",
     [
         ("friction", -1.0),
-        ("pillar_hydro", 1.0),
+        ("pillar_hydro", -0.5),
         ("off_midplane", 0.5),
         ("brownian", -2.0),
         ("friction", math.nan),
@@ -110,35 +110,40 @@ def test_brownian_diffusion_matches_the_body_mobility():
     np.testing.assert_array_equal(a.theta, b.theta)
 
 
-def test_pillar_hydro_slows_beads_near_the_pillar():
+def test_pillar_hydro_slows_a_fiber_passing_the_pillar():
     """Uniform flow, fiber tilted 5° just below the pillar base (no contact): the body
-    velocity equals P·(f_i u) with f_i = 1 − s exp(−gap_i / a) per bead, computed here
-    independently in numpy. Tolerance: round-off."""
+    velocity with the pillar's wall drag is (R + Kᵀ Z K)⁻¹ R V₀, Z from the Faxén law
+    ζ = k 6πμa β/(1 − β) exp(−(h − a)/H), β = 9a/16h, all computed here in numpy from
+    the dense RPY matrix. Tolerance 1e-9 (round-off)."""
     from fibersweep.fiber.contact import outline_distance
-    from fibersweep.fiber.mobility import fiber_offsets
+    from fibersweep.fiber.mobility import fiber_offsets, rigid_map, rpy_matrix
 
     geo = Geometry()
     field = FlowField.from_function(lambda X, Y: (600.0 + 0 * X, 0 * X), geo, 4.0)
-    s_h = 0.1
+    k_h, a, mu = 0.5, 2.0, 0.34
     xc = geo.base_center[0]
     d = 6.0  # centre 6 µm below the base
     start = FiberStart(5.0, -d / geo.pillar_height, 0.5)
-    speeds = []
-    for eff in ({}, {"pillar_hydro": s_h}):
+    vel = []
+    for eff in ({}, {"pillar_hydro": k_h}):
         tr, _ = simulate_for(field, FiberSettings(x0=xc, effects=eff), start, 1e-4)
-        speeds.append(tr.com_speed[0])
+        vel.append((tr.com_speed[0], tr.theta[1] - tr.theta[0]))
     n = 11
-    off = fiber_offsets(n, 2.0)
+    off = fiber_offsets(n, a)
     th = math.radians(5.0)
     bx = xc + off * math.cos(th)
     by = geo.base_center[1] - d + off * math.sin(th)
-    gap = np.array([outline_distance(x, y, geo.vertices) for x, y in zip(bx, by, strict=True)])
-    f = 1 - s_h * np.exp(-(gap - 2.0) / 2.0)
-    assert f.min() < 0.975  # the effect is really probed
-    ub = np.column_stack([f * 600 * math.cos(th), -f * 600 * math.sin(th)]).ravel()
-    v = body_mobility(n, 2.0, 0.34).P @ ub
-    assert speeds[0] == pytest.approx(600.0, rel=1e-12)
-    assert speeds[1] == pytest.approx(math.hypot(v[0], v[1]), rel=1e-9)
+    h = np.array([outline_distance(x, y, geo.vertices) for x, y in zip(bx, by, strict=True)])
+    beta = 9 / 16 * a / np.maximum(h, a)
+    zeta = k_h * 6 * math.pi * mu * a * beta / (1 - beta) * np.exp(-(np.maximum(h, a) - a) / 40.0)
+    kmat = rigid_map(off)
+    r = kmat.T @ np.linalg.solve(rpy_matrix(np.column_stack([off, 0 * off]), a, mu), kmat)
+    v0 = np.array([600 * math.cos(th), -600 * math.sin(th), 0.0])  # body frame
+    v = np.linalg.solve(r + kmat.T @ np.diag(np.repeat(zeta, 2)) @ kmat, r @ v0)
+    assert vel[0][0] == pytest.approx(600.0, rel=1e-12)
+    assert vel[1][0] == pytest.approx(math.hypot(v[0], v[1]), rel=1e-9)
+    assert vel[1][0] < 0.99 * 600.0  # the effect is really probed
+    assert vel[0][1] == pytest.approx(0.0, abs=1e-12) and vel[1][1] != 0.0  # it also turns
 
 
 def test_coulomb_friction_sticks_or_slides():

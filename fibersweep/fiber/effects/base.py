@@ -11,7 +11,7 @@ import numpy as np
 from fibersweep.errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from fibersweep.fiber.result import FiberStart
+    from fibersweep.fiber.result import FiberStart, RunResult
     from fibersweep.fiber.settings import FiberSettings
     from fibersweep.flow.field import FlowField
     from fibersweep.flow.settings import FlowSettings
@@ -49,9 +49,9 @@ class DynamicsParams:
     friction : float
         Coulomb friction coefficient on the pillar (tangential/normal force) [-].
     hydro_strength : float
-        Fractional slow-down of a bead touching the pillar (near-pillar hydrodynamics) [-].
+        Multiplier on the Faxén drag of a bead beside the pillar (0 = no pillar hydrodynamics) [-].
     hydro_length : float
-        Decay length of that slow-down with the bead-surface gap [µm].
+        Screening length of that drag [µm].
     kT : float
         Thermal energy for Brownian motion [pN·µm]; 0 = deterministic.
     """
@@ -90,6 +90,9 @@ class Effect:
         ``numpy.random.Generator``.
     ``dynamics(params, ctx)``
         Change the numeric :class:`DynamicsParams` the Numba kernels read.
+    ``transform_result(result, start)``
+        Change the finished run's report (e.g. back to nominal units), given
+        the start the caller asked for.
     """
 
     name: ClassVar[str] = ""
@@ -128,3 +131,6 @@ class Effect:
 
     def dynamics(self, params: DynamicsParams, ctx: DynamicsContext) -> DynamicsParams:
         return params
+
+    def transform_result(self, result: RunResult, start: FiberStart) -> RunResult:
+        return result

@@ -9,16 +9,16 @@ depth relative to the pillar). So the run starts at
 
     y0' = (y0 + ε/3) / (1 + ε),   L' = L / (1 + ε)     (centroid at y/h = 1/3)
 
-and its lengths come back to nominal units with :meth:`PillarScale.transform_outcome`
-(δ x (1 + ε), y_c x (1 + ε) − ε/3). The run itself reports real-pillar units;
-the discrepancy workflow (``fibersweep synth`` / ``discrepancy``) applies the
-conversion, through the optional ``transform_outcome`` hook it looks for.
+and its report comes back to nominal units (:meth:`PillarScale.transform_result`):
+the nominal start, δ x (1 + ε), y_c x (1 + ε) − ε/3. Positions in µm (x_f,
+y_f, the trajectory) stay those of the simulation, i.e. of the real pillar
+drawn at the nominal size.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,7 +26,7 @@ from fibersweep.fiber.effects.base import Effect
 from fibersweep.fiber.effects.registry import register
 
 if TYPE_CHECKING:  # pragma: no cover
-    from fibersweep.fiber.result import FiberStart
+    from fibersweep.fiber.result import FiberStart, RunResult
 
 
 @register
@@ -48,12 +48,9 @@ class PillarScale(Effect):
             length=start.length / s,
         )
 
-    def transform_outcome(self, row: dict[str, Any]) -> dict[str, Any]:
-        """Real-pillar units back to nominal ones (δ, y_c); other columns unchanged."""
+    def transform_result(self, result: RunResult, start: FiberStart) -> RunResult:
+        """Real-pillar units back to nominal ones: the asked start, δ and y_c."""
         s = 1.0 + self.value
-        out = dict(row)
-        if "delta" in out:
-            out["delta"] = out["delta"] * s
-        if "y_c" in out:
-            out["y_c"] = out["y_c"] * s - self.value / 3.0
-        return out
+        return replace(
+            result, start=start, delta=result.delta * s, y_c=result.y_c * s - self.value / 3.0
+        )

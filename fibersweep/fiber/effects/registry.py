@@ -13,7 +13,7 @@ from fibersweep.errors import InputError
 from fibersweep.fiber.effects.base import DynamicsContext, DynamicsParams, Effect
 
 if TYPE_CHECKING:  # pragma: no cover
-    from fibersweep.fiber.result import FiberStart
+    from fibersweep.fiber.result import FiberStart, RunResult
     from fibersweep.fiber.settings import FiberSettings
     from fibersweep.flow.field import FlowField
     from fibersweep.flow.settings import FlowSettings
@@ -69,6 +69,11 @@ class EffectSet:
         for e in self.effects:
             start = e.transform_start(start, rng)
         return start
+
+    def result(self, result: RunResult, start: FiberStart) -> RunResult:
+        for e in reversed(self.effects):
+            result = e.transform_result(result, start)
+        return result
 
     def params(self, ctx: DynamicsContext) -> DynamicsParams:
         p = DynamicsParams(hydro_length=ctx.bead_radius)
