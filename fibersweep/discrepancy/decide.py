@@ -8,8 +8,11 @@ penalty for the extra parameter: an effect enters the model only if, out of
 sample, it beats the baseline by more than the noise floor allows. Then:
 
 - no significant improvement -> "unexplained gap in region R, observable O";
-- the best candidate leaves a significant held-out gap (Holm over the
-  observables) -> "unexplained" (it is at most a partial explanation);
+- the best candidate leaves a significant gap (Holm over the observables),
+  or a significant systematic residual in any observable (Holm over every
+  component: a mean shift that a zero-mean spread such as start noise can
+  widen the copies around but never remove) -> "unexplained" (it is at most
+  a partial explanation);
 - another candidate also improves significantly and leaves no significant gap
   -> "ambiguous between A and B" (both are consistent with the data);
 - otherwise the best candidate is named.
@@ -33,7 +36,7 @@ import numpy as np
 from fibersweep.discrepancy.gap import GapResult, paired_improvement
 from fibersweep.discrepancy.stats import bootstrap_mean_ci, holm
 
-__all__ = ["HeldOut", "Verdict", "evaluate_heldout", "decide"]
+__all__ = ["HeldOut", "Verdict", "adequate", "evaluate_heldout", "decide"]
 
 
 @dataclass(frozen=True)
@@ -52,8 +55,9 @@ class HeldOut:
     residual : GapResult
         Cross-fitted (out-of-sample) gap with the effect on.
     explains : bool
-        Significant and no observable's gap remains significant with the effect
-        at its final value (``final`` when given, else ``residual``).
+        Significant, and with the effect at its final value (``final`` when
+        given, else ``residual``) no observable's gap nor systematic residual
+        remains significant (:func:`adequate`).
     per_fiber : ndarray, shape (n_heldout,)
         Per-fiber improvement (for paired comparisons).
     """
@@ -92,6 +96,16 @@ class Verdict:
     observable: str = ""
     region: str = ""
     text: str = ""
+
+
+def adequate(gap: GapResult) -> bool:
+    """No significant gap and no significant systematic residual left."""
+    return not gap.any and not gap.biased
+
+
+def _leftover(gap: GapResult) -> list[str]:
+    """Observables still off, gaps first, then systematic residuals."""
+    return list(dict.fromkeys(gap.significant + gap.biased))
 
 
 def _boot_p(d: np.ndarray, rng: np.random.Generator, n_boot: int = 4000) -> float:
@@ -140,7 +154,7 @@ def evaluate_heldout(
                 p_holm=float(p_adj[k]),
                 significant=sig,
                 residual=residuals[n],
-                explains=sig and not residuals[n].any,
+                explains=sig and adequate(residuals[n]),
                 per_fiber=per[n],
             )
         )
@@ -185,16 +199,22 @@ def decide(
         )
     best = max(sig, key=lambda h: h.improvement[0])
     if not best.explains:
-        rest = (best.final or best.residual).significant
+        left = best.final or best.residual
+        rest = _leftover(left)
         obs = rest[0] if rest else top_obs
+        what = []
+        if left.significant:
+            what.append(f"a significant gap in {', '.join(left.significant)}")
+        if left.biased:
+            what.append(f"a significant systematic residual in {', '.join(left.biased)}")
         return Verdict(
             "unexplained",
             {},
             obs,
             region,
             f"Unexplained gap in {region}, observable {obs}: the best effect, "
-            f"{best.name} = {best.value:.4g}, improves the held-out fibers but leaves a "
-            f"significant gap in {', '.join(rest)}.",
+            f"{best.name} = {best.value:.4g}, improves the held-out fibers but leaves "
+            f"{' and '.join(what) or 'a significant gap'}.",
         )
     # A rival that also leaves no significant gap is just as consistent with the data.
     # (A paired comparison of the two is not used: with common random numbers it is

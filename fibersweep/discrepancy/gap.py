@@ -93,6 +93,9 @@ class ObservableGap:
         its bootstrap 95 % interval (0 = as good as the model's own copies).
     bias_z : tuple of float
         z-scores of the signed residual per component (per class for 'class').
+    bias_p : tuple of float
+        Two-sided permutation p-values of those residuals (raw; see
+        :attr:`GapResult.biased` for the corrected decision).
     """
 
     name: str
@@ -101,6 +104,7 @@ class ObservableGap:
     significant: bool
     excess: tuple[float, float, float]
     bias_z: tuple[float, ...]
+    bias_p: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -129,6 +133,25 @@ class GapResult:
     def any(self) -> bool:
         return bool(self.significant)
 
+    @property
+    def biased(self) -> list[str]:
+        """Observables with a significant systematic (signed) residual, strongest first.
+
+        Holm over every (observable, component) pair at ``alpha``. A mean shift
+        of the observations against the model's copies is what a zero-mean
+        spread (start noise, Brownian motion) cannot produce, so the adequacy
+        check of a fitted effect asks for none (see :mod:`.decide`).
+        """
+        pairs = [(g.name, p) for g in self.gaps.values() for p in g.bias_p]
+        if not pairs:
+            return []
+        adj = holm([p for _, p in pairs])
+        best: dict[str, float] = {}
+        for (name, _), pa in zip(pairs, adj, strict=True):
+            if pa <= self.alpha:
+                best[name] = min(best.get(name, 1.0), float(pa))
+        return sorted(best, key=best.__getitem__)
+
 
 def assess_gap(
     values: Mapping[str, np.ndarray],
@@ -150,16 +173,16 @@ def assess_gap(
     names = [o for o in OBSERVABLES if o in values]
     tests: dict[str, PermTest] = {}
     per_fiber: dict[str, np.ndarray] = {}
-    biases: dict[str, tuple[float, ...]] = {}
+    biases: dict[str, list[PermTest]] = {}
     for name in names:
         S = score_matrix(name, values[name])
         tests[name] = permutation_test(S, rng, n_perm=n_perm)
         per_fiber[name] = excess(S)
         R = residual_matrix(name, values[name])
-        biases[name] = tuple(
-            permutation_test(R[:, :, c], rng, n_perm=min(n_perm, 999), two_sided=True).z
+        biases[name] = [
+            permutation_test(R[:, :, c], rng, n_perm=min(n_perm, 1999), two_sided=True)
             for c in range(R.shape[2])
-        )
+        ]
     p = np.array([tests[n].p_value for n in names])
     p_adj = holm(p) if len(p) else p
     gaps = {}
@@ -170,7 +193,8 @@ def assess_gap(
             p_holm=float(p_adj[k]),
             significant=bool(p_adj[k] <= alpha and tests[name].n > 0),
             excess=bootstrap_mean_ci(per_fiber[name], rng, n_boot=n_boot),
-            bias_z=biases[name],
+            bias_z=tuple(t.z for t in biases[name]),
+            bias_p=tuple(t.p_value for t in biases[name]),
         )
     return GapResult(gaps=gaps, alpha=alpha, per_fiber=per_fiber)
 

@@ -58,6 +58,7 @@ def _clean(x: Any) -> Any:
 def _gap_dict(g: GapResult | None) -> dict[str, Any]:
     if g is None:
         return {}
+    biased = set(g.biased)
     return {
         name: {
             "statistic": o.test.statistic,
@@ -69,6 +70,9 @@ def _gap_dict(g: GapResult | None) -> dict[str, Any]:
             "significant": o.significant,
             "excess": {"mean": o.excess[0], "lo95": o.excess[1], "hi95": o.excess[2]},
             "n": o.test.n,
+            "bias_z": list(o.bias_z),
+            "bias_p": list(o.bias_p),
+            "systematic": name in biased,
         }
         for name, o in g.gaps.items()
     }
@@ -283,8 +287,9 @@ def _markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
         "each observation against the model's jittered copies. Noise floor: the same score of "
         "the model's own copies (permutation test, Holm-corrected).",
         "",
-        "| observable | n | score | noise floor | z | p (Holm) | significant | excess [95 % CI] |",
-        "|---|---|---|---|---|---|---|---|",
+        "| observable | n | score | noise floor | z | p (Holm) | significant | excess [95 % CI] "
+        "| signed residual z |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for name, g in s["gap"].items():
         e = g["excess"]
@@ -293,7 +298,9 @@ def _markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
             f"| {_fmt(g['noise_floor'], '.4g')} | {_fmt(g['z'], '.2f')} "
             f"| {_fmt(g['p_holm'], '.3g')} | "
             f"{'**yes**' if g['significant'] else 'no'} | {_fmt(e['mean'], '.3g')} "
-            f"[{_fmt(e['lo95'], '.3g')}, {_fmt(e['hi95'], '.3g')}] |"
+            f"[{_fmt(e['lo95'], '.3g')}, {_fmt(e['hi95'], '.3g')}] "
+            f"| {', '.join(_fmt(z, '.1f') for z in g['bias_z'])}"
+            f"{' (**systematic**)' if g['systematic'] else ''} |"
         )
     d = s["descriptive"]
     lines += ["", "Descriptive measures (observed vs the model's copies):", ""]

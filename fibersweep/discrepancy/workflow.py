@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.decide import HeldOut, Verdict, decide, evaluate_heldout
+from fibersweep.discrepancy.decide import HeldOut, Verdict, adequate, decide, evaluate_heldout
 from fibersweep.discrepancy.fit import Fit, Signature, fit_effect, rank_effects
 from fibersweep.discrepancy.gap import (
     GapResult,
@@ -383,7 +383,7 @@ def run_discrepancy(
                     h,
                     value=final[h.name][0],
                     final=final[h.name][1],
-                    explains=h.significant and not final[h.name][1].any,
+                    explains=h.significant and adequate(final[h.name][1]),
                 )
                 if h.name in final
                 else replace(h, explains=False)

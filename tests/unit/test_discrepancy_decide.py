@@ -63,6 +63,42 @@ def test_no_improvement_is_unexplained():
     assert "observable delta" in v.text
 
 
+def _spread_gap(shift: float, sd: float, seed: int):
+    """Copies of sd ``sd`` (a widened model) around 0; observations N(shift, 1)."""
+    rng = np.random.default_rng(seed)
+    V = rng.standard_normal((60, 5)) * sd
+    V[:, 0] = rng.standard_normal(60) + shift
+    return assess_gap({"delta": V}, rng, n_perm=999, n_boot=200)
+
+
+def test_systematic_residual_test_is_calibrated():
+    # no shift: the Holm-corrected signed-residual test flags at most alpha = 0.05 of
+    # 200 data sets (measured 0.0475 over 400); stated band [0, 0.10] for 200 draws
+    flags = [bool(_spread_gap(0.0, 1.0, 100 + s).biased) for s in range(200)]
+    assert np.mean(flags) <= 0.10
+
+
+def test_spread_that_only_hides_a_shift_is_unexplained():
+    # A widened model (copies sd 2) around observations shifted by 0.8 sd: the score
+    # test no longer sees a gap, the signed residual does. Zero-mean noise cannot
+    # explain a shift: the verdict must not name the spread effect.
+    left = _spread_gap(0.8, 2.0, 8)
+    assert not left.any and left.biased == ["delta"]
+    rng = np.random.default_rng(6)
+    ho = evaluate_heldout(
+        {"start_noise": 1.6},
+        {"delta": np.full(60, 1.0)},
+        {"start_noise": {"delta": 1.0 - rng.normal(1.0, 0.3, 60)}},
+        {"start_noise": left},
+        rng,
+        alpha=0.05,
+    )
+    assert ho[0].significant and not ho[0].explains
+    v = decide(_gap(1.5, 9), ho, "R", rng, 0.05)
+    assert v.kind == "unexplained" and v.effects == {}
+    assert "systematic residual in delta" in v.text
+
+
 def test_two_equally_good_effects_are_ambiguous():
     rng = np.random.default_rng(5)
     d = rng.normal(1.0, 0.3, 60)

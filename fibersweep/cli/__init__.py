@@ -1,0 +1,43 @@
+"""The ``fibersweep`` command line (typer). The only package that prints or exits.
+
+Library errors map to exit codes here: bad input (:class:`InputError`, including
+config errors) exits 2, a failed computation (:class:`FibersweepError`) exits 1.
+
+Layout: :mod:`._app` holds the ``app`` and the shared helpers; one module per
+concept adds its commands to it: :mod:`.flow` (flow), :mod:`.fiber` (simulate),
+:mod:`.sweep` (run, classify, plot-phase), :mod:`.discrepancy` (synth, discrepancy).
+"""
+
+from fibersweep.cli._app import (
+    ConfigArg,
+    Verbose,
+    _errors,
+    _load,
+    _setup_logging,
+    app,
+    main,
+)
+
+# Imported to register their commands on ``app``. The import order is the order of
+# the commands in ``fibersweep --help``, so keep it (and keep isort off it).
+# isort: off
+from fibersweep.cli import flow
+from fibersweep.cli import fiber
+from fibersweep.cli import sweep
+from fibersweep.cli import discrepancy
+
+# isort: on
+
+__all__ = [
+    "ConfigArg",
+    "Verbose",
+    "_errors",
+    "_load",
+    "_setup_logging",
+    "app",
+    "discrepancy",
+    "fiber",
+    "flow",
+    "main",
+    "sweep",
+]

@@ -1,0 +1,5 @@
+"""``python -m fibersweep.cli``: run the command line."""
+
+from fibersweep.cli import app
+
+app()

@@ -1,0 +1,59 @@
+"""The typer ``app`` and the helpers every command module shares.
+
+Command modules import from here, not from the package ``__init__``, so that the
+package can import them (to register their commands) without an import cycle.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from fibersweep.errors import FibersweepError, InputError
+
+app = typer.Typer(
+    name="fibersweep",
+    help="Parameter sweeps of rigid fibers meeting a triangular pillar in a shallow channel.",
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    add_completion=False,
+)
+
+ConfigArg = Annotated[Path, typer.Argument(help="YAML config file.", show_default=False)]
+Verbose = Annotated[bool, typer.Option("--verbose", "-v", help="Log progress details.")]
+
+
+@contextmanager
+def _errors() -> Iterator[None]:
+    """Turn library errors into a message on stderr and an exit code."""
+    try:
+        yield
+    except InputError as exc:
+        typer.secho(f"error: {exc}", err=True, fg=typer.colors.RED)
+        raise typer.Exit(2) from None
+    except FibersweepError as exc:
+        typer.secho(f"failed: {exc}", err=True, fg=typer.colors.RED)
+        raise typer.Exit(1) from None
+
+
+def _setup_logging(verbose: bool) -> None:
+    logging.basicConfig(
+        level=logging.INFO if verbose else logging.WARNING,
+        format="%(asctime)s %(name)s %(levelname)s: %(message)s",
+    )
+
+
+def _load(path: Path):
+    from fibersweep.config import load_config
+
+    return load_config(path)
+
+
+@app.callback()
+def main() -> None:
+    """fibersweep: LBM flow once, many fiber runs, phase diagrams."""

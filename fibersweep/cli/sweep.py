@@ -1,0 +1,250 @@
+"""The sweep commands (issue 4/5): ``run``, ``classify`` and ``plot-phase``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from fibersweep.cli._app import ConfigArg, Verbose, _errors, _load, _setup_logging, app
+
+
+def _fmt_s(s: float | None) -> str:
+    if s is None:
+        return "unknown"
+    if s < 120:
+        return f"{s:.0f} s"
+    return f"{s / 60:.1f} min" if s < 7200 else f"{s / 3600:.1f} h"
+
+
+def _with_run_overrides(cfg, **kw):
+    """Config with ``run`` options from the command line, validated like the file."""
+    from fibersweep.config import parse_config
+
+    over = {k: v for k, v in kw.items() if v is not None}
+    if not over:
+        return cfg
+    data = cfg.model_dump(mode="json")
+    data["run"].update(over)
+    return parse_config(data, source="command line")
+
+
+@app.command()
+def run(
+    config: ConfigArg,
+    workers: Annotated[
+        int | None, typer.Option(help="Worker processes (default: run.workers).")
+    ] = None,
+    resume: Annotated[
+        bool, typer.Option("--resume/--no-resume", help="Keep finished runs (default).")
+    ] = True,
+    retry_failed: Annotated[
+        bool, typer.Option("--retry-failed", help="Re-run only the failed runs.")
+    ] = False,
+    dry_run: Annotated[
+        bool, typer.Option("--dry-run", help="Show what is done and to do, and a time estimate.")
+    ] = False,
+    executor: Annotated[
+        str | None, typer.Option(help="local (process pool) or dask (default: run.executor).")
+    ] = None,
+    scheduler: Annotated[
+        str | None, typer.Option(help="Dask scheduler tcp://HOST:PORT (implies dask).")
+    ] = None,
+    output: Annotated[
+        Path | None, typer.Option("--output", "-o", help="Output directory (default: run.output).")
+    ] = None,
+    verbose: Verbose = False,
+) -> None:
+    """Run a sweep: flow field (cached), fiber runs across workers, Parquet results."""
+    _setup_logging(verbose)
+    with _errors():
+        cfg = _load(config)
+        if scheduler and executor is None:
+            executor = "dask"
+        cfg = _with_run_overrides(
+            cfg,
+            workers=workers,
+            executor=executor,
+            scheduler=scheduler,
+            output=None if output is None else str(output),
+        )
+        if dry_run:
+            _dry_run(cfg, resume, retry_failed)
+            return
+        failed = _run(cfg, resume, retry_failed)
+    if failed:
+        raise typer.Exit(1)
+
+
+def _print_plan(plan, workers: int) -> None:
+    typer.echo(
+        f"{plan.out}: {len(plan.tasks)} runs in the sweep; done {plan.done_ok} ok, "
+        f"{plan.done_failed} failed; to do now {len(plan.todo)}"
+        + (f"; {plan.kept_other} rows from earlier sweeps kept" if plan.kept_other else "")
+    )
+    if plan.fresh:
+        typer.echo("  --no-resume: existing results will be moved to a previous-* folder")
+    for note in plan.notes:
+        typer.secho(f"  note: {note}", fg=typer.colors.YELLOW)
+
+
+def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
+    from dataclasses import replace
+
+    from fibersweep.sweep.plan import plan_sweep
+    from fibersweep.sweep.runner import estimate_run_s, flow_key_for
+
+    key, cached = flow_key_for(cfg)
+    plan = plan_sweep(cfg, key, resume=resume, retry_failed=retry_failed)
+    _print_plan(plan, cfg.run.workers)
+    per_run = plan.mean_run_s
+    how = "mean of the finished runs"
+    if per_run is None and cached and plan.todo:
+        per_run = estimate_run_s(cfg, plan.todo)
+        how = "timed on one run of this sweep"
+    # same rule as SweepPlan.estimate_s: no more workers busy than runs to do
+    est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(cfg.run.workers)
+    typer.echo(
+        f"  flow field: {'cached' if cached else 'NOT cached (it is computed first)'}; "
+        f"estimate {_fmt_s(est)} on {cfg.run.workers} workers"
+        + (f" ({per_run:.2f} s per run, {how})" if per_run is not None else "")
+    )
+
+
+def _run(cfg, resume: bool, retry_failed: bool) -> bool:
+    """Run the sweep with a progress bar; True if any run of the table failed."""
+    from collections import Counter
+
+    from tqdm import tqdm
+
+    from fibersweep.sweep.runner import run_sweep
+
+    bar = None
+    counts: Counter = Counter()
+    short = {"Below": "B", "Above": "A", "Pole-vaulting": "PV", "Trapping": "T", "failed": "fail"}
+
+    def on_plan(plan) -> None:
+        nonlocal bar
+        _print_plan(plan, cfg.run.workers)
+        if not plan.todo:
+            return
+        import sys
+
+        # On a terminal: a live bar; into a log file: a line every 10 s, not thousands.
+        every = 0.2 if sys.stderr.isatty() else 10.0
+        bar = tqdm(
+            total=len(plan.todo), unit="run", dynamic_ncols=True, smoothing=0.1, mininterval=every
+        )
+
+    def progress(row) -> None:
+        counts[row["class"] if row["status"] == "ok" else "failed"] += 1
+        if bar is not None:
+            shown = [k for k in short if counts[k]] + [k for k in counts if k not in short]
+            bar.set_postfix_str(
+                " ".join(f"{short.get(k, k or '?')}={counts[k]}" for k in shown), refresh=False
+            )
+            bar.update(1)
+
+    from fibersweep.sweep.runner import flow_key_for
+
+    key, cached = flow_key_for(cfg)
+    typer.echo(
+        f"flow field {key} ({cfg.flow.dx:g} µm grid): "
+        + ("cached" if cached else f"not cached, computing it once into {cfg.run.cache_dir} ...")
+    )
+    try:
+        summary = run_sweep(
+            cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan
+        )
+    except KeyboardInterrupt:
+        if bar is not None:
+            bar.close()
+        typer.secho(
+            f"interrupted: {sum(counts.values())} runs of this call are saved in "
+            f"{cfg.run.output}; run the same command again to resume",
+            err=True,
+            fg=typer.colors.YELLOW,
+        )
+        raise typer.Exit(130) from None
+    if bar is not None:
+        bar.close()
+    if summary.ran:
+        rate = summary.ran / summary.wall_s if summary.wall_s > 0 else 0.0
+        typer.echo(
+            f"ran {summary.ran} runs in {_fmt_s(summary.wall_s)} ({rate:.2f} runs/s) "
+            f"-> {summary.out}"
+        )
+    else:
+        typer.echo(f"nothing to run: every run of the sweep is in {summary.out}")
+    typer.echo(
+        "table: "
+        + ", ".join(f"{k} {v}" for k, v in summary.table_counts.items())
+        + f", failed {summary.failed}"
+    )
+    for line in summary.failures[:10]:
+        typer.secho(f"  failed {line}", err=True, fg=typer.colors.RED)
+    if summary.failed:
+        typer.secho(
+            f"{summary.failed} runs failed; re-run them with --retry-failed",
+            err=True,
+            fg=typer.colors.RED,
+        )
+    return summary.failed > 0
+
+
+@app.command()
+def classify(
+    results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
+    head_blocked_speed: Annotated[
+        float | None, typer.Option(help="Head blocked below this fraction of U_center.")
+    ] = None,
+    trap_time: Annotated[
+        float | None, typer.Option(help="In contact and stopped this long [s] -> Trapping.")
+    ] = None,
+    trap_speed: Annotated[
+        float | None, typer.Option(help="'Stopped': COM speed below this fraction of U_center.")
+    ] = None,
+    config: Annotated[
+        Path | None, typer.Option("--config", "-c", help="Take thresholds from this config.")
+    ] = None,
+    verbose: Verbose = False,
+) -> None:
+    """Re-classify stored trajectories with new thresholds (no simulation)."""
+    _setup_logging(verbose)
+    with _errors():
+        from fibersweep.sweep.reclassify import reclassify, thresholds_for
+
+        base = _load(config).fiber.classify if config is not None else None
+        th = thresholds_for(
+            results,
+            base,
+            head_blocked_speed=head_blocked_speed,
+            trap_time=trap_time,
+            trap_speed=trap_speed,
+        )
+        res = reclassify(results, th)
+    typer.echo(f"re-classified {res.n_runs} runs ({res.n_changed} changed) with {th}")
+    typer.echo(res.counts.to_string(index=False))
+    typer.echo(f"wrote {res.counts_path}")
+    for w in res.warnings:
+        typer.secho(f"warning: {w}", err=True, fg=typer.colors.YELLOW)
+
+
+@app.command("plot-phase")
+def plot_phase(
+    results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
+    out: Annotated[
+        Path | None, typer.Option("--out", "-o", help="Figure folder (default: RESULTS/figures).")
+    ] = None,
+    fmt: Annotated[str, typer.Option("--format", help="png, pdf or svg.")] = "png",
+    verbose: Verbose = False,
+) -> None:
+    """Phase diagram, δ map, contact map and δ distribution of a sweep."""
+    _setup_logging(verbose)
+    with _errors():
+        from fibersweep.plots.phase import plot_all
+
+        paths = plot_all(results, out, fmt)
+    for p in paths:
+        typer.echo(f"wrote {p}")
