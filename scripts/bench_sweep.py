@@ -3,12 +3,19 @@
 
 Reports, for the same tasks on the same cached flow field:
   * local pool, 1 worker and 2 workers: runs/s in steady state and the 1 -> 2 speed-up;
-  * Dask LocalCluster, 2 workers: runs/s and its overhead per run against the local pool;
+  * Dask LocalCluster, 2 workers, once per --chunk-size (runs per Dask task; default 1 and
+    auto): runs/s and its overhead per run against the local pool;
   * start-up cost (spawn + open the field + Numba warm-up) of each executor;
   * an estimate of configs/paper.yaml (flow field excluded) from the measured per-run
-    times of a random sample of the paper's own sweep points.
+    times of a random sample of the paper's own sweep points (--paper-sample 0: skipped).
+
+Steady throughput is runs / (end of the last run - start of the first), from the workers'
+own timestamps: start-up is left out, gaps between runs and an idle tail at the end count.
+(Timestamps taken as results reach the client would favour chunks, whose runs arrive in
+bursts.)
 
 Usage:  python scripts/bench_sweep.py [--config configs/quick.yaml] [--paper-sample 60]
+                                      [--chunk-size 1 --chunk-size auto]
 """
 
 from __future__ import annotations
@@ -31,27 +38,44 @@ from fibersweep.sweep.worker import WorkerSpec, init_worker, run_task
 log = logging.getLogger("bench_sweep")
 
 
-def measure(name: str, workers: int, tasks, spec) -> dict:
-    """Run ``tasks``; steady throughput is measured from the first to the last result."""
-    ex = make_executor(name, workers)
-    t0 = time.perf_counter()
-    stamps, run_s, cpu_s = [], [], []
+def parse_chunk_size(text: str) -> int | None:
+    """'auto' -> None (the executor chooses), else a positive number of runs per Dask task."""
+    if text == "auto":
+        return None
+    size = int(text)
+    if size < 1:
+        raise argparse.ArgumentTypeError(f"chunk size must be >= 1 or 'auto', got {text}")
+    return size
+
+
+def measure(name: str, workers: int, tasks, spec, chunk_size: int | None = None) -> dict:
+    """Run ``tasks``; steady throughput from the workers' own run start and end times."""
+    kw = {"chunk_size": chunk_size} if name == "dask" else {}
+    ex = make_executor(name, workers, **kw)
+    t0 = time.time()
+    starts, ends, run_s, cpu_s = [], [], [], []
     for oc in ex.run(run_task, tasks, init_worker, (spec, name == "local")):
-        stamps.append(time.perf_counter())
         row = oc.value["row"] if oc.value else {}
-        run_s.append(float(row.get("wall_time") or 0.0))
-        cpu_s.append(float(row.get("cpu_time") or 0.0))
         if oc.error or row.get("status") != "ok":
             log.warning("%s: %s", oc.key, oc.error or row.get("reason"))
-    total = time.perf_counter() - t0
-    steady = (len(stamps) - 1) / (stamps[-1] - stamps[0]) if len(stamps) > 1 else float("nan")
+        if not row:
+            continue
+        run_s.append(float(row["wall_time"]))
+        cpu_s.append(float(row.get("cpu_time") or 0.0))
+        ends.append(float(row["finished_at"]))
+        starts.append(ends[-1] - run_s[-1])
+    total = time.time() - t0
+    label = f"{name} x{workers}"
+    if name == "dask":
+        label += f" c{chunk_size or 'auto'}"
     return {
-        "name": f"{name} x{workers}",
+        "name": label,
         "workers": workers,
-        "n": len(stamps),
+        "n": len(ends),
+        "tasks": getattr(ex, "chunks_submitted", len(ends)),
         "total_s": total,
-        "startup_s": stamps[0] - t0 - run_s[0],
-        "steady_rps": steady,
+        "startup_s": min(starts) - t0,
+        "steady_rps": len(ends) / (max(ends) - min(starts)),
         "mean_run_s": statistics.fmean(run_s),
         "mean_cpu_s": statistics.fmean(cpu_s),
     }
@@ -64,7 +88,14 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=2, help="copies of the sweep's tasks")
     ap.add_argument("--paper-sample", type=int, default=60)
     ap.add_argument("--skip-dask", action="store_true")
+    ap.add_argument(
+        "--chunk-size",
+        type=parse_chunk_size,
+        action="append",
+        help="runs per Dask task, or 'auto' (repeat to compare; default: 1 and auto)",
+    )
     args = ap.parse_args()
+    chunk_sizes = args.chunk_size or [1, None]
     logging.basicConfig(level=logging.WARNING)
 
     cfg = load_config(args.config)
@@ -80,47 +111,52 @@ def main() -> None:
     tasks = [replace(t, key=f"{t.key}-{k}") for k in range(args.repeat) for t in base]
     print(f"{args.config}: {len(tasks)} runs per executor, field dx = {cfg.flow.dx} µm")
 
+    load_before = os.getloadavg()[0]
     results = [measure("local", 1, tasks, spec), measure("local", 2, tasks, spec)]
     if not args.skip_dask:
-        results.append(measure("dask", 2, tasks, spec))
-    print(f"load average before: {os.getloadavg()[0]:.2f} (2 cores; > 2 means a shared machine)")
+        results += [measure("dask", 2, tasks, spec, c) for c in chunk_sizes]
+    print(f"load average before: {load_before:.2f} (2 cores; > 2 means a shared machine)")
     print(
-        f"{'executor':<10}{'runs':>6}{'total s':>10}{'start-up s':>12}{'runs/s':>9}"
+        f"{'executor':<16}{'runs':>6}{'tasks':>7}{'total s':>10}{'start-up s':>12}{'runs/s':>9}"
         f"{'wall/run':>10}{'cpu/run':>9}{'cpu use':>9}"
     )
     for r in results:
         # cpu use: fraction of each worker's time spent computing runs (1.0 = a free core each)
         use = r["steady_rps"] * r["mean_cpu_s"] / r["workers"]
         print(
-            f"{r['name']:<10}{r['n']:>6}{r['total_s']:>10.2f}{r['startup_s']:>12.2f}"
-            f"{r['steady_rps']:>9.2f}{r['mean_run_s']:>10.3f}{r['mean_cpu_s']:>9.3f}{use:>9.2f}"
+            f"{r['name']:<16}{r['n']:>6}{r['tasks']:>7}{r['total_s']:>10.2f}"
+            f"{r['startup_s']:>12.2f}{r['steady_rps']:>9.2f}{r['mean_run_s']:>10.3f}"
+            f"{r['mean_cpu_s']:>9.3f}{use:>9.2f}"
         )
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     l1, l2 = results[0], results[1]
     print(
         f"scaling 1 -> 2 workers (steady runs/s ratio): {l2['steady_rps'] / l1['steady_rps']:.2f}"
     )
-    if not args.skip_dask:
-        d = results[2]
-        per_run_local = 1.0 / l2["steady_rps"]
+    per_run_local = 1.0 / l2["steady_rps"]
+    for d in results[2:]:
         per_run_dask = 1.0 / d["steady_rps"]
         print(
-            "Dask overhead per run vs local pool (2 workers, steady state): "
+            f"Dask overhead per run vs local pool (2 workers, steady state), {d['name']}: "
             f"{100 * (per_run_dask - per_run_local) / per_run_local:+.1f} % "
-            f"({1e3 * (per_run_dask - per_run_local):+.1f} ms per run)"
+            f"({1e3 * (per_run_dask - per_run_local):+.1f} ms per run, {d['tasks']} Dask tasks)"
         )
+    if args.paper_sample > 0:
+        paper_estimate(args.paper, cfg, spec, info, args.paper_sample)
 
-    # configs/paper.yaml: time a random sample of its own points with 2 workers.
-    paper = load_config(args.paper)
+
+def paper_estimate(paper_path: str, cfg, spec, info, n_sample: int) -> None:
+    """configs/paper.yaml: time a random sample of its own points with 2 workers."""
+    paper = load_config(paper_path)
     starts = paper.sweep.starts()
     rng = random.Random(0)
-    sample = rng.sample(make_tasks(paper, info.key), min(args.paper_sample, len(starts)))
+    sample = rng.sample(make_tasks(paper, info.key), min(n_sample, len(starts)))
     pspec = replace(spec, fiber_json=paper.fiber.model_dump_json())
     p = measure("local", 2, sample, pspec)
     est = len(starts) / p["steady_rps"]
     ideal = len(starts) * p["mean_cpu_s"] / 2.0
     print(
-        f"{args.paper}: {len(starts)} runs; sample of {p['n']} at dx = {cfg.flow.dx} µm: "
+        f"{paper_path}: {len(starts)} runs; sample of {p['n']} at dx = {cfg.flow.dx} µm: "
         f"{p['mean_run_s']:.3f} s wall, {p['mean_cpu_s']:.3f} s CPU per run, "
         f"{p['steady_rps']:.2f} runs/s on 2 workers -> estimate {est / 60:.1f} min here, "
         f"{ideal / 60:.1f} min on 2 free cores (+ {p['startup_s']:.0f} s start-up), field excluded"

@@ -76,7 +76,7 @@ def discrepancy(
     output: Annotated[Path, typer.Option("--output", "-o", help="Report folder.")] = Path("report"),
     budget: Annotated[int | None, typer.Option(help="Most simulations in total.")] = None,
     seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
-    copies: Annotated[int, typer.Option(help="Jittered baseline copies per fiber.")] = 4,
+    copies: Annotated[int, typer.Option(help="Jittered baseline copies per fiber.")] = 8,
     effects: Annotated[
         str | None, typer.Option(help="Comma-separated effects to consider [all].")
     ] = None,

@@ -8,11 +8,11 @@ penalty for the extra parameter: an effect enters the model only if, out of
 sample, it beats the baseline by more than the noise floor allows. Then:
 
 - no significant improvement -> "unexplained gap in region R, observable O";
-- the best candidate leaves a significant gap (Holm over the observables),
-  or a significant systematic residual in any observable (Holm over every
-  component: a mean shift that a zero-mean spread such as start noise can
-  widen the copies around but never remove) -> "unexplained" (it is at most
-  a partial explanation);
+- the best candidate leaves a significant gap, of the score or of the
+  signed residual of any observable (one Holm family, as in
+  :func:`gap.assess_gap`; the signed test catches a mean shift that a
+  zero-mean spread such as start noise can widen the copies around but never
+  remove) -> "unexplained" (it is at most a partial explanation);
 - another candidate also improves significantly and leaves no significant gap
   -> "ambiguous between A and B" (both are consistent with the data);
 - otherwise the best candidate is named.
@@ -99,13 +99,8 @@ class Verdict:
 
 
 def adequate(gap: GapResult) -> bool:
-    """No significant gap and no significant systematic residual left."""
-    return not gap.any and not gap.biased
-
-
-def _leftover(gap: GapResult) -> list[str]:
-    """Observables still off, gaps first, then systematic residuals."""
-    return list(dict.fromkeys(gap.significant + gap.biased))
+    """No significant gap of either kind (score or systematic residual) left."""
+    return not gap.any
 
 
 def _boot_p(d: np.ndarray, rng: np.random.Generator, n_boot: int = 4000) -> float:
@@ -186,7 +181,7 @@ def decide(
             text=f"No observable differs from the baseline beyond its noise floor "
             f"(Holm, alpha = {alpha:g}).",
         )
-    top_obs = gap.significant[0]
+    top_obs = gap.flagged[0]
     sig = [h for h in heldout if h.significant]
     if not sig:
         return Verdict(
@@ -200,7 +195,7 @@ def decide(
     best = max(sig, key=lambda h: h.improvement[0])
     if not best.explains:
         left = best.final or best.residual
-        rest = _leftover(left)
+        rest = left.flagged
         obs = rest[0] if rest else top_obs
         what = []
         if left.significant:

@@ -1,11 +1,16 @@
 """The gap between observations and a model ensemble, per observable, with its significance.
 
 Input is a value matrix per observable (column 0 observed, then the model's
-copies; see :mod:`fibersweep.discrepancy.scores`). For each observable the gap
-is tested with the permutation test of :mod:`fibersweep.discrepancy.stats`
-(noise floor = the model's own copies) and the p-values of all observables are
-Holm-corrected together. Descriptive measures (confusion matrix, Wasserstein
-distance of δ, mismatch rates, paired residuals) go to the report.
+copies; see :mod:`fibersweep.discrepancy.scores`). For each observable two
+permutation tests of :mod:`fibersweep.discrepancy.stats` (noise floor = the
+model's own copies) are run: the proper score (does the observation sit worse
+than a copy?) and the signed residual per component (is it shifted?). A shift
+that is small against the spread of the copies, e.g. every contact a few per
+cent slower, is seen by the signed test long before the score's; a spread is
+seen only by the score. All p-values of both kinds, over all observables, are
+Holm-corrected together: one family-wise error rate for "there is a gap".
+Descriptive measures (confusion matrix, Wasserstein distance of δ, mismatch
+rates, paired residuals) go to the report.
 """
 
 from __future__ import annotations
@@ -94,8 +99,9 @@ class ObservableGap:
     bias_z : tuple of float
         z-scores of the signed residual per component (per class for 'class').
     bias_p : tuple of float
-        Two-sided permutation p-values of those residuals (raw; see
-        :attr:`GapResult.biased` for the corrected decision).
+        Two-sided permutation p-values of those residuals (raw).
+    bias_p_holm : tuple of float
+        The same, Holm-adjusted in the family of all tests.
     """
 
     name: str
@@ -105,6 +111,7 @@ class ObservableGap:
     excess: tuple[float, float, float]
     bias_z: tuple[float, ...]
     bias_p: tuple[float, ...] = ()
+    bias_p_holm: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -125,32 +132,39 @@ class GapResult:
 
     @property
     def significant(self) -> list[str]:
-        """Observables with a significant gap, strongest first."""
+        """Observables whose score shows a significant gap, strongest first."""
         sig = [g for g in self.gaps.values() if g.significant]
         return [g.name for g in sorted(sig, key=lambda g: g.p_holm)]
-
-    @property
-    def any(self) -> bool:
-        return bool(self.significant)
 
     @property
     def biased(self) -> list[str]:
         """Observables with a significant systematic (signed) residual, strongest first.
 
-        Holm over every (observable, component) pair at ``alpha``. A mean shift
-        of the observations against the model's copies is what a zero-mean
-        spread (start noise, Brownian motion) cannot produce, so the adequacy
-        check of a fitted effect asks for none (see :mod:`.decide`).
+        A mean shift of the observations against the model's copies is also what
+        a zero-mean spread (start noise, Brownian motion) cannot produce.
         """
-        pairs = [(g.name, p) for g in self.gaps.values() for p in g.bias_p]
-        if not pairs:
-            return []
-        adj = holm([p for _, p in pairs])
-        best: dict[str, float] = {}
-        for (name, _), pa in zip(pairs, adj, strict=True):
-            if pa <= self.alpha:
-                best[name] = min(best.get(name, 1.0), float(pa))
+        best = {
+            g.name: min(g.bias_p_holm)
+            for g in self.gaps.values()
+            if g.bias_p_holm and min(g.bias_p_holm) <= self.alpha
+        }
         return sorted(best, key=best.__getitem__)
+
+    @property
+    def flagged(self) -> list[str]:
+        """Observables with a significant gap of either kind, strongest first."""
+        p = {}
+        for g in self.gaps.values():
+            cands = [g.p_holm] if g.significant else []
+            cands += [q for q in g.bias_p_holm if q <= self.alpha]
+            if cands:
+                p[g.name] = min(cands)
+        return sorted(p, key=p.__getitem__)
+
+    @property
+    def any(self) -> bool:
+        """Whether any test of the family rejects."""
+        return bool(self.flagged)
 
 
 def assess_gap(
@@ -183,10 +197,17 @@ def assess_gap(
             permutation_test(R[:, :, c], rng, n_perm=min(n_perm, 1999), two_sided=True)
             for c in range(R.shape[2])
         ]
-    p = np.array([tests[n].p_value for n in names])
-    p_adj = holm(p) if len(p) else p
+    # one Holm family: the score test of every observable, then its residual components
+    p = [tests[n].p_value for n in names]
+    for n in names:
+        p += [t.p_value if t.n > 0 else 1.0 for t in biases[n]]
+    p_adj = holm(np.array(p)) if p else np.array([])
     gaps = {}
+    at = len(names)
     for k, name in enumerate(names):
+        nb = len(biases[name])
+        b_adj = tuple(float(x) for x in p_adj[at : at + nb])
+        at += nb
         gaps[name] = ObservableGap(
             name=name,
             test=tests[name],
@@ -195,6 +216,7 @@ def assess_gap(
             excess=bootstrap_mean_ci(per_fiber[name], rng, n_boot=n_boot),
             bias_z=tuple(t.z for t in biases[name]),
             bias_p=tuple(t.p_value for t in biases[name]),
+            bias_p_holm=b_adj,
         )
     return GapResult(gaps=gaps, alpha=alpha, per_fiber=per_fiber)
 

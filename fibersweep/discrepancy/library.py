@@ -51,7 +51,8 @@ LIBRARY: dict[str, Candidate] = {
         Candidate("friction", 0.0, 1.0, (0.5,), 0.4, "Coulomb coefficient on the pillar"),
         Candidate("pillar_hydro", 0.0, 3.0, (1.0,), 0.5, "multiplier on the Faxén pillar drag"),
         Candidate("off_midplane", 0.0, 0.35, (0.25,), 0.15, "offset from the midplane / depth"),
-        Candidate("brownian", 0.0, 2.0e4, (1.0e4,), 1.0, "multiplier on kT at 295 K"),
+        # 1e3 x kT: rotational diffusion of ~25° over a ~1 s pass, already extreme
+        Candidate("brownian", 0.0, 3.0e3, (1.0e3,), 1.0, "multiplier on kT at 295 K"),
         Candidate("inlet_speed", -0.3, 0.3, (-0.15, 0.15), 0.1, "relative speed error"),
         Candidate("start_noise", 0.0, 5.0, (3.0,), 2.0, "start noise / reference noise"),
         Candidate("pillar_scale", -0.2, 0.2, (-0.1, 0.1), 0.08, "relative pillar size error"),

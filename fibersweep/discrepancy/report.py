@@ -72,6 +72,7 @@ def _gap_dict(g: GapResult | None) -> dict[str, Any]:
             "n": o.test.n,
             "bias_z": list(o.bias_z),
             "bias_p": list(o.bias_p),
+            "bias_p_holm": list(o.bias_p_holm),
             "systematic": name in biased,
         }
         for name, o in g.gaps.items()

@@ -80,10 +80,10 @@ def test_systematic_residual_test_is_calibrated():
 
 def test_spread_that_only_hides_a_shift_is_unexplained():
     # A widened model (copies sd 2) around observations shifted by 0.8 sd: the score
-    # test no longer sees a gap, the signed residual does. Zero-mean noise cannot
+    # test no longer sees a gap, the signed residual (same Holm family) does. Zero-mean noise cannot
     # explain a shift: the verdict must not name the spread effect.
     left = _spread_gap(0.8, 2.0, 8)
-    assert not left.any and left.biased == ["delta"]
+    assert not left.significant and left.biased == ["delta"] and left.any
     rng = np.random.default_rng(6)
     ho = evaluate_heldout(
         {"start_noise": 1.6},

@@ -6,7 +6,7 @@ import pytest
 from _sweep_helpers import Job, init, square
 
 from fibersweep.errors import InputError, SolverError
-from fibersweep.sweep.executors import LocalExecutor, make_executor
+from fibersweep.sweep.executors import DaskExecutor, LocalExecutor, make_executor
 
 
 def _collect(ex, jobs, **kw):
@@ -100,3 +100,13 @@ def test_registry_fails_loudly():
         make_executor("slurm", 2)
     with pytest.raises(InputError, match="--scheduler needs --executor dask"):
         make_executor("local", 2, scheduler="tcp://127.0.0.1:8786")
+
+
+def test_registry_passes_chunk_size_to_dask_only():
+    """Building a DaskExecutor needs no Dask: it is imported when the executor runs."""
+    ex = make_executor("dask", 3, retries=1, chunk_size=4)
+    assert isinstance(ex, DaskExecutor)
+    assert (ex.workers, ex.retries, ex.chunk_size) == (3, 1, 4)
+    assert make_executor("dask", 2).chunk_size is None, "automatic by default"
+    with pytest.raises(InputError, match="chunk_size applies to the dask executor only"):
+        make_executor("local", 2, chunk_size=4)

@@ -1,7 +1,7 @@
 """The discrepancy workflow on data with a hidden effect (synth -> discrepancy), coarse grid.
 
 The fast tests (CI) use 24 fibers and a reduced plan; the slow ones use the
-default plan on 60 fibers and every library effect at a realistic magnitude.
+default plan (8 copies) on 60 fibers and every library effect at a realistic magnitude.
 The label is never given to the workflow: it only sees the synthesised table.
 """
 
@@ -77,6 +77,10 @@ REALISTIC = {
     "inlet_speed": 0.05,
     "start_noise": 3.0,
     "pillar_scale": 0.1,
+    # k = 1: the first-reflection (Faxén) drag itself; contact dwell +14-36 %. At k = 0.5
+    # (the source's "about 10 % slower") 60 fibers show only a t_pass shift, which a
+    # 2.5 % slower inlet explains as well: "ambiguous" (README, study).
+    "pillar_hydro": 1.0,
 }
 # Stated recovery tolerances (relative to the truth), from the fit resolution of
 # 30 fibers x 2 copies per fold: speed scales are read off every fiber's time,
@@ -86,43 +90,51 @@ TOLERANCE = {
     "inlet_speed": 0.3,
     "start_noise": 0.5,
     "pillar_scale": 0.5,
+    "pillar_hydro": 0.5,
 }
 
 
-# start_noise (a spread, not a shift): the out-of-sample improvement of a spread
-# model with 4 copies per fiber is too noisy at N = 60 (study: "unexplained").
-_SPREAD = pytest.mark.xfail(reason="spread effects need more copies than the default", strict=False)
+def _gap_shrink(res, name: str) -> tuple[float, float]:
+    """Out-of-sample (cross-fitted) gap before / after, summed over the flagged observables.
+
+    Each observable's mean excess score in units of the copies' score spread, or, where
+    that is larger, its largest signed-residual z divided by sqrt(n) (the same units:
+    a mean shift per fiber over its noise); both are 0 for a model as good as its copies.
+    """
+    h = next(h for h in res.heldout if h.name == name)
+    w = res.weights
+
+    def size(gap, o):
+        g = gap.gaps[o]
+        shift = max(abs(z) for z in g.bias_z) / np.sqrt(max(g.test.n, 1))
+        return max(w[o] * g.excess[0], shift)
+
+    flagged = res.gap.flagged
+    return sum(size(res.gap, o) for o in flagged), sum(size(h.residual, o) for o in flagged)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    "name", [pytest.param(n, marks=_SPREAD) if n == "start_noise" else n for n in REALISTIC]
-)
+@pytest.mark.parametrize("name", list(REALISTIC))
 def test_library_effect_is_named_and_recovered(coarse_field, name):
     value = REALISTIC[name]
     res = _run(coarse_field, {name: value}, 60, seed=21)
     assert res.verdict.kind == "named", res.verdict.text
     assert list(res.verdict.effects) == [name]
     assert res.verdict.effects[name] == pytest.approx(value, rel=TOLERANCE[name])
-    # the out-of-sample (cross-fitted) gap, summed over the observables that had one
-    # (in units of the copies' score spread), shrinks by at least half
-    h = next(h for h in res.heldout if h.name == name)
-    w = res.weights
-    before = sum(w[o] * res.gap.gaps[o].excess[0] for o in res.gap.significant)
-    after = sum(w[o] * h.residual.gaps[o].excess[0] for o in res.gap.significant)
-    assert after <= 0.5 * before
+    # the out-of-sample gap over the observables that had one shrinks by at least half
+    before, after = _gap_shrink(res, name)
+    assert after <= 0.5 * before, (before, after)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name, value", [("pillar_hydro", 0.2), ("brownian", 1.0)])
-def test_effects_below_the_noise_floor_name_nothing_else(coarse_field, name, value):
-    # At these magnitudes the model's observables move by ~1 % of their noise
-    # (pillar_hydro: dwell +1 %; Brownian at 295 K in glycerol: < 0.1 µm): the
-    # honest answer is "no significant gap"; any name must be the true one.
-    v = _run(coarse_field, {name: value}, 60, seed=61).verdict
+def test_brownian_motion_at_room_temperature_is_below_the_noise_floor(coarse_field):
+    # Brownian motion at 295 K in the glycerol-ethanol mix moves a fiber by < 0.1 µm and
+    # < 0.5° over a pass: the honest answer is "no significant gap"; any name must be
+    # the true one.
+    v = _run(coarse_field, {"brownian": 1.0}, 60, seed=61).verdict
     assert v.kind in ("no significant gap", "named"), v.text
     if v.kind == "named":
-        assert list(v.effects) == [name]
+        assert list(v.effects) == ["brownian"]
 
 
 @pytest.mark.slow
@@ -134,17 +146,13 @@ def test_false_alarm_rate_over_seeds(coarse_field):
     assert all(v.kind != "named" for v in kinds)
 
 
-# Known failure (seed 41): a 3 deg bias of the reported angle is named start_noise = 1.6
-# (extra zero-mean start noise mimics a start bias at N = 60); seed 1 of the study
-# says "unexplained". Kept as a record until the library separates bias from spread.
-_BIAS = pytest.mark.xfail(reason="start_noise mimics a systematic start bias", strict=False)
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize("change", ["chi", pytest.param("theta_bias", marks=_BIAS)])
+@pytest.mark.parametrize("change", ["chi", "theta_bias"])
 def test_effect_outside_the_library_is_not_named(coarse_field, change):
     # a larger contact cutoff (chi 1.5 instead of 1.1), or reported angles 3 deg too
-    # small, are no library effect: never a name
+    # small, are no library effect: never a name. (Seed 41 with the angle bias once named
+    # start_noise = 1.6: extra zero-mean start noise widens the copies around a shifted
+    # theta_c; the signed-residual test in the adequacy check now catches the shift left.)
     if change == "chi":
         fiber = FiberSettings(contact=ContactSettings(chi=1.5))
         res = _run(coarse_field, {}, 60, seed=41, fiber_truth=fiber)
