@@ -22,6 +22,8 @@ app = typer.Typer(
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     add_completion=False,
+    # help texts carry units in brackets ([deg], [s]): print them, do not parse them as markup
+    rich_markup_mode=None,
 )
 
 ConfigArg = Annotated[Path, typer.Argument(help="YAML config file.", show_default=False)]

@@ -35,7 +35,7 @@ def synth(
     truth: Annotated[
         Path | None, typer.Option(help="Truth file [OUTPUT with suffix .truth.json].")
     ] = None,
-    workers: Annotated[int | None, typer.Option(help="Worker processes [run.workers].")] = None,
+    workers: Annotated[int | None, typer.Option(help="Worker processes (default: run.workers).")] = None,
     verbose: Verbose = False,
 ) -> None:
     """Measured-like fibers from the model with hidden effects and measurement noise.
@@ -78,13 +78,13 @@ def discrepancy(
     seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
     copies: Annotated[int, typer.Option(help="Jittered baseline copies per fiber.")] = 8,
     effects: Annotated[
-        str | None, typer.Option(help="Comma-separated effects to consider [all].")
+        str | None, typer.Option(help="Comma-separated effects to consider (default: all).")
     ] = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
     trajectories: Annotated[
         Path | None, typer.Option(help="Optional measured trajectories table.")
     ] = None,
-    workers: Annotated[int | None, typer.Option(help="Worker processes [run.workers].")] = None,
+    workers: Annotated[int | None, typer.Option(help="Worker processes (default: run.workers).")] = None,
     verbose: Verbose = False,
 ) -> None:
     """Where the model disagrees with MEASURED, which effect explains it, and the gap left."""

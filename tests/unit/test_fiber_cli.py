@@ -48,3 +48,14 @@ def test_simulate_reversible(tmp_path, flow_cache_dir, coarse_field):
     )
     assert res.exit_code == 0, res.output
     assert "class: Above" in res.output and "reversed flow: returns within" in res.output
+
+
+def test_help_texts_keep_their_units():
+    # units are written in brackets ([deg], [s]); the help must print them, not eat them
+    # as markup
+    sim = CliRunner().invoke(app, ["simulate", "--help"], terminal_width=200)
+    cls = CliRunner().invoke(app, ["classify", "--help"], terminal_width=200)
+    dis = CliRunner().invoke(app, ["discrepancy", "--help"], terminal_width=200)
+    assert "Start angle from +x [deg]." in sim.output
+    assert "stopped this long [s]" in cls.output
+    assert "(default: all)" in dis.output
