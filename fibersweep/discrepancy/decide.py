@@ -103,6 +103,11 @@ def adequate(gap: GapResult) -> bool:
     return not gap.any
 
 
+def _where(region: str) -> str:
+    """'in <region>' for the verdict sentence ('everywhere' as is)."""
+    return region if region in ("", "everywhere") else f"in {region}"
+
+
 def _boot_p(d: np.ndarray, rng: np.random.Generator, n_boot: int = 4000) -> float:
     """One-sided bootstrap p-value of mean(d) <= 0."""
     d = d[np.isfinite(d)]
@@ -189,7 +194,7 @@ def decide(
             {},
             top_obs,
             region,
-            f"Unexplained gap in {region}, observable {top_obs}: no effect of the library "
+            f"Unexplained gap {_where(region)}, observable {top_obs}: no effect of the library "
             "improves the held-out fibers significantly.",
         )
     best = max(sig, key=lambda h: h.improvement[0])
@@ -207,7 +212,7 @@ def decide(
             {},
             obs,
             region,
-            f"Unexplained gap in {region}, observable {obs}: the best effect, "
+            f"Unexplained gap {_where(region)}, observable {obs}: the best effect, "
             f"{best.name} = {best.value:.4g}, improves the held-out fibers but leaves "
             f"{' and '.join(what) or 'a significant gap'}.",
         )
