@@ -35,7 +35,9 @@ def synth(
     truth: Annotated[
         Path | None, typer.Option(help="Truth file [OUTPUT with suffix .truth.json].")
     ] = None,
-    workers: Annotated[int | None, typer.Option(help="Worker processes (default: run.workers).")] = None,
+    workers: Annotated[
+        int | None, typer.Option(help="Worker processes (default: run.workers).")
+    ] = None,
     verbose: Verbose = False,
 ) -> None:
     """Measured-like fibers from the model with hidden effects and measurement noise.
@@ -84,7 +86,9 @@ def discrepancy(
     trajectories: Annotated[
         Path | None, typer.Option(help="Optional measured trajectories table.")
     ] = None,
-    workers: Annotated[int | None, typer.Option(help="Worker processes (default: run.workers).")] = None,
+    workers: Annotated[
+        int | None, typer.Option(help="Worker processes (default: run.workers).")
+    ] = None,
     verbose: Verbose = False,
 ) -> None:
     """Where the model disagrees with MEASURED, which effect explains it, and the gap left."""
