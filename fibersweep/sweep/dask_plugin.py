@@ -13,13 +13,15 @@ from typing import Any
 
 from distributed.diagnostics.plugin import WorkerPlugin
 
+from fibersweep.sweep.executor_base import guarded_init
+
 __all__ = ["InitPlugin"]
 
 
 class InitPlugin(WorkerPlugin):
     """Calls ``initializer(*initargs)`` in every worker process when it starts.
 
-    Errors are kept (see :func:`~fibersweep.sweep.executors.guarded_init`) and
+    Errors are kept (see :func:`~fibersweep.sweep.executor_base.guarded_init`) and
     reported by the first task, which stops the sweep with the reason.
 
     Parameters
@@ -37,6 +39,4 @@ class InitPlugin(WorkerPlugin):
         self.initargs = initargs
 
     def setup(self, worker: Any) -> None:  # noqa: D102 (WorkerPlugin API)
-        from fibersweep.sweep.executors import guarded_init
-
         guarded_init(self.initializer, self.initargs)

@@ -10,7 +10,8 @@ import pytest
 from _sweep_helpers import Job, init, square
 
 from fibersweep.errors import InputError, SolverError
-from fibersweep.sweep.executors import DaskExecutor, LocalExecutor, chunk_sizes
+from fibersweep.sweep.dask_executor import DaskExecutor, chunk_sizes
+from fibersweep.sweep.local_executor import LocalExecutor
 
 # chunk_sizes is pure: its tests need no Dask.
 

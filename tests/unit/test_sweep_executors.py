@@ -110,3 +110,32 @@ def test_registry_passes_chunk_size_to_dask_only():
     assert make_executor("dask", 2).chunk_size is None, "automatic by default"
     with pytest.raises(InputError, match="chunk_size applies to the dask executor only"):
         make_executor("local", 2, chunk_size=4)
+
+
+def test_public_names_stay_importable_from_executors():
+    """The split modules' names are the very objects ``executors`` re-exports."""
+    import pickle
+
+    from fibersweep.sweep import dask_executor, executor_base, executors, local_executor
+
+    homes = {
+        executor_base: ["Executor", "Outcome", "WorkerSetupError", "guarded_call", "guarded_init"],
+        local_executor: ["LocalExecutor"],
+        dask_executor: ["DaskExecutor", "chunk_sizes", "run_chunk"],
+    }
+    for module, names in homes.items():
+        for name in names:
+            assert name in executors.__all__
+            assert getattr(executors, name) is getattr(module, name)
+    # Sent to worker processes by reference: they must stay top-level and picklable.
+    for fn in (executors.guarded_init, executors.guarded_call, executors.run_chunk):
+        assert pickle.loads(pickle.dumps(fn)) is fn
+
+
+def test_importing_executors_needs_no_dask():
+    import subprocess
+    import sys
+
+    code = "import sys, fibersweep.sweep.executors; print('dask' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False", "Dask is an optional extra: import it only to run"

@@ -1,0 +1,157 @@
+"""Local executor: a pool of spawned processes that survives its workers' crashes.
+
+When a worker dies the pool breaks (``BrokenProcessPool``); the tasks that were
+in flight get a strike and are re-run one at a time in a fresh pool, so an
+innocent task is never blamed for a neighbour's crash; a task that kills its
+worker more than ``retries`` times is reported as failed. See
+:mod:`fibersweep.sweep.executors` for the interface it shares with Dask.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing as mp
+from collections import defaultdict, deque
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from typing import Any
+
+from fibersweep.errors import InputError, SolverError
+from fibersweep.sweep.executor_base import (
+    Outcome,
+    _describe,
+    _Keyed,
+    _setup_failed,
+    guarded_call,
+    guarded_init,
+)
+
+__all__ = ["LocalExecutor"]
+
+log = logging.getLogger(__name__)
+
+
+class LocalExecutor:
+    """``concurrent.futures.ProcessPoolExecutor`` (spawned processes) with crash recovery.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes.
+    retries : int
+        Times a task may be caught in a worker crash before it is reported failed.
+    inflight_per_worker : int
+        Tasks queued per worker (small, so a crash touches few tasks).
+    """
+
+    def __init__(self, workers: int = 2, retries: int = 2, inflight_per_worker: int = 2) -> None:
+        if workers < 1:
+            raise InputError(f"workers must be >= 1, got {workers}")
+        self.workers = workers
+        self.retries = retries
+        self.cap = max(1, inflight_per_worker) * workers
+        self.pools_started = 0
+
+    def _pool(
+        self, initializer: Callable[..., None] | None, initargs: tuple
+    ) -> ProcessPoolExecutor:
+        self.pools_started += 1
+        # spawn: no inherited locks or threads from the parent (fork is unsafe with threads).
+        return ProcessPoolExecutor(
+            max_workers=self.workers,
+            mp_context=mp.get_context("spawn"),
+            initializer=guarded_init,
+            initargs=(initializer, initargs),
+        )
+
+    @staticmethod
+    def _stop(pool: ProcessPoolExecutor) -> None:
+        pool.shutdown(wait=False, cancel_futures=True)
+        terminate = getattr(pool, "terminate_workers", None)  # Python >= 3.14
+        if terminate is not None:
+            terminate()
+            return
+        for proc in list((getattr(pool, "_processes", None) or {}).values()):
+            if proc.is_alive():
+                proc.terminate()
+
+    def run(
+        self,
+        fn: Callable[[Any], Any],
+        tasks: Sequence[_Keyed],
+        initializer: Callable[..., None] | None = None,
+        initargs: tuple = (),
+    ) -> Iterator[Outcome]:
+        """Yield one :class:`Outcome` per task, in completion order."""
+        fresh: deque = deque(tasks)
+        suspects: deque = deque()  # in flight when a worker died: re-run alone
+        strikes: dict[str, int] = defaultdict(int)
+        barren = 0  # consecutive pools that broke without finishing anything
+        while fresh or suspects:
+            pool = self._pool(initializer, initargs)
+            inflight: dict[Future, Any] = {}
+            progressed = False
+            crashed: list[Any] = []
+            broken = False  # submit() found the pool already broken
+            try:
+                while (fresh or suspects or inflight) and not (crashed or broken):
+                    # A task leaves its queue only once submit() accepted it: a worker
+                    # that died since the last wait makes submit() raise, and the task,
+                    # which never started, stays queued for the next pool, without a strike.
+                    try:
+                        if suspects:
+                            if not inflight:
+                                inflight[pool.submit(guarded_call, fn, suspects[0])] = suspects[0]
+                                suspects.popleft()
+                        else:
+                            while fresh and len(inflight) < self.cap:
+                                inflight[pool.submit(guarded_call, fn, fresh[0])] = fresh[0]
+                                fresh.popleft()
+                    except BrokenProcessPool:
+                        broken = True
+                    if not inflight:
+                        break
+                    done, _ = wait(list(inflight), return_when=FIRST_COMPLETED)
+                    if broken or any(isinstance(f.exception(), BrokenProcessPool) for f in done):
+                        wait(list(inflight))  # the rest fail at once (or had finished)
+                        done = set(inflight)
+                    for f in done:
+                        t = inflight.pop(f)
+                        exc = f.exception()
+                        if isinstance(exc, BrokenProcessPool):
+                            crashed.append(t)
+                        elif exc is not None:
+                            _setup_failed(exc)
+                            yield Outcome(t.key, None, _describe(exc), strikes[t.key] + 1)
+                        else:
+                            progressed = True
+                            yield Outcome(t.key, f.result(), "", strikes[t.key] + 1)
+            finally:
+                self._stop(pool)
+            if not (crashed or broken):
+                continue
+            alone = len(crashed) == 1
+            barren = 0 if progressed else barren + 1
+            log.warning(
+                "a worker process died with %d task(s) in flight; restarting the pool",
+                len(crashed),
+            )
+            for t in crashed:
+                strikes[t.key] += 1
+                if strikes[t.key] > self.retries:
+                    why = "alone" if alone else f"with {len(crashed) - 1} other task(s)"
+                    yield Outcome(
+                        t.key,
+                        None,
+                        f"worker process died (BrokenProcessPool) {strikes[t.key]} times, "
+                        f"last {why}",
+                        strikes[t.key],
+                    )
+                else:
+                    suspects.append(t)
+            if barren > self.retries + 2:
+                raise SolverError(
+                    f"worker processes keep dying without finishing any task ({barren} pools in a "
+                    "row); is the worker set-up failing? Run with -v for worker logs."
+                )
