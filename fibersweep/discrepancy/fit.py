@@ -12,8 +12,9 @@ observations against ``fit_copies`` copies made with the effect on (common
 random numbers, so the baseline value 0 is one more point of the same
 curve): bounded Brent minimisation (:func:`scipy.optimize.minimize_scalar`)
 over the effect's interval (for a signed effect the half its signature
-points to) within a fixed number of simulated evaluations; the baseline value
-0 is always a candidate, so a fit never does worse than no effect.
+points to, unless one evaluation in the middle of the other half beats the
+baseline there) within a fixed number of simulated evaluations; the baseline
+value 0 is always a candidate, so a fit never does worse than no effect.
 """
 
 from __future__ import annotations
@@ -150,7 +151,8 @@ def fit_effect(
     base_copies : sequence of DataFrame
         The baseline copies 0..fit_copies-1 restricted to ``rows`` (the value 0).
     max_evals : int
-        Simulated evaluations allowed (each is len(rows) x fit_copies runs).
+        Simulated evaluations allowed (each is len(rows) x fit_copies runs); one
+        more for the side check of a signed effect.
     side : float
         For a signed effect, the sign of the best-matching probe (0: search both).
     bounds : (lo, hi), optional
@@ -177,14 +179,21 @@ def fit_effect(
         return seen[v]
 
     lo, hi = bounds if bounds is not None else (cand.lo, cand.hi)
+    brent_evals = max_evals
     if bounds is None and cand.signed and side != 0.0:
-        # the signature already told the sign: search that half only
+        # The signature suggests the sign; one evaluation in the middle of the other
+        # half checks it (a weak signature can point the wrong way), then Brent
+        # searches the better half with the evaluations it was given.
+        other = 0.5 * (cand.lo if side > 0 else cand.hi)
+        max_evals += 1  # read by loss() at call time
+        if loss(other) < seen[0.0]:
+            side = -side
         lo, hi = (0.0, cand.hi) if side > 0 else (cand.lo, 0.0)
     minimize_scalar(
         loss,
         bounds=(lo, hi),
         method="bounded",
-        options={"maxiter": max_evals, "xatol": 1e-3 * (cand.hi - cand.lo)},
+        options={"maxiter": brent_evals, "xatol": 1e-3 * (cand.hi - cand.lo)},
     )
     best = min(seen, key=lambda p: (seen[p], abs(p)))
     evals = tuple(sorted(seen.items()))

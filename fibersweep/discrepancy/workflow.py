@@ -125,7 +125,8 @@ class Plan:
         return {
             "baseline": n * self.copies,
             "probes": self.probes * half,
-            "fits": 2 * self.candidates * self.fit_evals * self.fit_copies * half,
+            # + 1: the side check of a signed effect (fit.fit_effect)
+            "fits": 2 * self.candidates * (self.fit_evals + 1) * self.fit_copies * half,
             "heldout": self.candidates * self.copies * n,
             "refits": self.refits * (self.fit_evals * self.fit_copies + self.copies) * n,
         }
