@@ -28,6 +28,7 @@ app = typer.Typer(
 
 ConfigArg = Annotated[Path, typer.Argument(help="YAML config file.", show_default=False)]
 Verbose = Annotated[bool, typer.Option("--verbose", "-v", help="Log progress details.")]
+Workers = Annotated[int | None, typer.Option(help="Worker processes (default: run.workers).")]
 
 
 @contextmanager

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from fibersweep.cli._app import ConfigArg, Verbose, _errors, _load, _setup_logging, app
+from fibersweep.cli._app import ConfigArg, Verbose, Workers, _errors, _load, _setup_logging, app
 
 
 def _sweep_box(cfg) -> dict[str, tuple[float, float]]:
@@ -35,9 +35,7 @@ def synth(
     truth: Annotated[
         Path | None, typer.Option(help="Truth file [OUTPUT with suffix .truth.json].")
     ] = None,
-    workers: Annotated[
-        int | None, typer.Option(help="Worker processes (default: run.workers).")
-    ] = None,
+    workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
     """Measured-like fibers from the model with hidden effects and measurement noise.
@@ -86,9 +84,7 @@ def discrepancy(
     trajectories: Annotated[
         Path | None, typer.Option(help="Optional measured trajectories table.")
     ] = None,
-    workers: Annotated[
-        int | None, typer.Option(help="Worker processes (default: run.workers).")
-    ] = None,
+    workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
     """Where the model disagrees with MEASURED, which effect explains it, and the gap left."""

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from fibersweep.cli._app import ConfigArg, Verbose, _errors, _load, _setup_logging, app
+from fibersweep.cli._app import ConfigArg, Verbose, Workers, _errors, _load, _setup_logging, app
 
 
 def _fmt_s(s: float | None) -> str:
@@ -33,9 +33,7 @@ def _with_run_overrides(cfg, **kw):
 @app.command()
 def run(
     config: ConfigArg,
-    workers: Annotated[
-        int | None, typer.Option(help="Worker processes (default: run.workers).")
-    ] = None,
+    workers: Workers = None,
     resume: Annotated[
         bool, typer.Option("--resume/--no-resume", help="Keep finished runs (default).")
     ] = True,
