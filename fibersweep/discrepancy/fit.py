@@ -159,6 +159,10 @@ def fit_effect(
         Search interval instead of the candidate's (e.g. around earlier fits).
     """
     k_fit = len(base_copies)
+    # The signature suggests the sign of a signed effect; one evaluation in the middle
+    # of the other half checks it (a weak signature can point the wrong way).
+    check_side = bounds is None and cand.signed and side != 0.0
+    limit = max_evals + int(check_side)
     seen: dict[float, float] = {
         0.0: combined_loss(value_matrices(observed, base_copies, observables), weights)
     }
@@ -168,7 +172,7 @@ def fit_effect(
         for u, lu in seen.items():  # avoid re-simulating (nearly) the same point
             if abs(u - v) <= 1e-9 * max(1.0, abs(v)):
                 return lu
-        if len(seen) - 1 >= max_evals:
+        if len(seen) - 1 >= limit:
             # Budget spent: this point is unknown; report the worst seen so Brent moves away.
             return max(seen.values())
         copies = [
@@ -179,21 +183,16 @@ def fit_effect(
         return seen[v]
 
     lo, hi = bounds if bounds is not None else (cand.lo, cand.hi)
-    brent_evals = max_evals
-    if bounds is None and cand.signed and side != 0.0:
-        # The signature suggests the sign; one evaluation in the middle of the other
-        # half checks it (a weak signature can point the wrong way), then Brent
-        # searches the better half with the evaluations it was given.
-        other = 0.5 * (cand.lo if side > 0 else cand.hi)
-        max_evals += 1  # read by loss() at call time
-        if loss(other) < seen[0.0]:
+    if check_side:
+        # Brent then searches the better half with the evaluations it was given.
+        if loss(0.5 * (cand.lo if side > 0 else cand.hi)) < seen[0.0]:
             side = -side
         lo, hi = (0.0, cand.hi) if side > 0 else (cand.lo, 0.0)
     minimize_scalar(
         loss,
         bounds=(lo, hi),
         method="bounded",
-        options={"maxiter": brent_evals, "xatol": 1e-3 * (cand.hi - cand.lo)},
+        options={"maxiter": max_evals, "xatol": 1e-3 * (cand.hi - cand.lo)},
     )
     best = min(seen, key=lambda p: (seen[p], abs(p)))
     evals = tuple(sorted(seen.items()))

@@ -25,7 +25,6 @@ from fibersweep.analysis.observables import (
 )
 from fibersweep.errors import InputError
 from fibersweep.fiber import record as R
-from fibersweep.fiber.effects import build_effects
 from fibersweep.fiber.mobility import body_mobility, fiber_offsets
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
 from fibersweep.fiber.rigid import integrate_rigid, seed_numba
@@ -183,7 +182,7 @@ def simulate(
             start=start, status="failed", reason=f"numerical error: {exc}", model=settings.model
         )
     result = _result(setup, rec, beads, code, time.perf_counter() - t_wall)
-    return build_effects(settings.effects).result(result, start)
+    return setup.effects.result(result, start)
 
 
 def simulate_reversible(

@@ -9,7 +9,7 @@ import numpy as np
 
 from fibersweep.errors import InputError
 from fibersweep.fiber.contact import Pillar, make_pillar, outline_distance
-from fibersweep.fiber.effects import DynamicsContext, DynamicsParams, build_effects
+from fibersweep.fiber.effects import DynamicsContext, DynamicsParams, EffectSet, build_effects
 from fibersweep.fiber.kparams import pack
 from fibersweep.fiber.mobility import fiber_offsets
 from fibersweep.fiber.result import FiberStart
@@ -41,6 +41,8 @@ class Setup:
     params : DynamicsParams
     u_center : float
         Signed centreline speed of the field [µm/s].
+    effects : EffectSet
+        The run's active effects (their ``result`` hook converts the report).
     """
 
     field: FlowField
@@ -53,6 +55,7 @@ class Setup:
     pillar: Pillar
     params: DynamicsParams
     u_center: float
+    effects: EffectSet
 
 
 def _finite(name: str, value: float) -> None:
@@ -181,6 +184,7 @@ def prepare(
         pillar,
         params,
         u_center,
+        effects,
     )
 
 
