@@ -234,11 +234,13 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
         ye = np.linspace(np.nanmin(y0), np.nanmax(y0) + 1e-9, 8)
         m, c = binned_map(x, y0, exc, xe, ye)
         lim = np.nanmax(np.abs(m)) if np.isfinite(m).any() else 1.0
-        im = ax.pcolormesh(xe, ye, m.T, cmap="RdBu_r", vmin=-lim, vmax=lim)
+        cmap = plt.get_cmap("RdBu_r").copy()
+        cmap.set_bad("0.85")  # bins without fibers: grey, not the white of "no excess"
+        im = ax.pcolormesh(xe, ye, np.ma.masked_invalid(m.T), cmap=cmap, vmin=-lim, vmax=lim)
         ax.set_xlabel(xl)
         ax.set_ylabel("y0 / h_obs")
         fig.colorbar(im, ax=ax, label="mean excess score (weighted)")
-    fig.suptitle("Where the measurement sits worse than the model's own copies")
+    fig.suptitle("Where the measurement sits worse than the model's own copies (grey: no fibers)")
     fig.tight_layout()
     save_figure(fig, out / "residual_map.png", dpi=110)
     made.append("residual_map.png")
