@@ -234,8 +234,8 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
         ye = np.linspace(np.nanmin(y0), np.nanmax(y0) + 1e-9, 8)
         m, c = binned_map(x, y0, exc, xe, ye)
         lim = np.nanmax(np.abs(m)) if np.isfinite(m).any() else 1.0
-        cmap = plt.get_cmap("RdBu_r").copy()
-        cmap.set_bad("0.85")  # bins without fibers: grey, not the white of "no excess"
+        # bins without fibers: grey, not the white of "no excess"
+        cmap = plt.get_cmap("RdBu_r").with_extremes(bad="0.85")
         im = ax.pcolormesh(xe, ye, np.ma.masked_invalid(m.T), cmap=cmap, vmin=-lim, vmax=lim)
         ax.set_xlabel(xl)
         ax.set_ylabel("y0 / h_obs")
