@@ -24,8 +24,10 @@ from pydantic import (
     ConfigDict,
     Discriminator,
     Field,
+    StrictFloat,
     Tag,
     ValidationError,
+    field_validator,
     model_validator,
 )
 
@@ -65,21 +67,42 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
+#: Most values one sweep axis may have (a range with a tiny step is refused before
+#: any array is made).
+MAX_AXIS_VALUES = 1_000_000
+#: Default limit on the number of sweep points (``run.max_points`` raises it).
+DEFAULT_MAX_POINTS = 200_000
+
+
 class RangeSpec(_Strict):
     """Inclusive range ``start, start+step, ... <= stop``."""
 
-    start: float
-    stop: float
-    step: float = Field(gt=0)
+    start: StrictFloat
+    stop: StrictFloat
+    step: StrictFloat = Field(gt=0)
 
     @model_validator(mode="after")
     def _not_empty(self) -> RangeSpec:
+        if not all(np.isfinite([self.start, self.stop, self.step])):
+            raise ValueError(
+                f"range bounds must be finite; got start {self.start}, stop {self.stop}, "
+                f"step {self.step}"
+            )
         if self.stop < self.start:
             raise ValueError(f"empty range: start {self.start} > stop {self.stop}")
+        if self.count() > MAX_AXIS_VALUES:
+            raise ValueError(
+                f"range has {self.count():,} values (more than {MAX_AXIS_VALUES:,}); "
+                "use a larger step"
+            )
         return self
 
+    def count(self) -> int:
+        """Number of values, computed without making them."""
+        return int(np.floor((self.stop - self.start) / self.step + 1e-9)) + 1
+
     def values(self) -> np.ndarray:
-        n = int(np.floor((self.stop - self.start) / self.step + 1e-9)) + 1
+        n = self.count()
         if n < 1:
             raise ValueError(f"empty range: start {self.start} > stop {self.stop}")
         return self.start + self.step * np.arange(n)
@@ -88,9 +111,13 @@ class RangeSpec(_Strict):
 class LinspaceSpec(_Strict):
     """``num`` evenly spaced values from ``start`` to ``stop`` inclusive."""
 
-    start: float
-    stop: float
-    num: int = Field(ge=1, le=100_000)
+    start: StrictFloat
+    stop: StrictFloat
+    num: int = Field(ge=1, le=100_000, strict=True)
+
+    def count(self) -> int:
+        """Number of values."""
+        return self.num
 
     def values(self) -> np.ndarray:
         return np.linspace(self.start, self.stop, self.num)
@@ -110,8 +137,8 @@ def _axis_kind(v: Any) -> str | None:
 
 
 Axis = Annotated[
-    Annotated[float, Tag("axis:number")]
-    | Annotated[list[float], Tag("axis:list")]
+    Annotated[StrictFloat, Tag("axis:number")]
+    | Annotated[list[StrictFloat], Tag("axis:list")]
     | Annotated[RangeSpec, Tag("axis:range")]
     | Annotated[LinspaceSpec, Tag("axis:linspace")],
     Discriminator(
@@ -122,6 +149,13 @@ Axis = Annotated[
         ),
     ),
 ]
+
+
+def axis_count(axis: Axis) -> int:
+    """Number of values of one sweep axis, without making them."""
+    if isinstance(axis, (RangeSpec, LinspaceSpec)):
+        return axis.count()
+    return len(axis) if isinstance(axis, (list, tuple)) else 1
 
 
 def axis_values(axis: Axis) -> np.ndarray:
@@ -143,17 +177,24 @@ class SweepSettings(_Strict):
     y0: Axis = Field(0.5, description="start lateral position from the base / h_obs")
     length: Axis = Field(1.0, description="fiber length / l_obs")
 
-    @model_validator(mode="after")
-    def _finite(self) -> SweepSettings:
-        for name in ("theta0", "y0", "length"):
-            v = axis_values(getattr(self, name))
-            if not np.all(np.isfinite(v)):
-                raise ValueError(f"{name}: values must be finite")
-            if len(v) == 0:
-                raise ValueError(f"{name}: no values")
-        if np.any(axis_values(self.length) <= 0):
-            raise ValueError("length: values must be positive")
-        return self
+    @field_validator("theta0", "y0", "length")
+    @classmethod
+    def _finite(cls, axis: Axis, info: Any) -> Axis:
+        # A field validator, so the error is reported at the axis's own line.
+        v = axis_values(axis)
+        if len(v) == 0:
+            raise ValueError("no values")
+        bad = v[~np.isfinite(v)]
+        if bad.size:
+            raise ValueError(f"values must be finite; got {_show(bad)}")
+        if info.field_name == "length" and np.any(v <= 0):
+            raise ValueError(f"lengths must be positive; got {_show(v[v <= 0])}")
+        return axis
+
+    @property
+    def size(self) -> int:
+        """Number of sweep points (product of the axis sizes), without making them."""
+        return axis_count(self.theta0) * axis_count(self.y0) * axis_count(self.length)
 
     def starts(self) -> list[FiberStart]:
         """Cartesian product of the axes, ordered length, y0, theta0."""
@@ -163,6 +204,12 @@ class SweepSettings(_Strict):
                 axis_values(self.length), axis_values(self.y0), axis_values(self.theta0)
             )
         ]
+
+
+def _show(values: np.ndarray, most: int = 3) -> str:
+    """A few offending values for an error message."""
+    shown = ", ".join(f"{x:g}" for x in values[:most])
+    return shown + (f" (and {values.size - most} more)" if values.size > most else "")
 
 
 class RunSettings(_Strict):
@@ -183,6 +230,11 @@ class RunSettings(_Strict):
         2, ge=0, description="re-runs of a task whose worker died (local pool and Dask)"
     )
     compact: bool = Field(True, description="merge part files into one at the end of a sweep")
+    max_points: int = Field(
+        DEFAULT_MAX_POINTS,
+        ge=1,
+        description="refuse sweeps with more points than this (raise it on purpose)",
+    )
 
     @model_validator(mode="after")
     def _scheduler_address(self) -> RunSettings:
@@ -200,6 +252,18 @@ class Config(_Strict):
     fiber: FiberSettings = FiberSettings()
     sweep: SweepSettings = SweepSettings()
     run: RunSettings = RunSettings()
+
+    @model_validator(mode="after")
+    def _size_within_limit(self) -> Config:
+        """Refuse huge sweeps at once, before any point is made (counted, not listed)."""
+        n = self.sweep.size
+        if n > self.run.max_points:
+            raise ValueError(
+                f"run.max_points: the sweep has {n:,} points, more than this limit "
+                f"({self.run.max_points:,}); use fewer points, or raise run.max_points "
+                "(or --max-points) if you mean it"
+            )
+        return self
 
     @model_validator(mode="after")
     def _starts_fit(self) -> Config:
@@ -236,25 +300,58 @@ class _Located:
     lines: dict[tuple, int]
 
 
+class _Loader(yaml.SafeLoader):
+    """Safe loader (no tags run) that reads ``3e-1`` and ``1e5`` as numbers, as YAML 1.2 does.
+
+    YAML 1.1 (PyYAML's default) needs a dot in a float, so ``y0: 3e-1`` was a string
+    while the same in a list was coerced: one rule for every number here.
+    """
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
 def _yaml_with_lines(text: str) -> _Located:
-    """Parse YAML and record the 1-based line of every key path."""
+    """Parse YAML and record the 1-based line of every key path.
+
+    Raises
+    ------
+    ConfigError
+        A key written twice in one mapping (YAML would silently keep the last).
+    """
     lines: dict[tuple, int] = {}
+    duplicates: list[str] = []
 
     def walk(node: yaml.Node, path: tuple) -> None:
         lines.setdefault(path, node.start_mark.line + 1)
         if isinstance(node, yaml.MappingNode):
+            first: dict[Any, int] = {}
             for k, v in node.value:
                 key = (*path, k.value)
-                lines[key] = k.start_mark.line + 1
+                line = k.start_mark.line + 1
+                if k.value in first:
+                    dotted = ".".join(str(p) for p in key)
+                    duplicates.append(
+                        f"{dotted}: key written twice (lines {first[k.value]} and {line}); keep one"
+                    )
+                    continue
+                first[k.value] = line
+                lines[key] = line
                 walk(v, key)
         elif isinstance(node, yaml.SequenceNode):
             for i, v in enumerate(node.value):
                 walk(v, (*path, i))
 
-    root = yaml.compose(text)
+    root = yaml.compose(text, Loader=_Loader)
     if root is not None:
         walk(root, ())
-    return _Located(yaml.safe_load(text), lines)
+    if duplicates:
+        raise ConfigError(duplicates)
+    return _Located(yaml.load(text, Loader=_Loader), lines)
 
 
 def _model_at(path: tuple) -> type[BaseModel] | None:
@@ -329,8 +426,11 @@ def parse_config(
         raise ConfigError(seen, source) from None
 
 
-def load_config(path: str | Path) -> Config:
+def load_config(path: str | Path, *, max_points: int | None = None) -> Config:
     """Read and validate a YAML config file.
+
+    ``max_points`` (the command line's ``--max-points``) replaces ``run.max_points``
+    before validation, so a large sweep can be allowed without editing the file.
 
     Raises
     ------
@@ -346,4 +446,10 @@ def load_config(path: str | Path) -> Config:
         located = _yaml_with_lines(text)
     except yaml.YAMLError as exc:
         raise ConfigError([f"invalid YAML: {exc}"], str(p)) from None
-    return parse_config(located.data, located.lines, str(p))
+    except ConfigError as exc:
+        raise ConfigError(exc.problems, str(p)) from None
+    data = located.data
+    if max_points is not None and isinstance(data, dict):
+        run = data.get("run") if isinstance(data.get("run"), dict) else {}
+        data = {**data, "run": {**run, "max_points": max_points}}
+    return parse_config(data, located.lines, str(p))

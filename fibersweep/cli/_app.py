@@ -51,10 +51,10 @@ def _setup_logging(verbose: bool) -> None:
     )
 
 
-def _load(path: Path):
+def _load(path: Path, max_points: int | None = None):
     from fibersweep.config import load_config
 
-    return load_config(path)
+    return load_config(path, max_points=max_points)
 
 
 @app.callback()

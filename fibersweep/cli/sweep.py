@@ -52,12 +52,16 @@ def run(
     output: Annotated[
         Path | None, typer.Option("--output", "-o", help="Output directory (default: run.output).")
     ] = None,
+    max_points: Annotated[
+        int | None,
+        typer.Option(help="Allow sweeps up to this many points (default: run.max_points)."),
+    ] = None,
     verbose: Verbose = False,
 ) -> None:
     """Run a sweep: flow field (cached), fiber runs across workers, Parquet results."""
     _setup_logging(verbose)
     with _errors():
-        cfg = _load(config)
+        cfg = _load(config, max_points=max_points)
         if scheduler and executor is None:
             executor = "dask"
         cfg = _with_run_overrides(
