@@ -224,7 +224,9 @@ class RunSettings(_Strict):
         32, ge=1, description="finished runs per Parquet part file (also flushed on exit)"
     )
     flush_seconds: float = Field(
-        30.0, gt=0, description="write a part at least this often while runs finish [s]"
+        5.0,
+        gt=0,
+        description="a finished run waits at most this long before it is written [s]",
     )
     retries: int = Field(
         2, ge=0, description="re-runs of a task whose worker died (local pool and Dask)"

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["FibersweepError", "InputError", "SolverError"]
+__all__ = ["FibersweepError", "InputError", "ResultsError", "SolverError", "Terminated"]
 
 
 class FibersweepError(Exception):
@@ -15,3 +15,18 @@ class InputError(FibersweepError, ValueError):
 
 class SolverError(FibersweepError, RuntimeError):
     """A computation that failed (divergence, NaN). CLI exit code 1."""
+
+
+class ResultsError(FibersweepError, OSError):
+    """Stored results that cannot be read or written (a broken part, a full disk). Exit 1.
+
+    The message names the file and the cause; nothing that was not read is deleted.
+    """
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM arrived: stop like Ctrl-C (finished runs saved, manifest 'interrupted').
+
+    A KeyboardInterrupt, so every clean-up path that handles Ctrl-C handles it too;
+    the CLI exits with 143 (128 + SIGTERM) instead of 130.
+    """

@@ -14,7 +14,7 @@ from typing import Annotated
 
 import typer
 
-from fibersweep.errors import FibersweepError, InputError
+from fibersweep.errors import FibersweepError, InputError, Terminated
 
 app = typer.Typer(
     name="fibersweep",
@@ -42,6 +42,30 @@ def _errors() -> Iterator[None]:
     except FibersweepError as exc:
         typer.secho(f"failed: {exc}", err=True, fg=typer.colors.RED)
         raise typer.Exit(1) from None
+    except OSError as exc:  # read-only folder, a file where a folder should be, disk full
+        from fibersweep.sweep.store import describe_os_error
+
+        typer.secho(f"failed: {describe_os_error(exc)}", err=True, fg=typer.colors.RED)
+        raise typer.Exit(1) from None
+
+
+@contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """Handle SIGTERM like Ctrl-C for the block: clean-up runs, then exit 143."""
+    import signal
+
+    def handler(signum: int, frame: object) -> None:
+        raise Terminated()
+
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread (e.g. called from a test runner thread)
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
 
 
 def _setup_logging(verbose: bool) -> None:

@@ -7,7 +7,17 @@ from typing import Annotated
 
 import typer
 
-from fibersweep.cli._app import ConfigArg, Verbose, Workers, _errors, _load, _setup_logging, app
+from fibersweep.cli._app import (
+    ConfigArg,
+    Verbose,
+    Workers,
+    _errors,
+    _load,
+    _setup_logging,
+    _sigterm_as_interrupt,
+    app,
+)
+from fibersweep.errors import Terminated
 
 
 def _fmt_s(s: float | None) -> str:
@@ -74,7 +84,8 @@ def run(
         if dry_run:
             _dry_run(cfg, resume, retry_failed)
             return
-        failed = _run(cfg, resume, retry_failed)
+        with _sigterm_as_interrupt():
+            failed = _run(cfg, resume, retry_failed)
     if failed:
         raise typer.Exit(1)
 
@@ -159,16 +170,17 @@ def _run(cfg, resume: bool, retry_failed: bool) -> bool:
         summary = run_sweep(
             cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan
         )
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         if bar is not None:
             bar.close()
+        why = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
         typer.secho(
-            f"interrupted: {sum(counts.values())} runs of this call are saved in "
+            f"{why}: {sum(counts.values())} runs of this call are saved in "
             f"{cfg.run.output}; run the same command again to resume",
             err=True,
             fg=typer.colors.YELLOW,
         )
-        raise typer.Exit(130) from None
+        raise typer.Exit(143 if isinstance(exc, Terminated) else 130) from None
     if bar is not None:
         bar.close()
     if summary.ran:

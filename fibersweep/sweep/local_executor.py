@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 import multiprocessing as mp
+import os
 from collections import defaultdict, deque
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -26,10 +27,17 @@ from fibersweep.sweep.executor_base import (
     guarded_call,
     guarded_init,
 )
+from fibersweep.sweep.lifeline import tie_to_parent
 
 __all__ = ["LocalExecutor"]
 
 log = logging.getLogger(__name__)
+
+
+def _pool_init(parent_pid: int, initializer: Callable[..., None] | None, initargs: tuple) -> None:
+    """Worker start: end with the parent (even on SIGKILL), then the guarded set-up."""
+    tie_to_parent(parent_pid)
+    guarded_init(initializer, initargs)
 
 
 class LocalExecutor:
@@ -61,8 +69,8 @@ class LocalExecutor:
         return ProcessPoolExecutor(
             max_workers=self.workers,
             mp_context=mp.get_context("spawn"),
-            initializer=guarded_init,
-            initargs=(initializer, initargs),
+            initializer=_pool_init,
+            initargs=(os.getpid(), initializer, initargs),
         )
 
     @staticmethod

@@ -19,7 +19,14 @@ from fibersweep.config import Config
 from fibersweep.errors import InputError
 from fibersweep.sweep.ids import diff_settings, fiber_result_settings, run_id
 from fibersweep.sweep.manifest import read_manifest
-from fibersweep.sweep.store import RUNS_DIR, TRAJ_DIR, read_runs
+from fibersweep.sweep.store import (
+    RUNS_DIR,
+    TRAJ_DIR,
+    quarantine,
+    read_runs,
+    trajectory_ids,
+    unreadable_parts,
+)
 from fibersweep.sweep.worker import SweepTask
 
 __all__ = ["SweepPlan", "make_tasks", "move_aside", "plan_sweep", "result_settings"]
@@ -92,6 +99,7 @@ def plan_sweep(
     *,
     resume: bool = True,
     retry_failed: bool = False,
+    repair: bool = False,
 ) -> SweepPlan:
     """Compare a config with its output directory and decide what to run.
 
@@ -105,6 +113,9 @@ def plan_sweep(
         aside by :func:`move_aside`, never deleted.
     retry_failed : bool
         Run only the points recorded as failed.
+    repair : bool
+        Move unreadable parts into a ``quarantine-*`` folder (their runs are then
+        to do). When False (a dry run) they are only left out and reported.
 
     Raises
     ------
@@ -114,9 +125,19 @@ def plan_sweep(
     out = Path(cfg.run.output)
     tasks = make_tasks(cfg, flow_key)
     manifest = read_manifest(out)
-    runs = read_runs(out)
-    have_results = len(runs) > 0
     notes: list[str] = []
+    bad = [p for p, _ in unreadable_parts(out)]
+    if bad and repair:
+        where = quarantine(out, bad)
+        notes.append(f"{len(bad)} unreadable part(s) moved to {where}; their runs are run again")
+        bad = []
+    elif bad:
+        notes.append(
+            f"{len(bad)} unreadable part(s) ({', '.join(p.name for p in bad)}): `fibersweep run` "
+            "moves them to a quarantine-* folder and runs their runs again"
+        )
+    runs = read_runs(out, skip=bad)
+    have_results = len(runs) > 0
     changes: list[str] = []
     if manifest is not None and "result_settings" in manifest:
         changes = diff_settings(manifest["result_settings"], result_settings(cfg, flow_key))
@@ -148,6 +169,15 @@ def plan_sweep(
     if fresh:
         runs = runs.iloc[0:0]
     status = dict(zip(runs["id"], runs["status"], strict=True))
+    if cfg.fiber.record.trajectories and (bad or any(out.glob(f"quarantine-*/{TRAJ_DIR}"))):
+        # A trajectory part was lost: its ids are unknown, so every ok run without a
+        # trajectory is run again (the new row and trajectory replace the old row).
+        have = trajectory_ids(out, skip=bad)
+        lost = [i for i, st in status.items() if st == "ok" and i not in have]
+        for i in lost:
+            del status[i]
+        if lost:
+            notes.append(f"{len(lost)} run(s) lost their trajectory and are run again")
     ids = {t.key for t in tasks}
     done_ok = sum(1 for t in tasks if status.get(t.key) == "ok")
     done_failed = sum(1 for t in tasks if status.get(t.key) == "failed")

@@ -14,6 +14,7 @@ from fibersweep.errors import InputError
 from fibersweep.fiber.result import CLASSES, Trajectory
 from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.flow.settings import FlowSettings
+from fibersweep.sweep.lock import output_lock
 from fibersweep.sweep.manifest import read_manifest, write_manifest
 from fibersweep.sweep.store import (
     RUNS_DIR,
@@ -122,6 +123,10 @@ def class_counts(runs: pd.DataFrame) -> pd.DataFrame:
 def reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     """Re-classify every stored trajectory and rewrite the runs table atomically.
 
+    Holds the output folder's lock (:mod:`fibersweep.sweep.lock`): a sweep
+    running there is never rewritten under its feet. Every part is read before
+    any is replaced; an unreadable one stops it with nothing changed.
+
     Runs without a stored trajectory keep their class (their count is logged);
     a run re-labelled Trapping gets δ = NaN (no displacement is defined).
 
@@ -130,9 +135,16 @@ def reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     InputError
         No results, or no trajectories were recorded.
     """
+    out = Path(out)
+    if not out.is_dir():
+        raise InputError(f"{out}: no sweep results here (no such folder)")
+    with output_lock(out, "classify"):
+        return _reclassify(out, thresholds)
+
+
+def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     from fibersweep.analysis.classify import classify
 
-    out = Path(out)
     man = read_manifest(out)
     runs = read_runs(out)
     if man is None or runs.empty:

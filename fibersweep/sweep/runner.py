@@ -16,11 +16,19 @@ from pathlib import Path
 from typing import Any
 
 from fibersweep.config import Config
+from fibersweep.errors import ResultsError
 from fibersweep.fiber.result import CLASSES
 from fibersweep.sweep.executors import make_executor
+from fibersweep.sweep.lock import output_lock
 from fibersweep.sweep.manifest import provenance, read_manifest, write_manifest
 from fibersweep.sweep.plan import SweepPlan, move_aside, plan_sweep, result_settings
-from fibersweep.sweep.store import PartWriter, clean_temporaries, compact, read_runs
+from fibersweep.sweep.store import (
+    PartWriter,
+    clean_temporaries,
+    compact,
+    describe_os_error,
+    read_runs,
+)
 from fibersweep.sweep.worker import SweepTask, WorkerSpec, failed_row, init_worker, run_task
 
 __all__ = [
@@ -100,7 +108,7 @@ def prepare(
 ) -> tuple[Any, Any, SweepPlan]:
     """Field, cache info and plan of a sweep (computes the field if it is not cached)."""
     fieldobj, info = flow_field_for(cfg)
-    plan = plan_sweep(cfg, info.key, resume=resume, retry_failed=retry_failed)
+    plan = plan_sweep(cfg, info.key, resume=resume, retry_failed=retry_failed, repair=True)
     return fieldobj, info, plan
 
 
@@ -145,12 +153,23 @@ def run_sweep(
         finished before it is on disk.
     """
     out = Path(cfg.run.output)
+    with output_lock(out, "run"):
+        return _run_locked(cfg, out, resume, retry_failed, progress, on_plan)
+
+
+def _run_locked(
+    cfg: Config,
+    out: Path,
+    resume: bool,
+    retry_failed: bool,
+    progress: Callable[[Mapping[str, Any]], None] | None,
+    on_plan: Callable[[SweepPlan], None] | None,
+) -> SweepSummary:
     fieldobj, info, plan = prepare(cfg, resume=resume, retry_failed=retry_failed)
     if on_plan is not None:
         on_plan(plan)
     if plan.fresh:
         move_aside(out)
-    out.mkdir(parents=True, exist_ok=True)
     clean_temporaries(out)
     prov = provenance(info.key)
     manifest = {
@@ -180,6 +199,7 @@ def run_sweep(
     t0 = time.perf_counter()
     state = "stopped"
     writer = PartWriter(out, meta, cfg.run.flush_every, cfg.run.flush_seconds)
+    writer.start_timer()
     try:
         if plan.todo:
             for oc in ex.run(run_task, plan.todo, init_worker, initargs):
@@ -196,31 +216,61 @@ def run_sweep(
                     summary.failures.append(f"{row['id']}: {row['reason']}")
                 if progress is not None:
                     progress(row)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # Ctrl-C, or SIGTERM (errors.Terminated)
         summary.interrupted = True
         state = "interrupted"
         raise
     else:
         state = "complete"
     finally:
-        writer.flush()
         summary.wall_s = time.perf_counter() - t0
-        if state == "complete" and cfg.run.compact:
-            compact(out, meta)
-        table = read_runs(out)
-        ok = table[table["status"] == "ok"]
-        summary.table_counts = {c: int((ok["class"] == c).sum()) for c in CLASSES}
-        other = int((~ok["class"].isin(CLASSES)).sum())
-        if other:
-            summary.table_counts["unclassified"] = other
-        summary.failed = int((table["status"] != "ok").sum())
-        manifest.update(
-            state=state,
-            finished=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-            counts=summary.table_counts,
-            failed=summary.failed,
-            rows=len(table),
-        )
-        write_manifest(out, manifest)
+        _finish(cfg, out, meta, manifest, writer, state, summary)
     log.info("sweep done: %d runs in %.1f s", summary.ran, summary.wall_s)
     return summary
+
+
+def _finish(
+    cfg: Config,
+    out: Path,
+    meta: dict[str, Any],
+    manifest: dict[str, Any],
+    writer: PartWriter,
+    state: str,
+    summary: SweepSummary,
+) -> None:
+    """Write what is left, compact, and record the outcome in the manifest.
+
+    Whatever fails here (a full disk) leaves the table readable: parts are atomic,
+    and runs that could not be written are reported by :class:`ResultsError`.
+    """
+    unsaved: ResultsError | None = None
+    try:
+        writer.close()
+    except ResultsError as exc:
+        unsaved, state = exc, "unsaved"
+    if state == "complete" and cfg.run.compact:
+        try:
+            compact(out, meta)
+        except OSError as exc:  # the parts stay; readers merge them
+            log.warning("parts not merged (%s)", describe_os_error(exc))
+    table = read_runs(out)
+    ok = table[table["status"] == "ok"]
+    summary.table_counts = {c: int((ok["class"] == c).sum()) for c in CLASSES}
+    other = int((~ok["class"].isin(CLASSES)).sum())
+    if other:
+        summary.table_counts["unclassified"] = other
+    summary.failed = int((table["status"] != "ok").sum())
+    manifest.update(
+        state=state,
+        finished=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        counts=summary.table_counts,
+        failed=summary.failed,
+        rows=len(table),
+        unsaved=writer.pending,
+    )
+    try:
+        write_manifest(out, manifest)
+    except OSError as exc:
+        log.error("manifest not updated (%s)", describe_os_error(exc))
+    if unsaved is not None:
+        raise unsaved

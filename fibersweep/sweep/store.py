@@ -19,6 +19,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import threading
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -27,7 +28,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
+
+from fibersweep.errors import ResultsError
 
 __all__ = [
     "RUN_COLUMNS",
@@ -36,11 +40,15 @@ __all__ = [
     "PartWriter",
     "clean_temporaries",
     "compact",
+    "describe_os_error",
     "list_parts",
     "part_name",
     "read_runs",
     "read_trajectories",
     "runs_table",
+    "quarantine",
+    "trajectory_ids",
+    "unreadable_parts",
     "write_table_atomic",
 ]
 
@@ -160,20 +168,79 @@ def _traj_table(run_id: str, cols: Mapping[str, np.ndarray]) -> pa.Table:
     return pa.table(data)
 
 
-def _read_parts(directory: Path, columns: list[str] | None = None) -> pa.Table | None:
-    tables = []
-    for p in list_parts(directory):
-        try:
-            tables.append(pq.read_table(p, columns=columns))
-        except (OSError, pa.ArrowInvalid) as exc:  # never expected: parts are atomic
-            log.warning("skipping unreadable part %s: %s", p, exc)
+def _read_part(path: Path, **kw: Any) -> pa.Table:
+    """One part, or :class:`ResultsError` naming it (never a silent skip)."""
+    try:
+        return pq.read_table(path, **kw)
+    except (OSError, pa.ArrowException) as exc:
+        raise ResultsError(
+            f"{path}: unreadable result part ({exc}); `fibersweep check {path.parent.parent}` "
+            "reports the folder, and `fibersweep run` on it moves the part aside and re-runs "
+            "its runs"
+        ) from None
+
+
+def _read_parts(
+    directory: Path, columns: list[str] | None = None, skip: frozenset[Path] = frozenset()
+) -> pa.Table | None:
+    tables = [_read_part(p, columns=columns) for p in list_parts(directory) if p not in skip]
     if not tables:
         return None
     return pa.concat_tables(tables, promote_options="permissive")
 
 
-def read_runs(out: Path) -> pd.DataFrame:
+def unreadable_parts(out: Path) -> list[tuple[Path, str]]:
+    """Parts of ``out`` that cannot be read, with the reason (runs read whole, trajectories' ids).
+
+    Returns
+    -------
+    list of (Path, str)
+    """
+    bad = []
+    for sub, cols in ((RUNS_DIR, None), (TRAJ_DIR, ["id"])):
+        for p in list_parts(Path(out) / sub):
+            try:
+                pq.read_table(p, columns=cols)
+            except (OSError, pa.ArrowException) as exc:
+                bad.append((p, str(exc)))
+    return bad
+
+
+def quarantine(out: Path, parts: Sequence[Path]) -> Path | None:
+    """Move ``parts`` into ``out/quarantine-<time>/<runs|trajectories>/`` (never delete).
+
+    Returns the quarantine folder, or None when there was nothing to move.
+    """
+    if not parts:
+        return None
+    dest = Path(out) / time.strftime("quarantine-%Y%m%dT%H%M%S", time.gmtime())
+    for p in parts:
+        target = dest / p.parent.name
+        target.mkdir(parents=True, exist_ok=True)
+        os.replace(p, target / p.name)
+        log.warning("moved unreadable part %s to %s", p, target)
+    return dest
+
+
+def trajectory_ids(out: Path, skip: Sequence[Path] = ()) -> set[str]:
+    """Ids that have a stored trajectory (parts in ``skip`` left out)."""
+    t = _read_parts(Path(out) / TRAJ_DIR, columns=["id"], skip=frozenset(skip))
+    return set() if t is None else set(pc.unique(t.column("id")).to_pylist())
+
+
+def read_runs(out: Path, skip: Sequence[Path] = ()) -> pd.DataFrame:
     """The runs table of an output directory, one row per id (the last written wins).
+
+    Parameters
+    ----------
+    out : Path
+    skip : sequence of Path
+        Parts to leave out (known unreadable ones, for a dry run's plan).
+
+    Raises
+    ------
+    ResultsError
+        A part cannot be read (named in the message).
 
     Returns
     -------
@@ -181,7 +248,7 @@ def read_runs(out: Path) -> pd.DataFrame:
         Columns RUN_COLUMNS (plus any extra ones), index 0..n-1; empty with those
         columns when nothing was written yet.
     """
-    t = _read_parts(Path(out) / RUNS_DIR)
+    t = _read_parts(Path(out) / RUNS_DIR, skip=frozenset(skip))
     if t is None:
         return runs_table([]).to_pandas()
     df = t.to_pandas()
@@ -198,7 +265,7 @@ def read_trajectories(out: Path, ids: Sequence[str] | None = None) -> pd.DataFra
     frames = []
     for p in list_parts(d):
         kw = {"filters": [("id", "in", list(ids))]} if ids is not None else {}
-        frames.append((p, pq.read_table(p, **kw).to_pandas()))
+        frames.append((p, _read_part(p, **kw).to_pandas()))
     if not frames:
         return pd.DataFrame(columns=["id", "sample"])
     # Last part holding an id wins, whole trajectory at a time.
@@ -214,6 +281,12 @@ def read_trajectories(out: Path, ids: Sequence[str] | None = None) -> pd.DataFra
 class PartWriter:
     """Buffers finished runs and writes them as atomic Parquet parts.
 
+    Parts are written after ``flush_every`` runs or once the oldest queued run has
+    waited ``flush_seconds`` (a background timer checks every second, so a kill
+    costs at most that much finished work even when runs are slow). A write that
+    fails (disk full, folder gone) keeps the runs queued and is retried at the next
+    flush; :meth:`close` raises :class:`ResultsError` if some still cannot be saved.
+
     Parameters
     ----------
     out : Path
@@ -223,7 +296,7 @@ class PartWriter:
     flush_every : int
         Write a part after this many runs.
     flush_seconds : float
-        ... or when this long has passed since the last write.
+        ... or when a queued run has waited this long [s].
     """
 
     def __init__(
@@ -231,7 +304,7 @@ class PartWriter:
         out: Path,
         meta: Mapping[str, Any] | None = None,
         flush_every: int = 32,
-        flush_seconds: float = 30.0,
+        flush_seconds: float = 5.0,
     ) -> None:
         self.out = Path(out)
         self.meta = dict(meta or {})
@@ -239,40 +312,115 @@ class PartWriter:
         self.flush_seconds = flush_seconds
         self._rows: list[dict[str, Any]] = []
         self._traj: list[pa.Table] = []
-        self._last = time.monotonic()
+        self._oldest: float | None = None
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._timer: threading.Thread | None = None
+        self.error: OSError | None = None
         self.parts_written = 0
         self.rows_written = 0
 
+    @property
+    def pending(self) -> int:
+        """Finished runs not yet on disk."""
+        return len(self._rows)
+
+    def start_timer(self) -> None:
+        """Flush in the background once a queued run is ``flush_seconds`` old."""
+        if self._timer is None:
+            self._timer = threading.Thread(target=self._tick, name="part-writer", daemon=True)
+            self._timer.start()
+
+    def _tick(self) -> None:
+        while not self._stop.wait(min(1.0, self.flush_seconds)):
+            if self._due():
+                self.flush()
+
+    def _due(self) -> bool:
+        return self._oldest is not None and time.monotonic() - self._oldest >= self.flush_seconds
+
     def add(self, row: Mapping[str, Any], trajectory: Mapping[str, np.ndarray] | None) -> None:
         """Queue one run's row (must hold ``id``) and its trajectory columns, if any."""
-        self._rows.append(dict(row))
-        if trajectory:
-            self._traj.append(_traj_table(str(row["id"]), trajectory))
-        if (
-            len(self._rows) >= self.flush_every
-            or time.monotonic() - self._last >= self.flush_seconds
-        ):
+        with self._lock:
+            self._rows.append(dict(row))
+            if trajectory:
+                self._traj.append(_traj_table(str(row["id"]), trajectory))
+            if self._oldest is None:
+                self._oldest = time.monotonic()
+        if len(self._rows) >= self.flush_every or self._due():
             self.flush()
 
-    def flush(self) -> None:
-        """Write what is queued (trajectories first, so a run row implies its trajectory)."""
-        if self._traj:
-            t = pa.concat_tables(self._traj, promote_options="permissive")
-            write_table_atomic(_with_meta(t, self.meta), self.out / TRAJ_DIR / part_name())
-            self._traj = []
-        if self._rows:
-            write_table_atomic(runs_table(self._rows, self.meta), self.out / RUNS_DIR / part_name())
-            self.parts_written += 1
-            self.rows_written += len(self._rows)
-            log.info("wrote %d runs to a new part", len(self._rows))
-            self._rows = []
-        self._last = time.monotonic()
+    def flush(self) -> bool:
+        """Write what is queued (trajectories first, so a run row implies its trajectory).
+
+        Returns
+        -------
+        bool
+            False when the write failed (the runs stay queued; ``error`` says why).
+        """
+        with self._lock:
+            try:
+                if self._traj:
+                    t = pa.concat_tables(self._traj, promote_options="permissive")
+                    write_table_atomic(_with_meta(t, self.meta), self.out / TRAJ_DIR / part_name())
+                    self._traj = []
+                if self._rows:
+                    write_table_atomic(
+                        runs_table(self._rows, self.meta), self.out / RUNS_DIR / part_name()
+                    )
+                    self.parts_written += 1
+                    self.rows_written += len(self._rows)
+                    log.info("wrote %d runs to a new part", len(self._rows))
+                    self._rows = []
+            except OSError as exc:
+                if str(exc) != str(self.error):
+                    log.error(
+                        "cannot write results (%s); %d finished runs kept in memory, "
+                        "retrying at the next flush",
+                        describe_os_error(exc),
+                        len(self._rows),
+                    )
+                self.error = exc
+                return False
+            self.error = None
+            self._oldest = None
+            return True
+
+    def close(self) -> None:
+        """Stop the timer and write the rest.
+
+        Raises
+        ------
+        ResultsError
+            Some finished runs could not be written (they are named in the log).
+        """
+        self._stop.set()
+        if self._timer is not None:
+            self._timer.join()
+            self._timer = None
+        if not self.flush():
+            ids = [str(r["id"]) for r in self._rows]
+            log.error("runs not saved: %s", ", ".join(ids))
+            raise ResultsError(
+                f"{len(ids)} finished runs could not be saved in {self.out}: "
+                f"{describe_os_error(self.error)}; run the same command again once the "
+                "cause is fixed (only they are re-run)"
+            )
 
     def __enter__(self) -> PartWriter:
+        self.start_timer()
         return self
 
     def __exit__(self, *exc: object) -> None:
-        self.flush()
+        self.close()
+
+
+def describe_os_error(exc: BaseException | None) -> str:
+    """'PATH: cause' for an OSError (one line, no traceback)."""
+    if isinstance(exc, OSError) and exc.strerror:
+        where = exc.filename if exc.filename is not None else ""
+        return f"{where}: {exc.strerror}" if where else exc.strerror
+    return str(exc)
 
 
 def compact(out: Path, meta: Mapping[str, Any] | None = None) -> None:
