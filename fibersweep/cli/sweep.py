@@ -262,3 +262,23 @@ def plot_phase(
         paths = plot_all(results, out, fmt)
     for p in paths:
         typer.echo(f"wrote {p}")
+
+
+@app.command()
+def check(
+    results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
+    verbose: Verbose = False,
+) -> None:
+    """Report the state of an output folder (reads every part; changes nothing).
+
+    Exit code 0 when every part is readable and no run misses its data, 1 otherwise.
+    """
+    _setup_logging(verbose)
+    with _errors():
+        from fibersweep.sweep.check import check_folder
+
+        report = check_folder(results)
+    for line in report.lines():
+        typer.echo(line)
+    if not report.healthy:
+        raise typer.Exit(1)
