@@ -237,6 +237,30 @@ class _Dispatch:
         return new
 
 
+def local_cluster(workers: int) -> Any:
+    """A loopback LocalCluster of ``workers`` single-threaded processes, serving no web pages.
+
+    Dask's scheduler and workers always open an HTTP port (with ``dashboard_address=None``
+    the scheduler still serves its dashboard routes on 127.0.0.1:8787). Here every HTTP
+    route is switched off and the ports are OS-chosen on 127.0.0.1: nothing answers there.
+    """
+    import dask
+    from distributed import LocalCluster
+
+    no_pages = {"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}
+    with dask.config.set(no_pages):
+        return LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address=None,
+            scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
+            worker_dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+
+
 class DaskExecutor:
     """Runs tasks on a Dask cluster: an existing one, or a loopback LocalCluster.
 
@@ -282,7 +306,7 @@ class DaskExecutor:
 
     def _client(self) -> tuple[Any, Any]:
         try:
-            from distributed import Client, LocalCluster
+            from distributed import Client
         except ImportError:
             raise InputError(
                 "--executor dask needs Dask distributed: pip install 'fibersweep[dask]'"
@@ -297,14 +321,7 @@ class DaskExecutor:
         if not log.isEnabledFor(logging.INFO):
             # Dask logs every worker start and stop at INFO; keep a plain run quiet.
             logging.getLogger("distributed").setLevel(logging.WARNING)
-        cluster = LocalCluster(
-            n_workers=self.workers,
-            threads_per_worker=1,
-            processes=True,
-            host="127.0.0.1",
-            dashboard_address=None,
-            silence_logs=logging.ERROR,
-        )
+        cluster = local_cluster(self.workers)
         return Client(cluster), cluster
 
     def _slots(self, client: Any) -> int:

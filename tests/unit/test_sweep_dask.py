@@ -164,3 +164,22 @@ def test_dask_existing_scheduler_address(tmp_path):
         ex = DaskExecutor(scheduler=cluster.scheduler_address)
         res = _run(ex, [Job("a", 3.0), Job("b", 4.0)], initializer=init, initargs=("S",))
         assert res["a"].value["x2"] == 9.0 and res["b"].value["tag"] == "S"
+
+
+def test_local_cluster_serves_no_web_pages():
+    """The README promises no dashboard: the scheduler's HTTP port answers 404 everywhere."""
+    import urllib.error
+    import urllib.request
+
+    from fibersweep.sweep.dask_executor import local_cluster
+
+    cluster = local_cluster(1)
+    try:
+        port = cluster.scheduler.http_server.port
+        assert port != 8787
+        for path in ("/status", "/health", "/metrics"):
+            with pytest.raises(urllib.error.HTTPError) as exc:
+                urllib.request.urlopen(f"http://127.0.0.1:{port}{path}", timeout=5)
+            assert exc.value.code == 404
+    finally:
+        cluster.close()
