@@ -50,22 +50,39 @@ def _errors() -> Iterator[None]:
 
 
 @contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
-    """Handle SIGTERM like Ctrl-C for the block: clean-up runs, then exit 143."""
-    import signal
+def _interruptible() -> Iterator[None]:
+    """Ctrl-C and SIGTERM stop the block cleanly: exit 130 and 143, never a traceback.
 
-    def handler(signum: int, frame: object) -> None:
+    SIGTERM raises :class:`Terminated` (a KeyboardInterrupt), so the library's
+    Ctrl-C clean-up runs for both. Once the block is over the work is saved, and
+    either signal only ends the process, with the same codes.
+    """
+    import os
+    import signal
+    import sys
+
+    def interrupt(signum: int, frame: object) -> None:
         raise Terminated()
 
+    def leave(signum: int, frame: object) -> None:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(143 if signum == signal.SIGTERM else 130)
+
     try:
-        old = signal.signal(signal.SIGTERM, handler)
+        signal.signal(signal.SIGTERM, interrupt)
     except ValueError:  # not the main thread (e.g. called from a test runner thread)
         yield
         return
     try:
         yield
+    except Terminated:
+        raise typer.Exit(143) from None
+    except KeyboardInterrupt:
+        raise typer.Exit(130) from None
     finally:
-        signal.signal(signal.SIGTERM, old)
+        signal.signal(signal.SIGTERM, leave)
+        signal.signal(signal.SIGINT, leave)
 
 
 def _setup_logging(verbose: bool) -> None:

@@ -12,9 +12,9 @@ from fibersweep.cli._app import (
     Verbose,
     Workers,
     _errors,
+    _interruptible,
     _load,
     _setup_logging,
-    _sigterm_as_interrupt,
     app,
 )
 from fibersweep.errors import Terminated
@@ -70,7 +70,7 @@ def run(
 ) -> None:
     """Run a sweep: flow field (cached), fiber runs across workers, Parquet results."""
     _setup_logging(verbose)
-    with _errors():
+    with _interruptible(), _errors():
         cfg = _load(config, max_points=max_points)
         if scheduler and executor is None:
             executor = "dask"
@@ -84,8 +84,7 @@ def run(
         if dry_run:
             _dry_run(cfg, resume, retry_failed)
             return
-        with _sigterm_as_interrupt():
-            failed = _run(cfg, resume, retry_failed)
+        failed = _run(cfg, resume, retry_failed)
     if failed:
         raise typer.Exit(1)
 
