@@ -61,13 +61,23 @@ def _physics(df: pd.DataFrame) -> pd.DataFrame:
 
 
 def _pool(proc: subprocess.Popen) -> list[psutil.Process]:
-    return psutil.Process(proc.pid).children(recursive=True)
+    try:
+        return psutil.Process(proc.pid).children(recursive=True)
+    except psutil.Error:  # the main process just ended
+        return []
+
+
+def _is_worker(p: psutil.Process) -> bool:
+    try:
+        return "resource_tracker" not in " ".join(p.cmdline())
+    except psutil.Error:  # gone, or a zombie not yet reaped
+        return False
 
 
 def _wait_for_workers(proc: subprocess.Popen, timeout: float = 60.0) -> list[psutil.Process]:
     t0 = time.monotonic()
     while True:
-        kids = [p for p in _pool(proc) if "resource_tracker" not in " ".join(p.cmdline())]
+        kids = [p for p in _pool(proc) if _is_worker(p)]
         if kids or proc.poll() is not None:
             return kids
         assert time.monotonic() - t0 < timeout, "no worker started"
