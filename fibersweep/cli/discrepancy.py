@@ -84,6 +84,9 @@ def discrepancy(
     trajectories: Annotated[
         Path | None, typer.Option(help="Optional measured trajectories table.")
     ] = None,
+    ignore_extra_columns: Annotated[
+        bool, typer.Option(help="Ignore columns of MEASURED the schema does not know.")
+    ] = False,
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
@@ -96,7 +99,7 @@ def discrepancy(
         from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
         from fibersweep.flow.cache import get_flow_field
 
-        data = load_measured(measured, trajectories)
+        data = load_measured(measured, trajectories, ignore_extra=ignore_extra_columns)
         settings = DiscrepancySettings(
             copies=copies, budget=budget, seed=seed, alpha=alpha,
             workers=workers or cfg.run.workers,

@@ -26,6 +26,7 @@ import yaml
 
 from fibersweep.discrepancy.gap import GapResult
 from fibersweep.discrepancy.localise import binned_map
+from fibersweep.discrepancy.scores import OBSERVABLES
 from fibersweep.discrepancy.workflow import DiscrepancyResult, _combined_excess
 from fibersweep.fiber.result import CLASSES
 from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, save_figure
@@ -116,6 +117,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "n_fibers": len(res.observed),
         "n_heldout": len(res.heldout_rows),
         "observables": list(res.observables),
+        "observables_absent": [o for o in OBSERVABLES if o not in res.observables],
         "alpha": res.settings.alpha,
         "gap": _gap_dict(res.gap),
         "descriptive": res.descriptive,
@@ -283,6 +285,13 @@ def _markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
         "with the effect value fitted on the other half); "
         f"{s['simulations']} simulations ({s['failed_runs']} failed, kept as failures) "
         f"in {s['seconds']:.0f} s; family-wise alpha = {s['alpha']}.",
+        "",
+        f"Observables used: {', '.join(s['observables'])}. "
+        + (
+            f"Absent from the measured data, so not tested: {', '.join(s['observables_absent'])}."
+            if s["observables_absent"]
+            else "Every observable the workflow knows was measured."
+        ),
         "",
         "## Gap per observable (all fibers, baseline model)",
         "",

@@ -32,14 +32,23 @@ Trajectories (optional second table): columns ``fiber_id, t [s], x [µm],
 y [µm], theta [deg]``, rows time-ordered per fiber; every fiber_id must be in
 the fibers table.
 
-Validation never drops a row: every problem raises :class:`InputError` that
-names the column, the rule and the offending rows (first few, 0-based).
-Angles in radians are caught either through ``angle_unit`` or by a heuristic:
-all |theta0| below 0.2 with a non-zero spread (the SPEC's ±10° is ±0.17 rad).
+Validation never drops a row or a column: every problem raises
+:class:`InputError` that names the column, the rule and the offending rows
+(first few, 0-based). A column the schema does not know (a misspelled
+``Delta`` or ``thetac``) is an error with a did-you-mean, unless the caller
+asks to ignore extra columns (``discrepancy --ignore-extra-columns``).
+Without an ``angle_unit`` column, every angle column is checked for radians:
+theta0 when every |theta0| is below 0.2 with a non-zero spread (the SPEC's
+±10° is ±0.17 rad); theta_c when at least three contact angles are given and
+every |theta_c| is at most π (contact angles in degrees spread over tens of
+degrees); the trajectories' theta when their first samples match theta0
+converted to radians far better than theta0 itself. ``angle_unit = 'deg'``
+states degrees and turns the guess off.
 """
 
 from __future__ import annotations
 
+import difflib
 import logging
 import math
 import os
@@ -174,6 +183,22 @@ def _to_bool(series: pd.Series, problems: list[str]) -> np.ndarray | None:
     return out
 
 
+def _looks_like_radians(col: str, v: np.ndarray) -> str | None:
+    """Why the angle column ``col`` (values as given) looks like radians, or None."""
+    finite = v[np.isfinite(v)]
+    if len(finite) < 3 or not np.std(finite) > 0.0:
+        return None
+    biggest = float(np.max(np.abs(finite)))
+    if col == "theta0" and biggest < 0.2:
+        return f"every |theta0| is below 0.2 with a non-zero spread (max {biggest:.3g})"
+    if col == "theta_c" and biggest <= math.pi + 1e-9:
+        return (
+            f"all {len(finite)} contact angles lie within ±π (max |theta_c| {biggest:.3g}), "
+            "while contact angles in degrees spread over tens of degrees"
+        )
+    return None
+
+
 def _angles_to_degrees(df: pd.DataFrame, vals: dict[str, np.ndarray], problems: list[str]) -> None:
     """Convert radians if ``angle_unit`` says so; otherwise catch radians by their range."""
     angle_cols = [c for c in ("theta0", "theta_c") if c in vals]
@@ -191,17 +216,39 @@ def _angles_to_degrees(df: pd.DataFrame, vals: dict[str, np.ndarray], problems: 
                 vals[c] = np.degrees(vals[c])
             log.info("converted theta0/theta_c from radians (angle_unit column)")
         return
-    th = vals["theta0"]
-    finite = th[np.isfinite(th)]
-    if len(finite) >= 3 and np.max(np.abs(finite)) < 0.2 and np.std(finite) > 0.0:
+    for c in angle_cols:
+        why = _looks_like_radians(c, vals[c])
+        if why:
+            problems.append(
+                f"{c}: {why}; these look like radians, but degrees are expected. Convert to "
+                "degrees, or add a column angle_unit = 'rad' (or 'deg' if they are degrees)"
+            )
+
+
+def _unknown_columns(columns: list[str]) -> list[str]:
+    """One problem line per column the schema does not know, with a did-you-mean."""
+    known = ["fiber_id", "angle_unit", *START_COLUMNS, *OBSERVED_COLUMNS]
+    lowered = {k.lower(): k for k in known}
+    problems = []
+    for c in columns:
+        name = str(c)
+        guess = lowered.get(name.strip().lower().replace("-", "_").replace(" ", "_"))
+        if guess is None:
+            close = difflib.get_close_matches(name.lower(), list(lowered), n=1, cutoff=0.6)
+            guess = lowered[close[0]] if close else None
+        hint = f"did you mean '{guess}'? " if guess else ""
+        problems.append(f"{name}: unknown column; {hint}(known: {', '.join(known)})")
+    if problems:
         problems.append(
-            "theta0: every |theta0| is below 0.2 with a non-zero spread "
-            f"(max {np.max(np.abs(finite)):.3g}); these look like radians, but degrees "
-            "are expected. Convert to degrees or add a column angle_unit = 'rad'"
+            "leave out columns the tool does not use, or pass --ignore-extra-columns "
+            "to ignore them"
         )
+    return problems
 
 
-def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredData:
+def validate_measured(
+    df: pd.DataFrame, source: str = "measured", ignore_extra: bool = False
+) -> MeasuredData:
     """Check a measured-fiber table against the schema and canonicalise it.
 
     Parameters
@@ -210,6 +257,8 @@ def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredDat
         Raw table (see the module docstring for the schema).
     source : str
         Name used in messages.
+    ignore_extra : bool
+        Ignore columns the schema does not know (logged) instead of raising.
 
     Returns
     -------
@@ -229,8 +278,10 @@ def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredDat
         )
     known = {"fiber_id", "angle_unit", *START_COLUMNS, *OBSERVED_COLUMNS}
     extra = [c for c in df.columns if c not in known]
-    if extra:
-        log.info("%s: ignoring extra columns %s", source, extra)
+    if extra and ignore_extra:
+        log.warning("%s: ignoring extra columns %s", source, extra)
+    elif extra:
+        problems.extend(_unknown_columns(extra))
     if len(df) == 0:
         raise InputError(f"{source}: the table has no rows")
     df = df.reset_index(drop=True)
@@ -346,15 +397,46 @@ def validate_measured(df: pd.DataFrame, source: str = "measured") -> MeasuredDat
     return MeasuredData(table=out, observed=tuple(observed), source=source)
 
 
-def validate_trajectories(traj: pd.DataFrame, fiber_ids: pd.Series, source: str) -> pd.DataFrame:
+def _trajectory_radians(traj: pd.DataFrame, fibers: pd.DataFrame) -> str | None:
+    """Why the trajectories' theta looks like radians, judged against theta0 [deg]."""
+    first = traj.groupby("fiber_id", sort=False)["theta"].first()
+    theta0 = fibers.set_index("fiber_id")["theta0"].reindex(first.index).to_numpy()
+    th = first.to_numpy()
+    ok = np.isfinite(theta0) & np.isfinite(th)
+    if ok.sum() < 3 or np.max(np.abs(theta0[ok])) < 1.0:
+        return None  # starts too close to 0 to tell degrees from radians
+    miss_deg = float(np.median(np.abs(th[ok] - theta0[ok])))
+    miss_rad = float(np.median(np.abs(th[ok] - np.radians(theta0[ok]))))
+    if miss_rad < 0.2 * miss_deg:
+        return (
+            f"the first sample of each track matches theta0 in radians (median miss "
+            f"{miss_rad:.3g}) far better than theta0 in degrees ({miss_deg:.3g})"
+        )
+    return None
+
+
+def validate_trajectories(
+    traj: pd.DataFrame, fibers: pd.DataFrame | pd.Series, source: str
+) -> pd.DataFrame:
     """Check the optional trajectory table (see module docstring).
+
+    Parameters
+    ----------
+    traj : pandas.DataFrame
+        Raw trajectory table.
+    fibers : pandas.DataFrame or pandas.Series
+        The validated fibers table (``fiber_id`` and ``theta0`` [deg], used for
+        the radians check), or only its ``fiber_id`` column.
+    source : str
+        Name used in messages.
 
     Raises
     ------
     InputError
-        Missing columns, non-finite values, unknown fiber ids or times that
-        go backwards, each naming the rows.
+        Missing columns, non-finite values, unknown fiber ids, times that go
+        backwards, or angles that look like radians, each naming the rows.
     """
+    fiber_ids = fibers["fiber_id"] if isinstance(fibers, pd.DataFrame) else fibers
     missing = [c for c in TRAJECTORY_COLUMNS if c not in traj.columns]
     if missing:
         raise InputError(f"{source}: trajectories: missing column(s) {', '.join(missing)}")
@@ -374,12 +456,21 @@ def validate_trajectories(traj: pd.DataFrame, fiber_ids: pd.Series, source: str)
         back = (traj.groupby("fiber_id", sort=False)["t"].diff() <= 0).to_numpy()
         if back.any():
             problems.append(f"trajectories.t: not increasing within a fiber in {_rows(back)}")
+    if not problems and isinstance(fibers, pd.DataFrame) and "theta0" in fibers.columns:
+        why = _trajectory_radians(traj, fibers)
+        if why:
+            problems.append(
+                f"trajectories.theta: {why}; these look like radians, but degrees are "
+                "expected. Convert to degrees"
+            )
     if problems:
         raise InputError(f"{source}: " + "; ".join(problems))
     return traj
 
 
-def load_measured(path: str | Path, trajectories: str | Path | None = None) -> MeasuredData:
+def load_measured(
+    path: str | Path, trajectories: str | Path | None = None, ignore_extra: bool = False
+) -> MeasuredData:
     """Read and validate a measured-fiber table (and optionally its trajectories).
 
     Parameters
@@ -388,6 +479,8 @@ def load_measured(path: str | Path, trajectories: str | Path | None = None) -> M
         ``.parquet`` or ``.csv`` file following the schema in the module docstring.
     trajectories : path, optional
         ``.parquet`` or ``.csv`` trajectory table.
+    ignore_extra : bool
+        Ignore columns the schema does not know instead of raising.
 
     Raises
     ------
@@ -397,12 +490,12 @@ def load_measured(path: str | Path, trajectories: str | Path | None = None) -> M
     p = Path(path)
     if not p.exists():
         raise InputError(f"{p}: no such file")
-    data = validate_measured(_read_table(p), source=str(p))
+    data = validate_measured(_read_table(p), source=str(p), ignore_extra=ignore_extra)
     if trajectories is not None:
         tp = Path(trajectories)
         if not tp.exists():
             raise InputError(f"{tp}: no such file")
-        traj = validate_trajectories(_read_table(tp), data.table["fiber_id"], str(tp))
+        traj = validate_trajectories(_read_table(tp), data.table, str(tp))
         data = MeasuredData(data.table, data.observed, traj, data.source)
     return data
 

@@ -101,3 +101,44 @@ def test_class_names_are_case_insensitive_and_optional_columns_optional():
     m = validate_measured(df)
     assert m.observed == ("class",)
     assert m.table["class"].iloc[2] == "Pole-vaulting"
+
+
+def test_misspelled_columns_are_errors_with_did_you_mean():
+    df = _table().rename(columns={"delta": "Delta", "theta_c": "thetac"})
+    with pytest.raises(InputError) as exc:
+        validate_measured(df, source="m.csv")
+    msg = str(exc.value)
+    assert "Delta: unknown column; did you mean 'delta'?" in msg
+    assert "thetac: unknown column; did you mean 'theta_c'?" in msg
+    assert "--ignore-extra-columns" in msg
+    # asked to, the same table loads without them (and says which observables it has)
+    m = validate_measured(df.drop(columns=["y_c"]), ignore_extra=True)
+    assert "delta" not in m.observed and "theta_c" not in m.observed
+    assert len(m) == len(df)
+
+
+def test_contact_angles_in_radians_are_caught_alone():
+    df = _table()
+    df["theta_c"] = np.radians(df["theta_c"])  # theta0 stays in degrees
+    with pytest.raises(InputError, match=r"theta_c: all 4 contact angles lie within ±π"):
+        validate_measured(df)
+    df["angle_unit"] = "deg"  # the user states degrees: no guess
+    assert "theta_c" in validate_measured(df).observed
+
+
+def test_trajectory_angles_in_radians_are_caught(tmp_path):
+    df = _table()
+    p = write_table(df, tmp_path / "m.csv")
+    t = np.linspace(0.0, 1.0, 5)
+    rows = [
+        {"fiber_id": str(i), "t": tk, "x": 10.0 * tk, "y": 0.0, "theta": df["theta0"][i]}
+        for i in range(len(df))
+        for tk in t
+    ]
+    ok = pd.DataFrame(rows)
+    write_table(ok, tmp_path / "t.csv")
+    assert load_measured(p, tmp_path / "t.csv").trajectories is not None
+    rad = ok.assign(theta=np.radians(ok["theta"]))
+    write_table(rad, tmp_path / "t_rad.csv")
+    with pytest.raises(InputError, match="trajectories.theta: the first sample .* radians"):
+        load_measured(p, tmp_path / "t_rad.csv")

@@ -44,7 +44,11 @@ def test_synth_then_discrepancy_writes_the_report(tmp_path, config):
     s = json.loads((out / "summary.json").read_text())
     assert s["verdict"]["kind"] == "no significant gap"
     assert s["simulations"] == 2 * len(table)
-    assert (out / "report.md").read_text().startswith("# Discrepancy report")
+    md = (out / "report.md").read_text()
+    assert md.startswith("# Discrepancy report")
+    # synth writes every observable, so the report says none was left untested
+    assert s["observables_absent"] == [] and "class" in s["observables"]
+    assert "Every observable the workflow knows was measured." in md
     assert (out / "residual_map.png").stat().st_size > 0
     assert not list(out.glob("updated_config*.yaml"))
 
@@ -65,3 +69,35 @@ def test_bad_inputs_exit_2_with_a_named_problem(tmp_path, config):
     ).to_csv(bad, index=False)
     r = runner.invoke(app, ["discrepancy", str(bad), str(config), "-o", str(tmp_path / "r")])
     assert r.exit_code == 2 and "radians" in r.output
+
+
+def test_misspelled_column_exits_2_unless_ignored(tmp_path, config):
+    runner = CliRunner()
+    rng = np.random.default_rng(1)
+    n = 10  # the held-out split needs at least 8
+    table = pd.DataFrame(
+        {
+            "theta0": rng.uniform(-10, 10, n),
+            "y0": rng.uniform(0.2, 0.6, n),
+            "length": rng.uniform(0.5, 1.4, n),
+            "class": "Below",
+            "Delta": 0.0,
+        }
+    )
+    bad = tmp_path / "typo.csv"
+    table.to_csv(bad, index=False)
+    out = tmp_path / "r"
+    r = runner.invoke(app, ["discrepancy", str(bad), str(config), "-o", str(out)])
+    assert r.exit_code == 2, r.output
+    assert "Delta: unknown column; did you mean 'delta'?" in r.output
+    assert not out.exists()
+    r = runner.invoke(
+        app,
+        ["discrepancy", str(bad), str(config), "-o", str(out), "--copies", "2",
+         "--ignore-extra-columns"],
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    s = json.loads((out / "summary.json").read_text())
+    assert s["observables"] == ["class"]
+    assert "delta" in s["observables_absent"] and "theta_c" in s["observables_absent"]
+    assert "Absent from the measured data, so not tested: " in (out / "report.md").read_text()
