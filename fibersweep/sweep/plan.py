@@ -17,7 +17,7 @@ import numpy as np
 
 from fibersweep.config import Config
 from fibersweep.errors import InputError
-from fibersweep.sweep.ids import diff_settings, fiber_result_settings, run_id
+from fibersweep.sweep.ids import diff_settings, fiber_result_settings, run_ids
 from fibersweep.sweep.manifest import read_manifest
 from fibersweep.sweep.store import (
     RUNS_DIR,
@@ -41,11 +41,12 @@ def result_settings(cfg: Config, flow_key: str) -> dict[str, Any]:
 
 def make_tasks(cfg: Config, flow_key: str) -> list[SweepTask]:
     """One task per distinct sweep point (a repeated axis value is run once)."""
-    fs = fiber_result_settings(cfg.fiber)
+    t, y, L = cfg.sweep.grid()
+    ids = run_ids(t, y, L, cfg.fiber, flow_key)
     tasks: dict[str, SweepTask] = {}
-    for s in cfg.sweep.starts():
-        rid = run_id(s, fs, flow_key)
-        tasks.setdefault(rid, SweepTask(rid, s.theta0, s.y0, s.length))
+    for rid, ti, yi, Li in zip(ids, t.tolist(), y.tolist(), L.tolist(), strict=True):
+        if rid not in tasks:
+            tasks[rid] = SweepTask(rid, ti, yi, Li)
     return list(tasks.values())
 
 

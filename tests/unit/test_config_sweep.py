@@ -123,3 +123,46 @@ def test_fiber_that_does_not_fit_the_channel_length_names_fiber_x0(tmp_path):
     p = _write(tmp_path, "fiber:\n  x0: 1\nsweep:\n  y0: 0.9\n")
     with pytest.raises(ConfigError, match=r"fiber\.x0 \(line 2\): the fiber at x0 = 1"):
         load_config(p)
+
+
+def test_prefiltered_start_check_keeps_every_failing_point():
+    """Points skipped by the fast pre-check provably pass; every failing one is checked."""
+    from fibersweep.config import Config, SweepSettings
+    from fibersweep.errors import InputError
+    from fibersweep.fiber.contact import make_pillar
+    from fibersweep.fiber.settings import FiberSettings
+    from fibersweep.fiber.setup import check_start
+
+    # x0 on the pillar's column, y0 from wall to wall, one unresolvable length: many
+    # points fail, for each of the three reasons. model_construct skips the config's
+    # own start check so that the failing points can be listed here.
+    cfg = Config.model_construct(
+        fiber=FiberSettings(x0=1150.0),
+        sweep=SweepSettings(
+            theta0={"start": -80, "stop": 80, "num": 9},
+            y0={"start": -5.2, "stop": 5.6, "num": 41},
+            length=[0.02, 0.5, 1.0, 2.5],
+        ),
+    )
+    geo = cfg.flow.geometry.to_geometry()
+    pillar = make_pillar(geo, cfg.fiber.contact, cfg.fiber.bead_radius, 1.0)
+    def first_problems(starts):
+        first: dict[str, str] = {}
+        for s in starts:
+            try:
+                check_start(geo, cfg.flow.dx, cfg.fiber, s, pillar)
+            except InputError as exc:
+                kind = str(exc).split(":")[0] + (" pillar" if "pillar" in str(exc) else "")
+                first.setdefault(kind, str(exc))
+        return first
+
+    every = first_problems(cfg.sweep.starts())
+    assert set(every) == {"length", "y0", "y0 pillar"}
+    kept = cfg._starts_to_check(geo, pillar.r_cut)
+    assert first_problems(kept) == every  # the same first problem of each kind
+    # Position problems can fail anywhere, so every such point must be kept; the
+    # length rule depends on L alone, so one point per length is enough.
+    resolvable = [s for s in cfg.sweep.starts() if s.length > 0.02]
+    positions = [s for s in resolvable if first_problems([s])]
+    assert positions and set(positions) <= set(kept)
+    assert len(kept) < 0.6 * cfg.sweep.size  # and clear points are skipped

@@ -113,3 +113,27 @@ def test_run_id_is_content_addressed():
 def test_diff_settings_names_paths():
     d = diff_settings({"a": {"b": 1, "c": 2}}, {"a": {"b": 1, "c": 3, "d": 4}})
     assert d == ["a.c: 2 -> 3", "a.d: (absent) -> 4"]
+
+
+def test_batched_run_ids_equal_the_documented_hash():
+    """run_ids hashes a shared prefix once; each id must still be the sha256 of the
+    canonical JSON {"start": [θ0, y0, L], "fiber": ..., "flow": key} (ids of stored
+    results must not change)."""
+    from fibersweep.sweep.ids import fiber_result_settings, run_ids, stable_hash
+
+    fs = FiberSettings()
+    rng = np.random.default_rng(3)
+    pts = [(-0.0, 0.1 + 0.2, 1.0), (1e-20, 5.0, 3.0), *rng.normal(size=(20, 3)).tolist()]
+    t, y, L = (list(c) for c in zip(*pts, strict=True))
+    got = run_ids(t, y, L, fs, "flowA")
+    want = [
+        stable_hash(
+            {
+                "start": [float(f"{v:.12g}") + 0.0 for v in p],
+                "fiber": fiber_result_settings(fs),
+                "flow": "flowA",
+            }
+        )
+        for p in pts
+    ]
+    assert got == want
