@@ -272,9 +272,8 @@ class Config(_Strict):
         n = self.sweep.size
         if n > self.run.max_points:
             raise ValueError(
-                f"run.max_points: the sweep has {n:,} points, more than this limit "
-                f"({self.run.max_points:,}); use fewer points, or raise run.max_points "
-                "(or --max-points) if you mean it"
+                f"sweep: {n:,} points, more than run.max_points ({self.run.max_points:,}); "
+                "use fewer points, or raise run.max_points (or --max-points) if you mean it"
             )
         return self
 
@@ -418,7 +417,7 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
         p for p in loc if not (isinstance(p, str) and ("[" in p or ":" in p or p in {"float"}))
     )
     msg = err["msg"].removeprefix("Value error, ")
-    named = re.match(r"^([a-z_0-9]+(?:\.[a-z_0-9]+)+): (.*)$", msg, flags=re.S)
+    named = re.match(r"^([a-z_0-9]+(?:\.[a-z_0-9]+)*): (.*)$", msg, flags=re.S)
     if named and not loc:
         # A whole-config check that names its field: report it at that field.
         loc = tuple(named.group(1).split("."))
