@@ -60,9 +60,9 @@ def synth(
         )  # fmt: skip
         write_table(table, output)
         tpath = truth or output.with_suffix(".truth.json")
-        from fibersweep.discrepancy.report import _atomic_write
+        from fibersweep.atomic import atomic_write
 
-        _atomic_write(tpath, json.dumps(tr, indent=2))
+        atomic_write(tpath, json.dumps(tr, indent=2))
     typer.echo(f"wrote {output} ({len(table)} fibers) and {tpath}")
     if tr["failed"]:
         typer.secho(f"  {len(tr['failed'])} failed runs left out (listed in the truth)",

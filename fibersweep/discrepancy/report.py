@@ -16,14 +16,13 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
 
+from fibersweep.atomic import atomic_write
 from fibersweep.discrepancy.gap import GapResult
 from fibersweep.discrepancy.localise import binned_map
 from fibersweep.discrepancy.scores import OBSERVABLES
@@ -32,13 +31,6 @@ from fibersweep.fiber.result import CLASSES
 from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, save_figure
 
 __all__ = ["summary", "write_report"]
-
-
-def _atomic_write(path: Path, data: str | bytes) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    with os.fdopen(fd, "wb") as fh:
-        fh.write(data.encode() if isinstance(data, str) else data)
-    os.replace(tmp, path)
 
 
 def _clean(x: Any) -> Any:
@@ -414,9 +406,9 @@ def write_report(
             fiber = data.setdefault("fiber", {})
             fiber["effects"] = {**(fiber.get("effects") or {}), name: float(value)}
             fname = "updated_config.yaml" if v.kind == "named" else f"updated_config.{name}.yaml"
-            _atomic_write(out / fname, yaml.safe_dump(data, sort_keys=False))
+            atomic_write(out / fname, yaml.safe_dump(data, sort_keys=False))
             configs.append(fname)
     s["updated_configs"] = configs
-    _atomic_write(out / "summary.json", json.dumps(s, indent=2))
-    _atomic_write(out / "report.md", _markdown(s, figures, configs))
+    atomic_write(out / "summary.json", json.dumps(s, indent=2))
+    atomic_write(out / "report.md", _markdown(s, figures, configs))
     return s

@@ -51,14 +51,13 @@ from __future__ import annotations
 import difflib
 import logging
 import math
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from fibersweep.atomic import atomic_path
 from fibersweep.errors import InputError
 from fibersweep.fiber.result import CLASSES
 
@@ -506,16 +505,9 @@ def write_table(df: pd.DataFrame, path: str | Path) -> Path:
     suffix = p.suffix.lower()
     if suffix not in (".parquet", ".csv"):
         raise InputError(f"{p}: unknown table format '{suffix}'; use .parquet or .csv")
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
+    with atomic_path(p) as tmp:
         if suffix == ".parquet":
             df.to_parquet(tmp, index=False)
         else:
             df.to_csv(tmp, index=False)
-        os.replace(tmp, p)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
     return p

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 import matplotlib as mpl
+
+from fibersweep.atomic import atomic_path
 
 __all__ = ["CLASS_STYLE", "FAILED_STYLE", "UNCLASSIFIED_STYLE", "paper_style", "save_figure"]
 
@@ -57,13 +58,10 @@ def save_figure(fig: Any, path: str | Path, **savefig_kw: Any) -> Path:
     import matplotlib.pyplot as plt
 
     out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
     savefig_kw.setdefault("format", out.suffix.lstrip(".").lower() or None)
-    tmp = out.with_name(f".{out.name}.tmp-{os.getpid()}")
     try:
-        fig.savefig(tmp, **savefig_kw)
-        os.replace(tmp, out)
+        with atomic_path(out) as tmp:
+            fig.savefig(tmp, **savefig_kw)
     finally:
         plt.close(fig)
-        tmp.unlink(missing_ok=True)
     return out

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from fibersweep.atomic import TMP_GLOB
 from fibersweep.errors import InputError
 from fibersweep.sweep.lock import LockHolder, lock_holder
 from fibersweep.sweep.manifest import read_manifest
@@ -117,7 +118,7 @@ def check_folder(out: Path) -> FolderReport:
         1
         for sub in (RUNS_DIR, TRAJ_DIR)
         if (out / sub).is_dir()
-        for _ in (out / sub).glob(".*.tmp-*")
+        for _ in (out / sub).glob(TMP_GLOB)
     )
     return FolderReport(
         out=out,

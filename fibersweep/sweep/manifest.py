@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import platform
 import subprocess
 import sys
@@ -12,6 +11,8 @@ import time
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
+
+from fibersweep.atomic import atomic_write
 
 __all__ = [
     "MANIFEST",
@@ -87,9 +88,5 @@ def read_manifest(out: Path) -> dict[str, Any] | None:
 
 def write_manifest(out: Path, manifest: dict[str, Any]) -> Path:
     """Write manifest.json atomically."""
-    p = Path(out) / MANIFEST
-    p.parent.mkdir(parents=True, exist_ok=True)
-    tmp = p.with_name(f".{MANIFEST}.tmp-{os.getpid()}")
-    tmp.write_text(json.dumps(manifest, indent=2, sort_keys=True, default=str) + "\n")
-    os.replace(tmp, p)
-    return p
+    text = json.dumps(manifest, indent=2, sort_keys=True, default=str) + "\n"
+    return atomic_write(Path(out) / MANIFEST, text)

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from fibersweep.atomic import atomic_path
 from fibersweep.errors import InputError
 from fibersweep.fiber.result import CLASSES, Trajectory
 from fibersweep.fiber.settings import ClassifySettings
@@ -191,9 +192,8 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
         p.unlink(missing_ok=True)
     counts = class_counts(runs)
     counts_path = out / COUNTS_FILE
-    tmp = counts_path.with_name(f".{COUNTS_FILE}.tmp")
-    counts.to_csv(tmp, index=False)
-    tmp.replace(counts_path)
+    with atomic_path(counts_path) as tmp:
+        counts.to_csv(tmp, index=False)
     man["config"]["fiber"]["classify"] = thresholds.model_dump(mode="json")
     man["counts"] = {c: int(n) for c, n in zip(counts["class"], counts["runs"], strict=True)}
     write_manifest(out, man)

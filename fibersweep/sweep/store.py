@@ -31,6 +31,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
+from fibersweep.atomic import TMP_GLOB, atomic_path
 from fibersweep.errors import ResultsError
 
 __all__ = [
@@ -98,16 +99,8 @@ def part_name(tag: str = "") -> str:
 
 def write_table_atomic(table: pa.Table, path: Path) -> Path:
     """Write ``table`` to ``path`` through a temporary file and an atomic rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
+    with atomic_path(path) as tmp:
         pq.write_table(table, tmp)
-        with open(tmp, "rb") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return path
 
 
@@ -117,7 +110,7 @@ def clean_temporaries(out: Path) -> int:
     for sub in (RUNS_DIR, TRAJ_DIR):
         d = Path(out) / sub
         if d.is_dir():
-            for p in d.glob(".*.tmp-*"):
+            for p in d.glob(TMP_GLOB):
                 p.unlink(missing_ok=True)
                 n += 1
     return n

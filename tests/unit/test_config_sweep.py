@@ -146,6 +146,7 @@ def test_prefiltered_start_check_keeps_every_failing_point():
     )
     geo = cfg.flow.geometry.to_geometry()
     pillar = make_pillar(geo, cfg.fiber.contact, cfg.fiber.bead_radius, 1.0)
+
     def first_problems(starts):
         first: dict[str, str] = {}
         for s in starts:
