@@ -155,7 +155,16 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     # kept apart from the config's, which later re-classifications overwrite.
     simulated = man.setdefault("simulated_classify", man["config"]["fiber"]["classify"])
     geometry = flow.geometry.to_geometry()
-    u_center = flow.fluid.u_center
+    # The speed the runs moved in (effects such as inlet_speed change it); manifests
+    # written before it was recorded only hold the nominal one.
+    u_center = man.get("u_center_effective")
+    if u_center is None:
+        u_center = flow.fluid.u_center
+        if man["config"]["fiber"].get("effects"):
+            log.warning(
+                "%s: the manifest predates the effective U_center; classifying with the "
+                "nominal %.4g µm/s although effects were on", out, u_center
+            )
     ok = runs["status"] == "ok"
     traj = read_trajectories(out, list(runs.loc[ok, "id"]))
     if traj.empty:

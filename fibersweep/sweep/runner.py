@@ -112,6 +112,17 @@ def prepare(
     return fieldobj, info, plan
 
 
+def effective_u_center(fieldobj: Any, fiber: Any) -> float:
+    """U_center [µm/s] the runs move in: the field's after the effects that change it.
+
+    The classification thresholds are fractions of this speed; ``classify``
+    re-applies them later from the manifest, so it must be the run's own.
+    """
+    from fibersweep.fiber.effects import build_effects
+
+    return float(build_effects(fiber.effects).field(fieldobj).fluid.u_center)
+
+
 def _separatrix(fieldobj: Any, info: Any, out: Path) -> float | None:
     old = read_manifest(out) or {}
     if old.get("provenance", {}).get("flow_key") == info.key and "separatrix" in old:
@@ -178,6 +189,7 @@ def _run_locked(
         "provenance": prov,
         "flow_cache": str(getattr(info, "path", "")),
         "separatrix": _separatrix(fieldobj, info, out),
+        "u_center_effective": effective_u_center(fieldobj, cfg.fiber),
         "sweep_size": len(plan.tasks),
         "state": "running",
     }

@@ -290,3 +290,33 @@ def test_bad_config_and_arguments_exit_2(tmp_path):
     assert res.exit_code == 2 and "run.executor" in text, text
     res, text = _invoke("run", tmp_path / "nope.yaml")
     assert res.exit_code == 2 and "cannot read config" in text
+
+
+def test_classify_uses_the_speed_the_runs_moved_in(
+    tmp_path, coarse_field, flow_cache_dir, monkeypatch
+):
+    """With inlet_speed the runs move in a slower flow; classify must judge them with the
+    U_center the runs used (thresholds are fractions of it), not the nominal speed."""
+    import fibersweep.analysis.classify as classify_module
+    from fibersweep.fiber.settings import ClassifySettings
+    from fibersweep.sweep.reclassify import reclassify
+
+    cfg = _config(tmp_path, flow_cache_dir, "slow", extra="  effects:\n    inlet_speed: -0.8\n")
+    res, text = _invoke("run", cfg)
+    assert res.exit_code == 0, text
+    out = tmp_path / "slow"
+    man = json.loads((out / "manifest.json").read_text())
+    nominal = man["config"]["flow"]["fluid"]["u_center"]
+    assert man["u_center_effective"] == pytest.approx(0.2 * nominal, rel=1e-12)
+    seen = []
+    real = classify_module.classify
+
+    def spy(traj, geometry, u_center, thresholds):
+        seen.append(u_center)
+        return real(traj, geometry, u_center, thresholds)
+
+    monkeypatch.setattr(classify_module, "classify", spy)
+    before = read_runs(out)
+    r = reclassify(out, ClassifySettings())
+    assert r.n_changed == 0 and (read_runs(out)["class"] == before["class"]).all()
+    assert len(seen) == len(before) and set(seen) == {man["u_center_effective"]}
