@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
-__all__ = ["FibersweepError", "InputError", "ResultsError", "SolverError", "Terminated"]
+__all__ = [
+    "RUN_ERRORS",
+    "FibersweepError",
+    "InputError",
+    "ResultsError",
+    "RunBug",
+    "SolverError",
+    "Terminated",
+]
 
 
 class FibersweepError(Exception):
@@ -30,3 +38,18 @@ class Terminated(KeyboardInterrupt):
     A KeyboardInterrupt, so every clean-up path that handles Ctrl-C handles it too;
     the CLI exits with 143 (128 + SIGTERM) instead of 130.
     """
+
+
+class RunBug(RuntimeError):
+    """A fiber run raised an error no run should raise: a bug, not a failed run.
+
+    Raised in a worker (with the run's id and the original traceback in the
+    message); the executors stop the sweep on it instead of recording a failed
+    row, so a programming error is never mistaken for physics.
+    """
+
+
+#: Errors a fiber run can legitimately raise, recorded as a failed run: bad input
+#: (e.g. start noise pushing a start onto the pillar), a computation that failed,
+#: and arithmetic failures. Anything else is a :class:`RunBug`.
+RUN_ERRORS: tuple[type[BaseException], ...] = (FibersweepError, ArithmeticError)

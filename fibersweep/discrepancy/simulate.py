@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
-from fibersweep.errors import FibersweepError, InputError, SolverError
+from fibersweep.errors import RUN_ERRORS, FibersweepError, InputError, SolverError
 from fibersweep.fiber.result import CLASSES, FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
@@ -87,7 +87,7 @@ def _run_chunk(
         try:
             res = simulate(field, settings, start, rng_seed=int(seed))
             row = outcome_row(res)
-        except Exception as exc:  # recorded, not dropped: the run failed (or bad start)
+        except RUN_ERRORS as exc:  # recorded, not dropped: the run failed (or bad start)
             row = _failed(f"{type(exc).__name__}: {exc}")
         out.append((int(i), row))
     return out

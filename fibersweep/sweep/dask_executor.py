@@ -27,7 +27,7 @@ from collections import Counter, deque
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from fibersweep.errors import InputError
+from fibersweep.errors import InputError, RunBug
 from fibersweep.sweep.executor_base import (
     Outcome,
     WorkerSetupError,
@@ -139,7 +139,7 @@ def run_chunk(fn: Callable[[Any], Any], tasks: Sequence[_Keyed]) -> list[Outcome
     for t in tasks:
         try:
             value = guarded_call(fn, t)
-        except WorkerSetupError:
+        except (WorkerSetupError, RunBug):
             raise
         except Exception as exc:
             log.debug("run %s raised", t.key, exc_info=True)

@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from fibersweep.errors import SolverError
+from fibersweep.errors import RunBug, SolverError
 
 __all__ = [
     "Executor",
@@ -105,5 +105,8 @@ def guarded_call(fn: Callable[[Any], Any], task: Any) -> Any:
 
 
 def _setup_failed(exc: BaseException | None) -> None:
+    """Stop the sweep on errors no retry can fix: a failed worker set-up, a bug in a run."""
+    if isinstance(exc, RunBug):
+        raise SolverError(f"a run hit a bug, not a physical failure; stopping:\n{exc}") from exc
     if isinstance(exc, WorkerSetupError):
         raise SolverError(f"worker set-up failed ({exc}); no run can succeed, stopping") from exc

@@ -19,6 +19,8 @@ import traceback
 from dataclasses import dataclass
 from typing import Any
 
+from fibersweep.errors import RUN_ERRORS, RunBug
+
 __all__ = ["SweepTask", "WorkerSpec", "init_worker", "run_task", "failed_row"]
 
 log = logging.getLogger(__name__)
@@ -131,7 +133,7 @@ def _warm(field: Any, fiber: Any) -> None:
     )
     try:
         simulate(field, short, FiberStart(theta0=0.0, y0=2.0, length=0.5))
-    except Exception as exc:  # a warm-up problem must not hide the real runs' errors
+    except RUN_ERRORS as exc:  # a warm-up problem must not hide the real runs' errors
         log.warning("warm-up run raised %s: %s", type(exc).__name__, exc)
 
 
@@ -172,11 +174,13 @@ def run_task(task: SweepTask) -> dict[str, Any]:
     c0 = time.process_time()
     try:
         res = simulate(_STATE["field"], _STATE["fiber"], start)
-    except Exception as exc:
+    except RUN_ERRORS as exc:  # bad input or a failed computation: a failed run
         log.warning("run %s raised: %s", task.key, traceback.format_exc(limit=3))
         row = failed_row(task, f"exception {type(exc).__name__}: {exc}")
         row.update(wall_time=time.perf_counter() - t0, worker=_worker_name())
         return {"row": row, "trajectory": None}
+    except Exception as exc:  # anything else is a bug: stop the sweep, say where
+        raise RunBug(f"run {task.key} ({start}):\n{traceback.format_exc()}") from exc
     _STATE["n_tasks"] += 1
     row = res.row()
     row.update(

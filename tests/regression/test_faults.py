@@ -84,8 +84,11 @@ def _wait_for_workers(proc: subprocess.Popen, timeout: float = 60.0) -> list[psu
         time.sleep(0.05)
 
 
-def _kill(proc: subprocess.Popen, sig: str, target: str, delay: float) -> tuple[int, int]:
-    """Signal the main process or a worker after ``delay`` s; returns (exit code, orphans)."""
+def _kill(proc: subprocess.Popen, sig: str, target: str, delay: float) -> tuple[int, int, str]:
+    """Signal the main process or a worker after ``delay`` s.
+
+    Returns (exit code, orphans, the run's output).
+    """
     workers = _wait_for_workers(proc)
     time.sleep(delay)
     family = _pool(proc) if proc.poll() is None else []
@@ -96,12 +99,12 @@ def _kill(proc: subprocess.Popen, sig: str, target: str, delay: float) -> tuple[
                 live[0].send_signal(getattr(signal, sig))
         else:
             proc.send_signal(getattr(signal, sig))
-    proc.communicate(timeout=180)
+    text, _ = proc.communicate(timeout=180)
     # Every process of the sweep must be gone a few seconds after its main process.
     _, alive = psutil.wait_procs(family, timeout=10)
     for p in alive:
         p.kill()
-    return proc.returncode, len(alive)
+    return proc.returncode, len(alive), text
 
 
 @pytest.fixture(scope="module")
@@ -139,10 +142,10 @@ def test_kill_then_resume_equals_uninterrupted(reference, tmp_path, flow_cache_d
         while not list_parts(out / RUNS_DIR) and proc.poll() is None:
             assert time.monotonic() - t0 < 120
             time.sleep(0.02)
-    code, orphans = _kill(proc, sig, target, delay=0.0)
+    code, orphans, text = _kill(proc, sig, target, delay=0.0)
     assert orphans == 0, "processes outlived the sweep"
     if target == "main":
-        assert code == EXIT[sig]
+        assert code == EXIT[sig], text
         if sig != "SIGKILL":  # clean stop: saved and said so
             man = json.loads((out / "manifest.json").read_text())
             assert man["state"] == "interrupted"
@@ -168,9 +171,9 @@ def test_random_kills_soak(reference, tmp_path, flow_cache_dir):
                 for f in p.glob("*"):
                     f.unlink()
         sig, target = kinds[k % 4]
-        code, orphans = _kill(_run(cfg), sig, target, delay=rng.uniform(0.0, 4.0))
+        code, orphans, text = _kill(_run(cfg), sig, target, delay=rng.uniform(0.0, 4.0))
         assert orphans == 0, f"kill {k} ({sig} {target}): orphans"
-        assert code in (EXIT[sig], 0), f"kill {k}: exit {code}"
+        assert code in (EXIT[sig], 0), f"kill {k} ({sig} {target}): exit {code}\n{text}"
         survived += 1
     _resume_and_compare(cfg, out, reference)
     assert survived == 24

@@ -21,7 +21,7 @@ class Job:
     key: str
     x: float
     sleep: float = 0.0
-    action: str = ""  # "", "raise", "die", "die-once:<marker path>"
+    action: str = ""  # "", "raise", "bug", "die", "die-once:<marker path>"
 
 
 def init(tag: str, log_dir: str | None = None) -> None:
@@ -37,6 +37,10 @@ def square(job: Job) -> dict:
         time.sleep(job.sleep)
     if job.action == "raise":
         raise ValueError(f"bad job {job.key}")
+    if job.action == "bug":
+        from fibersweep.errors import RunBug
+
+        raise RunBug(f"run {job.key}: TypeError in the model")
     if job.action == "die":
         os._exit(3)
     if job.action.startswith("die-once:"):

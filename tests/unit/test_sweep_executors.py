@@ -139,3 +139,39 @@ def test_importing_executors_needs_no_dask():
     code = "import sys, fibersweep.sweep.executors; print('dask' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False", "Dask is an optional extra: import it only to run"
+
+
+@pytest.mark.parametrize("kind", ["local", "dask"])
+def test_a_bug_in_a_run_stops_the_sweep(kind):
+    """A RunBug (a run raised something no run should) is not a failed row: it stops."""
+    jobs = [Job("a", 1.0), Job("bug", 2.0, action="bug"), Job("c", 3.0)]
+    ex = make_executor(kind, 2, None, 0)
+    with pytest.raises(SolverError, match="(?s)a run hit a bug.*run bug: TypeError in the model"):
+        list(ex.run(square, jobs))
+
+
+def test_worker_records_failed_runs_and_raises_bugs(monkeypatch):
+    """run_task: input and numerical errors are failed rows; any other exception a RunBug."""
+    import fibersweep.fiber.run as run_module
+    from fibersweep.errors import RunBug
+    from fibersweep.errors import SolverError as Solver
+    from fibersweep.sweep import worker
+
+    monkeypatch.setitem(worker._STATE, "field", None)
+    monkeypatch.setitem(worker._STATE, "fiber", None)
+    task = worker.SweepTask("id1", 0.0, 0.5, 1.0)
+    for exc in (InputError("y0: overlaps the pillar"), Solver("NaN"), ZeroDivisionError()):
+
+        def boom(*a, exc=exc, **k):
+            raise exc
+
+        monkeypatch.setattr(run_module, "simulate", boom)
+        row = worker.run_task(task)["row"]
+        assert row["status"] == "failed" and type(exc).__name__ in row["reason"]
+
+    def bug(*a, **k):
+        raise TypeError("unsupported operand")
+
+    monkeypatch.setattr(run_module, "simulate", bug)
+    with pytest.raises(RunBug, match="(?s)run id1 .*TypeError: unsupported operand"):
+        worker.run_task(task)
