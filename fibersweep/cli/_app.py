@@ -6,6 +6,7 @@ package can import them (to register their commands) without an import cycle.
 
 from __future__ import annotations
 
+import atexit
 import logging
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -83,6 +84,17 @@ def _interruptible() -> Iterator[None]:
     finally:
         signal.signal(signal.SIGTERM, leave)
         signal.signal(signal.SIGINT, leave)
+        # Interpreter shutdown resets Python-level handlers to the default, so a late
+        # signal would end the process with -2/-15 instead of the codes above; from the
+        # first exit handler on, the work is saved and printed: ignore them.
+        atexit.register(_ignore_stop_signals)
+
+
+def _ignore_stop_signals() -> None:
+    import signal
+
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _setup_logging(verbose: bool) -> None:

@@ -17,7 +17,7 @@ from fibersweep.cli._app import (
     _setup_logging,
     app,
 )
-from fibersweep.errors import Terminated
+from fibersweep.errors import InputError, Terminated
 
 
 def _fmt_s(s: float | None) -> str:
@@ -248,7 +248,8 @@ def classify(
 def plot_phase(
     results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
     out: Annotated[
-        Path | None, typer.Option("--out", "-o", help="Figure folder (default: RESULTS/figures).")
+        Path | None,
+        typer.Option("--output", "-o", "--out", help="Figure folder (default: RESULTS/figures)."),
     ] = None,
     fmt: Annotated[str, typer.Option("--format", help="png, pdf or svg.")] = "png",
     verbose: Verbose = False,
@@ -257,8 +258,14 @@ def plot_phase(
     _setup_logging(verbose)
     with _errors():
         from fibersweep.plots.phase import plot_all
+        from fibersweep.sweep.manifest import read_manifest
+        from fibersweep.sweep.store import read_runs
 
-        paths = plot_all(results, out, fmt)
+        runs = read_runs(results)
+        if runs.empty:
+            raise InputError(f"{results}: no runs to plot (expected {results}/runs/part-*.parquet)")
+        sep = (read_manifest(results) or {}).get("separatrix")
+        paths = plot_all(runs, out or results / "figures", fmt, separatrix=sep)
     for p in paths:
         typer.echo(f"wrote {p}")
 

@@ -28,7 +28,7 @@ from fibersweep.discrepancy.localise import binned_map
 from fibersweep.discrepancy.scores import OBSERVABLES
 from fibersweep.discrepancy.workflow import DiscrepancyResult, _combined_excess
 from fibersweep.fiber.result import CLASSES
-from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, save_figure
+from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, save_figure, subplots
 
 __all__ = ["summary", "write_report"]
 
@@ -174,9 +174,6 @@ def _class_groups(codes: np.ndarray) -> list[tuple[str, dict[str, object], np.nd
 
 def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]:
     import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
     from fibersweep.discrepancy.gap import value_matrices
@@ -192,7 +189,7 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
     ]
     if effect and effect in res.effect_copies:
         panels.append((f"with {effect}", res.effect_copies[effect][0]["class"].to_numpy()))
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), sharey=True)
+    fig, axes = subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), sharey=True)
     size = (12 + 30 * (o_ho["length"] - 0.4)).to_numpy()
     seen: dict[str, dict[str, object]] = {}
     for ax, (title, codes) in zip(np.atleast_1d(axes), panels, strict=True):
@@ -222,14 +219,14 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
 
     exc = _combined_excess(res.gap, res.weights)
     th, y0, L = (obs[c].to_numpy(dtype=np.float64) for c in ("theta0", "y0", "length"))
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.8))
+    fig, axes = subplots(1, 2, figsize=(9, 3.8))
     for ax, (x, xl) in zip(axes, ((th, "θ0 [deg]"), (L, "L / l_obs")), strict=True):
         xe = np.linspace(np.nanmin(x), np.nanmax(x) + 1e-9, 6)
         ye = np.linspace(np.nanmin(y0), np.nanmax(y0) + 1e-9, 8)
         m, c = binned_map(x, y0, exc, xe, ye)
         lim = np.nanmax(np.abs(m)) if np.isfinite(m).any() else 1.0
         # bins without fibers: grey, not the white of "no excess"
-        cmap = plt.get_cmap("RdBu_r").with_extremes(bad="0.85")
+        cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
         im = ax.pcolormesh(xe, ye, np.ma.masked_invalid(m.T), cmap=cmap, vmin=-lim, vmax=lim)
         ax.set_xlabel(xl)
         ax.set_ylabel("y0 / h_obs")
@@ -251,7 +248,7 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
             ]
             a = [np.multiply(h.residual.gaps[n].excess, wn) for n, wn in zip(names, w, strict=True)]
             x = np.arange(len(names))
-            fig, ax = plt.subplots(figsize=(6.5, 3.5))
+            fig, ax = subplots(figsize=(6.5, 3.5))
             for off, vals, lab in ((-0.18, b, "baseline"), (0.18, a, f"with {effect}")):
                 mean = np.array([v[0] for v in vals])
                 err = np.array([[v[0] - v[1], v[2] - v[0]] for v in vals]).T

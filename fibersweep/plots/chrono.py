@@ -5,15 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.colors import Normalize  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
 from fibersweep.fiber.result import RunResult  # noqa: E402
-from fibersweep.plots.style import CLASS_STYLE, paper_style, save_figure  # noqa: E402
+from fibersweep.plots.style import CLASS_STYLE, paper_style, save_figure, subplots  # noqa: E402
 from fibersweep.units import Geometry  # noqa: E402
 
 __all__ = ["chronophotograph"]
@@ -75,10 +73,10 @@ def chronophotograph(
     picks = np.unique(np.clip(np.searchsorted(tr.t, times), 0, len(tr.t) - 1))
     xb, yb = geometry.base_center
     h = geometry.pillar_height
-    cmap = plt.get_cmap("viridis")
-    norm = plt.Normalize(t0, t1)
+    cmap = matplotlib.colormaps["viridis"]
+    norm = Normalize(t0, t1)
     with paper_style():
-        fig, ax = plt.subplots(figsize=(6.0, 3.6))
+        fig, ax = subplots(figsize=(6.0, 3.6))
         ax.add_patch(
             Polygon((geometry.vertices - [xb, yb]) / h, closed=True, fc="0.8", ec="0.3", lw=1.0)
         )

@@ -9,7 +9,7 @@ import numpy as np
 from fibersweep.flow.analysis import flux_separatrix, stream_function
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.streamlines import separatrix_y
-from fibersweep.plots.style import save_figure
+from fibersweep.plots.style import new_figure, save_figure
 
 __all__ = ["plot_flow"]
 
@@ -30,10 +30,6 @@ def plot_flow(field: FlowField, path: str | Path, *, half_window: float | None =
     half_window : float, optional
         Half width in x of the top panel around the pillar [µm]; default 4 h_obs.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.patches import Polygon
 
     geom = field.geometry
@@ -52,7 +48,7 @@ def plot_flow(field: FlowField, path: str | Path, *, half_window: float | None =
     y_traced = separatrix_y(field)
     psi = stream_function(field)
 
-    fig = plt.figure(figsize=(11, 8.5), constrained_layout=True)
+    fig = new_figure(figsize=(11, 8.5), layout="constrained")
     gs = fig.add_gridspec(2, 2, height_ratios=[1.5, 1.0])
     ax = fig.add_subplot(gs[0, :])
     xs, ys = x[sel], y[sely]

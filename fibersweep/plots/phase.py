@@ -11,13 +11,9 @@ import logging
 import math
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")  # files only; never needs a display
-
-import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.colors import Normalize  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
@@ -31,9 +27,8 @@ from fibersweep.plots.style import (  # noqa: E402
     UNCLASSIFIED_STYLE,
     paper_style,
     save_figure,
+    subplots,
 )
-from fibersweep.sweep.manifest import read_manifest  # noqa: E402
-from fibersweep.sweep.store import read_runs  # noqa: E402
 
 __all__ = [
     "FORMATS",
@@ -58,7 +53,7 @@ def _lengths(runs: pd.DataFrame) -> list[float]:
 def _grid(n: int, panel_h: float = 2.3) -> tuple[Figure, np.ndarray]:
     nrows = math.ceil(n / 4)
     ncols = math.ceil(n / nrows)  # balanced rows: 5 panels -> 3 + 2, not 4 + 1
-    fig, axes = plt.subplots(
+    fig, axes = subplots(
         nrows,
         ncols,
         figsize=(WIDTH_IN if n > 1 else 4.2, panel_h * nrows + 0.6),
@@ -87,7 +82,7 @@ def _label_axes(axes: np.ndarray, n: int) -> None:
             ax.xaxis.set_tick_params(labelbottom=True)
 
 
-def _separatrix(ax: plt.Axes, sep: float | None) -> None:
+def _separatrix(ax: Axes, sep: float | None) -> None:
     if sep is not None and np.isfinite(sep):
         ax.axhline(sep, color="0.2", lw=1.0, ls="--", zorder=1)
 
@@ -196,7 +191,7 @@ def phase_figure(runs: pd.DataFrame, separatrix: float | None, by: str = "class"
 
 def contact_figure(runs: pd.DataFrame) -> Figure:
     """Contact map: fiber angle θ_c and contact point y_c/h at first contact, by class."""
-    fig, ax = plt.subplots(figsize=(5.2, 3.2))
+    fig, ax = subplots(figsize=(5.2, 3.2))
     c = runs[(runs["status"] == "ok") & runs["contact"].fillna(False).astype(bool)]
     c = c[np.isfinite(c["theta_c"].to_numpy(dtype=float))]
     for k in _present(c):
@@ -221,7 +216,7 @@ def contact_figure(runs: pd.DataFrame) -> Figure:
 
 def delta_hist_figure(runs: pd.DataFrame) -> Figure:
     """Distribution of δ for runs with and without contact (counts per bin, log scale)."""
-    fig, ax = plt.subplots(figsize=(4.2, 3.0))
+    fig, ax = subplots(figsize=(4.2, 3.0))
     ok = runs[(runs["status"] == "ok")]
     d = ok["delta"].to_numpy(dtype=float)
     touched = ok["contact"].fillna(False).astype(bool).to_numpy()
@@ -252,41 +247,44 @@ def delta_hist_figure(runs: pd.DataFrame) -> Figure:
     return fig
 
 
-def plot_all(results: Path | str, out: Path | str | None = None, fmt: str = "png") -> list[Path]:
-    """Write every figure of a sweep.
+def plot_all(
+    runs: pd.DataFrame,
+    out: Path | str,
+    fmt: str = "png",
+    *,
+    separatrix: float | None = None,
+) -> list[Path]:
+    """Write every figure of a sweep's runs table.
 
     Parameters
     ----------
-    results : path
-        Output directory of a sweep.
-    out : path, optional
-        Figure folder; default ``RESULTS/figures``.
+    runs : pandas.DataFrame
+        The runs table (:func:`fibersweep.sweep.store.read_runs`).
+    out : path
+        Figure folder (created if missing).
     fmt : {'png', 'pdf', 'svg'}
+    separatrix : float, optional
+        Far-upstream separatrix y/h_obs, drawn as a line.
 
     Returns
     -------
     list of Path
-        phase, delta, contact and delta_hist figures.
+        phase, phase_delta, contact_map and delta_hist figures.
 
     Raises
     ------
     InputError
-        Unknown format, or no results.
+        Unknown format, or no runs.
     """
     if fmt not in FORMATS:
         raise InputError(f"--format {fmt!r}: expected one of {', '.join(FORMATS)}")
-    results = Path(results)
-    runs = read_runs(results)
     if runs.empty:
-        raise InputError(f"{results}: no runs to plot (expected {results}/runs/part-*.parquet)")
-    man = read_manifest(results) or {}
-    sep = man.get("separatrix")
-    out = Path(out) if out is not None else results / "figures"
-    out.mkdir(parents=True, exist_ok=True)
+        raise InputError("no runs to plot")
+    out = Path(out)
     paths = []
     figures = {
-        "phase": lambda: phase_figure(runs, sep, "class"),
-        "phase_delta": lambda: phase_figure(runs, sep, "delta"),
+        "phase": lambda: phase_figure(runs, separatrix, "class"),
+        "phase_delta": lambda: phase_figure(runs, separatrix, "delta"),
         "contact_map": lambda: contact_figure(runs),
         "delta_hist": lambda: delta_hist_figure(runs),
     }

@@ -8,10 +8,19 @@ from pathlib import Path
 from typing import Any
 
 import matplotlib as mpl
+from matplotlib.figure import Figure
 
 from fibersweep.atomic import atomic_path
 
-__all__ = ["CLASS_STYLE", "FAILED_STYLE", "UNCLASSIFIED_STYLE", "paper_style", "save_figure"]
+__all__ = [
+    "CLASS_STYLE",
+    "FAILED_STYLE",
+    "UNCLASSIFIED_STYLE",
+    "new_figure",
+    "paper_style",
+    "save_figure",
+    "subplots",
+]
 
 # Okabe-Ito colours (colour-blind safe); marker shapes carry the class without colour too.
 CLASS_STYLE: dict[str, dict[str, object]] = {
@@ -55,13 +64,34 @@ def save_figure(fig: Any, path: str | Path, **savefig_kw: Any) -> Path:
     The format is the path's suffix unless ``format=`` is given; other keywords
     go to ``Figure.savefig``.
     """
-    import matplotlib.pyplot as plt
-
     out = Path(path)
     savefig_kw.setdefault("format", out.suffix.lstrip(".").lower() or None)
     try:
         with atomic_path(out) as tmp:
             fig.savefig(tmp, **savefig_kw)
     finally:
-        plt.close(fig)
+        if getattr(fig.canvas, "manager", None) is not None:  # made through pyplot
+            import matplotlib.pyplot as plt
+
+            plt.close(fig)
     return out
+
+
+def new_figure(**kw: Any) -> Figure:
+    """A figure that belongs to no window or backend (files only, any thread).
+
+    Keywords go to :class:`matplotlib.figure.Figure` (``figsize`` [in], ``layout``).
+    Unlike ``pyplot.figure`` it selects no backend and registers nothing globally,
+    so importing or using the plots never changes matplotlib's state.
+    """
+    return Figure(**kw)
+
+
+def subplots(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float], **kw: Any) -> Any:
+    """``(figure, axes)`` like ``pyplot.subplots``, on a :func:`new_figure`.
+
+    ``layout`` goes to the figure; other keywords (``sharex``, ``squeeze``...) to
+    :meth:`Figure.subplots`.
+    """
+    fig = new_figure(figsize=figsize, layout=kw.pop("layout", None))
+    return fig, fig.subplots(nrows, ncols, **kw)
