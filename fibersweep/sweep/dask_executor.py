@@ -25,6 +25,7 @@ import logging
 import math
 from collections import Counter, deque
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any
 
 from fibersweep.errors import InputError, RunBug
@@ -126,6 +127,23 @@ def _split(tasks: Sequence[_Keyed], sizes: Sequence[int]) -> list[list[_Keyed]]:
         chunks.append(list(tasks[start : start + size]))
         start += size
     return chunks
+
+
+@contextmanager
+def _quiet_dask() -> Iterator[None]:
+    """Dask logs every worker start and stop at INFO: keep a plain run quiet.
+
+    Only while the executor runs; the ``distributed`` logger's level is restored
+    afterwards, so the caller's logging is left as it was.
+    """
+    logger = logging.getLogger("distributed")
+    old = logger.level
+    if not log.isEnabledFor(logging.INFO):
+        logger.setLevel(logging.WARNING)
+    try:
+        yield
+    finally:
+        logger.setLevel(old)
 
 
 def run_chunk(fn: Callable[[Any], Any], tasks: Sequence[_Keyed]) -> list[Outcome]:
@@ -318,9 +336,6 @@ class DaskExecutor:
                 raise InputError(
                     f"cannot reach the Dask scheduler at {self.scheduler}: {exc}"
                 ) from None
-        if not log.isEnabledFor(logging.INFO):
-            # Dask logs every worker start and stop at INFO; keep a plain run quiet.
-            logging.getLogger("distributed").setLevel(logging.WARNING)
         cluster = local_cluster(self.workers)
         return Client(cluster), cluster
 
@@ -341,14 +356,15 @@ class DaskExecutor:
         if len({t.key for t in tasks}) != len(tasks):
             raise InputError("task keys must be unique (they name the Dask tasks)")
         self.chunks_submitted = 0
-        client, cluster = self._client()
-        try:
-            client.register_plugin(InitPlugin(initializer, initargs), name="fibersweep-init")
-            yield from self._run_chunks(client, fn, tasks)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+        with _quiet_dask():
+            client, cluster = self._client()
+            try:
+                client.register_plugin(InitPlugin(initializer, initargs), name="fibersweep-init")
+                yield from self._run_chunks(client, fn, tasks)
+            finally:
+                client.close()
+                if cluster is not None:
+                    cluster.close()
 
     def _run_chunks(
         self, client: Any, fn: Callable[[Any], Any], tasks: Sequence[_Keyed]

@@ -183,3 +183,14 @@ def test_local_cluster_serves_no_web_pages():
             assert exc.value.code == 404
     finally:
         cluster.close()
+
+
+def test_dask_leaves_the_callers_logging_as_it_was():
+    """The executor quiets Dask's INFO chatter only while it runs (no global change)."""
+    import logging
+
+    logger = logging.getLogger("distributed")
+    before = logger.level
+    outs = list(DaskExecutor(workers=1).run(square, [Job("a", 2.0)]))
+    assert [o.value["x2"] for o in outs] == [4.0]
+    assert logger.level == before
