@@ -14,7 +14,7 @@ import difflib
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any
 
 import numpy as np
 import yaml
@@ -229,7 +229,7 @@ class RunSettings(_Strict):
     workers: int = Field(2, ge=1, description="worker processes")
     output: str = Field("results/run", description="output directory")
     cache_dir: str = Field(".fibersweep-cache", description="flow-field cache directory")
-    executor: Literal["local", "dask"] = Field("local", description="local pool or Dask")
+    executor: str = Field("local", description="executor name (local pool or dask)")
     scheduler: str | None = Field(None, description="Dask scheduler address tcp://HOST:PORT")
     flush_every: int = Field(
         32, ge=1, description="finished runs per Parquet part file (also flushed on exit)"
@@ -248,6 +248,17 @@ class RunSettings(_Strict):
         ge=1,
         description="refuse sweeps with more points than this (raise it on purpose)",
     )
+
+    @field_validator("executor")
+    @classmethod
+    def _known_executor(cls, name: str) -> str:
+        from fibersweep.sweep.executors import EXECUTORS  # the registry decides
+
+        if name not in EXECUTORS:
+            close = difflib.get_close_matches(name, list(EXECUTORS), n=1)
+            hint = f"did you mean '{close[0]}'? " if close else ""
+            raise ValueError(f"unknown executor; {hint}valid: {', '.join(EXECUTORS)}")
+        return name
 
     @model_validator(mode="after")
     def _scheduler_address(self) -> RunSettings:
