@@ -56,7 +56,8 @@ def synth(
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
         table, tr = synthesize(
             field, cfg.fiber, _sweep_box(cfg), n, effects, seed=seed,
-            workers=workers or cfg.run.workers,
+            workers=workers or cfg.run.workers, executor=cfg.run.executor,
+            scheduler=cfg.run.scheduler,
         )  # fmt: skip
         write_table(table, output)
         tpath = truth or output.with_suffix(".truth.json")
@@ -103,6 +104,7 @@ def discrepancy(
         settings = DiscrepancySettings(
             copies=copies, budget=budget, seed=seed, alpha=alpha,
             workers=workers or cfg.run.workers,
+            executor=cfg.run.executor, scheduler=cfg.run.scheduler,
             effects=tuple(e.strip() for e in effects.split(",")) if effects else None,
         )  # fmt: skip
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
