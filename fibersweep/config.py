@@ -150,6 +150,19 @@ Axis = Annotated[
 ]
 
 
+class FieldError(ValueError):
+    """A check across several fields that fails at one of them.
+
+    Raised by model validators with the field's dotted ``path`` relative to the
+    model that raised it; the config loader reports the problem at that field's
+    line instead of at the model's.
+    """
+
+    def __init__(self, path: str, message: str) -> None:
+        super().__init__(message)
+        self.path = tuple(path.split("."))
+
+
 def axis_count(axis: Axis) -> int:
     """Number of values of one sweep axis, without making them."""
     if isinstance(axis, (RangeSpec, LinspaceSpec)):
@@ -263,8 +276,8 @@ class RunSettings(_Strict):
     @model_validator(mode="after")
     def _scheduler_address(self) -> RunSettings:
         if self.scheduler is not None and "://" not in self.scheduler:
-            raise ValueError(
-                f"scheduler: expected an address like tcp://HOST:PORT, got {self.scheduler!r}"
+            raise FieldError(
+                "scheduler", f"expected an address like tcp://HOST:PORT, got {self.scheduler!r}"
             )
         return self
 
@@ -282,9 +295,10 @@ class Config(_Strict):
         """Refuse huge sweeps at once, before any point is made (counted, not listed)."""
         n = self.sweep.size
         if n > self.run.max_points:
-            raise ValueError(
-                f"sweep: {n:,} points, more than run.max_points ({self.run.max_points:,}); "
-                "use fewer points, or raise run.max_points (or --max-points) if you mean it"
+            raise FieldError(
+                "sweep",
+                f"{n:,} points, more than run.max_points ({self.run.max_points:,}); "
+                "use fewer points, or raise run.max_points (or --max-points) if you mean it",
             )
         return self
 
@@ -312,7 +326,7 @@ class Config(_Strict):
                 bad.setdefault(path, msg)  # first problem per field is enough to act on
         if bad:
             path, msg = next(iter(bad.items()))
-            raise ValueError(f"{path}: {msg}")
+            raise FieldError(path, msg)
         return self
 
     def _starts_to_check(self, geo: Any, r_cut: float) -> list[FiberStart]:
@@ -428,11 +442,11 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
         p for p in loc if not (isinstance(p, str) and ("[" in p or ":" in p or p in {"float"}))
     )
     msg = err["msg"].removeprefix("Value error, ")
-    named = re.match(r"^([a-z_0-9]+(?:\.[a-z_0-9]+)*): (.*)$", msg, flags=re.S)
-    if named and not loc:
-        # A whole-config check that names its field: report it at that field.
-        loc = tuple(named.group(1).split("."))
-        msg = named.group(2)
+    raised = (err.get("ctx") or {}).get("error")
+    if isinstance(raised, FieldError):
+        # A cross-field check names the field it is about: report it there.
+        loc = loc + raised.path
+        msg = str(raised)
     dotted = ".".join(str(p) for p in loc) or "<top level>"
     line = None
     for k in range(len(loc), -1, -1):

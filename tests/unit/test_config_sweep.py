@@ -177,3 +177,11 @@ def test_executor_names_come_from_the_registry(tmp_path):
         in str(ei.value)
     )
     assert load_config(_write(tmp_path, "run:\n  executor: dask\n")).run.executor == "dask"
+
+
+def test_cross_field_checks_report_at_their_field(tmp_path):
+    """Model-level checks name their field structurally (FieldError), not in the text."""
+    p = _write(tmp_path, "run:\n  executor: dask\n  scheduler: foo\n")
+    with pytest.raises(ConfigError) as ei:
+        load_config(p)
+    assert "run.scheduler (line 3): expected an address like tcp://HOST:PORT" in str(ei.value)
