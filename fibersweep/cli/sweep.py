@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import enum
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
+from fibersweep.analysis.classify import RULES
 from fibersweep.cli._app import (
     ConfigArg,
     Verbose,
@@ -18,6 +20,9 @@ from fibersweep.cli._app import (
     app,
 )
 from fibersweep.errors import InputError, Terminated
+
+#: Choices of ``classify --rule``, from the rule registry.
+Rule = enum.Enum("Rule", {name: name for name in RULES}, type=str)
 
 
 def _fmt_s(s: float | None) -> str:
@@ -218,12 +223,23 @@ def classify(
     trap_speed: Annotated[
         float | None, typer.Option(help="'Stopped': COM speed below this fraction of U_center.")
     ] = None,
+    rule: Annotated[
+        Rule | None,
+        typer.Option(help="Pole-vaulting rule: head-speed (the source's), pivot or switch."),
+    ] = None,
+    pivot_fraction: Annotated[
+        float | None, typer.Option(help="pivot rule: head travel below this x L while turning.")
+    ] = None,
     config: Annotated[
         Path | None, typer.Option("--config", "-c", help="Take thresholds from this config.")
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Re-classify stored trajectories with new thresholds (no simulation)."""
+    """Re-classify stored trajectories with new thresholds or rule (no simulation).
+
+    The runs table gets one class column per rule (class_head_speed, class_pivot,
+    class_switch); 'class' is the chosen rule's.
+    """
     _setup_logging(verbose)
     with _errors():
         from fibersweep.sweep.reclassify import reclassify, thresholds_for
@@ -235,6 +251,8 @@ def classify(
             head_blocked_speed=head_blocked_speed,
             trap_time=trap_time,
             trap_speed=trap_speed,
+            rule=rule.value if rule is not None else None,
+            pivot_fraction=pivot_fraction,
         )
         res = reclassify(results, th)
     typer.echo(f"re-classified {res.n_runs} runs ({res.n_changed} changed) with {th}")

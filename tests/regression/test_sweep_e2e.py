@@ -311,12 +311,22 @@ def test_classify_uses_the_speed_the_runs_moved_in(
     seen = []
     real = classify_module.classify
 
-    def spy(traj, geometry, u_center, thresholds):
+    def spy(traj, geometry, u_center, thresholds, rule=None):
         seen.append(u_center)
-        return real(traj, geometry, u_center, thresholds)
+        return real(traj, geometry, u_center, thresholds, rule)
 
     monkeypatch.setattr(classify_module, "classify", spy)
     before = read_runs(out)
     r = reclassify(out, ClassifySettings())
     assert r.n_changed == 0 and (read_runs(out)["class"] == before["class"]).all()
-    assert len(seen) == len(before) and set(seen) == {man["u_center_effective"]}
+    # every run, under every rule, judged with the effective speed
+    from fibersweep.analysis.classify import RULES
+    from fibersweep.sweep.reclassify import rule_column
+
+    assert len(seen) == len(RULES) * len(before) and set(seen) == {man["u_center_effective"]}
+    after = read_runs(out)  # one class column per rule, 'class' the default rule's
+    assert (after["class"] == after[rule_column("head-speed")]).all()
+    assert {rule_column(r) for r in RULES} <= set(after.columns)
+    res, text = _invoke("classify", out, "--rule", "switch")
+    assert res.exit_code == 0 and "rule='switch'" in text, text
+    assert (read_runs(out)["class"] == after[rule_column("switch")]).all()
