@@ -10,8 +10,10 @@ did-you-mean for misspelled keys.
 
 from __future__ import annotations
 
+import copy
 import difflib
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
@@ -39,8 +41,10 @@ __all__ = [
     "Axis",
     "Config",
     "ConfigError",
+    "FieldError",
     "RunSettings",
     "SweepSettings",
+    "apply_overrides",
     "load_config",
     "parse_config",
 ]
@@ -453,7 +457,8 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
         if loc[:k] in lines:
             line = lines[loc[:k]]
             break
-    where = f" (line {line})" if line else ""
+    # a YAML line number, or the label of a command-line override
+    where = f" (line {line})" if isinstance(line, int) else (f" ({line})" if line else "")
     if err["type"] == "extra_forbidden":
         parent = _model_at(loc[:-1])
         hint = ""
@@ -472,7 +477,7 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
 
 
 def parse_config(
-    data: Any, lines: dict[tuple, int] | None = None, source: str = "config"
+    data: Any, lines: dict[tuple, int | str] | None = None, source: str = "config"
 ) -> Config:
     """Validate a config mapping.
 
@@ -496,16 +501,83 @@ def parse_config(
         raise ConfigError(seen, source) from None
 
 
-def load_config(path: str | Path, *, max_points: int | None = None) -> Config:
-    """Read and validate a YAML config file.
+def apply_overrides(
+    data: dict[str, Any], lines: dict[tuple, int | str], overrides: Sequence[str]
+) -> dict[str, Any]:
+    """Apply ``KEY=VALUE`` overrides (dotted keys, YAML values) to a config mapping.
 
-    ``max_points`` (the command line's ``--max-points``) replaces ``run.max_points``
-    before validation, so a large sweep can be allowed without editing the file.
+    Parameters
+    ----------
+    data : dict
+        The config as read from YAML (not modified).
+    lines : dict
+        Key path -> YAML line; each overridden path is relabelled with its
+        override, so a problem with it is reported as ``(override KEY=VALUE)``.
+    overrides : sequence of str
+        E.g. ``fiber.contact.chi=1.2``, ``sweep.y0=[0.3, 0.4]``, ``flow.dx=2``.
+        Values are YAML: numbers, booleans, strings, ``[lists]`` and ``{maps}``.
+
+    Returns
+    -------
+    dict
+        A new mapping with the overrides applied, in order (a later one wins).
 
     Raises
     ------
     ConfigError
-        Unreadable file, invalid YAML, or invalid settings (each named).
+        Malformed overrides, each named (the schema then checks keys and values).
+    """
+    out: dict[str, Any] = copy.deepcopy(data)
+    problems = []
+    for item in overrides:
+        key, sep, raw = item.partition("=")
+        path = tuple(p.strip() for p in key.split("."))
+        if not sep or not all(path):
+            problems.append(
+                f"override {item!r}: expected KEY=VALUE with a dotted key, "
+                "e.g. fiber.contact.chi=1.2"
+            )
+            continue
+        try:
+            value = yaml.load(raw, Loader=_Loader) if raw.strip() else None
+        except yaml.YAMLError as exc:
+            problems.append(f"override {item!r}: the value is not valid YAML ({exc})")
+            continue
+        node = out
+        for depth, part in enumerate(path[:-1]):
+            child = node.setdefault(part, {})
+            if child is None:
+                child = node[part] = {}
+            if not isinstance(child, dict):
+                where = ".".join(path[: depth + 1])
+                problems.append(f"override {item!r}: {where} is a value, not a section")
+                break
+            node = child
+        else:
+            node[path[-1]] = value
+            label = f"override {item}"
+            lines[path] = label
+            for k in range(1, len(path)):
+                lines.setdefault(path[:k], label)
+    if problems:
+        raise ConfigError(problems)
+    return out
+
+
+def load_config(
+    path: str | Path, overrides: Sequence[str] = (), *, max_points: int | None = None
+) -> Config:
+    """Read and validate a YAML config file, with command-line overrides.
+
+    ``overrides`` are ``KEY=VALUE`` strings (:func:`apply_overrides`), validated by
+    the same schema with the same messages. ``max_points`` (the command line's
+    ``--max-points``) replaces ``run.max_points`` before validation, so a large
+    sweep can be allowed without editing the file.
+
+    Raises
+    ------
+    ConfigError
+        Unreadable file, invalid YAML, bad overrides or invalid settings (each named).
     """
     p = Path(path)
     try:
@@ -519,6 +591,14 @@ def load_config(path: str | Path, *, max_points: int | None = None) -> Config:
     except ConfigError as exc:
         raise ConfigError(exc.problems, str(p)) from None
     data = located.data
+    if overrides:
+        if data is None:
+            data = {}
+        if isinstance(data, dict):
+            try:
+                data = apply_overrides(data, located.lines, overrides)
+            except ConfigError as exc:
+                raise ConfigError(exc.problems, str(p)) from None
     if max_points is not None and isinstance(data, dict):
         run = data.get("run") if isinstance(data.get("run"), dict) else {}
         data = {**data, "run": {**run, "max_points": max_points}}

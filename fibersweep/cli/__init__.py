@@ -25,6 +25,7 @@ from fibersweep.cli import flow
 from fibersweep.cli import fiber
 from fibersweep.cli import sweep
 from fibersweep.cli import discrepancy
+from fibersweep.cli import show
 
 # isort: on
 
@@ -38,6 +39,7 @@ __all__ = [
     "discrepancy",
     "fiber",
     "flow",
+    "show",
     "main",
     "sweep",
 ]

@@ -11,6 +11,7 @@ import typer
 from fibersweep.analysis.classify import RULES
 from fibersweep.cli._app import (
     ConfigArg,
+    Overrides,
     Verbose,
     Workers,
     _errors,
@@ -48,6 +49,7 @@ def _with_run_overrides(cfg, **kw):
 @app.command()
 def run(
     config: ConfigArg,
+    overrides: Overrides = None,
     workers: Workers = None,
     resume: Annotated[
         bool, typer.Option("--resume/--no-resume", help="Keep finished runs (default).")
@@ -76,7 +78,7 @@ def run(
     """Run a sweep: flow field (cached), fiber runs across workers, Parquet results."""
     _setup_logging(verbose)
     with _interruptible(), _errors():
-        cfg = _load(config, max_points=max_points)
+        cfg = _load(config, overrides, max_points=max_points)
         if scheduler and executor is None:
             executor = "dask"
         cfg = _with_run_overrides(
@@ -89,7 +91,7 @@ def run(
         if dry_run:
             _dry_run(cfg, resume, retry_failed)
             return
-        failed = _run(cfg, resume, retry_failed)
+        failed = _run(cfg, resume, retry_failed, overrides or [])
     if failed:
         raise typer.Exit(1)
 
@@ -129,7 +131,7 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     )
 
 
-def _run(cfg, resume: bool, retry_failed: bool) -> bool:
+def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = None) -> bool:
     """Run the sweep with a progress bar; True if any run of the table failed."""
     from collections import Counter
 
@@ -172,8 +174,9 @@ def _run(cfg, resume: bool, retry_failed: bool) -> bool:
     )
     try:
         summary = run_sweep(
-            cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan
-        )
+            cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan,
+            overrides=overrides,
+        )  # fmt: skip
     except KeyboardInterrupt as exc:
         if bar is not None:
             bar.close()

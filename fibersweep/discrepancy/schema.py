@@ -239,8 +239,7 @@ def _unknown_columns(columns: list[str]) -> list[str]:
         problems.append(f"{name}: unknown column; {hint}(known: {', '.join(known)})")
     if problems:
         problems.append(
-            "leave out columns the tool does not use, or pass --ignore-extra-columns "
-            "to ignore them"
+            "leave out columns the tool does not use, or pass --ignore-extra-columns to ignore them"
         )
     return problems
 

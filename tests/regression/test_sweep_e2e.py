@@ -330,3 +330,15 @@ def test_classify_uses_the_speed_the_runs_moved_in(
     res, text = _invoke("classify", out, "--rule", "switch")
     assert res.exit_code == 0 and "rule='switch'" in text, text
     assert (read_runs(out)["class"] == after[rule_column("switch")]).all()
+
+
+def test_run_with_overrides_records_them(tmp_path, coarse_field, flow_cache_dir):
+    cfg = _config(tmp_path, flow_cache_dir, "ov")
+    res, text = _invoke("run", cfg, "sweep.y0=[0.9]", "sweep.theta0=0", "fiber.contact.chi=1.2")
+    assert res.exit_code == 0, text
+    man = json.loads((tmp_path / "ov" / "manifest.json").read_text())
+    assert man["overrides"] == ["sweep.y0=[0.9]", "sweep.theta0=0", "fiber.contact.chi=1.2"]
+    assert man["config"]["fiber"]["contact"]["chi"] == 1.2
+    assert len(read_runs(tmp_path / "ov")) == 1
+    res, text = _invoke("run", cfg, "fiber.contact.chii=1.2")
+    assert res.exit_code == 2 and "(override fiber.contact.chii=1.2): unknown key" in text
