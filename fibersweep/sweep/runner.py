@@ -200,7 +200,13 @@ def _run_locked(
         "state": "running",
     }
     write_manifest(out, manifest)
-    meta = {"fibersweep": prov["fibersweep"], "git": prov["git"], "flow_key": info.key}
+    meta = {
+        "fibersweep": prov["fibersweep"],
+        "git": prov["git"],
+        "flow_key": info.key,
+        "config": manifest["config"],
+        "overrides": manifest["overrides"],
+    }
     summary = SweepSummary(out=out)
     spec = WorkerSpec(
         flow_json=cfg.flow.model_dump_json(),

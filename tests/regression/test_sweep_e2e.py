@@ -342,3 +342,17 @@ def test_run_with_overrides_records_them(tmp_path, coarse_field, flow_cache_dir)
     assert len(read_runs(tmp_path / "ov")) == 1
     res, text = _invoke("run", cfg, "fiber.contact.chii=1.2")
     assert res.exit_code == 2 and "(override fiber.contact.chii=1.2): unknown key" in text
+
+
+def test_parquet_fields_carry_units_and_the_config(reference):
+    """A runs part read outside fibersweep says what each column holds and how it was made."""
+    _, out, _ = reference
+    part = list_parts(out / RUNS_DIR)[0]
+    schema = pq.read_schema(part)
+    assert schema.field("y0").metadata == {
+        b"unit": b"h_obs",
+        b"doc": b"start lateral position of the centre of mass, from the pillar base line",
+    }
+    assert schema.field("y_f").metadata[b"unit"] == "µm".encode()
+    meta = json.loads(schema.metadata[b"fibersweep"])
+    assert meta["config"]["flow"]["dx"] == 4.0 and meta["overrides"] == []
