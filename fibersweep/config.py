@@ -12,7 +12,10 @@ from __future__ import annotations
 
 import copy
 import difflib
+import itertools
 import re
+import types
+import typing
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,6 +42,7 @@ from fibersweep.flow.settings import FlowSettings
 
 __all__ = [
     "Axis",
+    "Combination",
     "Config",
     "ConfigError",
     "FieldError",
@@ -47,6 +51,9 @@ __all__ = [
     "apply_overrides",
     "load_config",
     "parse_config",
+    "setting_annotation",
+    "setting_axis_values",
+    "setting_column",
 ]
 
 
@@ -162,9 +169,10 @@ class FieldError(ValueError):
     line instead of at the model's.
     """
 
-    def __init__(self, path: str, message: str) -> None:
+    def __init__(self, path: str | tuple, message: str) -> None:
         super().__init__(message)
-        self.path = tuple(path.split("."))
+        # a tuple keeps parts that hold dots themselves (a swept setting key)
+        self.path = tuple(path) if isinstance(path, tuple) else tuple(path.split("."))
 
 
 def axis_count(axis: Axis) -> int:
@@ -184,14 +192,28 @@ def axis_values(axis: Axis) -> np.ndarray:
 
 
 class SweepSettings(_Strict):
-    """Sweep over the start angle, lateral position and length.
+    """Sweep over the start angle, lateral position and length, and any other setting.
 
-    Each axis is a number, a list, ``{start, stop, step}`` or ``{start, stop, num}``.
+    Each start axis is a number, a list, ``{start, stop, step}`` or ``{start, stop, num}``.
+    Any other key is a dotted setting key (``fiber.effects.friction``,
+    ``flow.geometry.pillar_height``) swept as an axis in the same forms, or a list
+    of values of any type (``fiber.contact.pillar: [rough, smooth]``); the setting
+    axes are combined as a product. ``zip`` holds a mapping of setting keys (or a
+    list of such mappings) whose value lists are swept together, one combination
+    per position. Every combination is validated as a whole config
+    (:meth:`Config.combinations`).
     """
+
+    model_config = ConfigDict(extra="allow", frozen=True)
 
     theta0: Axis = Field(0.0, description="start angle from +x [degrees]")
     y0: Axis = Field(0.5, description="start lateral position from the base / h_obs")
     length: Axis = Field(1.0, description="fiber length / l_obs")
+    zip: Any = Field(
+        None,
+        description="setting keys swept together: a mapping key -> values (same lengths), "
+        "or a list of such mappings",
+    )
 
     @field_validator("theta0", "y0", "length")
     @classmethod
@@ -207,9 +229,108 @@ class SweepSettings(_Strict):
             raise ValueError(f"lengths must be positive; got {_show(v[v <= 0])}")
         return axis
 
+    @field_validator("zip", mode="before")
+    @classmethod
+    def _zip_shape(cls, value: Any) -> Any:
+        if value is None or isinstance(value, dict):
+            return value
+        if isinstance(value, list) and value and all(isinstance(g, dict) for g in value):
+            return value
+        raise ValueError(
+            "expected a mapping of setting keys to value lists (swept together), "
+            "or a list of such mappings"
+        )
+
+    @model_validator(mode="after")
+    def _setting_axes_valid(self) -> SweepSettings:
+        """Keys name settings, values are axis forms, zipped lists are equally long."""
+        seen: dict[str, tuple] = {}
+        for loc, key, raw in self.axis_items():
+            if "." not in key:
+                close = difflib.get_close_matches(key, _START_AXES + ("zip",), n=1, cutoff=0.5)
+                hint = f"; did you mean '{close[0]}'?" if close else ""
+                raise FieldError(
+                    loc,
+                    f"unknown key{hint} Valid keys here: {', '.join(_START_AXES)}, zip, "
+                    "or a dotted setting key such as fiber.effects.friction",
+                )
+            try:
+                setting_annotation(key)
+                values = setting_axis_values(raw)
+            except ValueError as exc:
+                raise FieldError(loc, str(exc)) from None
+            if key in seen:
+                where = ".".join(str(p) for p in ("sweep", *seen[key]))
+                raise FieldError(loc, f"{key} is swept twice (also at {where}); keep one")
+            seen[key] = loc
+            del values
+        for gloc, group in self._zip_groups():
+            sizes = {k: len(setting_axis_values(v)) for k, v in group.items()}
+            if len(set(sizes.values())) > 1:
+                shown = ", ".join(f"{k}: {n}" for k, n in sizes.items())
+                raise FieldError(
+                    gloc, f"zipped keys need value lists of the same length; got {shown}"
+                )
+        return self
+
+    def _zip_groups(self) -> list[tuple[tuple, dict[str, Any]]]:
+        """(location relative to ``sweep``, mapping) of each zip group."""
+        if self.zip is None:
+            return []
+        if isinstance(self.zip, dict):
+            return [(("zip",), self.zip)]
+        return [(("zip", i), g) for i, g in enumerate(self.zip)]
+
+    def axis_items(self) -> list[tuple[tuple, str, Any]]:
+        """Every setting axis as (location relative to ``sweep``, dotted key, raw value).
+
+        Product axes first (in the order written), then each zip group's keys.
+        """
+        out = [((k,), k, v) for k, v in (self.model_extra or {}).items()]
+        for gloc, group in self._zip_groups():
+            out.extend(((*gloc, k), k, v) for k, v in group.items())
+        return out
+
+    @property
+    def setting_keys(self) -> list[str]:
+        """The swept setting keys (dotted), product axes first, then zipped ones."""
+        return [k for _, k, _ in self.axis_items()]
+
+    def assignments(self) -> list[dict[str, Any]]:
+        """Every combination of the setting axes as {dotted key: raw value}.
+
+        The product of the product axes and the zip groups, the first written
+        varying slowest. ``[{}]`` when no setting is swept.
+        """
+        factors: list[list[dict[str, Any]]] = [
+            [{k: v} for v in setting_axis_values(raw)]
+            for k, raw in (self.model_extra or {}).items()
+        ]
+        for _, group in self._zip_groups():
+            cols = {k: setting_axis_values(v) for k, v in group.items()}
+            n = len(next(iter(cols.values()))) if cols else 0
+            factors.append([{k: vals[i] for k, vals in cols.items()} for i in range(n)])
+        out = []
+        for combo in itertools.product(*factors):
+            merged: dict[str, Any] = {}
+            for part in combo:
+                merged.update(part)
+            out.append(merged)
+        return out
+
+    @property
+    def n_combinations(self) -> int:
+        """Number of setting combinations, without making them."""
+        n = 1
+        for raw in (self.model_extra or {}).values():
+            n *= setting_axis_count(raw)
+        for _, group in self._zip_groups():
+            n *= setting_axis_count(next(iter(group.values()))) if group else 1
+        return n
+
     @property
     def size(self) -> int:
-        """Number of sweep points (product of the axis sizes), without making them."""
+        """Number of start points (product of the three start axes), without making them."""
         return axis_count(self.theta0) * axis_count(self.y0) * axis_count(self.length)
 
     def grid(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -232,6 +353,150 @@ class SweepSettings(_Strict):
             FiberStart(theta0=float(t), y0=float(y), length=float(L))
             for t, y, L in zip(*self.grid(), strict=True)
         ]
+
+
+_START_AXES = ("theta0", "y0", "length")
+
+
+def _range_form(raw: dict) -> RangeSpec | LinspaceSpec | None:
+    keys = set(raw)
+    if keys == {"start", "stop", "step"}:
+        return RangeSpec.model_validate(raw)
+    if keys == {"start", "stop", "num"}:
+        return LinspaceSpec.model_validate(raw)
+    return None
+
+
+def setting_axis_count(raw: Any) -> int:
+    """Number of values of a setting axis, without making them (form assumed valid)."""
+    if isinstance(raw, dict):
+        spec = _range_form(raw)
+        return spec.count() if spec is not None else 1
+    return len(raw) if isinstance(raw, list) else 1
+
+
+def setting_axis_values(raw: Any) -> list[Any]:
+    """The values of a setting axis, in order.
+
+    Parameters
+    ----------
+    raw : Any
+        A single value (number, string, boolean), a list of values of any type
+        (each element one value), ``{start, stop, step}`` or ``{start, stop, num}``
+        (numbers rounded to 12 digits, as for the start axes).
+
+    Raises
+    ------
+    ValueError
+        Another mapping, an empty list, or a bad range.
+    """
+    if isinstance(raw, dict):
+        try:
+            spec = _range_form(raw)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            where = ".".join(str(p) for p in first["loc"])
+            msg = first["msg"].removeprefix("Value error, ")
+            raise ValueError(f"bad range{' ' + where if where else ''}: {msg}") from None
+        if spec is None:
+            raise ValueError(
+                "expected a value, a list of values, {start, stop, step} or {start, stop, num}; "
+                f"got a mapping with keys {', '.join(map(str, raw))}"
+            )
+        return [float(v) for v in np.round(spec.values(), 12)]
+    if isinstance(raw, list):
+        if not raw:
+            raise ValueError("no values")
+        return list(raw)
+    return [raw]
+
+
+def _unwrap(ann: Any) -> Any:
+    """``X | None`` -> X (the other members of a union are kept)."""
+    args = [a for a in typing.get_args(ann) if a is not type(None)]
+    if typing.get_origin(ann) in (typing.Union, types.UnionType) and len(args) == 1:
+        return args[0]
+    return ann
+
+
+def setting_annotation(key: str) -> tuple[Any, Any]:
+    """Type annotation and pydantic field of a dotted setting key that may be swept.
+
+    Walks the config models; inside a mapping setting (``fiber.effects``) the
+    next part is a mapping key and the value type is returned (field None).
+
+    Raises
+    ------
+    ValueError
+        Not a setting that changes results, or an unknown key (did-you-mean).
+    """
+    parts = key.split(".")
+    if any(not p for p in parts):
+        raise ValueError(f"{key!r}: empty part in the dotted key")
+    if parts[0] in ("run", "sweep"):
+        raise ValueError(
+            f"{parts[0]}.* settings do not change a run's result; they cannot be a sweep axis"
+        )
+    if parts[:2] == ["fiber", "classify"]:
+        raise ValueError(
+            "classification thresholds are not part of a run's id: re-label stored runs "
+            "with `fibersweep classify` instead of sweeping them"
+        )
+    model: Any = Config
+    ann: Any = Config
+    field: Any = None
+    for i, part in enumerate(parts):
+        if isinstance(model, type) and issubclass(model, BaseModel):
+            if part not in model.model_fields:
+                here = ".".join(parts[:i]) or "<top level>"
+                close = difflib.get_close_matches(part, list(model.model_fields), n=1, cutoff=0.5)
+                hint = f"; did you mean '{close[0]}'?" if close else ""
+                valid = ", ".join(k for k in model.model_fields if i or k in ("fiber", "flow"))
+                raise ValueError(
+                    f"unknown setting '{part}' in {here}{hint} Valid keys there: {valid}"
+                )
+            field = model.model_fields[part]
+            ann = _unwrap(field.annotation)
+        elif typing.get_origin(model) is dict:
+            ann, field = _unwrap(typing.get_args(model)[1]), None
+        else:
+            here = ".".join(parts[:i])
+            raise ValueError(f"{here} is a value, not a section: no '{part}' inside it")
+        model = ann
+    return ann, field
+
+
+def setting_column(key: str) -> tuple[str, str, str]:
+    """How a swept setting is stored as a runs-table column.
+
+    Returns
+    -------
+    kind : {'float', 'int', 'bool', 'string', 'json'}
+        Column type (``json``: a section or list, stored as its JSON text).
+    unit : str
+        From the ``[unit]`` in the field's description ('' if none).
+    doc : str
+        The field's description.
+    """
+    try:
+        ann, field = setting_annotation(key)
+    except ValueError:
+        return "json", "", f"swept setting {key}"
+    kind = "json"
+    if ann is bool:
+        kind = "bool"
+    elif ann is int:
+        kind = "int"
+    elif ann is float:
+        kind = "float"
+    elif ann is str or typing.get_origin(ann) is typing.Literal:
+        kind = "string"
+    desc = (field.description if field is not None else None) or ""
+    if field is None and key.startswith("fiber.effects."):
+        desc = f"strength of the effect {key.rsplit('.', 1)[1]} (0 = off)"
+    m = re.search(r"\[([^\]]+)\]", desc)
+    unit = m.group(1) if m else ""
+    return kind, unit, f"swept setting {key}: {desc}" if desc else f"swept setting {key}"
 
 
 def _show(values: np.ndarray, most: int = 3) -> str:
@@ -296,15 +561,62 @@ class Config(_Strict):
 
     @model_validator(mode="after")
     def _size_within_limit(self) -> Config:
-        """Refuse huge sweeps at once, before any point is made (counted, not listed)."""
-        n = self.sweep.size
+        """Refuse huge sweeps at once, before any point is made (counted, not listed).
+
+        Every setting combination counts: the limit is on start points times
+        combinations.
+        """
+        starts, combos = self.sweep.size, self.sweep.n_combinations
+        n = starts * combos
         if n > self.run.max_points:
+            how = f" ({starts:,} starts x {combos:,} setting combinations)" if combos > 1 else ""
             raise FieldError(
                 "sweep",
-                f"{n:,} points, more than run.max_points ({self.run.max_points:,}); "
+                f"{n:,} points{how}, more than run.max_points ({self.run.max_points:,}); "
                 "use fewer points, or raise run.max_points (or --max-points) if you mean it",
             )
         return self
+
+    @model_validator(mode="after")
+    def _combinations_valid(self) -> Config:
+        """Every setting combination is a valid config (same schema, same start check)."""
+        if self.sweep.setting_keys:
+            self.combinations()
+        return self
+
+    def combinations(self) -> list[Combination]:
+        """The configs the sweep runs: one per combination of the setting axes.
+
+        Each is this config with the combination's values applied and no setting
+        axes left, validated by the same schema (its start points checked with
+        :meth:`_starts_to_check`). Without setting axes: ``[Combination({}, self)]``.
+
+        Raises
+        ------
+        FieldError
+            A combination is invalid: at the axis whose value is at fault (its
+            value named), or at the field that failed with the combination named.
+        """
+        assignments = self.sweep.assignments()
+        if assignments == [{}]:
+            return [Combination({}, self)]
+        locs = {k: ("sweep", *loc) for loc, k, _ in self.sweep.axis_items()}
+        base = self.model_dump(mode="json")
+        base["sweep"] = {k: base["sweep"][k] for k in _START_AXES}
+        out = []
+        for assignment in assignments:
+            data = copy.deepcopy(base)
+            for key, value in assignment.items():
+                _set_path(data, key.split("."), value)
+            try:
+                cfg = Config.model_validate(data)
+            except ValidationError as exc:
+                raise _combination_error(exc, assignment, locs) from None
+            dumped = cfg.model_dump(mode="json")
+            values = {k: _get_path(dumped, k.split(".")) for k in assignment}
+            _check_effects(values, locs)
+            out.append(Combination(values, cfg))
+        return out
 
     @model_validator(mode="after")
     def _starts_fit(self) -> Config:
@@ -314,6 +626,8 @@ class Config(_Strict):
         makes (:func:`fibersweep.fiber.setup.check_start`); effects that move the
         start (start noise, pillar scale) are applied per run and checked there.
         """
+        if self.sweep.setting_keys:
+            return self  # each setting combination is checked as a config of its own
         from fibersweep.fiber.contact import make_pillar  # numba-backed: import lazily
         from fibersweep.fiber.setup import check_start
 
@@ -363,6 +677,80 @@ class Config(_Strict):
         clear[first_of_length] = False
         idx = np.flatnonzero(~clear)
         return [FiberStart(theta0=float(t[i]), y0=float(y[i]), length=float(L[i])) for i in idx]
+
+
+@dataclass(frozen=True)
+class Combination:
+    """One combination of the setting axes and the config it makes.
+
+    Attributes
+    ----------
+    values : dict
+        Swept dotted key -> the value as validated (JSON types: ``0.3``, ``"rough"``).
+    config : Config
+        The whole config with these values, no setting axes left.
+    """
+
+    values: dict[str, Any]
+    config: Config
+
+    @property
+    def label(self) -> str:
+        """``key=value, ...`` for messages ('' without setting axes)."""
+        return ", ".join(f"{k}={v}" for k, v in self.values.items())
+
+
+def _set_path(data: dict, parts: list[str], value: Any) -> None:
+    node = data
+    for part in parts[:-1]:
+        child = node.get(part)
+        if not isinstance(child, dict):
+            child = node[part] = {}
+        node = child
+    node[parts[-1]] = value
+
+
+def _get_path(data: Any, parts: list[str]) -> Any:
+    for part in parts:
+        data = data.get(part) if isinstance(data, dict) else None
+    return data
+
+
+def _combination_error(
+    exc: ValidationError, assignment: dict[str, Any], locs: dict[str, tuple]
+) -> FieldError:
+    """The first problem of an invalid combination, at the axis to blame when there is one."""
+    loc, msg, given = _error_parts(exc.errors()[0])
+    for key in assignment:
+        path = tuple(key.split("."))
+        n = min(len(path), len(loc))
+        if n and path[:n] == loc[:n]:
+            others = {k: v for k, v in assignment.items() if k != key}
+            with_ = f" (with {_show_assignment(others)})" if others else ""
+            return FieldError(locs[key], f"value {assignment[key]!r}{with_}: {msg}")
+    dotted = ".".join(str(p) for p in loc) or "<top level>"
+    given_s = "" if given is None or isinstance(given, dict) else f"; given {given!r}"
+    first = next(iter(assignment))
+    return FieldError(locs[first], f"with {_show_assignment(assignment)}: {dotted}: {msg}{given_s}")
+
+
+def _check_effects(values: dict[str, Any], locs: dict[str, tuple]) -> None:
+    """Swept effects exist and take the value (the registry checks names and ranges)."""
+    keys = [k for k in values if k.startswith("fiber.effects.")]
+    if not keys:
+        return
+    from fibersweep.fiber.effects import build_effects  # numba-backed: import lazily
+
+    for key in keys:
+        try:
+            build_effects({key.split(".", 2)[2]: values[key]})
+        except InputError as exc:
+            msg = str(exc).removeprefix("effects: ")
+            raise FieldError(locs[key], f"value {values[key]!r}: {msg}") from None
+
+
+def _show_assignment(assignment: dict[str, Any]) -> str:
+    return ", ".join(f"{k} = {v!r}" for k, v in assignment.items())
 
 
 # --------------------------------------------------------------------------- loading
@@ -439,7 +827,8 @@ def _model_at(path: tuple) -> type[BaseModel] | None:
     return model
 
 
-def _describe(err: dict, lines: dict[tuple, int]) -> str:
+def _error_parts(err: dict) -> tuple[tuple, str, Any]:
+    """(location, message, given input) of one pydantic error, union-branch names dropped."""
     loc = tuple(p for p in err["loc"] if not (isinstance(p, str) and p[:1].isupper()))
     # pydantic inserts union-branch names like 'list[float]'; drop them.
     loc = tuple(
@@ -451,6 +840,11 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
         # A cross-field check names the field it is about: report it there.
         loc = loc + raised.path
         msg = str(raised)
+    return loc, msg, err.get("input")
+
+
+def _describe(err: dict, lines: dict[tuple, int]) -> str:
+    loc, msg, given = _error_parts(err)
     dotted = ".".join(str(p) for p in loc) or "<top level>"
     line = None
     for k in range(len(loc), -1, -1):
@@ -471,8 +865,10 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
             valid = ", ".join(parent.model_fields)
             hint += f" Valid keys here: {valid}"
         return f"{dotted}{where}: unknown key{hint}"
-    given = err.get("input")
-    given_s = "" if isinstance(given, dict) else f"; given {given!r}"
+    raised = (err.get("ctx") or {}).get("error")
+    given_s = (
+        "" if isinstance(given, dict) or isinstance(raised, FieldError) else f"; given {given!r}"
+    )
     return f"{dotted}{where}: {msg}{given_s}"
 
 
