@@ -102,31 +102,57 @@ def _print_plan(plan, workers: int) -> None:
         f"{plan.done_failed} failed; to do now {len(plan.todo)}"
         + (f"; {plan.kept_other} rows from earlier sweeps kept" if plan.kept_other else "")
     )
+    if len(plan.settings) > 1 or plan.columns:
+        todo = {}
+        for t in plan.todo:
+            todo[t.settings] = todo.get(t.settings, 0) + 1
+        keys = ", ".join(plan.columns)
+        typer.echo(f"  {len(plan.settings)} setting combinations of {keys}:")
+        for st in plan.settings:
+            typer.echo(f"    {st.combination.label or '(base)'}: to do {todo.get(st.id, 0)}")
     if plan.fresh:
         typer.echo("  --no-resume: existing results will be moved to a previous-* folder")
     for note in plan.notes:
         typer.secho(f"  note: {note}", fg=typer.colors.YELLOW)
 
 
+def _fields_line(cfg) -> tuple[str, bool]:
+    """One line on the sweep's flow fields, and whether all are cached."""
+    from fibersweep.sweep.runner import flow_keys_for
+
+    fields = flow_keys_for(cfg)
+    missing = [k for k, (_, cached) in fields.items() if not cached]
+    if len(fields) == 1:
+        key, (flow, cached) = next(iter(fields.items()))
+        return f"flow field {key} ({flow.dx:g} µm grid): " + (
+            "cached" if cached else "NOT cached (it is computed first)"
+        ), cached
+    return (
+        f"{len(fields)} flow fields ({len(fields) - len(missing)} cached"
+        + (f", {len(missing)} computed first, once each" if missing else "")
+        + ")"
+    ), not missing
+
+
 def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     from dataclasses import replace
 
     from fibersweep.sweep.plan import plan_sweep
-    from fibersweep.sweep.runner import estimate_run_s, flow_key_for
+    from fibersweep.sweep.runner import estimate_run_s, flow_keys_for
 
-    key, cached = flow_key_for(cfg)
-    plan = plan_sweep(cfg, key, resume=resume, retry_failed=retry_failed)
+    plan = plan_sweep(cfg, None, resume=resume, retry_failed=retry_failed)
     _print_plan(plan, cfg.run.workers)
     per_run = plan.mean_run_s
     how = "mean of the finished runs"
+    line, _ = _fields_line(cfg)
+    cached = plan.todo and flow_keys_for(cfg)[plan.todo[len(plan.todo) // 2].flow_key][1]
     if per_run is None and cached and plan.todo:
         per_run = estimate_run_s(cfg, plan.todo)
         how = "timed on one run of this sweep"
     # same rule as SweepPlan.estimate_s: no more workers busy than runs to do
     est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(cfg.run.workers)
     typer.echo(
-        f"  flow field: {'cached' if cached else 'NOT cached (it is computed first)'}; "
-        f"estimate {_fmt_s(est)} on {cfg.run.workers} workers"
+        f"  {line}; estimate {_fmt_s(est)} on {cfg.run.workers} workers"
         + (f" ({per_run:.2f} s per run, {how})" if per_run is not None else "")
     )
 
@@ -165,13 +191,8 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
             )
             bar.update(1)
 
-    from fibersweep.sweep.runner import flow_key_for
-
-    key, cached = flow_key_for(cfg)
-    typer.echo(
-        f"flow field {key} ({cfg.flow.dx:g} µm grid): "
-        + ("cached" if cached else f"not cached, computing it once into {cfg.run.cache_dir} ...")
-    )
+    line, cached = _fields_line(cfg)
+    typer.echo(line if cached else f"{line}; computing into {cfg.run.cache_dir} ...")
     try:
         summary = run_sweep(
             cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan,

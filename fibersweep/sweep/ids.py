@@ -25,6 +25,7 @@ __all__ = [
     "fiber_result_settings",
     "run_id",
     "run_ids",
+    "settings_id",
     "stable_hash",
 ]
 
@@ -114,6 +115,16 @@ def run_ids(
         h.update(f"{_norm(t)!r},{_norm(y)!r},{_norm(L)!r}]}}".encode())
         out.append(h.hexdigest()[:ID_LENGTH])
     return out
+
+
+def settings_id(fiber: FiberSettings | dict[str, Any], flow_key: str) -> str:
+    """Id of a run's settings: the hash of its fiber result settings and flow key.
+
+    The runs of one setting combination share it (the ``settings`` column), and
+    a run's id is the hash of it with the start added (:func:`run_id`).
+    """
+    fs = fiber if isinstance(fiber, dict) else fiber_result_settings(fiber)
+    return stable_hash({"fiber": fs, "flow": flow_key})
 
 
 def diff_settings(old: Any, new: Any, prefix: str = "") -> list[str]:

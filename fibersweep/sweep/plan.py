@@ -6,18 +6,20 @@ Dask) and ``--dry-run``.
 
 from __future__ import annotations
 
+import copy
 import logging
 import shutil
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from fibersweep.config import Config
+from fibersweep.config import Combination, Config
 from fibersweep.errors import InputError
-from fibersweep.sweep.ids import diff_settings, fiber_result_settings, run_ids
+from fibersweep.sweep.ids import diff_settings, fiber_result_settings, run_ids, settings_id
 from fibersweep.sweep.manifest import read_manifest
 from fibersweep.sweep.store import (
     RUNS_DIR,
@@ -29,25 +31,160 @@ from fibersweep.sweep.store import (
 )
 from fibersweep.sweep.worker import SweepTask
 
-__all__ = ["SweepPlan", "make_tasks", "move_aside", "plan_sweep", "result_settings"]
+__all__ = [
+    "Setting",
+    "SweepPlan",
+    "base_settings",
+    "make_tasks",
+    "move_aside",
+    "plan_sweep",
+    "result_settings",
+    "sweep_settings",
+]
 
 log = logging.getLogger(__name__)
 
 
 def result_settings(cfg: Config, flow_key: str) -> dict[str, Any]:
-    """Everything that changes results, as stored in the manifest and compared on resume."""
+    """Everything that changes results, as stored in the manifest and compared on resume.
+
+    For a sweep over settings: its base config's (the swept keys are masked when
+    compared, :func:`base_settings`).
+    """
     return {"flow_key": flow_key, "fiber": fiber_result_settings(cfg.fiber)}
 
 
-def make_tasks(cfg: Config, flow_key: str) -> list[SweepTask]:
-    """One task per distinct sweep point (a repeated axis value is run once)."""
-    t, y, L = cfg.sweep.grid()
-    ids = run_ids(t, y, L, cfg.fiber, flow_key)
+def base_settings(
+    config_json: dict[str, Any], flow_key: str | None, swept: Sequence[str]
+) -> dict[str, Any]:
+    """The result settings of a config with the swept keys left out, for the resume check.
+
+    Parameters
+    ----------
+    config_json : dict
+        A config as JSON (``Config.model_dump(mode="json")`` or a manifest's).
+    flow_key : str or None
+        Its flow field's key, compared when no flow setting is swept.
+    swept : sequence of str
+        Dotted keys swept by the stored sweeps or this one: they may differ.
+
+    Returns
+    -------
+    dict
+        ``{"flow_key": ..., "fiber": ...}``, or ``{"flow": ..., "fiber": ...}`` with
+        the flow settings themselves when a flow setting is swept (its key differs
+        per run then).
+    """
+    fiber = copy.deepcopy(config_json.get("fiber", {}))
+    fiber.pop("classify", None)
+    out: dict[str, Any] = {"fiber": fiber}
+    flow_swept = any(k.startswith("flow.") for k in swept)
+    if flow_swept:
+        out["flow"] = copy.deepcopy(config_json.get("flow", {}))
+    else:
+        out["flow_key"] = flow_key
+    for key in swept:
+        parts = key.split(".")
+        node = out.get(parts[0])
+        for part in parts[1:-1]:
+            node = node.get(part) if isinstance(node, dict) else None
+        if isinstance(node, dict):
+            node.pop(parts[-1], None)
+    return out
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One setting combination of a sweep.
+
+    Attributes
+    ----------
+    id : str
+        Settings id (:func:`fibersweep.sweep.ids.settings_id`).
+    combination : Combination
+        The swept values and the config they make.
+    flow_key : str
+        Its flow field's key.
+    """
+
+    id: str
+    combination: Combination
+    flow_key: str
+
+    @property
+    def config(self) -> Config:
+        return self.combination.config
+
+
+def sweep_settings(cfg: Config, flow_key: str | Sequence[str] | None = None) -> list[Setting]:
+    """The setting combinations of a sweep, grouped by flow field (first seen first).
+
+    Parameters
+    ----------
+    cfg : Config
+    flow_key : str, sequence of str or None
+        Flow keys of :meth:`Config.combinations` (one string: the same for all);
+        None: each combination's own (:func:`fibersweep.flow.cache.cache_key`,
+        nothing computed).
+    """
+    combos = cfg.combinations()
+    if flow_key is None:
+        from fibersweep.flow.cache import cache_key
+
+        keys = [cache_key(c.config.flow) for c in combos]
+    elif isinstance(flow_key, str):
+        keys = [flow_key] * len(combos)
+    else:
+        keys = list(flow_key)
+    out = [Setting(settings_id(c.config.fiber, k), c, k) for c, k in zip(combos, keys, strict=True)]
+    order = {k: i for i, k in reversed(list(enumerate(keys)))}
+    return sorted(out, key=lambda s: order[s.flow_key])  # stable: axis order within a field
+
+
+def make_tasks(
+    cfg: Config,
+    flow_key: str | Sequence[str] | None = None,
+    columns: Sequence[str] | None = None,
+    settings: Sequence[Setting] | None = None,
+) -> list[SweepTask]:
+    """One task per distinct run (a repeated value or point is run once).
+
+    Parameters
+    ----------
+    cfg : Config
+    flow_key : str, sequence of str or None
+        See :func:`sweep_settings`.
+    columns : sequence of str, optional
+        Swept keys whose values each task carries (default: this sweep's); a
+        folder that also holds other sweeps' keys names them all.
+    settings : sequence of Setting, optional
+        :func:`sweep_settings`'s result, if already made.
+
+    Returns
+    -------
+    list of SweepTask
+        Setting by setting (grouped by flow field), each in start order.
+    """
+    settings = sweep_settings(cfg, flow_key) if settings is None else settings
+    columns = cfg.sweep.setting_keys if columns is None else list(columns)
     tasks: dict[str, SweepTask] = {}
-    for rid, ti, yi, Li in zip(ids, t.tolist(), y.tolist(), L.tolist(), strict=True):
-        if rid not in tasks:
-            tasks[rid] = SweepTask(rid, ti, yi, Li)
+    t, y, L = cfg.sweep.grid()
+    for st in settings:
+        values: tuple[tuple[str, Any], ...] = ()
+        if columns:
+            dumped = st.config.model_dump(mode="json")
+            values = tuple((k, _get(dumped, k)) for k in columns)
+        ids = run_ids(t, y, L, st.config.fiber, st.flow_key)
+        for rid, ti, yi, Li in zip(ids, t.tolist(), y.tolist(), L.tolist(), strict=True):
+            if rid not in tasks:
+                tasks[rid] = SweepTask(rid, ti, yi, Li, st.id, st.flow_key, values)
     return list(tasks.values())
+
+
+def _get(data: Any, key: str) -> Any:
+    for part in key.split("."):
+        data = data.get(part) if isinstance(data, dict) else None
+    return data
 
 
 @dataclass(frozen=True)
@@ -74,6 +211,11 @@ class SweepPlan:
         Mean wall time of the finished runs [s], for the estimate.
     fresh : bool
         True when existing results will be moved aside.
+    settings : list of Setting
+        The sweep's setting combinations (one without setting axes).
+    columns : list of str
+        Swept keys of the folder: this sweep's and the stored sweeps' (one
+        runs-table column each).
     """
 
     out: Path
@@ -86,6 +228,8 @@ class SweepPlan:
     notes: list[str] = field(default_factory=list)
     mean_run_s: float | None = None
     fresh: bool = False
+    settings: list[Setting] = field(default_factory=list)
+    columns: list[str] = field(default_factory=list)
 
     def estimate_s(self, workers: int) -> float | None:
         """Wall-clock estimate for ``todo`` on ``workers`` workers [s] (None if unknown)."""
@@ -96,7 +240,7 @@ class SweepPlan:
 
 def plan_sweep(
     cfg: Config,
-    flow_key: str,
+    flow_key: str | Sequence[str] | None = None,
     *,
     resume: bool = True,
     retry_failed: bool = False,
@@ -107,8 +251,9 @@ def plan_sweep(
     Parameters
     ----------
     cfg : Config
-    flow_key : str
-        Hash of the flow field.
+    flow_key : str, sequence of str or None
+        Hash of the flow field, or one per setting combination; None: computed
+        from the settings (:func:`sweep_settings`).
     resume : bool
         Keep finished runs (default). False starts over; old results are moved
         aside by :func:`move_aside`, never deleted.
@@ -124,8 +269,12 @@ def plan_sweep(
         The output holds results made with different settings and ``resume`` is on.
     """
     out = Path(cfg.run.output)
-    tasks = make_tasks(cfg, flow_key)
     manifest = read_manifest(out)
+    settings = sweep_settings(cfg, flow_key)
+    swept = list(cfg.sweep.setting_keys)
+    stored_swept = [k for k in (manifest or {}).get("swept", []) if k not in swept]
+    columns = swept + stored_swept
+    tasks = make_tasks(cfg, columns=columns, settings=settings)
     notes: list[str] = []
     bad = [p for p, _ in unreadable_parts(out)]
     if bad and repair:
@@ -141,7 +290,16 @@ def plan_sweep(
     have_results = len(runs) > 0
     changes: list[str] = []
     if manifest is not None and "result_settings" in manifest:
-        changes = diff_settings(manifest["result_settings"], result_settings(cfg, flow_key))
+        if columns:  # settings swept here or before: compare the rest
+            old_key = manifest["result_settings"].get("flow_key")
+            changes = diff_settings(
+                base_settings(manifest.get("config", {}), old_key, columns),
+                base_settings(cfg.model_dump(mode="json"), settings[0].flow_key, columns),
+            )
+        else:
+            changes = diff_settings(
+                manifest["result_settings"], result_settings(cfg, settings[0].flow_key)
+            )
         old_cls = manifest.get("config", {}).get("fiber", {}).get("classify")
         new_cls = cfg.fiber.classify.model_dump(mode="json")
         if old_cls is not None and old_cls != new_cls and have_results:
@@ -199,6 +357,8 @@ def plan_sweep(
         notes=notes,
         mean_run_s=mean,
         fresh=fresh,
+        settings=settings,
+        columns=columns,
     )
 
 

@@ -21,21 +21,36 @@ from fibersweep.fiber.result import CLASSES
 from fibersweep.sweep.executors import make_executor
 from fibersweep.sweep.lock import output_lock
 from fibersweep.sweep.manifest import provenance, read_manifest, write_manifest
-from fibersweep.sweep.plan import SweepPlan, move_aside, plan_sweep, result_settings
+from fibersweep.sweep.plan import (
+    SweepPlan,
+    move_aside,
+    plan_sweep,
+    result_settings,
+    sweep_settings,
+)
 from fibersweep.sweep.store import (
     PartWriter,
     clean_temporaries,
     compact,
     describe_os_error,
     read_runs,
+    rewrite_runs,
 )
-from fibersweep.sweep.worker import SweepTask, WorkerSpec, failed_row, init_worker, run_task
+from fibersweep.sweep.worker import (
+    SettingSpec,
+    SweepTask,
+    WorkerSpec,
+    failed_row,
+    init_worker,
+    run_task,
+)
 
 __all__ = [
     "SweepSummary",
     "estimate_run_s",
     "flow_field_for",
     "flow_key_for",
+    "flow_keys_for",
     "prepare",
     "run_sweep",
 ]
@@ -89,27 +104,61 @@ def flow_key_for(cfg: Config) -> tuple[str, bool]:
     return key, (Path(cfg.run.cache_dir) / f"flow-{key}" / MANIFEST).exists()
 
 
+def flow_keys_for(cfg: Config) -> dict[str, tuple[Any, bool]]:
+    """Each distinct flow setting of a sweep: key -> (FlowSettings, cached?); computes nothing.
+
+    In the order the sweep runs them (one entry without flow axes).
+    """
+    out: dict[str, tuple[Any, bool]] = {}
+    for st in sweep_settings(cfg):
+        if st.flow_key not in out:
+            out[st.flow_key] = (st.config.flow, flow_key_for(st.config)[1])
+    return out
+
+
 def estimate_run_s(cfg: Config, todo: list[SweepTask]) -> float | None:
-    """Seconds per run, timed here on the middle to-do point after one warm-up run."""
+    """Seconds per run, timed here on the middle to-do point after one warm-up run.
+
+    The run is made with its own setting combination (its field must be cached).
+    """
     from fibersweep.fiber.result import FiberStart
     from fibersweep.fiber.run import simulate
 
-    fieldobj, _ = flow_field_for(cfg)
     t = todo[len(todo) // 2]
+    sub = next((s.config for s in sweep_settings(cfg) if s.id == t.settings), cfg)
+    fieldobj, _ = flow_field_for(sub)
     start = FiberStart(theta0=t.theta0, y0=t.y0, length=t.length)
-    simulate(fieldobj, cfg.fiber, start)  # compiles
+    simulate(fieldobj, sub.fiber, start)  # compiles
     t0 = time.perf_counter()
-    simulate(fieldobj, cfg.fiber, start)
+    simulate(fieldobj, sub.fiber, start)
     return time.perf_counter() - t0
 
 
 def prepare(
     cfg: Config, *, resume: bool = True, retry_failed: bool = False
-) -> tuple[Any, Any, SweepPlan]:
-    """Field, cache info and plan of a sweep (computes the field if it is not cached)."""
-    fieldobj, info = flow_field_for(cfg)
-    plan = plan_sweep(cfg, info.key, resume=resume, retry_failed=retry_failed, repair=True)
-    return fieldobj, info, plan
+) -> tuple[dict[str, tuple[Any, Any]], SweepPlan]:
+    """Fields and plan of a sweep.
+
+    Every distinct flow setting's field is found in the cache or computed, once,
+    before any fiber runs.
+
+    Returns
+    -------
+    fields : dict
+        Flow key -> (FlowField, CacheInfo), in the order the sweep uses them.
+    plan : SweepPlan
+    """
+    from fibersweep.flow.cache import get_flow_field
+
+    plan = plan_sweep(cfg, None, resume=resume, retry_failed=retry_failed, repair=True)
+    fields: dict[str, tuple[Any, Any]] = {}
+    for st in plan.settings:
+        if st.flow_key not in fields:
+            fieldobj, info = get_flow_field(st.config.flow, cfg.run.cache_dir, mmap=True)
+            if info.key != st.flow_key:  # the cache's key function is the plan's
+                raise RuntimeError(f"flow key {info.key} != planned {st.flow_key}")
+            fields[st.flow_key] = (fieldobj, info)
+    return fields, plan
 
 
 def effective_u_center(fieldobj: Any, fiber: Any) -> float:
@@ -123,10 +172,13 @@ def effective_u_center(fieldobj: Any, fiber: Any) -> float:
     return float(build_effects(fiber.effects).field(fieldobj).fluid.u_center)
 
 
-def _separatrix(fieldobj: Any, info: Any, out: Path) -> float | None:
-    old = read_manifest(out) or {}
+def _separatrix(fieldobj: Any, info: Any, old: dict[str, Any]) -> float | None:
+    """Far-upstream separatrix y/h_obs of a field (reused from the stored manifest)."""
     if old.get("provenance", {}).get("flow_key") == info.key and "separatrix" in old:
         return old["separatrix"]
+    for entry in (old.get("combinations") or {}).values():
+        if entry.get("flow_key") == info.key and "separatrix" in entry:
+            return entry["separatrix"]
     try:
         from fibersweep.flow.streamlines import separatrix_y
 
@@ -134,6 +186,30 @@ def _separatrix(fieldobj: Any, info: Any, out: Path) -> float | None:
     except Exception as exc:  # a figure aid: never stop a sweep over it
         log.warning("separatrix not computed: %s", exc)
         return None
+
+
+def _combinations_entry(
+    plan: SweepPlan, fields: dict[str, tuple[Any, Any]], old: dict[str, Any]
+) -> dict[str, dict[str, Any]]:
+    """Manifest entries per settings id: swept values, flow, U_center and separatrix.
+
+    Entries of settings run before in this folder are kept, so ``classify`` and
+    the figures find every stored run's own field and speed.
+    """
+    out = dict(old.get("combinations") or {})
+    seps: dict[str, float | None] = {}
+    for st in plan.settings:
+        fieldobj, info = fields[st.flow_key]
+        if st.flow_key not in seps:
+            seps[st.flow_key] = _separatrix(fieldobj, info, old)
+        out[st.id] = {
+            "values": st.combination.values,
+            "flow_key": st.flow_key,
+            "flow": st.config.flow.model_dump(mode="json"),
+            "u_center_effective": effective_u_center(fieldobj, st.config.fiber),
+            "separatrix": seps[st.flow_key],
+        }
+    return out
 
 
 def run_sweep(
@@ -181,22 +257,30 @@ def _run_locked(
     on_plan: Callable[[SweepPlan], None] | None,
     overrides: Sequence[str] = (),
 ) -> SweepSummary:
-    fieldobj, info, plan = prepare(cfg, resume=resume, retry_failed=retry_failed)
+    fields, plan = prepare(cfg, resume=resume, retry_failed=retry_failed)
     if on_plan is not None:
         on_plan(plan)
     if plan.fresh:
         move_aside(out)
     clean_temporaries(out)
+    old = read_manifest(out) or {}
+    first = plan.settings[0]
+    fieldobj, info = fields[first.flow_key]
+    combos = _combinations_entry(plan, fields, old)
     prov = provenance(info.key)
+    base_key = first.flow_key if not _flow_swept(plan.columns) else _base_key(cfg)
     manifest = {
         "config": cfg.model_dump(mode="json"),
         "overrides": list(overrides),
-        "result_settings": result_settings(cfg, info.key),
+        "result_settings": result_settings(cfg, base_key),
         "provenance": prov,
         "flow_cache": str(getattr(info, "path", "")),
-        "separatrix": _separatrix(fieldobj, info, out),
-        "u_center_effective": effective_u_center(fieldobj, cfg.fiber),
+        "separatrix": combos[first.id]["separatrix"],
+        "u_center_effective": combos[first.id]["u_center_effective"],
         "sweep_size": len(plan.tasks),
+        "swept": plan.columns,
+        "flow_keys": list(fields),
+        "combinations": combos,
         "state": "running",
     }
     write_manifest(out, manifest)
@@ -204,16 +288,26 @@ def _run_locked(
         "fibersweep": prov["fibersweep"],
         "git": prov["git"],
         "flow_key": info.key,
+        "flow_keys": list(fields),
+        "swept": plan.columns,
         "config": manifest["config"],
         "overrides": manifest["overrides"],
     }
     summary = SweepSummary(out=out)
+    needed = {t.settings for t in plan.todo}
     spec = WorkerSpec(
-        flow_json=cfg.flow.model_dump_json(),
-        field_path=str(Path(info.path).resolve()),
-        flow_key=info.key,
-        fiber_json=cfg.fiber.model_dump_json(),
         log_level=logging.getLogger("fibersweep").getEffectiveLevel(),
+        settings=tuple(
+            SettingSpec(
+                settings=st.id,
+                flow_key=st.flow_key,
+                flow_json=st.config.flow.model_dump_json(),
+                field_path=str(Path(fields[st.flow_key][1].path).resolve()),
+                fiber_json=st.config.fiber.model_dump_json(),
+            )
+            for st in plan.settings
+            if st.id in needed
+        ),
     )
     ex = make_executor(cfg.run.executor, cfg.run.workers, cfg.run.scheduler, cfg.run.retries)
     # Dask workers keep their own signal handling; pool workers leave Ctrl-C to us.
@@ -248,9 +342,50 @@ def _run_locked(
         state = "complete"
     finally:
         summary.wall_s = time.perf_counter() - t0
-        _finish(cfg, out, meta, manifest, writer, state, summary)
+        _finish(cfg, out, meta, manifest, writer, state, summary, plan)
     log.info("sweep done: %d runs in %.1f s", summary.ran, summary.wall_s)
     return summary
+
+
+def _flow_swept(columns: list[str]) -> bool:
+    return any(k.startswith("flow.") for k in columns)
+
+
+def _base_key(cfg: Config) -> str:
+    from fibersweep.flow.cache import cache_key
+
+    return cache_key(cfg.flow)
+
+
+def _fill_setting_columns(out: Path, meta: dict[str, Any], table: Any, plan: SweepPlan) -> Any:
+    """Give stored runs of this sweep the swept keys' columns they lack.
+
+    Runs made before a setting was swept (or before another folder's key was)
+    have no value in its column; a run of this sweep is known by its id, so its
+    values are those of its task. Rewritten as one merged part when anything changed.
+    """
+    by_id = {t.key: t for t in plan.tasks}
+    changed = False
+    table = table.copy()
+    for name in ["settings", *plan.columns]:
+        if name not in table:
+            table[name] = None
+        col = table[name].astype(object)
+        missing = col.isna().to_numpy() | (col == "").to_numpy()
+        for i in missing.nonzero()[0]:
+            task = by_id.get(table.at[i, "id"])
+            if task is not None:
+                value = task.columns().get(name)
+                if value is not None:
+                    col.iat[i] = value
+                    changed = True
+        table[name] = col
+    if changed:
+        try:
+            rewrite_runs(out, table, meta)
+        except OSError as exc:
+            log.warning("swept-setting columns not filled in (%s)", describe_os_error(exc))
+    return table
 
 
 def _finish(
@@ -261,6 +396,7 @@ def _finish(
     writer: PartWriter,
     state: str,
     summary: SweepSummary,
+    plan: SweepPlan | None = None,
 ) -> None:
     """Write what is left, compact, and record the outcome in the manifest.
 
@@ -278,6 +414,8 @@ def _finish(
         except OSError as exc:  # the parts stay; readers merge them
             log.warning("parts not merged (%s)", describe_os_error(exc))
     table = read_runs(out)
+    if plan is not None and plan.columns and unsaved is None:
+        table = _fill_setting_columns(out, meta, table, plan)
     ok = table[table["status"] == "ok"]
     summary.table_counts = {c: int((ok["class"] == c).sum()) for c in CLASSES}
     other = int((~ok["class"].isin(CLASSES)).sum())

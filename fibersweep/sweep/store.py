@@ -47,6 +47,7 @@ __all__ = [
     "part_name",
     "read_runs",
     "read_trajectories",
+    "rewrite_runs",
     "runs_table",
     "quarantine",
     "trajectory_ids",
@@ -83,6 +84,7 @@ RUN_COLUMNS: dict[str, pa.DataType] = {
     "wall_time": pa.float64(),
     "cpu_time": pa.float64(),
     "model": pa.string(),
+    "settings": pa.string(),
     "worker": pa.string(),
     "attempts": pa.int64(),
     "finished_at": pa.float64(),
@@ -111,6 +113,7 @@ COLUMN_DOCS: dict[str, tuple[str, str]] = {
     "wall_time": ("s", "wall-clock time of the run"),
     "cpu_time": ("s", "CPU time of the run in its worker"),
     "model": ("", "fiber model (rigid or bead-spring)"),
+    "settings": ("", "id of the run's settings (hash of fiber settings and flow field)"),
     "worker": ("", "host:pid of the worker that ran it"),
     "attempts": ("", "times the run was started (worker crashes re-run it)"),
     "finished_at": ("s", "Unix time the run finished"),
@@ -170,10 +173,43 @@ def runs_table(
         fields.append(pa.field(name, typ, metadata={"unit": unit, "doc": doc}))
         arrays.append(pa.array(col.tolist(), type=typ, from_pandas=True))
     for name in df.columns:
-        if name not in RUN_COLUMNS:
-            fields.append(pa.field(name, pa.array(df[name].tolist(), from_pandas=True).type))
-            arrays.append(pa.array(df[name].tolist(), from_pandas=True))
+        if name in RUN_COLUMNS:
+            continue
+        if "." in name:  # a swept setting (dotted key): typed, with its unit
+            f, arr = _setting_field(name, df[name].tolist())
+        else:
+            arr = pa.array(df[name].tolist(), from_pandas=True)
+            f = pa.field(name, arr.type)
+        fields.append(f)
+        arrays.append(arr)
     return _with_meta(pa.Table.from_arrays(arrays, schema=pa.schema(fields)), meta)
+
+
+_KINDS = {"float": pa.float64(), "int": pa.int64(), "bool": pa.bool_(), "string": pa.string()}
+
+
+def _missing(v: Any) -> bool:
+    return v is None or (isinstance(v, float) and np.isnan(v))
+
+
+def _setting_field(name: str, values: list[Any]) -> tuple[pa.Field, pa.Array]:
+    """Column of a swept setting: its schema type, unit and description as field metadata.
+
+    A section or list value is stored as its JSON text (type ``json`` in the metadata).
+    """
+    from fibersweep.config import setting_column
+
+    kind, unit, doc = setting_column(name)
+    meta = {"unit": unit, "doc": doc, "kind": kind}
+    if kind in _KINDS:
+        try:
+            arr = pa.array(values, type=_KINDS[kind], from_pandas=True)
+            return pa.field(name, arr.type, metadata=meta), arr
+        except (pa.ArrowInvalid, pa.ArrowTypeError):  # e.g. stored as text by an older sweep
+            pass
+    text = [None if _missing(v) else v if isinstance(v, str) else json.dumps(v) for v in values]
+    arr = pa.array(text, type=pa.string())
+    return pa.field(name, arr.type, metadata={**meta, "kind": "json"}), arr
 
 
 def _traj_table(run_id: str, cols: Mapping[str, np.ndarray]) -> pa.Table:
@@ -446,6 +482,20 @@ def describe_os_error(exc: BaseException | None) -> str:
     return str(exc)
 
 
+def rewrite_runs(out: Path, runs: pd.DataFrame, meta: Mapping[str, Any] | None = None) -> Path:
+    """Replace the runs table by ``runs`` (one merged part written atomically, then the
+    old parts removed; until they are, readers deduplicate and the new part wins).
+    """
+    out = Path(out)
+    old = list_parts(out / RUNS_DIR)
+    path = write_table_atomic(
+        runs_table(runs.to_dict("records"), meta), out / RUNS_DIR / part_name("-merged")
+    )
+    for p in old:
+        p.unlink(missing_ok=True)
+    return path
+
+
 def compact(out: Path, meta: Mapping[str, Any] | None = None) -> None:
     """Merge each dataset's parts into one deduplicated part, then remove the old parts.
 
@@ -453,14 +503,8 @@ def compact(out: Path, meta: Mapping[str, Any] | None = None) -> None:
     old part is removed; until they are, readers deduplicate.
     """
     out = Path(out)
-    runs_parts = list_parts(out / RUNS_DIR)
-    if len(runs_parts) > 1:
-        df = read_runs(out)
-        write_table_atomic(
-            runs_table(df.to_dict("records"), meta), out / RUNS_DIR / part_name("-merged")
-        )
-        for p in runs_parts:
-            p.unlink(missing_ok=True)
+    if len(list_parts(out / RUNS_DIR)) > 1:
+        rewrite_runs(out, read_runs(out), meta)
     traj_parts = list_parts(out / TRAJ_DIR)
     if len(traj_parts) > 1:
         df = read_trajectories(out)
