@@ -294,9 +294,25 @@ def plot_phase(
         typer.Option("--output", "-o", "--out", help="Figure folder (default: RESULTS/figures)."),
     ] = None,
     fmt: Annotated[str, typer.Option("--format", help="png, pdf or svg.")] = "png",
+    col: Annotated[
+        str | None,
+        typer.Option(
+            "--col",
+            help="Panel columns by this column, e.g. a swept key fiber.effects.friction "
+            "(default: the first swept key that varies, else length).",
+        ),
+    ] = None,
+    row: Annotated[
+        str | None,
+        typer.Option("--row", help="Panel rows by this column (default: the next that varies)."),
+    ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Phase diagram, δ map, contact map and δ distribution of a sweep."""
+    """Phase diagram, δ map, contact map and δ distribution of a sweep.
+
+    A folder of several settings gets one panel per value of the swept keys that
+    vary (--col, --row), and one file per value of any further one.
+    """
     _setup_logging(verbose)
     with _errors():
         from fibersweep.plots.phase import plot_all
@@ -306,8 +322,12 @@ def plot_phase(
         runs = read_runs(results)
         if runs.empty:
             raise InputError(f"{results}: no runs to plot (expected {results}/runs/part-*.parquet)")
-        sep = (read_manifest(results) or {}).get("separatrix")
-        paths = plot_all(runs, out or results / "figures", fmt, separatrix=sep)
+        man = read_manifest(results) or {}
+        sep = man.get("separatrix")
+        combos = man.get("combinations") or {}
+        if len({e.get("flow_key") for e in combos.values()}) > 1:  # one per flow field
+            sep = {sid: e.get("separatrix") for sid, e in combos.items()}
+        paths = plot_all(runs, out or results / "figures", fmt, separatrix=sep, col=col, row=row)
     for p in paths:
         typer.echo(f"wrote {p}")
 

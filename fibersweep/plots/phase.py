@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import logging
 import math
+import re
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 import numpy as np  # noqa: E402
@@ -34,8 +37,11 @@ __all__ = [
     "FORMATS",
     "contact_figure",
     "delta_hist_figure",
+    "facet_keys",
     "phase_figure",
     "plot_all",
+    "swept_keys",
+    "varying_keys",
 ]
 
 log = logging.getLogger(__name__)
@@ -46,8 +52,49 @@ THETA = r"$\theta_0$ [deg]"
 Y0 = r"$y_0/h_{obs}$"
 
 
-def _lengths(runs: pd.DataFrame) -> list[float]:
-    return sorted(runs["length"].round(6).unique().tolist())
+#: Columns that are the panel axes or per-run outcomes, never facets.
+_NOT_FACETS = {"theta0", "y0", "id", "settings", "worker", "finished_at", "wall_time"}
+
+
+def swept_keys(runs: pd.DataFrame) -> list[str]:
+    """Columns of swept settings (dotted keys) in the runs table, in table order."""
+    return [c for c in runs.columns if "." in c]
+
+
+def varying_keys(runs: pd.DataFrame) -> list[str]:
+    """Facet candidates that take more than one value: swept settings, then length."""
+    keys = [*swept_keys(runs), "length"]
+    return [k for k in keys if k in runs and runs[k].nunique(dropna=False) > 1]
+
+
+def facet_keys(
+    runs: pd.DataFrame, col: str | None = None, row: str | None = None
+) -> tuple[str | None, str | None, list[str]]:
+    """Columns and rows of the phase figures, and the keys left to split figures by.
+
+    Defaults from what varies: the first varying key (swept settings before
+    length) across, the second down; any further varying key gets one figure per
+    value (:func:`plot_all`).
+
+    Raises
+    ------
+    InputError
+        ``col`` or ``row`` is not a column that can be faceted by (valid ones named).
+    """
+    valid = [c for c in [*swept_keys(runs), "length"] if c in runs]
+    valid += [c for c in runs.columns if c not in valid and c not in _NOT_FACETS and c in {
+        "model", "class", "contact"}]  # fmt: skip
+    for opt, key in (("--col", col), ("--row", row)):
+        if key is not None and key not in valid:
+            raise InputError(f"{opt} {key!r}: not a column to facet by; valid: {', '.join(valid)}")
+    if col is not None and col == row:
+        raise InputError(f"--col and --row are both {col!r}")
+    free = [k for k in varying_keys(runs) if k not in (col, row)]
+    if col is None and free:
+        col = free.pop(0)
+    if row is None and free:
+        row = free.pop(0)
+    return col, row, free
 
 
 def _grid(n: int, panel_h: float = 2.3) -> tuple[Figure, np.ndarray]:
@@ -64,6 +111,40 @@ def _grid(n: int, panel_h: float = 2.3) -> tuple[Figure, np.ndarray]:
     for ax in axes.flat[n:]:
         ax.set_visible(False)
     return fig, axes
+
+
+def _values(runs: pd.DataFrame, key: str | None) -> list:
+    if key is None:
+        return [None]
+    v = runs[key].dropna().unique().tolist()
+    try:
+        return sorted(v)
+    except TypeError:
+        return v
+
+
+def _label(key: str) -> str:
+    if key == "length":
+        return r"$L/l_{obs}$"
+    if "." in key:
+        from fibersweep.config import setting_column
+
+        unit = setting_column(key)[1]
+        return f"{key} [{unit}]" if unit else key
+    return key
+
+
+def _fmt(v: object) -> str:
+    return f"{v:.3g}" if isinstance(v, float) else str(v)
+
+
+def _select(runs: pd.DataFrame, key: str | None, value: object) -> pd.DataFrame:
+    if key is None:
+        return runs
+    col = runs[key]
+    if isinstance(value, float):
+        return runs[np.isclose(col.astype(float), value, rtol=1e-9, atol=1e-12)]
+    return runs[col == value]
 
 
 def _marker_size(panel: pd.DataFrame) -> float:
@@ -118,20 +199,41 @@ def _sep_label(sep: float) -> str:
     return f"separatrix ({sep:.3f})"
 
 
-def phase_figure(runs: pd.DataFrame, separatrix: float | None, by: str = "class") -> Figure:
-    """(θ0, y0/h) phase diagram, one panel per fiber length.
+def phase_figure(
+    runs: pd.DataFrame,
+    separatrix: float | None | dict[str, float | None],
+    by: str = "class",
+    col: str | None = "length",
+    row: str | None = None,
+) -> Figure:
+    """(θ0, y0/h) phase diagram, one panel per value of ``col`` (and ``row``).
 
     Parameters
     ----------
     runs : DataFrame
         The runs table (columns theta0, y0, length, class, status, delta).
-    separatrix : float or None
-        Far-upstream y/h of the separatrix streamline.
+    separatrix : float, None or dict
+        Far-upstream y/h of the separatrix streamline; a dict maps settings id
+        -> separatrix (a folder of several flow fields: drawn in a panel when its
+        runs share one).
     by : {'class', 'delta'}
         Marker per class, or colour by δ on one colour scale shared by all panels.
+    col, row : str or None
+        Runs-table columns to facet by (:func:`facet_keys`); only ``col``: its
+        panels wrap in rows of at most four.
     """
-    lengths = _lengths(runs)
-    fig, axes = _grid(len(lengths))
+    cols, rows = _values(runs, col), _values(runs, row)
+    if row is None:
+        fig, axes = _grid(len(cols))
+        cells = [(ax, c, None) for ax, c in zip(axes.flat, cols, strict=False)]
+    else:
+        fig, axes = subplots(
+            len(rows), len(cols),
+            figsize=(min(WIDTH_IN * 1.4, 2.0 + 2.4 * len(cols)), 2.3 * len(rows) + 0.6),
+            sharex=True, sharey=True, squeeze=False,
+        )  # fmt: skip
+        cells = [(axes[i, j], c, r) for i, r in enumerate(rows) for j, c in enumerate(cols)]
+    n_panels = len(cells)
     ok = runs["status"] == "ok"
     fin = runs.loc[ok, "delta"].to_numpy(dtype=float)
     fin = fin[np.isfinite(fin)]
@@ -139,10 +241,14 @@ def phase_figure(runs: pd.DataFrame, separatrix: float | None, by: str = "class"
     norm = Normalize(-max(lim, 1e-3), max(lim, 1e-3))
     sc = None
     present = _present(runs)
-    for ax, L in zip(axes.flat, lengths, strict=False):
-        p = runs[np.isclose(runs["length"], L)]
-        s = _marker_size(p)
-        _separatrix(ax, separatrix)
+    seps: set[float] = set()
+    for ax, cv, rv in cells:
+        p = _select(_select(runs, col, cv), row, rv)
+        s = _marker_size(p) if len(p) else 10.0
+        sep = _panel_separatrix(p, separatrix)
+        if sep is not None:
+            seps.add(round(sep, 6))
+        _separatrix(ax, sep)
         good = p[p["status"] == "ok"]
         if by == "class":
             for c in present:
@@ -164,12 +270,20 @@ def phase_figure(runs: pd.DataFrame, separatrix: float | None, by: str = "class"
         bad = p[p["status"] != "ok"]
         if len(bad):
             ax.scatter(bad["theta0"], bad["y0"], s=s, lw=1.0, **FAILED_STYLE)
-        if len(lengths) > 1:
-            ax.set_title(rf"$L/l_{{obs}}$ = {L:.3g}")
-    _label_axes(axes, len(lengths))
+        title = [f"{_label(k)} = {_fmt(v)}" for k, v in ((col, cv), (row, rv)) if k is not None]
+        if title and (len(cols) > 1 or len(rows) > 1):
+            ax.set_title(", ".join(title), fontsize=7 if len(title) > 1 else None)
+    if row is None:
+        _label_axes(axes, n_panels)
+    else:
+        for ax in axes[:, 0]:
+            ax.set_ylabel(Y0)
+        for ax in axes[-1, :]:
+            ax.set_xlabel(THETA)
     failed = bool((~ok).any())
+    legend_sep = next(iter(seps)) if len(seps) == 1 else None
     if by == "class":
-        hs = _legend_handles(present, separatrix, failed)
+        hs = _legend_handles(present, legend_sep, failed)
         fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)
     else:
         visible = [a for a in axes.flat if a.get_visible()]
@@ -182,11 +296,24 @@ def phase_figure(runs: pd.DataFrame, separatrix: float | None, by: str = "class"
             )
         if failed:
             hs.append(Line2D([], [], ls="", markersize=6, label="failed", **FAILED_STYLE))
-        if separatrix is not None:
-            hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label=_sep_label(separatrix)))
+        if legend_sep is not None:
+            hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label=_sep_label(legend_sep)))
         if hs:
             fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)
     return fig
+
+
+def _panel_separatrix(
+    panel: pd.DataFrame, separatrix: float | None | dict[str, float | None]
+) -> float | None:
+    """The separatrix of a panel's runs: the one value, or the one their settings share."""
+    if not isinstance(separatrix, dict):
+        return separatrix
+    if "settings" not in panel or panel.empty:
+        return None
+    vals = {separatrix.get(sid) for sid in panel["settings"].unique()}
+    vals = {v for v in vals if v is not None}
+    return vals.pop() if len(vals) == 1 else None
 
 
 def contact_figure(runs: pd.DataFrame) -> Figure:
@@ -252,7 +379,9 @@ def plot_all(
     out: Path | str,
     fmt: str = "png",
     *,
-    separatrix: float | None = None,
+    separatrix: float | None | dict[str, float | None] = None,
+    col: str | None = None,
+    row: str | None = None,
 ) -> list[Path]:
     """Write every figure of a sweep's runs table.
 
@@ -263,8 +392,12 @@ def plot_all(
     out : path
         Figure folder (created if missing).
     fmt : {'png', 'pdf', 'svg'}
-    separatrix : float, optional
-        Far-upstream separatrix y/h_obs, drawn as a line.
+    separatrix : float, dict or None
+        Far-upstream separatrix y/h_obs, drawn as a line (a dict: per settings id).
+    col, row : str, optional
+        Facets of the phase figures (default from what varies, :func:`facet_keys`);
+        keys that vary beyond them split the phase figures into one file per
+        value (``phase-KEY=VALUE.png``).
 
     Returns
     -------
@@ -274,20 +407,30 @@ def plot_all(
     Raises
     ------
     InputError
-        Unknown format, or no runs.
+        Unknown format, unknown facet, or no runs.
     """
     if fmt not in FORMATS:
         raise InputError(f"--format {fmt!r}: expected one of {', '.join(FORMATS)}")
     if runs.empty:
         raise InputError("no runs to plot")
+    col, row, rest = facet_keys(runs, col, row)
+    if col is None and row is not None:
+        col, row = row, None
     out = Path(out)
     paths = []
-    figures = {
-        "phase": lambda: phase_figure(runs, separatrix, "class"),
-        "phase_delta": lambda: phase_figure(runs, separatrix, "delta"),
-        "contact_map": lambda: contact_figure(runs),
-        "delta_hist": lambda: delta_hist_figure(runs),
-    }
+    pages: list[tuple[str, pd.DataFrame]] = [("", runs)]
+    if rest:
+        pages = []
+        for values, page in runs.groupby(rest, sort=True):
+            values = values if isinstance(values, tuple) else (values,)
+            tag = "-".join(f"{k}={_fmt(v)}" for k, v in zip(rest, values, strict=True))
+            pages.append(("-" + re.sub(r"[^A-Za-z0-9_.=+-]", "_", tag), page))
+    figures: dict[str, Callable[[], Figure]] = {}
+    for tag, page in pages:
+        figures[f"phase{tag}"] = partial(phase_figure, page, separatrix, "class", col, row)
+        figures[f"phase_delta{tag}"] = partial(phase_figure, page, separatrix, "delta", col, row)
+    figures["contact_map"] = partial(contact_figure, runs)
+    figures["delta_hist"] = partial(delta_hist_figure, runs)
     with paper_style():
         for name, make in figures.items():
             paths.append(save_figure(make(), out / f"{name}.{fmt}", format=fmt))

@@ -114,8 +114,32 @@ def trajectory_from_frame(df: pd.DataFrame) -> Trajectory:
     )
 
 
-def class_counts(runs: pd.DataFrame) -> pd.DataFrame:
-    """Runs per class (ok runs) and failures, with fractions; columns class, runs, fraction."""
+def class_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFrame:
+    """Runs per class (ok runs) and failures, with fractions.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        The runs table.
+    by : list of str, optional
+        Swept-setting columns: one block of counts per combination of their
+        values (fractions within it), the key columns first.
+
+    Returns
+    -------
+    DataFrame
+        Columns ``*by``, class, runs, fraction.
+    """
+    by = [k for k in (by or []) if k in runs]
+    if by:
+        blocks = []
+        for values, group in runs.groupby(by, sort=True, dropna=False):
+            values = values if isinstance(values, tuple) else (values,)
+            block = class_counts(group)
+            for k, v in reversed(list(zip(by, values, strict=True))):
+                block.insert(0, k, v)
+            blocks.append(block)
+        return pd.concat(blocks, ignore_index=True)
     ok = runs[runs["status"] == "ok"]
     rows = [(c, int((ok["class"] == c).sum())) for c in CLASSES]
     # ok runs the thresholds cannot place (e.g. a trap no longer long enough to count)
@@ -156,17 +180,9 @@ def reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
         return _reclassify(out, thresholds)
 
 
-def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
-    from fibersweep.analysis.classify import RULES, classify_all
-
-    man = read_manifest(out)
-    runs = read_runs(out)
-    if man is None or runs.empty:
-        raise InputError(f"{out}: no sweep results here (expected manifest.json and runs/)")
+def _run_context(man: dict, out: Path) -> tuple[object, float]:
+    """Geometry and effective U_center [µm/s] of the stored (first) setting."""
     flow = FlowSettings.model_validate(man["config"]["flow"])
-    # The thresholds the runs were simulated with (the trap rule also stops a run);
-    # kept apart from the config's, which later re-classifications overwrite.
-    simulated = man.setdefault("simulated_classify", man["config"]["fiber"]["classify"])
     geometry = flow.geometry.to_geometry()
     # The speed the runs moved in (effects such as inlet_speed change it); manifests
     # written before it was recorded only hold the nominal one.
@@ -180,6 +196,30 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
                 out,
                 u_center,
             )
+    return geometry, u_center
+
+
+def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
+    from fibersweep.analysis.classify import RULES, classify_all
+
+    man = read_manifest(out)
+    runs = read_runs(out)
+    if man is None or runs.empty:
+        raise InputError(f"{out}: no sweep results here (expected manifest.json and runs/)")
+    # The thresholds the runs were simulated with (the trap rule also stops a run);
+    # kept apart from the config's, which later re-classifications overwrite.
+    simulated = man.setdefault("simulated_classify", man["config"]["fiber"]["classify"])
+    geometry, u_center = _run_context(man, out)
+    # A folder of several settings: each run's own geometry and speed, by its settings id.
+    per_setting = {
+        sid: (
+            FlowSettings.model_validate(e["flow"]).geometry.to_geometry(),
+            e["u_center_effective"],
+        )
+        for sid, e in (man.get("combinations") or {}).items()
+        if "flow" in e and e.get("u_center_effective") is not None
+    }
+    sids = runs["settings"] if "settings" in runs else pd.Series([None] * len(runs))
     ok = runs["status"] == "ok"
     traj = read_trajectories(out, list(runs.loc[ok, "id"]))
     if traj.empty:
@@ -198,8 +238,9 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
         if rid not in groups:
             missing += 1
             continue
+        geo, u = per_setting.get(sids.iat[i], (geometry, u_center))
         labels = classify_all(
-            trajectory_from_frame(groups[rid].sort_values("sample")), geometry, u_center, thresholds
+            trajectory_from_frame(groups[rid].sort_values("sample")), geo, u, thresholds
         )
         for name, label in labels.items():
             by_rule[name].iat[i] = label
@@ -223,12 +264,13 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     )
     for p in old_parts:
         p.unlink(missing_ok=True)
-    counts = class_counts(runs)
+    counts = class_counts(runs, list(man.get("swept") or []))
     counts_path = out / COUNTS_FILE
     with atomic_path(counts_path) as tmp:
         counts.to_csv(tmp, index=False)
     man["config"]["fiber"]["classify"] = thresholds.model_dump(mode="json")
-    man["counts"] = {c: int(n) for c, n in zip(counts["class"], counts["runs"], strict=True)}
+    total = class_counts(runs)
+    man["counts"] = {c: int(n) for c, n in zip(total["class"], total["runs"], strict=True)}
     write_manifest(out, man)
     unclassified = int(((runs["status"] == "ok") & ~runs["class"].isin(CLASSES)).sum())
     warnings = _beyond_simulated(
