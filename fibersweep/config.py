@@ -248,7 +248,12 @@ class SweepSettings(_Strict):
         for loc, key, raw in self.axis_items():
             if "." not in key:
                 close = difflib.get_close_matches(key, _START_AXES + ("zip",), n=1, cutoff=0.5)
-                hint = f"; did you mean '{close[0]}'?" if close else ""
+                hint = f"; did you mean '{close[0]}'?" if close else "."
+                if key in ("fiber", "flow"):
+                    example = (
+                        "flow.dx: [4, 2]" if key == "flow" else "fiber.contact.chi: [1.1, 1.2]"
+                    )
+                    hint = f"; write a swept setting as one dotted key, e.g. {example}."
                 raise FieldError(
                     loc,
                     f"unknown key{hint} Valid keys here: {', '.join(_START_AXES)}, zip, "
@@ -928,6 +933,10 @@ def apply_overrides(
     for item in overrides:
         key, sep, raw = item.partition("=")
         path = tuple(p.strip() for p in key.split("."))
+        if len(path) > 2 and path[0] == "sweep":
+            # a swept setting is one dotted key inside sweep (or inside sweep.zip)
+            cut = 3 if path[1] == "zip" and len(path) > 3 else 2
+            path = (*path[: cut - 1], ".".join(path[cut - 1 :]))
         if not sep or not all(path):
             problems.append(
                 f"override {item!r}: expected KEY=VALUE with a dotted key, "

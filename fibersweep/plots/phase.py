@@ -124,13 +124,15 @@ def _values(runs: pd.DataFrame, key: str | None) -> list:
 
 
 def _label(key: str) -> str:
+    """Short panel label of a facet key: the setting's last part, with its unit."""
     if key == "length":
         return r"$L/l_{obs}$"
     if "." in key:
         from fibersweep.config import setting_column
 
         unit = setting_column(key)[1]
-        return f"{key} [{unit}]" if unit else key
+        short = key.rsplit(".", 1)[1]
+        return f"{short} [{unit}]" if unit else short
     return key
 
 
@@ -284,6 +286,8 @@ def phase_figure(
     legend_sep = next(iter(seps)) if len(seps) == 1 else None
     if by == "class":
         hs = _legend_handles(present, legend_sep, failed)
+        if len(seps) > 1:
+            hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label="separatrix (per field)"))
         fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)
     else:
         visible = [a for a in axes.flat if a.get_visible()]
