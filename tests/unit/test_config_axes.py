@@ -149,3 +149,11 @@ def test_columns_are_typed_with_units():
     assert setting_column("fiber.record.samples")[0] == "int"
     assert setting_column("fiber.effects.friction")[0] == "float"
     assert setting_column("fiber.young_modulus")[:2] == ("float", "Pa")
+
+
+def test_shipped_axis_example_is_valid():
+    from pathlib import Path
+
+    cfg = load_config(Path(__file__).parents[2] / "configs" / "friction_axis.yaml")
+    assert cfg.sweep.setting_keys == ["fiber.effects.friction", "fiber.contact.pillar"]
+    assert len(cfg.combinations()) == 6 and cfg.sweep.size == 15
