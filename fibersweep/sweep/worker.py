@@ -183,7 +183,10 @@ def _setting(sid: str) -> tuple[Any, Any]:
     """(flow field, fiber settings) of a settings id; the field mapped once per worker."""
     if "specs" not in _STATE:  # set up by hand (tests): the single field and fiber
         return _STATE["field"], _STATE["fiber"]
-    spec = _STATE["specs"][sid]
+    specs = _STATE["specs"]
+    if sid not in specs and len(specs) == 1:  # a single-setting spec runs every task
+        sid = next(iter(specs))
+    spec = specs[sid]
     fields = _STATE["fields"]
     if spec.flow_key not in fields:
         from fibersweep.flow.cache import load_entry
