@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 from typer.testing import CliRunner
@@ -78,6 +79,21 @@ def test_flow_axis_computes_two_fields_and_every_run_is_recorded(swept, flow_cac
     f = schema.field("flow.geometry.pillar_height")
     assert str(f.type) == "double" and f.metadata[b"unit"] == "µm".encode()
     assert str(schema.field("fiber.effects.friction").type) == "double"
+
+
+def test_dask_runs_the_same_mixed_table(swept, flow_cache_dir, tmp_path):
+    """Dask workers map the fields the same way: bit-identical physics, same columns."""
+    pytest.importorskip("distributed")
+    tmp, cfg, _ = swept
+    other = tmp_path / "dask.yaml"
+    other.write_text(cfg.read_text().replace(str(tmp / "out"), str(tmp_path / "dask")))
+    res, text = _invoke("run", other, "--executor", "dask", "--workers", "2")
+    assert res.exit_code == 0, text
+    cols = ["id", "settings", "flow.geometry.pillar_height", "fiber.effects.friction", "class",
+            "delta", "x_f", "y_f", "theta_f", "n_steps"]  # fmt: skip
+    local = read_runs(tmp / "out")[cols].sort_values("id").reset_index(drop=True)
+    dask = read_runs(tmp_path / "dask")[cols].sort_values("id").reset_index(drop=True)
+    pd.testing.assert_frame_equal(dask, local)
 
 
 def test_second_run_and_dry_run_do_nothing(swept):
