@@ -619,7 +619,13 @@ class Config(_Strict):
                 raise _combination_error(exc, assignment, locs) from None
             dumped = cfg.model_dump(mode="json")
             values = {k: _get_path(dumped, k.split(".")) for k in assignment}
-            _check_effects(values, locs)
+            off = _check_effects(values, locs)
+            if off:
+                # An effect swept to its baseline is off: left out, so those runs keep the
+                # ids of runs made without it (a folder swept later reuses them).
+                for key in off:
+                    data["fiber"]["effects"].pop(key.split(".", 2)[2])
+                cfg = Config.model_validate(data)
             out.append(Combination(values, cfg))
         return out
 
@@ -739,19 +745,29 @@ def _combination_error(
     return FieldError(locs[first], f"with {_show_assignment(assignment)}: {dotted}: {msg}{given_s}")
 
 
-def _check_effects(values: dict[str, Any], locs: dict[str, tuple]) -> None:
-    """Swept effects exist and take the value (the registry checks names and ranges)."""
+def _check_effects(values: dict[str, Any], locs: dict[str, tuple]) -> list[str]:
+    """Swept effects exist and take the value (the registry checks names and ranges).
+
+    Returns
+    -------
+    list of str
+        The swept effect keys whose value is the effect's baseline (inactive).
+    """
     keys = [k for k in values if k.startswith("fiber.effects.")]
     if not keys:
-        return
+        return []
     from fibersweep.fiber.effects import build_effects  # numba-backed: import lazily
 
+    off = []
     for key in keys:
         try:
-            build_effects({key.split(".", 2)[2]: values[key]})
+            made = build_effects({key.split(".", 2)[2]: values[key]})
         except InputError as exc:
             msg = str(exc).removeprefix("effects: ")
             raise FieldError(locs[key], f"value {values[key]!r}: {msg}") from None
+        if not made.effects:
+            off.append(key)
+    return off
 
 
 def _show_assignment(assignment: dict[str, Any]) -> str:

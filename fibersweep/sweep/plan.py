@@ -173,7 +173,7 @@ def make_tasks(
         values: tuple[tuple[str, Any], ...] = ()
         if columns:
             dumped = st.config.model_dump(mode="json")
-            values = tuple((k, _get(dumped, k)) for k in columns)
+            values = tuple((k, st.combination.values.get(k, _get(dumped, k))) for k in columns)
         ids = run_ids(t, y, L, st.config.fiber, st.flow_key)
         for rid, ti, yi, Li in zip(ids, t.tolist(), y.tolist(), L.tolist(), strict=True):
             if rid not in tasks:
@@ -182,8 +182,11 @@ def make_tasks(
 
 
 def _get(data: Any, key: str) -> Any:
+    """A config's value of a dotted key (an effect left out is at its baseline, 0)."""
     for part in key.split("."):
         data = data.get(part) if isinstance(data, dict) else None
+    if data is None and key.startswith("fiber.effects."):
+        return 0.0
     return data
 
 

@@ -69,6 +69,15 @@ def test_each_combination_has_its_own_ids_settings_and_values(tmp_path):
     assert {t.key for t in tasks[4:8]} == {t.key for t in make_tasks(fixed, "K")}
 
 
+def test_an_effect_swept_to_its_baseline_reuses_the_runs_made_without_it(tmp_path):
+    """friction 0 is friction off: those runs have the ids of a sweep without friction."""
+    plain = make_tasks(_cfg(tmp_path), "K")
+    swept = make_tasks(_cfg(tmp_path, {FRICTION: [0, 0.3]}), "K")
+    assert [t.key for t in swept[:4]] == [t.key for t in plain]
+    assert {dict(t.values)[FRICTION] for t in swept[:4]} == {0.0}
+    assert not {t.key for t in swept[4:]} & {t.key for t in plain}
+
+
 def test_mixed_folder_resumes_each_run_without_duplicates(tmp_path):
     small = _cfg(tmp_path, {FRICTION: [0, 0.3]})
     stored = _store(small, failed={"x"})
@@ -131,12 +140,11 @@ def test_stored_runs_get_the_columns_of_a_later_axis(tmp_path):
     """Runs from before a key was swept are given its column when a sweep reuses them."""
     from fibersweep.sweep.runner import _fill_setting_columns
 
-    one = _cfg(tmp_path, effects={"friction": 0.3})
-    _store(one)
+    _store(_cfg(tmp_path))  # no friction at all
     assert FRICTION not in read_runs(tmp_path / "out")
-    cfg = _cfg(tmp_path, {FRICTION: [0.3, 0.6]})
+    cfg = _cfg(tmp_path, {FRICTION: [0, 0.6]})
     plan = plan_sweep(cfg, "K")
-    assert plan.done_ok == 4 and len(plan.todo) == 4
+    assert plan.done_ok == 4 and len(plan.todo) == 4 and not plan.changes
     _fill_setting_columns(tmp_path / "out", {}, read_runs(tmp_path / "out"), plan)
     df = read_runs(tmp_path / "out")
-    assert (df[FRICTION] == 0.3).all() and len(df) == 4
+    assert (df[FRICTION] == 0.0).all() and len(df) == 4 and df["settings"].notna().all()
