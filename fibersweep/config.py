@@ -32,6 +32,7 @@ from pydantic import (
     Tag,
     ValidationError,
     field_validator,
+    model_serializer,
     model_validator,
 )
 
@@ -232,14 +233,21 @@ class SweepSettings(_Strict):
     @field_validator("zip", mode="before")
     @classmethod
     def _zip_shape(cls, value: Any) -> Any:
-        if value is None or isinstance(value, dict):
+        if value is None or (isinstance(value, dict) and value):
             return value
-        if isinstance(value, list) and value and all(isinstance(g, dict) for g in value):
+        if isinstance(value, list) and value and all(isinstance(g, dict) and g for g in value):
             return value
         raise ValueError(
             "expected a mapping of setting keys to value lists (swept together), "
             "or a list of such mappings"
         )
+
+    @model_serializer(mode="wrap")
+    def _without_empty_zip(self, handler: Any) -> dict[str, Any]:
+        data = handler(self)
+        if isinstance(data, dict) and data.get("zip") is None:
+            data.pop("zip", None)  # written only when used
+        return data
 
     @model_validator(mode="after")
     def _setting_axes_valid(self) -> SweepSettings:

@@ -108,8 +108,12 @@ def _print_plan(plan, workers: int) -> None:
             todo[t.settings] = todo.get(t.settings, 0) + 1
         keys = ", ".join(plan.columns)
         typer.echo(f"  {len(plan.settings)} setting combinations of {keys}:")
-        for st in plan.settings:
+        shown = 12
+        for st in plan.settings[:shown]:
             typer.echo(f"    {st.combination.label or '(base)'}: to do {todo.get(st.id, 0)}")
+        if len(plan.settings) > shown:
+            rest = sum(todo.get(st.id, 0) for st in plan.settings[shown:])
+            typer.echo(f"    ... {len(plan.settings) - shown} more combinations: to do {rest}")
     if plan.fresh:
         typer.echo("  --no-resume: existing results will be moved to a previous-* folder")
     for note in plan.notes:

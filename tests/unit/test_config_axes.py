@@ -104,6 +104,7 @@ def test_max_points_counts_every_combination():
             "sweep.zip (line 3): zipped keys need value lists of the same length; "
             "got fiber.contact.chi: 2, flow.dx: 1",
         ),
+        ("  zip: {}", "sweep.zip (line 3): expected a mapping of setting keys to value lists"),
         (
             "  fiber.bead_radius: [2]\n  zip: {fiber.bead_radius: [1.5]}",
             "sweep.zip.fiber.bead_radius (line 4): fiber.bead_radius is swept twice",
