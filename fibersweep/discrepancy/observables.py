@@ -49,8 +49,8 @@ __all__ = [
 ]
 
 Kind = Literal["class", "binary", "continuous"]
-#: Where a quantity exists: always, for fibers that are not Trapping, for fibers with contact.
-Defined = Literal["always", "not_trapped", "contact"]
+#: Conditions for a quantity to exist: the fiber is not Trapping; it touched the pillar.
+Condition = Literal["not_trapped", "contact"]
 
 
 @dataclass(frozen=True)
@@ -116,9 +116,10 @@ class Observable:
         One line for messages and the report.
     extract : callable RunResult -> value
         The value of a successful run (NaN or '' where undefined).
-    defined : {'always', 'not_trapped', 'contact'}
-        Where the quantity exists. NaN is accepted only outside it (and anywhere
-        for 'contact' when the table has no contact column).
+    defined : tuple of {'not_trapped', 'contact'}
+        Where the quantity exists: every condition holds (``()``: always). NaN is
+        accepted only outside it (and anywhere for 'contact' when the table has
+        no contact column).
     strict : bool
         A value given where the quantity does not exist is an error.
     required : bool
@@ -158,7 +159,7 @@ class Observable:
     unit: str
     description: str
     extract: Callable[[RunResult], Any]
-    defined: Defined = "always"
+    defined: tuple[Condition, ...] = ()
     strict: bool = True
     required: bool = False
     scored: bool = True
@@ -194,11 +195,14 @@ class Observable:
         contact : ndarray, shape (n,), bool, or None
             Fibers that touched the pillar; None when contact was not measured.
         """
-        if self.defined == "always":
-            return np.ones(len(trapped), dtype=bool)
-        if self.defined == "not_trapped":
-            return ~np.asarray(trapped, dtype=bool)
-        return None if contact is None else np.asarray(contact, dtype=bool)
+        mask = np.ones(len(trapped), dtype=bool)
+        if "not_trapped" in self.defined:
+            mask &= ~np.asarray(trapped, dtype=bool)
+        if "contact" in self.defined:
+            if contact is None:
+                return None
+            mask &= np.asarray(contact, dtype=bool)
+        return mask
 
     def outcome(self, result: RunResult | None) -> Any:
         """Value in an outcome table: extracted from an ok run, missing otherwise."""
@@ -268,7 +272,7 @@ _REGISTRY: dict[str, Observable] = {
             "h_obs",
             "lateral displacement (y_f - y0) / h_obs far downstream",
             extract=lambda r: r.delta,
-            defined="not_trapped",
+            defined=("not_trapped",),
             noise=NoiseLaw("additive", 0.01),
             bounds=(-10.0, 10.0),
             unit_hint="delta must be in units of h_obs",
@@ -288,7 +292,7 @@ _REGISTRY: dict[str, Observable] = {
             "deg",
             "fiber angle at first contact",
             extract=_if_contact("theta_c"),
-            defined="contact",
+            defined=("contact",),
             noise=NoiseLaw("additive", 1.0),
             bounds=(-180.0, 180.0),
             unit_hint="theta_c must be in degrees",
@@ -300,7 +304,7 @@ _REGISTRY: dict[str, Observable] = {
             "h_obs",
             "lateral position of the contact point from the base / h_obs",
             extract=_if_contact("y_c"),
-            defined="contact",
+            defined=("contact",),
             noise=NoiseLaw("additive", 0.01),
             bounds=(-0.5, 1.5),
             unit_hint="y_c must be measured from the base in units of h_obs",
@@ -311,7 +315,7 @@ _REGISTRY: dict[str, Observable] = {
             "s",
             "time to pass the pillar",
             extract=lambda r: r.t_pass,
-            defined="not_trapped",
+            defined=("not_trapped",),
             strict=False,
             # relative error; 0.01 is about one frame at 100 fps over a 1 s track
             noise=NoiseLaw("lognormal", 0.01),
@@ -327,7 +331,7 @@ _REGISTRY: dict[str, Observable] = {
             "s",
             "time of first contact on the clock of t_pass",
             extract=_if_contact("t_contact"),
-            defined="contact",
+            defined=("contact",),
             scored=False,  # compared as the dwell (contact to passing)
             bounds=(0.0, 1e4),
             lower_open=True,
@@ -339,7 +343,7 @@ _REGISTRY: dict[str, Observable] = {
             "s",
             "time from first contact to passing the pillar (t_pass - t_contact)",
             extract=lambda r: r.t_pass - r.t_contact if r.contact else math.nan,
-            defined="contact",
+            defined=("contact", "not_trapped"),
             # reflected at 0: a measured contact never comes after the pass;
             # 0.01 s is one frame at 100 fps
             noise=NoiseLaw("reflected", 0.01),

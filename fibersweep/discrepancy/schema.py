@@ -89,12 +89,9 @@ _START_RANGES = {
         "length must be in units of l_obs (divide µm by the pillar base length)",
     ),
 }
-_WHY_NAN = {
-    "always": "a value is required",
-    "not_trapped": "NaN is allowed only for Trapping",
-    "contact": "NaN is allowed only without contact",
-}
-_UNDEFINED = {"not_trapped": "for a Trapping fiber", "contact": "for a fiber without contact"}
+# Where a quantity does not exist, per condition of Observable.defined
+_WITHOUT = {"not_trapped": "for Trapping", "contact": "without contact"}
+_GIVEN = {"not_trapped": "for a Trapping fiber", "contact": "for a fiber without contact"}
 _BOOL_LOOKUP = {"true": True, "false": False, "1": True, "0": False, "yes": True, "no": False}
 _MAX_ROWS_SHOWN = 8
 
@@ -317,13 +314,14 @@ def validate_measured(
         out[col] = vals[col]
     canonical = {**labels, **flags, **vals}
     observed = []
-    for o in present:
-        out[o.name] = canonical[o.name]
-        if o.scored:
-            observed.append(o.name)
-    for name, o in OBSERVABLES.items():
-        if o.derive is not None and all(c in vals for c in o.derived_from):
+    for name, o in OBSERVABLES.items():  # registry order
+        if name in canonical:
+            out[name] = canonical[name]
+        elif o.derive is not None and all(c in vals for c in o.derived_from):
             out[name] = o.derive(vals)  # e.g. dwell = t_pass - t_contact
+        else:
+            continue
+        if o.scored:
             observed.append(name)
     return MeasuredData(table=out, observed=tuple(observed), source=source)
 
@@ -355,14 +353,16 @@ def _check_values(
     nan = np.isnan(v)
     if col in _START_RANGES:
         (lo, hi), hint = _START_RANGES[col]
-        allowed, why, lower_open = np.zeros_like(nan), _WHY_NAN["always"], False
+        allowed, why, lower_open = np.zeros_like(nan), "a value is required", False
     else:
         o = OBSERVABLES[col]
         (lo, hi), hint, lower_open = o.bounds or (-np.inf, np.inf), o.unit_hint, o.lower_open
         defined = o.defined_mask(trapped, contact)
         # without a contact column NaN means 'no contact'
         allowed = ~defined if defined is not None else np.ones_like(nan)
-        why = _WHY_NAN[o.defined]
+        why = "a value is required"
+        if o.defined:
+            why = "NaN is allowed only " + " or ".join(_WITHOUT[c] for c in o.defined)
     bad_nan = nan & ~allowed
     if bad_nan.any():
         problems.append(
@@ -394,13 +394,14 @@ def _check_consistency(
             )
     for col, v in vals.items():
         o = OBSERVABLES.get(col)
-        if o is None or not o.strict or o.defined == "always":
+        if o is None or not o.strict or not o.defined:
             continue
         defined = o.defined_mask(trapped, contact)
         if defined is not None:
             given = np.isfinite(v) & ~defined
             if given.any():
-                problems.append(f"{col}: given {_UNDEFINED[o.defined]} in {_rows(given)}")
+                where = " or ".join(_GIVEN[c] for c in o.defined)
+                problems.append(f"{col}: given {where} in {_rows(given)}")
     if "t_contact" in vals and "t_pass" in vals:
         late = np.isfinite(vals["t_contact"]) & np.isfinite(vals["t_pass"])
         late &= vals["t_contact"] > vals["t_pass"]

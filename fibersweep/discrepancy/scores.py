@@ -16,9 +16,8 @@ Scores (lower is better, all proper):
   ``mean_k |x_k - y| - sum_{k != l} |x_k - x_l| / (2 m (m - 1))``, unbiased for
   the CRPS of the distribution the members come from;
 - categorical observables (kinds class and binary: class, contact): the log-loss
-  of the additively
-  smoothed ensemble frequency ``(n_c + alpha) / (m + K alpha)``; the smoothing
-  keeps a class the copies never produced at a finite cost.
+  of the additively smoothed ensemble frequency ``(n_c + alpha) / (m + K alpha)``;
+  the smoothing keeps a class the copies never produced at a finite cost.
 """
 
 from __future__ import annotations
