@@ -9,24 +9,20 @@ fiber_id    no        any unique label (default: the row number)
 theta0      yes       start angle from +x, counter-clockwise [degrees]
 y0          yes       start centre-of-mass lateral position from the base / h_obs
 length      yes       fiber length / l_obs
-class       yes       Below, Above, Pole-vaulting or Trapping (case-insensitive)
-delta       no        (y_f - y0) / h_obs far downstream; empty (NaN) for Trapping
-contact     no        whether the fiber touched the pillar (bool, 0/1, true/false)
-theta_c     no        fiber angle at first contact [degrees]; NaN without contact
-y_c         no        lateral position of the contact point from the base / h_obs;
-                      NaN without contact
-t_pass      no        time to pass the pillar [s]; NaN for Trapping
-t_contact   no        time of first contact on the clock of t_pass [s]; NaN without
-                      contact. With t_pass it gives the observable ``dwell``
-                      = t_pass - t_contact (contact to passing)
-angle_unit  no        'deg' (default) or 'rad' for theta0 and theta_c, same in every row
+angle_unit  no        'deg' (default) or 'rad' for every angle column, same in every row
 ==========  ========  ==========================================================
+
+plus one column per observable of the registry
+(:data:`fibersweep.discrepancy.observables.OBSERVABLES`, listed at the end of
+this docstring with its unit, range and NaN rule). An observable derived from
+other columns (``dwell`` = t_pass - t_contact) is computed here.
 
 An optional observed column that is absent is simply not tested. An optional
 column that is present must be complete: NaN is allowed only where the quantity
-is undefined (delta and t_pass for Trapping, theta_c, y_c and t_contact without
-contact).
-Leave a column out entirely if it was not measured.
+does not exist (``Observable.defined``: e.g. delta and t_pass for Trapping,
+theta_c, y_c and t_contact without contact); a value given where it does not
+exist is an error for the strict ones. Leave a column out entirely if it was
+not measured.
 
 Trajectories (optional second table): columns ``fiber_id, t [s], x [µm],
 y [µm], theta [deg]``, rows time-ordered per fiber; every fiber_id must be in
@@ -39,9 +35,9 @@ Validation never drops a row or a column: every problem raises
 asks to ignore extra columns (``discrepancy --ignore-extra-columns``).
 Without an ``angle_unit`` column, every angle column is checked for radians:
 theta0 when every |theta0| is below 0.2 with a non-zero spread (the SPEC's
-±10° is ±0.17 rad); theta_c when at least three contact angles are given and
-every |theta_c| is at most π (contact angles in degrees spread over tens of
-degrees); the trajectories' theta when their first samples match theta0
+±10° is ±0.17 rad); an angle observable (theta_c) when at least three values
+are given and every one is at most π in size (contact angles in degrees spread
+over tens of degrees); the trajectories' theta when their first samples match theta0
 converted to radians far better than theta0 itself. ``angle_unit = 'deg'``
 states degrees and turns the guess off.
 """
@@ -524,3 +520,31 @@ def write_table(df: pd.DataFrame, path: str | Path) -> Path:
         else:
             df.to_csv(tmp, index=False)
     return p
+
+
+def observed_columns_doc() -> str:
+    """The registry's observed columns as a reStructuredText table (unit, range, NaN rule)."""
+    without = {"not_trapped": "for Trapping", "contact": "without contact"}
+    rows = []
+    for name, o in OBSERVABLES.items():
+        if o.derived_from:
+            rows.append((name, "-", f"{o.description} [{o.unit}], derived"))
+            continue
+        if o.kind == "class":
+            what = f"{o.description}: {', '.join(o.categories)} (case-insensitive)"
+        elif o.kind == "binary":
+            what = f"{o.description} (bool, 0/1, true/false)"
+        else:
+            lo, hi = o.bounds or (-math.inf, math.inf)
+            what = f"{o.description} [{o.unit}] in {'(' if o.lower_open else '['}{lo:g}, {hi:g}]"
+        if o.defined:
+            what += "; NaN " + " or ".join(without[c] for c in o.defined)
+        rows.append((name, "yes" if o.required else "no", what))
+    rule = "==========  ========  " + "=" * 58
+    lines = ["", "Observed columns (from the registry)", "-" * 36, rule]
+    lines += ["column      required  meaning [unit]", rule]
+    lines += [f"{n:<10}  {r:<8}  {w}" for n, r, w in rows]
+    return "\n".join([*lines, rule, ""])
+
+
+__doc__ = (__doc__ or "") + observed_columns_doc()
