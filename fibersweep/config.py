@@ -10,11 +10,13 @@ did-you-mean for misspelled keys.
 
 from __future__ import annotations
 
+import copy
 import difflib
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any
 
 import numpy as np
 import yaml
@@ -39,8 +41,10 @@ __all__ = [
     "Axis",
     "Config",
     "ConfigError",
+    "FieldError",
     "RunSettings",
     "SweepSettings",
+    "apply_overrides",
     "load_config",
     "parse_config",
 ]
@@ -150,6 +154,19 @@ Axis = Annotated[
 ]
 
 
+class FieldError(ValueError):
+    """A check across several fields that fails at one of them.
+
+    Raised by model validators with the field's dotted ``path`` relative to the
+    model that raised it; the config loader reports the problem at that field's
+    line instead of at the model's.
+    """
+
+    def __init__(self, path: str, message: str) -> None:
+        super().__init__(message)
+        self.path = tuple(path.split("."))
+
+
 def axis_count(axis: Axis) -> int:
     """Number of values of one sweep axis, without making them."""
     if isinstance(axis, (RangeSpec, LinspaceSpec)):
@@ -229,7 +246,7 @@ class RunSettings(_Strict):
     workers: int = Field(2, ge=1, description="worker processes")
     output: str = Field("results/run", description="output directory")
     cache_dir: str = Field(".fibersweep-cache", description="flow-field cache directory")
-    executor: Literal["local", "dask"] = Field("local", description="local pool or Dask")
+    executor: str = Field("local", description="executor name (local pool or dask)")
     scheduler: str | None = Field(None, description="Dask scheduler address tcp://HOST:PORT")
     flush_every: int = Field(
         32, ge=1, description="finished runs per Parquet part file (also flushed on exit)"
@@ -249,11 +266,22 @@ class RunSettings(_Strict):
         description="refuse sweeps with more points than this (raise it on purpose)",
     )
 
+    @field_validator("executor")
+    @classmethod
+    def _known_executor(cls, name: str) -> str:
+        from fibersweep.sweep.executors import EXECUTORS  # the registry decides
+
+        if name not in EXECUTORS:
+            close = difflib.get_close_matches(name, list(EXECUTORS), n=1)
+            hint = f"did you mean '{close[0]}'? " if close else ""
+            raise ValueError(f"unknown executor; {hint}valid: {', '.join(EXECUTORS)}")
+        return name
+
     @model_validator(mode="after")
     def _scheduler_address(self) -> RunSettings:
         if self.scheduler is not None and "://" not in self.scheduler:
-            raise ValueError(
-                f"scheduler: expected an address like tcp://HOST:PORT, got {self.scheduler!r}"
+            raise FieldError(
+                "scheduler", f"expected an address like tcp://HOST:PORT, got {self.scheduler!r}"
             )
         return self
 
@@ -271,9 +299,10 @@ class Config(_Strict):
         """Refuse huge sweeps at once, before any point is made (counted, not listed)."""
         n = self.sweep.size
         if n > self.run.max_points:
-            raise ValueError(
-                f"sweep: {n:,} points, more than run.max_points ({self.run.max_points:,}); "
-                "use fewer points, or raise run.max_points (or --max-points) if you mean it"
+            raise FieldError(
+                "sweep",
+                f"{n:,} points, more than run.max_points ({self.run.max_points:,}); "
+                "use fewer points, or raise run.max_points (or --max-points) if you mean it",
             )
         return self
 
@@ -301,7 +330,7 @@ class Config(_Strict):
                 bad.setdefault(path, msg)  # first problem per field is enough to act on
         if bad:
             path, msg = next(iter(bad.items()))
-            raise ValueError(f"{path}: {msg}")
+            raise FieldError(path, msg)
         return self
 
     def _starts_to_check(self, geo: Any, r_cut: float) -> list[FiberStart]:
@@ -417,18 +446,19 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
         p for p in loc if not (isinstance(p, str) and ("[" in p or ":" in p or p in {"float"}))
     )
     msg = err["msg"].removeprefix("Value error, ")
-    named = re.match(r"^([a-z_0-9]+(?:\.[a-z_0-9]+)*): (.*)$", msg, flags=re.S)
-    if named and not loc:
-        # A whole-config check that names its field: report it at that field.
-        loc = tuple(named.group(1).split("."))
-        msg = named.group(2)
+    raised = (err.get("ctx") or {}).get("error")
+    if isinstance(raised, FieldError):
+        # A cross-field check names the field it is about: report it there.
+        loc = loc + raised.path
+        msg = str(raised)
     dotted = ".".join(str(p) for p in loc) or "<top level>"
     line = None
     for k in range(len(loc), -1, -1):
         if loc[:k] in lines:
             line = lines[loc[:k]]
             break
-    where = f" (line {line})" if line else ""
+    # a YAML line number, or the label of a command-line override
+    where = f" (line {line})" if isinstance(line, int) else (f" ({line})" if line else "")
     if err["type"] == "extra_forbidden":
         parent = _model_at(loc[:-1])
         hint = ""
@@ -447,7 +477,7 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
 
 
 def parse_config(
-    data: Any, lines: dict[tuple, int] | None = None, source: str = "config"
+    data: Any, lines: dict[tuple, int | str] | None = None, source: str = "config"
 ) -> Config:
     """Validate a config mapping.
 
@@ -471,16 +501,83 @@ def parse_config(
         raise ConfigError(seen, source) from None
 
 
-def load_config(path: str | Path, *, max_points: int | None = None) -> Config:
-    """Read and validate a YAML config file.
+def apply_overrides(
+    data: dict[str, Any], lines: dict[tuple, int | str], overrides: Sequence[str]
+) -> dict[str, Any]:
+    """Apply ``KEY=VALUE`` overrides (dotted keys, YAML values) to a config mapping.
 
-    ``max_points`` (the command line's ``--max-points``) replaces ``run.max_points``
-    before validation, so a large sweep can be allowed without editing the file.
+    Parameters
+    ----------
+    data : dict
+        The config as read from YAML (not modified).
+    lines : dict
+        Key path -> YAML line; each overridden path is relabelled with its
+        override, so a problem with it is reported as ``(override KEY=VALUE)``.
+    overrides : sequence of str
+        E.g. ``fiber.contact.chi=1.2``, ``sweep.y0=[0.3, 0.4]``, ``flow.dx=2``.
+        Values are YAML: numbers, booleans, strings, ``[lists]`` and ``{maps}``.
+
+    Returns
+    -------
+    dict
+        A new mapping with the overrides applied, in order (a later one wins).
 
     Raises
     ------
     ConfigError
-        Unreadable file, invalid YAML, or invalid settings (each named).
+        Malformed overrides, each named (the schema then checks keys and values).
+    """
+    out: dict[str, Any] = copy.deepcopy(data)
+    problems = []
+    for item in overrides:
+        key, sep, raw = item.partition("=")
+        path = tuple(p.strip() for p in key.split("."))
+        if not sep or not all(path):
+            problems.append(
+                f"override {item!r}: expected KEY=VALUE with a dotted key, "
+                "e.g. fiber.contact.chi=1.2"
+            )
+            continue
+        try:
+            value = yaml.load(raw, Loader=_Loader) if raw.strip() else None
+        except yaml.YAMLError as exc:
+            problems.append(f"override {item!r}: the value is not valid YAML ({exc})")
+            continue
+        node = out
+        for depth, part in enumerate(path[:-1]):
+            child = node.setdefault(part, {})
+            if child is None:
+                child = node[part] = {}
+            if not isinstance(child, dict):
+                where = ".".join(path[: depth + 1])
+                problems.append(f"override {item!r}: {where} is a value, not a section")
+                break
+            node = child
+        else:
+            node[path[-1]] = value
+            label = f"override {item}"
+            lines[path] = label
+            for k in range(1, len(path)):
+                lines.setdefault(path[:k], label)
+    if problems:
+        raise ConfigError(problems)
+    return out
+
+
+def load_config(
+    path: str | Path, overrides: Sequence[str] = (), *, max_points: int | None = None
+) -> Config:
+    """Read and validate a YAML config file, with command-line overrides.
+
+    ``overrides`` are ``KEY=VALUE`` strings (:func:`apply_overrides`), validated by
+    the same schema with the same messages. ``max_points`` (the command line's
+    ``--max-points``) replaces ``run.max_points`` before validation, so a large
+    sweep can be allowed without editing the file.
+
+    Raises
+    ------
+    ConfigError
+        Unreadable file, invalid YAML, bad overrides or invalid settings (each named).
     """
     p = Path(path)
     try:
@@ -494,6 +591,14 @@ def load_config(path: str | Path, *, max_points: int | None = None) -> Config:
     except ConfigError as exc:
         raise ConfigError(exc.problems, str(p)) from None
     data = located.data
+    if overrides:
+        if data is None:
+            data = {}
+        if isinstance(data, dict):
+            try:
+                data = apply_overrides(data, located.lines, overrides)
+            except ConfigError as exc:
+                raise ConfigError(exc.problems, str(p)) from None
     if max_points is not None and isinstance(data, dict):
         run = data.get("run") if isinstance(data.get("run"), dict) else {}
         data = {**data, "run": {**run, "max_points": max_points}}

@@ -5,10 +5,18 @@ Rules (SPEC section 4; thresholds in :class:`ClassifySettings`):
 1. **Trapping**: the fiber is in contact and its centre of mass moves slower
    than ``trap_speed``·|U_center| for at least ``trap_time`` (consecutive
    samples, duration = last − first sample time of the run of such samples).
-2. **Pole-vaulting**: while in contact the head (the bead that leads at the
-   start) is blocked, speed below ``head_blocked_speed``·|U_center|, at some
-   sample, and head and tail swap: the directed tail→head angle turns by more
-   than 90° between the first and last sample.
+2. **Pole-vaulting**: head and tail swap (the directed tail→head angle turns by
+   more than 90° between the first and last sample) and the turn is a vault by
+   the chosen rule (:data:`RULES`, ``ClassifySettings.rule``):
+
+   * ``head-speed`` (default; the source's rule): while in contact the head
+     (the bead that leads at the start) is blocked, speed below
+     ``head_blocked_speed``·|U_center|, at some sample;
+   * ``pivot``: from the first contact until the fiber has turned through 90°,
+     the head travels less than ``pivot_fraction``·L: the fiber turns about its
+     head instead of sliding past;
+   * ``switch``: the fiber touched the pillar (front and rear switch after a
+     contact, whatever the head did).
 3. Otherwise **Above** / **Below**: the side of the pillar centroid on which
    the centre of mass is when it crosses the centroid's x (first crossing in
    the flow direction).
@@ -21,13 +29,24 @@ re-classifying with other thresholds needs no new simulation.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import numpy as np
 
 from fibersweep.fiber.result import Trajectory
 from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.units import Geometry
 
-__all__ = ["classify", "longest_run", "pass_crossing", "stopped_mask"]
+__all__ = [
+    "RULES",
+    "Rule",
+    "classify",
+    "classify_all",
+    "longest_run",
+    "pass_crossing",
+    "stopped_mask",
+]
 
 
 def stopped_mask(traj: Trajectory, u_center: float, thresholds: ClassifySettings) -> np.ndarray:
@@ -59,8 +78,67 @@ def pass_crossing(traj: Trajectory, geometry: Geometry, u_center: float) -> floa
     return float(traj.y[k] + w * (traj.y[k + 1] - traj.y[k]))
 
 
+def _head_blocked(tr: Trajectory, u_center: float, th: ClassifySettings) -> bool:
+    contact = np.asarray(tr.contact, dtype=bool)
+    slow = np.asarray(tr.head_speed) < th.head_blocked_speed * abs(u_center)
+    return bool(np.any(contact & slow))
+
+
+def _pivots(tr: Trajectory, u_center: float, th: ClassifySettings) -> bool:
+    contact = np.flatnonzero(np.asarray(tr.contact, dtype=bool))
+    if contact.size == 0:
+        return False
+    k0 = int(contact[0])
+    theta = np.asarray(tr.theta, dtype=np.float64)
+    turned = np.flatnonzero(np.abs(theta[k0:] - theta[k0]) >= 90.0)
+    if turned.size == 0:
+        return False
+    k1 = k0 + int(turned[0])
+    head = np.asarray(tr.head, dtype=np.float64)
+    length = float(np.hypot(*(head[0] - np.asarray(tr.tail[0], dtype=np.float64))))
+    travel = float(np.sum(np.hypot(*np.diff(head[k0 : k1 + 1], axis=0).T)))
+    return travel < th.pivot_fraction * length
+
+
+def _touched(tr: Trajectory, u_center: float, th: ClassifySettings) -> bool:
+    return bool(np.any(np.asarray(tr.contact, dtype=bool)))
+
+
+@dataclass(frozen=True)
+class Rule:
+    """A pole-vaulting rule: given that head and tail swapped, was it a vault?
+
+    Attributes
+    ----------
+    name : str
+    description : str
+    vaulted : callable
+        ``(trajectory, u_center [µm/s], thresholds) -> bool``; a pure function of
+        the stored trajectory.
+    """
+
+    name: str
+    description: str
+    vaulted: Callable[[Trajectory, float, ClassifySettings], bool]
+
+
+#: Pole-vaulting rules by name; ``head-speed`` is the source's and the default.
+RULES: dict[str, Rule] = {
+    r.name: r
+    for r in (
+        Rule("head-speed", "head blocked (speed < head_blocked_speed U) in contact", _head_blocked),
+        Rule("pivot", "head travels < pivot_fraction L while turning 90° after contact", _pivots),
+        Rule("switch", "front and rear switch after a contact", _touched),
+    )
+}
+
+
 def classify(
-    trajectory: Trajectory, geometry: Geometry, u_center: float, thresholds: ClassifySettings
+    trajectory: Trajectory,
+    geometry: Geometry,
+    u_center: float,
+    thresholds: ClassifySettings,
+    rule: str | None = None,
 ) -> str:
     """Class of a run: 'Below', 'Above', 'Pole-vaulting', 'Trapping', or '' if undetermined.
 
@@ -73,18 +151,31 @@ def classify(
     u_center : float
         Centreline speed of the field the run used [µm/s] (its sign is the flow direction).
     thresholds : ClassifySettings
+    rule : str, optional
+        Pole-vaulting rule from :data:`RULES`; default ``thresholds.rule``.
+
+    Raises
+    ------
+    KeyError
+        Unknown rule (the config and the CLI check names against :data:`RULES`).
     """
+    vaulted = RULES[rule or thresholds.rule].vaulted
     tr = trajectory
     if len(tr.t) < 2:
         return ""
     if longest_run(tr.t, stopped_mask(tr, u_center, thresholds)) >= thresholds.trap_time:
         return "Trapping"
-    contact = np.asarray(tr.contact, dtype=bool)
-    blocked = contact & (np.asarray(tr.head_speed) < thresholds.head_blocked_speed * abs(u_center))
     swapped = abs(float(tr.theta[-1]) - float(tr.theta[0])) > 90.0
     y_cross = pass_crossing(tr, geometry, u_center)
     if np.isnan(y_cross):
         return ""
-    if np.any(blocked) and swapped:
+    if swapped and vaulted(tr, u_center, thresholds):
         return "Pole-vaulting"
     return "Above" if y_cross > geometry.centroid[1] else "Below"
+
+
+def classify_all(
+    trajectory: Trajectory, geometry: Geometry, u_center: float, thresholds: ClassifySettings
+) -> dict[str, str]:
+    """The class of a run under every rule of :data:`RULES` (name -> class)."""
+    return {name: classify(trajectory, geometry, u_center, thresholds, name) for name in RULES}

@@ -25,6 +25,8 @@ from fibersweep.cli import flow
 from fibersweep.cli import fiber
 from fibersweep.cli import sweep
 from fibersweep.cli import discrepancy
+from fibersweep.cli import show
+from fibersweep.cli import init
 
 # isort: on
 
@@ -38,6 +40,8 @@ __all__ = [
     "discrepancy",
     "fiber",
     "flow",
+    "init",
+    "show",
     "main",
     "sweep",
 ]

@@ -28,6 +28,14 @@ app = typer.Typer(
 )
 
 ConfigArg = Annotated[Path, typer.Argument(help="YAML config file.", show_default=False)]
+Overrides = Annotated[
+    list[str] | None,
+    typer.Argument(
+        help="KEY=VALUE settings that replace the config's, e.g. fiber.contact.chi=1.2 "
+        "flow.dx=2 'sweep.y0=[0.3, 0.4]' (values are YAML).",
+        show_default=False,
+    ),
+]
 Verbose = Annotated[bool, typer.Option("--verbose", "-v", help="Log progress details.")]
 Workers = Annotated[int | None, typer.Option(help="Worker processes (default: run.workers).")]
 
@@ -104,12 +112,27 @@ def _setup_logging(verbose: bool) -> None:
     )
 
 
-def _load(path: Path, max_points: int | None = None):
+def _load(path: Path, overrides: list[str] | None = None, max_points: int | None = None):
     from fibersweep.config import load_config
 
-    return load_config(path, max_points=max_points)
+    return load_config(path, overrides or (), max_points=max_points)
+
+
+def _version(value: bool) -> None:
+    if value:
+        from fibersweep import __version__
+
+        typer.echo(f"fibersweep {__version__}")
+        raise typer.Exit()
 
 
 @app.callback()
-def main() -> None:
+def main(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_version, is_eager=True, help="Print the version and exit."
+        ),
+    ] = False,
+) -> None:
     """fibersweep: LBM flow once, many fiber runs, phase diagrams."""

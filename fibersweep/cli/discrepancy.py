@@ -7,7 +7,16 @@ from typing import Annotated
 
 import typer
 
-from fibersweep.cli._app import ConfigArg, Verbose, Workers, _errors, _load, _setup_logging, app
+from fibersweep.cli._app import (
+    ConfigArg,
+    Overrides,
+    Verbose,
+    Workers,
+    _errors,
+    _load,
+    _setup_logging,
+    app,
+)
 
 
 def _sweep_box(cfg) -> dict[str, tuple[float, float]]:
@@ -23,6 +32,7 @@ def _sweep_box(cfg) -> dict[str, tuple[float, float]]:
 @app.command()
 def synth(
     config: ConfigArg,
+    overrides: Overrides = None,
     effect: Annotated[
         list[str] | None,
         typer.Option("--effect", help="Hidden effect NAME=VALUE (repeatable)."),
@@ -47,7 +57,7 @@ def synth(
 
     _setup_logging(verbose)
     with _errors():
-        cfg = _load(config)
+        cfg = _load(config, overrides)
         from fibersweep.discrepancy.schema import write_table
         from fibersweep.discrepancy.synth import parse_effects, synthesize
         from fibersweep.flow.cache import get_flow_field
@@ -56,7 +66,8 @@ def synth(
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
         table, tr = synthesize(
             field, cfg.fiber, _sweep_box(cfg), n, effects, seed=seed,
-            workers=workers or cfg.run.workers,
+            workers=workers or cfg.run.workers, executor=cfg.run.executor,
+            scheduler=cfg.run.scheduler,
         )  # fmt: skip
         write_table(table, output)
         tpath = truth or output.with_suffix(".truth.json")
@@ -73,6 +84,7 @@ def synth(
 def discrepancy(
     measured: Annotated[Path, typer.Argument(help="Measured fibers (.parquet or .csv).")],
     config: ConfigArg,
+    overrides: Overrides = None,
     output: Annotated[Path, typer.Option("--output", "-o", help="Report folder.")] = Path("report"),
     budget: Annotated[int | None, typer.Option(help="Most simulations in total.")] = None,
     seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
@@ -93,7 +105,7 @@ def discrepancy(
     """Where the model disagrees with MEASURED, which effect explains it, and the gap left."""
     _setup_logging(verbose)
     with _errors():
-        cfg = _load(config)
+        cfg = _load(config, overrides)
         from fibersweep.discrepancy.report import write_report
         from fibersweep.discrepancy.schema import load_measured
         from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
@@ -103,6 +115,7 @@ def discrepancy(
         settings = DiscrepancySettings(
             copies=copies, budget=budget, seed=seed, alpha=alpha,
             workers=workers or cfg.run.workers,
+            executor=cfg.run.executor, scheduler=cfg.run.scheduler,
             effects=tuple(e.strip() for e in effects.split(",")) if effects else None,
         )  # fmt: skip
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)

@@ -7,7 +7,15 @@ from typing import Annotated
 
 import typer
 
-from fibersweep.cli._app import ConfigArg, Verbose, _errors, _load, _setup_logging, app
+from fibersweep.cli._app import (
+    ConfigArg,
+    Overrides,
+    Verbose,
+    _errors,
+    _load,
+    _setup_logging,
+    app,
+)
 
 
 @app.command()
@@ -28,6 +36,7 @@ def simulate(
     ] = False,
     seed: Annotated[int | None, typer.Option("--seed", help="Seed of random effects.")] = None,
     verbose: Verbose = False,
+    overrides: Overrides = None,
 ) -> None:
     """Run one fiber past the pillar and print its class, δ and contact data."""
     import math
@@ -40,7 +49,7 @@ def simulate(
         from fibersweep.fiber.run import simulate_reversible
         from fibersweep.flow.cache import get_flow_field
 
-        cfg = _load(config)
+        cfg = _load(config, overrides)
         fiber = cfg.fiber
         if model is not None:
             if model not in ("rigid", "bead-spring"):

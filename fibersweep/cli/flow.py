@@ -7,12 +7,21 @@ from typing import Annotated
 
 import typer
 
-from fibersweep.cli._app import ConfigArg, Verbose, _errors, _load, _setup_logging, app
+from fibersweep.cli._app import (
+    ConfigArg,
+    Overrides,
+    Verbose,
+    _errors,
+    _load,
+    _setup_logging,
+    app,
+)
 
 
 @app.command()
 def flow(
     config: ConfigArg,
+    overrides: Overrides = None,
     force: Annotated[
         bool, typer.Option("--force", help="Recompute the field even if it is cached.")
     ] = False,
@@ -27,7 +36,7 @@ def flow(
 
     _setup_logging(verbose)
     with _errors():
-        cfg = _load(config)
+        cfg = _load(config, overrides)
         from fibersweep.flow.cache import get_flow_field
 
         t0 = time.perf_counter()

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import enum
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
+from fibersweep.analysis.classify import RULES
 from fibersweep.cli._app import (
     ConfigArg,
+    Overrides,
     Verbose,
     Workers,
     _errors,
@@ -18,6 +21,9 @@ from fibersweep.cli._app import (
     app,
 )
 from fibersweep.errors import InputError, Terminated
+
+#: Choices of ``classify --rule``, from the rule registry.
+Rule = enum.Enum("Rule", {name: name for name in RULES}, type=str)
 
 
 def _fmt_s(s: float | None) -> str:
@@ -43,6 +49,7 @@ def _with_run_overrides(cfg, **kw):
 @app.command()
 def run(
     config: ConfigArg,
+    overrides: Overrides = None,
     workers: Workers = None,
     resume: Annotated[
         bool, typer.Option("--resume/--no-resume", help="Keep finished runs (default).")
@@ -71,7 +78,7 @@ def run(
     """Run a sweep: flow field (cached), fiber runs across workers, Parquet results."""
     _setup_logging(verbose)
     with _interruptible(), _errors():
-        cfg = _load(config, max_points=max_points)
+        cfg = _load(config, overrides, max_points=max_points)
         if scheduler and executor is None:
             executor = "dask"
         cfg = _with_run_overrides(
@@ -84,7 +91,7 @@ def run(
         if dry_run:
             _dry_run(cfg, resume, retry_failed)
             return
-        failed = _run(cfg, resume, retry_failed)
+        failed = _run(cfg, resume, retry_failed, overrides or [])
     if failed:
         raise typer.Exit(1)
 
@@ -124,7 +131,7 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     )
 
 
-def _run(cfg, resume: bool, retry_failed: bool) -> bool:
+def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = None) -> bool:
     """Run the sweep with a progress bar; True if any run of the table failed."""
     from collections import Counter
 
@@ -167,8 +174,9 @@ def _run(cfg, resume: bool, retry_failed: bool) -> bool:
     )
     try:
         summary = run_sweep(
-            cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan
-        )
+            cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan,
+            overrides=overrides,
+        )  # fmt: skip
     except KeyboardInterrupt as exc:
         if bar is not None:
             bar.close()
@@ -218,12 +226,23 @@ def classify(
     trap_speed: Annotated[
         float | None, typer.Option(help="'Stopped': COM speed below this fraction of U_center.")
     ] = None,
+    rule: Annotated[
+        Rule | None,
+        typer.Option(help="Pole-vaulting rule: head-speed (the source's), pivot or switch."),
+    ] = None,
+    pivot_fraction: Annotated[
+        float | None, typer.Option(help="pivot rule: head travel below this x L while turning.")
+    ] = None,
     config: Annotated[
         Path | None, typer.Option("--config", "-c", help="Take thresholds from this config.")
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Re-classify stored trajectories with new thresholds (no simulation)."""
+    """Re-classify stored trajectories with new thresholds or rule (no simulation).
+
+    The runs table gets one class column per rule (class_head_speed, class_pivot,
+    class_switch); 'class' is the chosen rule's.
+    """
     _setup_logging(verbose)
     with _errors():
         from fibersweep.sweep.reclassify import reclassify, thresholds_for
@@ -235,6 +254,8 @@ def classify(
             head_blocked_speed=head_blocked_speed,
             trap_time=trap_time,
             trap_speed=trap_speed,
+            rule=rule.value if rule is not None else None,
+            pivot_fraction=pivot_fraction,
         )
         res = reclassify(results, th)
     typer.echo(f"re-classified {res.n_runs} runs ({res.n_changed} changed) with {th}")

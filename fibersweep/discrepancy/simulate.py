@@ -1,8 +1,10 @@
-"""Batches of fiber runs for the discrepancy workflow, on a persistent process pool.
+"""Batches of fiber runs for the discrepancy workflow, on the sweep's executors.
 
 The workflow makes many small batches (baseline copies, probes, each step of
-a parameter fit), so the pool is started once and kept (spawned processes get
-the field and the settings once, in their initializer). Every run has its own
+a parameter fit). They go through the same executors as a sweep (the local
+process pool or Dask, :mod:`fibersweep.sweep.executors`), kept open across
+batches (``keep=True``), so the workers get the field and the settings once,
+in their initializer. Every run has its own
 seed (Brownian noise, start-noise effects), so a batch is reproducible whatever
 the number of workers. A run that raises is recorded as ``status='failed'``
 with the reason, never dropped. The number of runs is counted against a budget.
@@ -12,10 +14,9 @@ from __future__ import annotations
 
 import logging
 import math
-import multiprocessing as mp
+import traceback
 from collections.abc import Mapping
-from concurrent.futures import ProcessPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -23,7 +24,7 @@ import pandas as pd
 from tqdm.auto import tqdm
 
 from fibersweep.discrepancy.observables import OBSERVABLES
-from fibersweep.errors import RUN_ERRORS, FibersweepError, InputError, SolverError
+from fibersweep.errors import RUN_ERRORS, FibersweepError, InputError, RunBug
 from fibersweep.fiber.result import CLASSES, FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
@@ -66,25 +67,34 @@ def _init(field: FlowField, settings: FiberSettings) -> None:
     _WORKER["settings"] = settings
 
 
-def _run_chunk(
-    task: tuple[np.ndarray, np.ndarray, dict[str, float], np.ndarray],
-) -> list[tuple[int, dict[str, Any]]]:
+@dataclass(frozen=True)
+class _Batch:
+    """Runs of one batch sent to a worker together (``key`` names the executor task)."""
+
+    key: str
+    idx: np.ndarray  # (k,) positions in the batch
+    starts: np.ndarray  # (k, 3) theta0 [deg], y0 [/h], length [/l_obs]
+    effects: dict[str, float]
+    seeds: np.ndarray  # (k,) int
+
+
+def _run_chunk(task: _Batch) -> list[tuple[int, dict[str, Any]]]:
     from fibersweep.fiber.run import simulate
 
-    idx, starts, effects, seeds = task
     field: FlowField = _WORKER["field"]
     base: FiberSettings = _WORKER["settings"]
     # the batch's effects come on top of those the baseline config already has
-    effects = {**base.effects, **effects}
-    settings = base.model_copy(update={"effects": effects})
+    settings = base.model_copy(update={"effects": {**base.effects, **task.effects}})
     out = []
-    for i, s, seed in zip(idx, starts, seeds, strict=True):
+    for i, s, seed in zip(task.idx, task.starts, task.seeds, strict=True):
         start = FiberStart(theta0=float(s[0]), y0=float(s[1]), length=float(s[2]))
         try:
             res = simulate(field, settings, start, rng_seed=int(seed))
             row = outcome_row(res)
         except RUN_ERRORS as exc:  # recorded, not dropped: the run failed (or bad start)
             row = _failed(f"{type(exc).__name__}: {exc}")
+        except Exception as exc:  # a bug, not a failed run: stop the workflow
+            raise RunBug(f"run {start} of {task.key}:\n{traceback.format_exc()}") from exc
         out.append((int(i), row))
     return out
 
@@ -99,13 +109,18 @@ class Simulator:
     settings : FiberSettings
         Baseline fiber settings; each batch replaces ``effects``.
     workers : int
-        Worker processes; 1 runs in this process.
+        Worker processes; 1 with the local executor runs in this process.
     budget : int or None
         Most runs allowed in total (None: unlimited).
     progress : bool
         Show tqdm progress bars.
+    executor : str
+        Executor name from :data:`fibersweep.sweep.executors.EXECUTORS`
+        ('local' or 'dask').
+    scheduler : str or None
+        Dask scheduler address (dask executor only).
 
-    Use as a context manager so the pool is shut down.
+    Use as a context manager so the workers are shut down.
     """
 
     def __init__(
@@ -115,7 +130,11 @@ class Simulator:
         workers: int = 2,
         budget: int | None = None,
         progress: bool = True,
+        executor: str = "local",
+        scheduler: str | None = None,
     ) -> None:
+        from fibersweep.sweep.executors import make_executor
+
         if workers < 1:
             raise InputError(f"workers must be >= 1, got {workers}")
         self.field = field
@@ -125,7 +144,13 @@ class Simulator:
         self.progress = progress
         self.used = 0
         self.failed = 0
-        self._pool: ProcessPoolExecutor | None = None
+        self._batches = 0
+        # retries=0: a run that kills its worker is a failed run here, not re-run
+        self._executor = (
+            None
+            if workers == 1 and executor == "local"
+            else make_executor(executor, workers, scheduler, retries=0, keep=True)
+        )
 
     def __enter__(self) -> Simulator:
         return self
@@ -134,24 +159,14 @@ class Simulator:
         self.close()
 
     def close(self) -> None:
-        if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
-            self._pool = None
+        """Stop the workers."""
+        if self._executor is not None:
+            self._executor.close()
 
     @property
     def remaining(self) -> float:
         """Runs left in the budget (inf when unlimited)."""
         return math.inf if self.budget is None else self.budget - self.used
-
-    def _get_pool(self) -> ProcessPoolExecutor:
-        if self._pool is None:
-            self._pool = ProcessPoolExecutor(
-                max_workers=self.workers,
-                mp_context=mp.get_context("spawn"),
-                initializer=_init,
-                initargs=(self.field, self.settings),
-            )
-        return self._pool
 
     def run(
         self,
@@ -202,26 +217,34 @@ class Simulator:
         rows: list[dict[str, Any] | None] = [None] * n
         n_chunks = max(1, min(n, 4 * self.workers))
         chunks = [c for c in np.array_split(np.arange(n), n_chunks) if len(c)]
-        tasks = [(c, starts[c], effects, seeds[c]) for c in chunks]
+        self._batches += 1
+        tasks = {
+            f"b{self._batches}-{k}": _Batch(
+                f"b{self._batches}-{k}", c, starts[c], effects, seeds[c]
+            )
+            for k, c in enumerate(chunks)
+        }
         bar = tqdm(total=n, desc=desc, disable=not self.progress, leave=False)
         try:
-            if self.workers == 1:
+            if self._executor is None:
                 _init(self.field, self.settings)
-                results = (_run_chunk(t) for t in tasks)
-                for chunk in results:
-                    for i, row in chunk:
-                        rows[i] = row
-                    bar.update(len(chunk))
+                outcomes = ((t.key, _run_chunk(t), "") for t in tasks.values())
             else:
-                pool = self._get_pool()
-                try:
-                    for chunk in pool.map(_run_chunk, tasks):
-                        for i, row in chunk:
-                            rows[i] = row
-                        bar.update(len(chunk))
-                except BrokenProcessPool as exc:
-                    self._pool = None
-                    raise SolverError(f"a simulation worker died during '{desc}': {exc}") from None
+                outcomes = (
+                    (o.key, o.value, o.error)
+                    for o in self._executor.run(
+                        _run_chunk,
+                        list(tasks.values()),
+                        initializer=_init,
+                        initargs=(self.field, self.settings),
+                    )
+                )
+            for key, chunk, error in outcomes:
+                if error:  # the worker died (or the task could not run): failed runs
+                    chunk = [(int(i), _failed(f"worker: {error}")) for i in tasks[key].idx]
+                for i, row in chunk:
+                    rows[i] = row
+                bar.update(len(chunk))
         finally:
             bar.close()
         self.used += n

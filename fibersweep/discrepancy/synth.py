@@ -97,6 +97,8 @@ def synthesize(
     seed: int = 0,
     workers: int = 2,
     progress: bool = True,
+    executor: str = "local",
+    scheduler: str | None = None,
 ) -> tuple[pd.DataFrame, dict[str, Any]]:
     """Make a measured-fiber table and its truth.
 
@@ -134,7 +136,9 @@ def synthesize(
     seeds = rng.integers(0, 2**31 - 1, size=n)
     z = noise_draws([seed, 4242], n)
     effects = {**fiber.effects, **effects}  # hidden effects on top of the config's own
-    with Simulator(field, fiber, workers=workers, progress=progress) as sim:
+    with Simulator(
+        field, fiber, workers=workers, progress=progress, executor=executor, scheduler=scheduler
+    ) as sim:
         raw = sim.run(true, effects, seeds, desc="synth")
     obs = noise.observe(raw, z)
     ok = (obs["status"] == "ok").to_numpy()

@@ -72,6 +72,10 @@ class DiscrepancySettings:
         Most simulations in total; None = what the plan needs.
     seed : int
     workers : int
+    executor : str
+        Where the simulations run: 'local' (process pool) or 'dask'.
+    scheduler : str or None
+        Dask scheduler address (dask only; None starts a local cluster).
     effects : tuple of str or None
         Library subset to consider (None = all).
     noise : NoiseModel
@@ -88,6 +92,8 @@ class DiscrepancySettings:
     budget: int | None = None
     seed: int = 0
     workers: int = 2
+    executor: str = "local"
+    scheduler: str | None = None
     effects: tuple[str, ...] | None = None
     noise: NoiseModel = field(default_factory=NoiseModel)
     n_perm: int = 4999
@@ -256,7 +262,10 @@ def run_discrepancy(
     folds = [np.sort(perm[: n // 2]), np.sort(perm[n // 2 :])]
     extra_values: dict[str, list[float]] = {}
 
-    with Simulator(field_, fiber, workers=s.workers, budget=s.budget, progress=progress) as sim:
+    with Simulator(
+        field_, fiber, workers=s.workers, budget=s.budget, progress=progress,
+        executor=s.executor, scheduler=s.scheduler,
+    ) as sim:  # fmt: skip
         maker = CopyMaker(measured.starts, s.noise, s.seed, sim)
         # (1) noise floor: jittered baseline copies
         base = [

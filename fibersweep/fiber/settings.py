@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 __all__ = [
     "ContactSettings",
@@ -63,6 +63,22 @@ class ClassifySettings(_Strict):
     trap_speed: float = Field(
         0.01, gt=0, description="'stopped' means COM speed below this fraction of U_center"
     )
+    rule: str = Field(
+        "head-speed",
+        description="pole-vaulting rule: head-speed (the source's), pivot or switch",
+    )
+    pivot_fraction: float = Field(
+        0.5, gt=0, description="pivot rule: the head moves less than this x L while turning 90°"
+    )
+
+    @field_validator("rule")
+    @classmethod
+    def _known_rule(cls, name: str) -> str:
+        from fibersweep.analysis.classify import RULES  # the registry decides
+
+        if name not in RULES:
+            raise ValueError(f"unknown rule; valid: {', '.join(RULES)}")
+        return name
 
 
 class RecordSettings(_Strict):

@@ -298,6 +298,10 @@ class DaskExecutor:
     chunk_size : int or None
         Runs per Dask task; None chooses them from the number of runs and worker
         threads (:func:`chunk_sizes`), 1 sends one task per run.
+    keep : bool
+        Keep the client (and the LocalCluster) between :meth:`run` calls; the
+        worker set-up runs again only when the initializer or its arguments
+        change. Call :meth:`close`, or use the executor as a context manager.
 
     Attributes
     ----------
@@ -311,6 +315,7 @@ class DaskExecutor:
         scheduler: str | None = None,
         retries: int = 2,
         chunk_size: int | None = None,
+        keep: bool = False,
     ) -> None:
         if workers < 1:
             raise InputError(f"workers must be >= 1, got {workers}")
@@ -320,7 +325,32 @@ class DaskExecutor:
         self.scheduler = scheduler
         self.retries = retries
         self.chunk_size = chunk_size
+        self.keep = keep
         self.chunks_submitted = 0
+        self._session: tuple[Any, Any] | None = None  # (client, cluster) kept
+        self._plugin_ident: tuple | None = None
+
+    name = "dask"
+    #: Options :func:`~fibersweep.sweep.executors.make_executor` may pass.
+    OPTIONS = frozenset({"retries", "keep", "scheduler", "chunk_size"})
+
+    def __enter__(self) -> DaskExecutor:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Close a kept client and its LocalCluster (nothing to do otherwise)."""
+        if self._session is None:
+            return
+        client, cluster = self._session
+        self._session = None
+        self._plugin_ident = None
+        with _quiet_dask():
+            client.close()
+            if cluster is not None:
+                cluster.close()
 
     def _client(self) -> tuple[Any, Any]:
         try:
@@ -357,14 +387,22 @@ class DaskExecutor:
             raise InputError("task keys must be unique (they name the Dask tasks)")
         self.chunks_submitted = 0
         with _quiet_dask():
-            client, cluster = self._client()
+            if self._session is None:
+                self._session = self._client()
+            client, _ = self._session
+            clean = False
             try:
-                client.register_plugin(InitPlugin(initializer, initargs), name="fibersweep-init")
+                ident = (initializer, tuple(id(a) for a in initargs))
+                if ident != self._plugin_ident:
+                    client.register_plugin(
+                        InitPlugin(initializer, initargs), name="fibersweep-init"
+                    )
+                    self._plugin_ident = ident
                 yield from self._run_chunks(client, fn, tasks)
+                clean = True
             finally:
-                client.close()
-                if cluster is not None:
-                    cluster.close()
+                if not (self.keep and clean):
+                    self.close()
 
     def _run_chunks(
         self, client: Any, fn: Callable[[Any], Any], tasks: Sequence[_Keyed]

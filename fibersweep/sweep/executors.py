@@ -64,7 +64,17 @@ __all__ = [
 ]
 
 
-EXECUTORS: dict[str, type] = {"local": LocalExecutor, "dask": DaskExecutor}
+#: Executor classes by name. Each declares ``name`` and the ``OPTIONS`` it takes;
+#: a new executor is one module and one entry here.
+EXECUTORS: dict[str, type] = {cls.name: cls for cls in (LocalExecutor, DaskExecutor)}
+
+# How each option is spelled on the command line / in the config, for messages.
+_OPTION_NAMES = {
+    "scheduler": "--scheduler (run.scheduler)",
+    "chunk_size": "chunk_size",
+    "retries": "run.retries",
+    "keep": "keep",
+}
 
 
 def make_executor(
@@ -74,17 +84,31 @@ def make_executor(
     retries: int = 2,
     *,
     chunk_size: int | None = None,
-) -> LocalExecutor | DaskExecutor:
-    """Executor by name; unknown names fail listing the valid ones.
+    keep: bool = False,
+) -> Executor:
+    """Executor by name from :data:`EXECUTORS`, with the options it declares.
 
-    ``chunk_size`` (runs per Dask task, None: automatic) applies to Dask only.
+    Options left at None (or ``keep`` False) are not passed. An unknown name
+    fails listing the valid ones; an option the executor does not take fails
+    naming the executors that do.
+
+    Raises
+    ------
+    InputError
     """
     if name not in EXECUTORS:
         raise InputError(f"unknown executor {name!r}; valid: {', '.join(EXECUTORS)}")
-    if name == "local":
-        if scheduler:
-            raise InputError("--scheduler needs --executor dask")
-        if chunk_size is not None:
-            raise InputError("chunk_size applies to the dask executor only")
-        return LocalExecutor(workers, retries=retries)
-    return DaskExecutor(workers, scheduler=scheduler, retries=retries, chunk_size=chunk_size)
+    cls = EXECUTORS[name]
+    given = {"scheduler": scheduler, "chunk_size": chunk_size, "keep": keep or None}
+    options: dict[str, object] = {"retries": retries}
+    for key, value in given.items():
+        if value is None:
+            continue
+        if key not in cls.OPTIONS:
+            takers = [n for n, c in EXECUTORS.items() if key in c.OPTIONS]
+            raise InputError(
+                f"{_OPTION_NAMES[key]} applies to the {' or '.join(takers)} executor only, "
+                f"not {name!r}"
+            )
+        options[key] = value
+    return cls(workers, **options)

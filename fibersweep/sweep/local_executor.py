@@ -51,15 +51,54 @@ class LocalExecutor:
         Times a task may be caught in a worker crash before it is reported failed.
     inflight_per_worker : int
         Tasks queued per worker (small, so a crash touches few tasks).
+    keep : bool
+        Keep the pool between :meth:`run` calls with the same initializer and
+        arguments (many small batches pay the worker start-up once); call
+        :meth:`close`, or use the executor as a context manager.
     """
 
-    def __init__(self, workers: int = 2, retries: int = 2, inflight_per_worker: int = 2) -> None:
+    name = "local"
+    #: Options :func:`~fibersweep.sweep.executors.make_executor` may pass.
+    OPTIONS = frozenset({"retries", "keep"})
+
+    def __init__(
+        self, workers: int = 2, retries: int = 2, inflight_per_worker: int = 2, keep: bool = False
+    ) -> None:
         if workers < 1:
             raise InputError(f"workers must be >= 1, got {workers}")
         self.workers = workers
         self.retries = retries
         self.cap = max(1, inflight_per_worker) * workers
+        self.keep = keep
         self.pools_started = 0
+        self._kept: tuple[tuple, ProcessPoolExecutor] | None = None
+
+    def __enter__(self) -> LocalExecutor:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop a kept pool (nothing to do otherwise)."""
+        if self._kept is not None:
+            self._stop(self._kept[1])
+            self._kept = None
+
+    def _acquire(
+        self, initializer: Callable[..., None] | None, initargs: tuple
+    ) -> ProcessPoolExecutor:
+        """The kept pool if it was set up the same way, else a new one."""
+        ident = (initializer, tuple(id(a) for a in initargs))
+        if self._kept is not None and self._kept[0] == ident:
+            pool = self._kept[1]
+            self._kept = None
+            return pool
+        self.close()
+        pool = self._pool(initializer, initargs)
+        if self.keep:
+            self._ident = ident
+        return pool
 
     def _pool(
         self, initializer: Callable[..., None] | None, initargs: tuple
@@ -97,11 +136,16 @@ class LocalExecutor:
         strikes: dict[str, int] = defaultdict(int)
         barren = 0  # consecutive pools that broke without finishing anything
         while fresh or suspects:
-            pool = self._pool(initializer, initargs)
+            pool = (
+                self._acquire(initializer, initargs)
+                if self.keep
+                else self._pool(initializer, initargs)
+            )
             inflight: dict[Future, Any] = {}
             progressed = False
             crashed: list[Any] = []
             broken = False  # submit() found the pool already broken
+            clean = False  # the loop ended by itself (no error, not abandoned)
             try:
                 while (fresh or suspects or inflight) and not (crashed or broken):
                     # A task leaves its queue only once submit() accepted it: a worker
@@ -135,8 +179,13 @@ class LocalExecutor:
                         else:
                             progressed = True
                             yield Outcome(t.key, f.result(), "", strikes[t.key] + 1)
+                clean = True
             finally:
-                self._stop(pool)
+                # A kept pool must be whole and idle; anything else is stopped.
+                if self.keep and clean and not (crashed or broken or inflight):
+                    self._kept = (self._ident, pool)
+                else:
+                    self._stop(pool)
             if not (crashed or broken):
                 continue
             alone = len(crashed) == 1

@@ -40,10 +40,29 @@ def library_versions() -> dict[str, str]:
     return out
 
 
-def git_revision() -> str | None:
-    """Commit of the fibersweep source tree (``+dirty`` if modified), or None."""
-    src = Path(__file__).resolve().parents[2]
+def git_revision(src: Path | None = None) -> str | None:
+    """Commit of fibersweep's own source checkout (``+dirty`` if modified), or None.
+
+    Only when fibersweep runs from its own git checkout (an editable install):
+    ``src`` (default: the folder above the package) must be the top of a git
+    work tree whose ``pyproject.toml`` names the ``fibersweep`` project. An
+    installed copy inside a user's repository (a virtual environment in a
+    project folder) must not record the user's commit; the package version
+    identifies it instead.
+    """
+    src = (src or Path(__file__).resolve().parents[2]).resolve()
     try:
+        if 'name = "fibersweep"' not in (src / "pyproject.toml").read_text():
+            return None
+        top = subprocess.run(
+            ["git", "-C", str(src), "rev-parse", "--show-toplevel"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=True,
+        ).stdout.strip()
+        if Path(top).resolve() != src:
+            return None
         rev = subprocess.run(
             ["git", "-C", str(src), "rev-parse", "HEAD"],
             capture_output=True,
@@ -58,7 +77,7 @@ def git_revision() -> str | None:
             timeout=5,
             check=True,
         ).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
+    except (OSError, subprocess.SubprocessError, UnicodeDecodeError):
         return None
     return rev + ("+dirty" if dirty else "") if rev else None
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from pydantic import ValidationError
 
 from fibersweep.atomic import atomic_path
 from fibersweep.errors import InputError
@@ -27,7 +28,14 @@ from fibersweep.sweep.store import (
     write_table_atomic,
 )
 
-__all__ = ["Reclassified", "class_counts", "reclassify", "thresholds_for", "trajectory_from_frame"]
+__all__ = [
+    "Reclassified",
+    "class_counts",
+    "reclassify",
+    "rule_column",
+    "thresholds_for",
+    "trajectory_from_frame",
+]
 
 log = logging.getLogger(__name__)
 
@@ -78,7 +86,7 @@ def thresholds_for(
     upd = {k: v for k, v in overrides.items() if v is not None}
     try:
         return ClassifySettings.model_validate({**base.model_dump(), **upd})
-    except Exception as exc:
+    except ValidationError as exc:
         raise InputError(f"classification thresholds: {exc}") from None
 
 
@@ -121,6 +129,11 @@ def class_counts(runs: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
+def rule_column(rule: str) -> str:
+    """Runs-table column holding the class under a rule (``head-speed`` -> ``class_head_speed``)."""
+    return "class_" + rule.replace("-", "_")
+
+
 def reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     """Re-classify every stored trajectory and rewrite the runs table atomically.
 
@@ -144,7 +157,7 @@ def reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
 
 
 def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
-    from fibersweep.analysis.classify import classify
+    from fibersweep.analysis.classify import RULES, classify_all
 
     man = read_manifest(out)
     runs = read_runs(out)
@@ -163,7 +176,9 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
         if man["config"]["fiber"].get("effects"):
             log.warning(
                 "%s: the manifest predates the effective U_center; classifying with the "
-                "nominal %.4g µm/s although effects were on", out, u_center
+                "nominal %.4g µm/s although effects were on",
+                out,
+                u_center,
             )
     ok = runs["status"] == "ok"
     traj = read_trajectories(out, list(runs.loc[ok, "id"]))
@@ -174,19 +189,28 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
         )
     groups = dict(tuple(traj.groupby("id", sort=False)))
     new_cls = runs["class"].copy()
+    # One column per rule (class_head_speed, class_pivot, class_switch), so rules can be
+    # compared run by run; 'class' is the chosen rule's. Empty where no trajectory.
+    by_rule = {name: pd.Series([""] * len(runs), dtype=object) for name in RULES}
     missing = 0
     for i in np.flatnonzero(ok.to_numpy()):
         rid = runs.at[i, "id"]
         if rid not in groups:
             missing += 1
             continue
-        new_cls.iat[i] = classify(
+        labels = classify_all(
             trajectory_from_frame(groups[rid].sort_values("sample")), geometry, u_center, thresholds
         )
+        for name, label in labels.items():
+            by_rule[name].iat[i] = label
+        new_cls.iat[i] = labels[thresholds.rule]
     if missing:
         log.warning("%d ok runs have no stored trajectory and keep their class", missing)
     changed = int((new_cls != runs["class"]).sum())
-    runs = runs.assign(**{"class": new_cls})
+    runs = runs.assign(
+        **{"class": new_cls},
+        **{rule_column(name): col.to_numpy() for name, col in by_rule.items()},
+    )
     runs.loc[runs["class"] == "Trapping", "delta"] = math.nan
     old_parts = list_parts(out / RUNS_DIR)
     meta = {

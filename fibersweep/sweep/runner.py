@@ -10,7 +10,7 @@ from __future__ import annotations
 import logging
 import time
 from collections import Counter
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -143,6 +143,7 @@ def run_sweep(
     retry_failed: bool = False,
     progress: Callable[[Mapping[str, Any]], None] | None = None,
     on_plan: Callable[[SweepPlan], None] | None = None,
+    overrides: Sequence[str] = (),
 ) -> SweepSummary:
     """Run every to-do point of a sweep and record it.
 
@@ -156,6 +157,9 @@ def run_sweep(
         Called with each finished row (for a progress bar).
     on_plan : callable, optional
         Called with the plan before anything runs.
+    overrides : sequence of str
+        The command line's ``KEY=VALUE`` overrides, recorded in the manifest as
+        given (``cfg`` already has them applied).
 
     Returns
     -------
@@ -165,7 +169,7 @@ def run_sweep(
     """
     out = Path(cfg.run.output)
     with output_lock(out, "run"):
-        return _run_locked(cfg, out, resume, retry_failed, progress, on_plan)
+        return _run_locked(cfg, out, resume, retry_failed, progress, on_plan, overrides)
 
 
 def _run_locked(
@@ -175,6 +179,7 @@ def _run_locked(
     retry_failed: bool,
     progress: Callable[[Mapping[str, Any]], None] | None,
     on_plan: Callable[[SweepPlan], None] | None,
+    overrides: Sequence[str] = (),
 ) -> SweepSummary:
     fieldobj, info, plan = prepare(cfg, resume=resume, retry_failed=retry_failed)
     if on_plan is not None:
@@ -185,6 +190,7 @@ def _run_locked(
     prov = provenance(info.key)
     manifest = {
         "config": cfg.model_dump(mode="json"),
+        "overrides": list(overrides),
         "result_settings": result_settings(cfg, info.key),
         "provenance": prov,
         "flow_cache": str(getattr(info, "path", "")),
@@ -194,7 +200,13 @@ def _run_locked(
         "state": "running",
     }
     write_manifest(out, manifest)
-    meta = {"fibersweep": prov["fibersweep"], "git": prov["git"], "flow_key": info.key}
+    meta = {
+        "fibersweep": prov["fibersweep"],
+        "git": prov["git"],
+        "flow_key": info.key,
+        "config": manifest["config"],
+        "overrides": manifest["overrides"],
+    }
     summary = SweepSummary(out=out)
     spec = WorkerSpec(
         flow_json=cfg.flow.model_dump_json(),

@@ -35,6 +35,7 @@ from fibersweep.atomic import TMP_GLOB, atomic_path
 from fibersweep.errors import ResultsError
 
 __all__ = [
+    "COLUMN_DOCS",
     "RUN_COLUMNS",
     "RUNS_DIR",
     "TRAJ_DIR",
@@ -87,6 +88,34 @@ RUN_COLUMNS: dict[str, pa.DataType] = {
     "finished_at": pa.float64(),
 }
 
+#: Unit and frame of the runs-table columns, stored as Parquet field metadata
+#: (``unit`` and ``doc``), so a table read outside fibersweep says what it holds.
+COLUMN_DOCS: dict[str, tuple[str, str]] = {
+    "id": ("", "content id of the run (hash of start, fiber settings and flow field)"),
+    "theta0": ("deg", "start angle of the tail-to-head vector from +x (flow direction)"),
+    "y0": ("h_obs", "start lateral position of the centre of mass, from the pillar base line"),
+    "length": ("l_obs", "fiber length over the pillar base length"),
+    "class": ("", "Below, Above, Pole-vaulting or Trapping (empty when failed)"),
+    "status": ("", "ok or failed"),
+    "reason": ("", "why a run failed"),
+    "delta": ("h_obs", "lateral displacement y_f - y0 far downstream (NaN for Trapping)"),
+    "contact": ("", "whether the fiber touched the pillar"),
+    "theta_c": ("deg", "fiber angle at first contact, in (-90, 90]"),
+    "y_c": ("h_obs", "lateral position of the first contact point, from the base line"),
+    "t_contact": ("s", "time of first contact"),
+    "t_pass": ("s", "time the centre of mass passes the pillar's downstream end"),
+    "x_f": ("µm", "final centre-of-mass x, channel frame (inlet at 0)"),
+    "y_f": ("µm", "final centre-of-mass y, channel frame (wall at 0)"),
+    "theta_f": ("deg", "final directed angle, unwrapped"),
+    "n_steps": ("", "integrator steps"),
+    "wall_time": ("s", "wall-clock time of the run"),
+    "cpu_time": ("s", "CPU time of the run in its worker"),
+    "model": ("", "fiber model (rigid or bead-spring)"),
+    "worker": ("", "host:pid of the worker that ran it"),
+    "attempts": ("", "times the run was started (worker crashes re-run it)"),
+    "finished_at": ("s", "Unix time the run finished"),
+}
+
 _seq = 0
 
 
@@ -137,7 +166,8 @@ def runs_table(
     fields, arrays = [], []
     for name, typ in RUN_COLUMNS.items():
         col = df[name] if name in df else pd.Series([None] * len(df), dtype=object)
-        fields.append(pa.field(name, typ))
+        unit, doc = COLUMN_DOCS[name]
+        fields.append(pa.field(name, typ, metadata={"unit": unit, "doc": doc}))
         arrays.append(pa.array(col.tolist(), type=typ, from_pandas=True))
     for name in df.columns:
         if name not in RUN_COLUMNS:

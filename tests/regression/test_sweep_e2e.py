@@ -311,12 +311,48 @@ def test_classify_uses_the_speed_the_runs_moved_in(
     seen = []
     real = classify_module.classify
 
-    def spy(traj, geometry, u_center, thresholds):
+    def spy(traj, geometry, u_center, thresholds, rule=None):
         seen.append(u_center)
-        return real(traj, geometry, u_center, thresholds)
+        return real(traj, geometry, u_center, thresholds, rule)
 
     monkeypatch.setattr(classify_module, "classify", spy)
     before = read_runs(out)
     r = reclassify(out, ClassifySettings())
     assert r.n_changed == 0 and (read_runs(out)["class"] == before["class"]).all()
-    assert len(seen) == len(before) and set(seen) == {man["u_center_effective"]}
+    # every run, under every rule, judged with the effective speed
+    from fibersweep.analysis.classify import RULES
+    from fibersweep.sweep.reclassify import rule_column
+
+    assert len(seen) == len(RULES) * len(before) and set(seen) == {man["u_center_effective"]}
+    after = read_runs(out)  # one class column per rule, 'class' the default rule's
+    assert (after["class"] == after[rule_column("head-speed")]).all()
+    assert {rule_column(r) for r in RULES} <= set(after.columns)
+    res, text = _invoke("classify", out, "--rule", "switch")
+    assert res.exit_code == 0 and "rule='switch'" in text, text
+    assert (read_runs(out)["class"] == after[rule_column("switch")]).all()
+
+
+def test_run_with_overrides_records_them(tmp_path, coarse_field, flow_cache_dir):
+    cfg = _config(tmp_path, flow_cache_dir, "ov")
+    res, text = _invoke("run", cfg, "sweep.y0=[0.9]", "sweep.theta0=0", "fiber.contact.chi=1.2")
+    assert res.exit_code == 0, text
+    man = json.loads((tmp_path / "ov" / "manifest.json").read_text())
+    assert man["overrides"] == ["sweep.y0=[0.9]", "sweep.theta0=0", "fiber.contact.chi=1.2"]
+    assert man["config"]["fiber"]["contact"]["chi"] == 1.2
+    assert len(read_runs(tmp_path / "ov")) == 1
+    res, text = _invoke("run", cfg, "fiber.contact.chii=1.2")
+    assert res.exit_code == 2 and "(override fiber.contact.chii=1.2): unknown key" in text
+
+
+def test_parquet_fields_carry_units_and_the_config(reference):
+    """A runs part read outside fibersweep says what each column holds and how it was made."""
+    _, out, _ = reference
+    part = list_parts(out / RUNS_DIR)[0]
+    schema = pq.read_schema(part)
+    assert schema.field("y0").metadata == {
+        b"unit": b"h_obs",
+        b"doc": b"start lateral position of the centre of mass, from the pillar base line",
+    }
+    assert schema.field("y_f").metadata[b"unit"] == "µm".encode()
+    meta = json.loads(schema.metadata[b"fibersweep"])
+    assert meta["config"]["flow"]["dx"] == 4.0 and meta["overrides"] == []

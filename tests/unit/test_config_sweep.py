@@ -167,3 +167,21 @@ def test_prefiltered_start_check_keeps_every_failing_point():
     positions = [s for s in resolvable if first_problems([s])]
     assert positions and set(positions) <= set(kept)
     assert len(kept) < 0.6 * cfg.sweep.size  # and clear points are skipped
+
+
+def test_executor_names_come_from_the_registry(tmp_path):
+    with pytest.raises(ConfigError) as ei:
+        load_config(_write(tmp_path, "run:\n  executor: dsak\n"))
+    assert (
+        "run.executor (line 2): unknown executor; did you mean 'dask'? valid: local, dask"
+        in str(ei.value)
+    )
+    assert load_config(_write(tmp_path, "run:\n  executor: dask\n")).run.executor == "dask"
+
+
+def test_cross_field_checks_report_at_their_field(tmp_path):
+    """Model-level checks name their field structurally (FieldError), not in the text."""
+    p = _write(tmp_path, "run:\n  executor: dask\n  scheduler: foo\n")
+    with pytest.raises(ConfigError) as ei:
+        load_config(p)
+    assert "run.scheduler (line 3): expected an address like tcp://HOST:PORT" in str(ei.value)

@@ -98,3 +98,54 @@ def test_thinning_keeps_what_classification_needs():
 )
 def test_fiber_angle(theta, expect):
     assert fiber_angle(theta) == pytest.approx(expect)
+
+
+def _turning(head_path: str, m: int = 401, length: float = 100.0):
+    """A fiber in contact that turns its tail->head angle from 0 to 180 degrees.
+
+    head_path 'pivot': the head stays at one point (speed 0) and the tail swings round it;
+    'slide': the fiber spins about its centre while drifting 3 L downstream, so the head
+    travels several L while it turns (a flip while passing, not a vault).
+    """
+    t = np.linspace(0, 2, m)
+    th = np.radians(np.linspace(0, 180, m))
+    if head_path == "pivot":
+        head = np.column_stack([np.full(m, XC - 20.0), np.full(m, YC + 60.0)])
+        com = head - 0.5 * length * np.column_stack([np.cos(th), np.sin(th)])
+    else:
+        com = np.column_stack([XC - 150 + 3 * length * t / 2, np.full(m, YC + 60.0)])
+        head = com + 0.5 * length * np.column_stack([np.cos(th), np.sin(th)])
+    tail = 2 * com - head
+    speed = np.hypot(*np.gradient(head, t, axis=0).T)
+    # cross the centroid's x at the end so the run is classifiable
+    x = np.r_[com[:-1, 0], XC + 200.0]
+    return Trajectory(
+        t=t, x=x, y=com[:, 1], theta=np.degrees(th), head=head, tail=tail,
+        head_speed=speed, com_speed=np.full(m, 300.0), contact=np.ones(m, bool),
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("rule", "pivot", "slide"),
+    [
+        ("head-speed", "Pole-vaulting", "Above"),  # the sliding head never stops
+        ("pivot", "Pole-vaulting", "Above"),  # head travel 0 vs about 2.4 L while turning
+        ("switch", "Pole-vaulting", "Pole-vaulting"),  # any swap after contact
+    ],
+)
+def test_every_rule_on_a_pivot_and_on_a_sliding_flip(rule, pivot, slide):
+    from fibersweep.analysis.classify import RULES
+
+    assert rule in RULES
+    assert classify(_turning("pivot"), GEO, U, TH, rule) == pivot
+    assert classify(_turning("slide"), GEO, U, TH, rule) == slide
+
+
+def test_every_rule_is_tested_and_unknown_rules_are_refused():
+    from pydantic import ValidationError
+
+    from fibersweep.analysis.classify import RULES
+
+    assert set(RULES) == {"head-speed", "pivot", "switch"}  # extend the table above
+    with pytest.raises(ValidationError, match="unknown rule; valid: head-speed, pivot, switch"):
+        ClassifySettings(rule="wobble")

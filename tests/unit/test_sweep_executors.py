@@ -6,7 +6,7 @@ import pytest
 from _sweep_helpers import Job, init, square
 
 from fibersweep.errors import InputError, SolverError
-from fibersweep.sweep.executors import DaskExecutor, LocalExecutor, make_executor
+from fibersweep.sweep.executors import EXECUTORS, DaskExecutor, LocalExecutor, make_executor
 
 
 def _collect(ex, jobs, **kw):
@@ -98,7 +98,9 @@ def test_local_broken_initializer_stops_with_its_reason():
 def test_registry_fails_loudly():
     with pytest.raises(InputError, match="valid: local, dask"):
         make_executor("slurm", 2)
-    with pytest.raises(InputError, match="--scheduler needs --executor dask"):
+    with pytest.raises(
+        InputError, match=r"--scheduler \(run.scheduler\) applies to the dask executor only"
+    ):
         make_executor("local", 2, scheduler="tcp://127.0.0.1:8786")
 
 
@@ -108,7 +110,9 @@ def test_registry_passes_chunk_size_to_dask_only():
     assert isinstance(ex, DaskExecutor)
     assert (ex.workers, ex.retries, ex.chunk_size) == (3, 1, 4)
     assert make_executor("dask", 2).chunk_size is None, "automatic by default"
-    with pytest.raises(InputError, match="chunk_size applies to the dask executor only"):
+    with pytest.raises(
+        InputError, match="chunk_size applies to the dask executor only, not 'local'"
+    ):
         make_executor("local", 2, chunk_size=4)
 
 
@@ -175,3 +179,23 @@ def test_worker_records_failed_runs_and_raises_bugs(monkeypatch):
     monkeypatch.setattr(run_module, "simulate", bug)
     with pytest.raises(RunBug, match="(?s)run id1 .*TypeError: unsupported operand"):
         worker.run_task(task)
+
+
+@pytest.mark.parametrize("name", sorted(EXECUTORS))
+def test_every_executor_declares_its_options_and_name(name):
+    cls = EXECUTORS[name]
+    assert cls.name == name and "retries" in cls.OPTIONS and "keep" in cls.OPTIONS
+
+
+@pytest.mark.parametrize("name", sorted(EXECUTORS))
+def test_kept_executor_reuses_its_workers_across_runs(name, tmp_path):
+    """keep=True: many small batches pay the worker start-up (and set-up) once."""
+    jobs = [Job(f"k{i}", float(i)) for i in range(4)]
+    args = ("T", str(tmp_path))
+    with make_executor(name, 2, keep=True) as ex:
+        for batch in range(3):
+            res = _collect(ex, [Job(f"{j.key}-{batch}", j.x) for j in jobs], initializer=init,
+                           initargs=args)  # fmt: skip
+            assert all(o.error == "" for o in res.values())
+    # one set-up per worker process in all, not per batch
+    assert 1 <= len(list(tmp_path.glob("init-*"))) <= 2
