@@ -87,6 +87,27 @@ def measured_table(
     return table
 
 
+def _missing(table: pd.DataFrame) -> np.ndarray:
+    """Per row, the continuous observables missing where they must exist ('' if none).
+
+    Returns
+    -------
+    ndarray, shape (n,), str
+        Descriptions joined by ', ' (e.g. 'time to pass the pillar').
+    """
+    trapped = (table["class"] == "Trapping").to_numpy()
+    contact = table["contact"].to_numpy(dtype=bool) if "contact" in table else None
+    out = np.full(len(table), "", dtype=object)
+    for name in table.columns.intersection(list(OBSERVABLES)):
+        o = OBSERVABLES[name]
+        need = o.defined_mask(trapped, contact)
+        if o.kind != "continuous" or need is None:
+            continue
+        gone = need & ~np.isfinite(table[name].to_numpy(dtype=np.float64))
+        out[gone] = [f"{w}, {o.description}" if w else o.description for w in out[gone]]
+    return out
+
+
 def synthesize(
     field: FlowField,
     fiber: FiberSettings,
@@ -145,23 +166,14 @@ def synthesize(
     table = measured_table(obs, reported)
     # A run that leaves a quantity undefined where it must exist (a passing fiber whose
     # rear never crossed the pillar line has no time to pass) is incomplete: a failure.
-    trapped = (table["class"] == "Trapping").to_numpy()
-    contact = table["contact"].to_numpy(dtype=bool) if "contact" in table else None
-    missing = np.zeros((n, 0), dtype=bool)
-    what = []
-    for name in table.columns.intersection(list(OBSERVABLES)):
-        need = OBSERVABLES[name].defined_mask(trapped, contact)
-        if need is not None and OBSERVABLES[name].kind == "continuous":
-            missing = np.column_stack([missing, need & ~np.isfinite(table[name].to_numpy())])
-            what.append(OBSERVABLES[name].description)
-    incomplete = ok & missing.any(axis=1)
+    missing = _missing(table)
+    incomplete = ok & (missing != "")
     keep = ok & ~incomplete
     failures = [
         {
             "fiber_id": table["fiber_id"][i],
             "true_start": true[i].tolist(),
-            "reason": raw["reason"][i]
-            or "no " + ", ".join(w for w, m in zip(what, missing[i], strict=True) if m),
+            "reason": raw["reason"][i] or f"no {missing[i]}",
         }
         for i in np.flatnonzero(~keep)
     ]

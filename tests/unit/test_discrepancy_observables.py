@@ -250,3 +250,16 @@ def test_a_new_observable_is_one_registry_entry(registry):
 
 def test_registry_order_is_the_report_order():
     assert NAMES == ["class", "delta", "contact", "theta_c", "y_c", "t_pass", "t_contact", "dwell"]
+
+
+def test_synth_drops_runs_missing_a_quantity_where_it_must_exist():
+    from fibersweep.discrepancy.synth import _missing
+
+    table, _ = _measured()
+    assert (_missing(table) == "").all()
+    table.loc[0, "t_pass"] = np.nan  # a Below fiber that never passed within the run
+    table.loc[1, "theta_c"] = np.nan  # contact without a contact angle
+    missing = _missing(table)
+    assert missing[0] == OBSERVABLES["t_pass"].description
+    assert missing[1] == OBSERVABLES["theta_c"].description
+    assert (missing[2:] == "").all()
