@@ -63,6 +63,9 @@ class NoiseModel:
             if not (np.isfinite(v) and v >= 0):
                 raise InputError(f"noise.{name}: must be a finite number >= 0, got {v!r}")
 
+    def __hash__(self) -> int:  # the outcome dict is never mutated after __post_init__
+        return hash((self.theta0, self.y0, self.length, tuple(self.outcome.items())))
+
     def sd(self, name: str) -> float:
         """Standard deviation of the start column or observable ``name``."""
         if name in ("theta0", "y0", "length"):
