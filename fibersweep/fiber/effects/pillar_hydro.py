@@ -15,9 +15,21 @@ more.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
-from fibersweep.fiber.effects.base import DynamicsContext, DynamicsParams, Effect
+from fibersweep.fiber.effects.base import DynamicsContext, Effect
 from fibersweep.fiber.effects.registry import register
+from fibersweep.fiber.hooks import implements
+from fibersweep.fiber.wallhydro import mobility_with_wall_drag, rigid_wall_velocity, wall_drag
+
+__all__ = ["PillarHydro", "PillarHydroKernel"]
+
+
+class PillarHydroKernel(NamedTuple):
+    """Kernel record: multiplier k on the Faxén drag [-] and its screening length [µm]."""
+
+    strength: float
+    length: float
 
 
 @register
@@ -29,5 +41,25 @@ class PillarHydro(Effect):
     def validate(self) -> None:
         self._require(0.0 <= self.value <= 20.0, "must be in [0, 20]")
 
-    def dynamics(self, params: DynamicsParams, ctx: DynamicsContext) -> DynamicsParams:
-        return params.with_(hydro_strength=self.value, hydro_length=ctx.depth)
+    def kernel(self, ctx: DynamicsContext) -> PillarHydroKernel:
+        return PillarHydroKernel(float(self.value), float(ctx.depth))
+
+
+@implements("rigid_mobility", PillarHydroKernel)
+def rigid_mobility(e, k, vbx, vby, om, nm_eff):
+    """Rigid model: V = A⁻¹ V₀ and N' = A⁻¹ N (see :mod:`fibersweep.fiber.wallhydro`)."""
+    w = k.work
+    p = k.params
+    if wall_drag(w.dist, p.a, e.strength, e.length, p.mu, w.zeta) > 0:
+        vbx, vby, om = rigid_wall_velocity(k.body.s, nm_eff, w.zeta, vbx, vby, om, w.nm_eff)
+        return vbx, vby, om, w.nm_eff
+    return vbx, vby, om, nm_eff
+
+
+@implements("bead_mobility", PillarHydroKernel)
+def bead_mobility(e, k):
+    """Bead-spring model: M -> (M⁻¹ + Z)⁻¹ and u -> (I + M Z)⁻¹ u (Woodbury)."""
+    w = k.work
+    p = k.params
+    if wall_drag(w.dist, p.a, e.strength, e.length, p.mu, w.zeta) > 0:
+        mobility_with_wall_drag(w.mob, w.zeta, w.f)

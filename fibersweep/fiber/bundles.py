@@ -1,0 +1,217 @@
+"""The typed bundles the Numba integrators read, built once per run by :func:`build_kernel`.
+
+Each bundle is a ``typing.NamedTuple`` (Numba passes it as a struct and
+resolves field access at compile time, so it costs what separate arguments
+cost). The integrators take one :class:`Kernel` holding them all:
+
+- :class:`FlowArrays`: the field on its grid;
+- :class:`~fibersweep.fiber.contact.PillarArrays`: the pillar (rough or smooth);
+- :class:`BodyArrays`: the straight fiber's rigid-body mobility;
+- :class:`Params`: the scalars of stepping, stopping and the bead-spring energy;
+- :class:`Work`: scratch buffers, allocated here so the kernels never allocate;
+- ``effects``: the kernel records of the run's active dynamic effects
+  (see :mod:`fibersweep.fiber.hooks`), sorted by effect name and ending with
+  :data:`~fibersweep.fiber.hooks.BASELINE`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from fibersweep.fiber.contact import PillarArrays
+from fibersweep.fiber.hooks import BASELINE
+from fibersweep.fiber.mobility import body_mobility
+from fibersweep.fiber.setup import Setup
+
+__all__ = [
+    "DEFAULT_DT",
+    "BodyArrays",
+    "FlowArrays",
+    "Kernel",
+    "Params",
+    "PillarArrays",
+    "Work",
+    "build_kernel",
+]
+
+DEFAULT_DT = 5e-5  # s; bead-spring default step (see tests/validation/test_fiber_beadspring.py)
+
+
+class FlowArrays(NamedTuple):
+    """Background flow: ``ux, uy`` (nx, ny) [µm/s] on nodes ``dx`` [µm] apart."""
+
+    ux: np.ndarray
+    uy: np.ndarray
+    dx: float
+
+
+class BodyArrays(NamedTuple):
+    """Rigid-body mobility of the straight n-bead fiber (body frame, see mobility.BodyMobility).
+
+    Attributes
+    ----------
+    s : ndarray, shape (n,)
+        Bead offsets along the axis [µm].
+    pm, nm, chol : ndarray, shapes (3, 2n), (3, 3), (3, 3)
+        P, N and the Cholesky factor of N.
+    tip_m : float
+        Largest bead mobility of the rigid body [µm/(pN s)].
+    """
+
+    s: np.ndarray
+    pm: np.ndarray
+    nm: np.ndarray
+    chol: np.ndarray
+    tip_m: float
+
+
+class Params(NamedTuple):
+    """Scalars of a run (lengths µm, times s, speeds µm/s, forces pN).
+
+    Attributes
+    ----------
+    a, mu : bead radius, viscosity [pN s/µm²]
+    max_disp, contact_disp : largest bead move per step far from / near the pillar (rigid)
+    dt_max : largest step (rigid)
+    dt : fixed step (bead-spring; NaN for rigid)
+    t_max : give up
+    x_stop : mode 0 stops when the rearmost end passes this x
+    t_stop : mode 1 stops at this time
+    mode : 0 run past the pillar, 1 run until t_stop
+    trap_speed, trap_time : a fiber in contact slower than trap_speed for trap_time is trapped
+    y_lo, y_hi : bead centres must stay between these
+    stretch, bend : bead-spring S [pN] and B [pN µm²]
+    """
+
+    a: float
+    mu: float
+    max_disp: float
+    contact_disp: float
+    dt_max: float
+    dt: float
+    t_max: float
+    x_stop: float
+    t_stop: float
+    mode: int
+    trap_speed: float
+    trap_time: float
+    y_lo: float
+    y_hi: float
+    stretch: float
+    bend: float
+
+
+class Work(NamedTuple):
+    """Scratch buffers of the integrators (n beads; the (2n, 2n) ones are empty for rigid).
+
+    ``x, y`` bead centres, ``u`` (n, 2) background velocities, ``fx, fy`` forces
+    (rigid: contact; bead-spring: total), ``cfx, cfy`` contact forces (bead-spring),
+    ``gx, gy`` Jacobian scratch, ``st`` contact stiffness, ``dist`` distance to
+    the pillar, ``tang`` friction forces, ``zeta`` wall drags, ``nm_eff`` (3, 3)
+    modified body mobility, ``f`` (2n) bead velocities, ``mob, jac, lhs`` (2n, 2n),
+    ``rhs, qs, v`` (2n).
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    u: np.ndarray
+    fx: np.ndarray
+    fy: np.ndarray
+    cfx: np.ndarray
+    cfy: np.ndarray
+    gx: np.ndarray
+    gy: np.ndarray
+    st: np.ndarray
+    dist: np.ndarray
+    tang: np.ndarray
+    zeta: np.ndarray
+    nm_eff: np.ndarray
+    f: np.ndarray
+    mob: np.ndarray
+    jac: np.ndarray
+    lhs: np.ndarray
+    rhs: np.ndarray
+    qs: np.ndarray
+    v: np.ndarray
+
+
+class Kernel(NamedTuple):
+    """All inputs of an integrator for one run."""
+
+    flow: FlowArrays
+    pillar: PillarArrays
+    body: BodyArrays
+    params: Params
+    work: Work
+    effects: tuple
+
+
+def _work(n: int, matrices: bool) -> Work:
+    m = 2 * n if matrices else 0
+    return Work(
+        *(np.zeros(n) for _ in range(2)),
+        np.zeros((n, 2)),
+        *(np.zeros(n) for _ in range(10)),
+        np.zeros((3, 3)),
+        np.zeros(2 * n),
+        *(np.zeros((m, m)) for _ in range(3)),
+        *(np.zeros(m) for _ in range(3)),
+    )
+
+
+def build_kernel(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> Kernel:
+    """Every kernel input of a run: the one place they are assembled.
+
+    Parameters
+    ----------
+    setup : Setup
+        The validated run (:func:`fibersweep.fiber.setup.prepare`).
+    mode : {0, 1}
+        0: stop past the pillar; 1: stop at ``t_stop`` [s].
+    t_stop : float
+        Stop time of mode 1 [s].
+    """
+    st = setup.settings
+    field = setup.field
+    geo = field.geometry
+    a = float(st.bead_radius)
+    mu = float(field.fluid.viscosity)
+    bead_spring = st.model == "bead-spring"
+    dt = st.step.dt if st.step.dt is not None else (DEFAULT_DT if bead_spring else math.nan)
+    x_pass = float(setup.pillar.vertices[:, 0].max())
+    params = Params(
+        a=a,
+        mu=mu,
+        max_disp=float(st.step.max_displacement),
+        contact_disp=float(st.step.contact_displacement),
+        dt_max=st.classify.trap_time / 20.0,
+        dt=float(dt),
+        t_max=float(st.step.t_max),
+        x_stop=x_pass + st.step.x_end,
+        t_stop=float(t_stop),
+        mode=int(mode),
+        trap_speed=st.classify.trap_speed * abs(setup.u_center),
+        trap_time=float(st.classify.trap_time),
+        y_lo=a,
+        y_hi=geo.width - a,
+        stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²
+        bend=st.young_modulus * math.pi * a**4 / 4.0,
+    )
+    bm = body_mobility(setup.n, a, mu)
+    body = BodyArrays(bm.offsets.copy(), bm.P.copy(), bm.N.copy(), bm.chol.copy(), bm.tip_mobility)
+    flow = FlowArrays(
+        np.ascontiguousarray(field.ux, dtype=np.float64),
+        np.ascontiguousarray(field.uy, dtype=np.float64),
+        float(field.dx),
+    )
+    return Kernel(
+        flow,
+        setup.pillar.arrays(),
+        body,
+        params,
+        _work(setup.n, bead_spring),
+        setup.kernel_effects + (BASELINE,),
+    )

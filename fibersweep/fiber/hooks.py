@@ -1,0 +1,175 @@
+"""Kernel hooks of the dynamic effects: compile-time dispatch on the effect's record type.
+
+An effect that acts inside the Numba integrators hands them a small record
+(a ``typing.NamedTuple`` of floats, its *kernel record*) and implements one or
+more of the stages below for that record type with :func:`implements`. The
+integrators receive the run's records as a tuple (``Kernel.effects``) and, at
+each stage, loop over it with ``numba.literal_unroll``: the loop is unrolled at
+compile time and each record's stage resolves (through ``numba.extending.overload``)
+to its implementation or, when it has none, to nothing. So the integrators are
+compiled once per *set* of active effects (Numba caches one specialisation per
+tuple type, in memory and on disk), and an effect that is off is not in the
+tuple: it costs nothing, not even a branch.
+
+Stages (``k`` is the run's :class:`fibersweep.fiber.bundles.Kernel`; the work
+buffers ``k.work`` hold the current bead positions, forces and distances):
+
+``background(e, k)``
+    Both models, after interpolation: change the beads' background velocities
+    ``k.work.u`` (n, 2) [µm/s] in place.
+``rigid_mobility(e, k, vbx, vby, om, nm_eff)`` -> ``(vbx, vby, om, nm_eff)``
+    Rigid model: change the body velocity (body frame) by a change of mobility;
+    return the mobility ``nm_eff`` (3, 3) the later stages must use.
+``rigid_contact(e, k, c, sn, any_c, vbx, vby, om, nm_eff)`` -> ``(vbx, vby, om)``
+    Rigid model: change the body velocity by extra contact forces.
+``rigid_noise(e, k, dt, c, sn, xc, yc, th)`` -> ``(xc, yc, th)``
+    Rigid model, after each step of length ``dt`` [s]: random increments.
+``bead_forces(e, k, any_c)``
+    Bead-spring model, before the mobility is applied: add forces to
+    ``k.work.fx, fy`` [pN] (``k.work.f`` holds the background velocities).
+``bead_mobility(e, k)``
+    Bead-spring model: change the mobility ``k.work.mob`` (2n, 2n) and the
+    background velocities ``k.work.f`` (2n) in place.
+
+Stage implementations are plain Python functions (Numba compiles them into the
+integrator) with the stage's signature.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import NamedTuple
+
+from numba.extending import overload
+
+__all__ = [
+    "BASELINE",
+    "STAGES",
+    "Baseline",
+    "background",
+    "bead_forces",
+    "bead_mobility",
+    "implements",
+    "rigid_contact",
+    "rigid_mobility",
+    "rigid_noise",
+    "stages_of",
+]
+
+STAGES = (
+    "background",
+    "rigid_mobility",
+    "rigid_contact",
+    "rigid_noise",
+    "bead_forces",
+    "bead_mobility",
+)
+
+_IMPLS: dict[tuple[str, type], Callable] = {}
+
+
+class Baseline(NamedTuple):
+    """The record every effect tuple ends with (``literal_unroll`` needs a non-empty tuple)."""
+
+
+BASELINE = Baseline()
+
+
+def implements(stage: str, record: type) -> Callable[[Callable], Callable]:
+    """Decorator: the function is ``stage`` for effects whose kernel record is ``record``."""
+    if stage not in STAGES:
+        raise ValueError(f"unknown kernel stage {stage!r}; stages: {', '.join(STAGES)}")
+
+    def deco(fn: Callable) -> Callable:
+        if (stage, record) in _IMPLS and _IMPLS[(stage, record)] is not fn:
+            raise TypeError(f"{record.__name__} implements {stage!r} twice")
+        _IMPLS[(stage, record)] = fn
+        return fn
+
+    return deco
+
+
+def stages_of(record: type) -> frozenset[str]:
+    """The stages implemented for kernel records of type ``record``."""
+    return frozenset(stage for stage, rec in _IMPLS if rec is record)
+
+
+def _impl(stage: str, e, noop: Callable) -> Callable:
+    return _IMPLS.get((stage, getattr(e, "instance_class", None)), noop)
+
+
+# Stubs: callable only inside Numba kernels, where they resolve per record type.
+
+
+def background(e, k):
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def rigid_mobility(e, k, vbx, vby, om, nm_eff):
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def rigid_contact(e, k, c, sn, any_c, vbx, vby, om, nm_eff):
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def rigid_noise(e, k, dt, c, sn, xc, yc, th):
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def bead_forces(e, k, any_c):
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def bead_mobility(e, k):
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def _keep_mobility(e, k, vbx, vby, om, nm_eff):
+    return vbx, vby, om, nm_eff
+
+
+def _keep_velocity(e, k, c, sn, any_c, vbx, vby, om, nm_eff):
+    return vbx, vby, om
+
+
+def _keep_pose(e, k, dt, c, sn, xc, yc, th):
+    return xc, yc, th
+
+
+def _none2(e, k):
+    return None
+
+
+def _none3(e, k, any_c):
+    return None
+
+
+@overload(background)
+def _ov_background(e, k):
+    return _impl("background", e, _none2)
+
+
+@overload(rigid_mobility)
+def _ov_rigid_mobility(e, k, vbx, vby, om, nm_eff):
+    return _impl("rigid_mobility", e, _keep_mobility)
+
+
+@overload(rigid_contact)
+def _ov_rigid_contact(e, k, c, sn, any_c, vbx, vby, om, nm_eff):
+    return _impl("rigid_contact", e, _keep_velocity)
+
+
+@overload(rigid_noise)
+def _ov_rigid_noise(e, k, dt, c, sn, xc, yc, th):
+    return _impl("rigid_noise", e, _keep_pose)
+
+
+@overload(bead_forces)
+def _ov_bead_forces(e, k, any_c):
+    return _impl("bead_forces", e, _none3)
+
+
+@overload(bead_mobility)
+def _ov_bead_mobility(e, k):
+    return _impl("bead_mobility", e, _none2)
