@@ -42,12 +42,19 @@ CASES = {
     "rigid_vault_smooth": ("run", "rigid", VAULT, {"contact": {"pillar": "smooth"}}, None),
     "rigid_trap_friction": ("run", "rigid", TRAP, {"effects": {"friction": 0.3}}, None),
     "rigid_vault_friction_smooth": (
-        "run", "rigid", VAULT, {"effects": {"friction": 0.3}, "contact": {"pillar": "smooth"}},
+        "run",
+        "rigid",
+        VAULT,
+        {"effects": {"friction": 0.3}, "contact": {"pillar": "smooth"}},
         None,
     ),  # fmt: skip
     "rigid_apex_hydro": ("run", "rigid", APEX, {"effects": {"pillar_hydro": 1.0}}, None),
     "rigid_apex_hydro_friction": (
-        "run", "rigid", APEX, {"effects": {"pillar_hydro": 1.0, "friction": 0.3}}, None,
+        "run",
+        "rigid",
+        APEX,
+        {"effects": {"pillar_hydro": 1.0, "friction": 0.3}},
+        None,
     ),  # fmt: skip
     "rigid_apex_midplane": ("run", "rigid", APEX, {"effects": {"off_midplane": 0.2}}, None),
     "rigid_apex_brownian": ("run", "rigid", APEX, {"effects": {"brownian": 1.0}}, 7),
@@ -58,14 +65,25 @@ CASES = {
     "rigid_for": ("for", "rigid", APEX, {}, None),
     "bs_short_contact": ("run", "bead-spring", SHORT, {"x0": 1100.0}, None),
     "bs_short_friction": (
-        "run", "bead-spring", SHORT, {"x0": 1100.0, "effects": {"friction": 0.3}}, None,
+        "run",
+        "bead-spring",
+        SHORT,
+        {"x0": 1100.0, "effects": {"friction": 0.3}},
+        None,
     ),  # fmt: skip
     "bs_short_hydro": (
-        "run", "bead-spring", SHORT, {"x0": 1100.0, "effects": {"pillar_hydro": 1.0}}, None,
+        "run",
+        "bead-spring",
+        SHORT,
+        {"x0": 1100.0, "effects": {"pillar_hydro": 1.0}},
+        None,
     ),  # fmt: skip
     "bs_short_midplane_smooth": (
-        "run", "bead-spring", SHORT,
-        {"x0": 1100.0, "effects": {"off_midplane": 0.2}, "contact": {"pillar": "smooth"}}, None,
+        "run",
+        "bead-spring",
+        SHORT,
+        {"x0": 1100.0, "effects": {"off_midplane": 0.2}, "contact": {"pillar": "smooth"}},
+        None,
     ),  # fmt: skip
     "bs_for": ("for", "bead-spring", APEX, {"x0": 1000.0}, None),
 }

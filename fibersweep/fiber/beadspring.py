@@ -39,61 +39,64 @@ CHUNK = 20_000
 
 
 @nb.njit(cache=True)
-def bead_velocity(k):
-    """f(q) = u + M F at the beads ``k.work.x, y`` into ``k.work.f`` (2n); M into ``k.work.mob``.
+def bead_velocity(flow, pillar, body, p, w, bw, effects):
+    """f(q) = u + M F at the beads ``w.x, w.y`` into ``bw.f`` (2n); M into ``bw.mob``.
 
     Elastic and contact forces, the background flow, then the effects' stages:
     ``bead_forces`` (extra forces, e.g. friction) before the mobility is built,
     ``bead_mobility`` (e.g. pillar hydrodynamics: f = (I + M Z)⁻¹ u + M' F with
     mob holding M') after. Returns (any_contact, cx, cy).
     """
-    w = k.work
-    p = k.params
     x = w.x
     y = w.y
+    u = w.u
+    fx = w.fx
+    fy = w.fy
+    cfx = bw.cfx
+    cfy = bw.cfy
+    f = bw.f
+    mob = bw.mob
     n = x.shape[0]
-    interpolate_ib(k.flow.ux, k.flow.uy, k.flow.dx, x, y, w.u)
-    elastic_forces(x, y, p.a, p.stretch, p.bend, w.fx, w.fy)
-    any_c, cx, cy = pillar_forces(k.pillar, x, y, w.cfx, w.cfy, w.st, w.dist)
+    interpolate_ib(flow.ux, flow.uy, flow.dx, x, y, u)
+    elastic_forces(x, y, p.a, p.stretch, p.bend, fx, fy)
+    any_c, cx, cy = pillar_forces(pillar, x, y, cfx, cfy, w.st, w.dist)
     for i in range(n):
-        w.fx[i] += w.cfx[i]
-        w.fy[i] += w.cfy[i]
-    for e in literal_unroll(k.effects):
-        H.background(e, k)
+        fx[i] += cfx[i]
+        fy[i] += cfy[i]
+    for e in literal_unroll(effects):
+        H.background(e, u)
     for i in range(n):
-        w.f[2 * i] = w.u[i, 0]
-        w.f[2 * i + 1] = w.u[i, 1]
-    for e in literal_unroll(k.effects):
-        H.bead_forces(e, k, any_c)
-    rpy_fill(x, y, p.a, p.mu, w.mob)
-    for e in literal_unroll(k.effects):
-        H.bead_mobility(e, k)
+        f[2 * i] = u[i, 0]
+        f[2 * i + 1] = u[i, 1]
+    for e in literal_unroll(effects):
+        H.bead_forces(e, body, w, bw, any_c)
+    rpy_fill(x, y, p.a, p.mu, mob)
+    for e in literal_unroll(effects):
+        H.bead_mobility(e, w, bw)
     for r in range(2 * n):
         acc = 0.0
         for j in range(n):
-            acc += w.mob[r, 2 * j] * w.fx[j] + w.mob[r, 2 * j + 1] * w.fy[j]
-        w.f[r] += acc
+            acc += mob[r, 2 * j] * fx[j] + mob[r, 2 * j + 1] * fy[j]
+        f[r] += acc
     return any_c, cx, cy
 
 
 @nb.njit(cache=True)
-def _jacobian(k):
-    """J = ∂F/∂q (2n, 2n) into ``k.work.jac`` by central differences, banded.
+def _jacobian(pillar, p, w, bw):
+    """J = ∂F/∂q (2n, 2n) into ``bw.jac`` by central differences, banded.
 
     Elastic forces couple a bead to its two neighbours on each side; the contact
     force on a bead depends on that bead only (a 2x2 diagonal block, computed
-    only for beads with a non-zero contact stiffness ``k.work.st``). Uses
-    ``k.work.gx, gy, cfx, cfy`` as scratch.
+    only for beads with a non-zero contact stiffness ``w.st``). Uses
+    ``bw.gx, gy, cfx, cfy`` as scratch.
     """
-    w = k.work
-    p = k.params
     x = w.x
     y = w.y
-    jac = w.jac
-    fx = w.gx
-    fy = w.gy
-    gx = w.cfx
-    gy = w.cfy
+    jac = bw.jac
+    fx = bw.gx
+    fy = bw.gy
+    gx = bw.cfx
+    gy = bw.cfy
     st = w.st
     n = x.shape[0]
     a = p.a
@@ -134,10 +137,10 @@ def _jacobian(k):
             if st[j] > 0.0:
                 one_x[0] = x[j] + (h if comp == 0 else 0.0)
                 one_y[0] = y[j] + (h if comp == 1 else 0.0)
-                pillar_forces(k.pillar, one_x, one_y, c1, c2, d1, d2)
+                pillar_forces(pillar, one_x, one_y, c1, c2, d1, d2)
                 one_x[0] = x[j] - (h if comp == 0 else 0.0)
                 one_y[0] = y[j] - (h if comp == 1 else 0.0)
-                pillar_forces(k.pillar, one_x, one_y, c3, c4, d1, d2)
+                pillar_forces(pillar, one_x, one_y, c3, c4, d1, d2)
                 jac[2 * j, col] += (c1[0] - c3[0]) / (2.0 * h)
                 jac[2 * j + 1, col] += (c2[0] - c4[0]) / (2.0 * h)
 
@@ -164,20 +167,20 @@ def integrate_bead_spring(q, qprev, state, k, stride, rec, brec):
     -------
     (rows, code)
     """
-    p = k.params
-    w = k.work
+    flow, pillar, body, p, w, bw, effects = k
     n2 = q.shape[0]
     n = n2 // 2
     dt = p.dt
     x = w.x
     y = w.y
-    f = w.f
-    lhs = w.lhs
-    rhs = w.rhs
-    qs = w.qs
-    v = w.v
-    mob = w.mob
-    jac = w.jac
+    dist = w.dist
+    f = bw.f
+    lhs = bw.lhs
+    rhs = bw.rhs
+    qs = bw.qs
+    v = bw.v
+    mob = bw.mob
+    jac = bw.jac
     t = state[0]
     stopped_since = state[1]
     have_prev = state[2] > 0.5
@@ -197,10 +200,10 @@ def integrate_bead_spring(q, qprev, state, k, stride, rec, brec):
         for i in range(n):
             x[i] = qs[2 * i]
             y[i] = qs[2 * i + 1]
-        any_c, cx, cy = bead_velocity(k)
+        any_c, cx, cy = bead_velocity(flow, pillar, body, p, w, bw, effects)
         min_d = 1e300
         for i in range(n):
-            min_d = min(min_d, w.dist[i])
+            min_d = min(min_d, dist[i])
         # Record the current state q (time t) with the velocity estimate v.
         hx = q[2 * n - 2]
         hy = q[2 * n - 1]
@@ -257,7 +260,7 @@ def integrate_bead_spring(q, qprev, state, k, stride, rec, brec):
         if code != R.CHUNK_FULL:
             break
         # Linearly implicit step.
-        _jacobian(k)
+        _jacobian(pillar, p, w, bw)
         c = 2.0 * dt / 3.0 if have_prev else dt
         for i2 in range(n2):
             for j2 in range(n2):

@@ -42,14 +42,17 @@ def seed_numba(seed: int) -> None:
 
 
 @nb.njit(cache=True)
-def rigid_velocity(k, xc, yc, th):
+def rigid_velocity(flow, pillar, body, w, effects, xc, yc, th):
     """Lab-frame body velocity of a rigid fiber at (xc, yc, th).
 
     Parameters
     ----------
-    k : bundles.Kernel
-        The run's inputs; ``k.work`` receives the bead positions, background
-        velocities, contact forces, stiffnesses and distances.
+    flow, pillar, body : bundles.FlowArrays, contact.PillarArrays, bundles.BodyArrays
+    w : bundles.Work
+        Receives the bead positions, background velocities, contact forces,
+        stiffnesses and distances.
+    effects : tuple
+        Kernel records of the active effects (``Kernel.effects``).
     xc, yc, th : float
         Centre [µm] and angle [rad] of the axis (towards bead n-1).
 
@@ -59,31 +62,38 @@ def rigid_velocity(k, xc, yc, th):
         Velocity [µm/s, rad/s], contact flag and point [µm], smallest distance to
         the pillar [µm], summed contact stiffness [pN/µm].
     """
-    w = k.work
-    s = k.body.s
+    # Bind the arrays once (each read of a bundle's field costs a reference count).
+    s = body.s
+    x = w.x
+    y = w.y
+    u = w.u
+    fx = w.fx
+    fy = w.fy
+    st = w.st
+    dist = w.dist
     n = s.shape[0]
     c = math.cos(th)
     sn = math.sin(th)
     for i in range(n):
-        w.x[i] = xc + s[i] * c
-        w.y[i] = yc + s[i] * sn
-    interpolate_ib(k.flow.ux, k.flow.uy, k.flow.dx, w.x, w.y, w.u)
-    any_c, cx, cy = pillar_forces(k.pillar, w.x, w.y, w.fx, w.fy, w.st, w.dist)
-    for e in literal_unroll(k.effects):
-        H.background(e, k)
+        x[i] = xc + s[i] * c
+        y[i] = yc + s[i] * sn
+    interpolate_ib(flow.ux, flow.uy, flow.dx, x, y, u)
+    any_c, cx, cy = pillar_forces(pillar, x, y, fx, fy, st, dist)
+    for e in literal_unroll(effects):
+        H.background(e, u)
     min_d = 1e300
     stiff = 0.0
     for i in range(n):
-        if w.dist[i] < min_d:
-            min_d = w.dist[i]
-        stiff += w.st[i]
-    ub = w.u.reshape(2 * n)
-    vbx, vby, om = body_velocity(c, sn, s, k.body.pm, k.body.nm, ub, w.fx, w.fy, any_c)
-    nm_eff = k.body.nm
-    for e in literal_unroll(k.effects):
-        vbx, vby, om, nm_eff = H.rigid_mobility(e, k, vbx, vby, om, nm_eff)
-    for e in literal_unroll(k.effects):
-        vbx, vby, om = H.rigid_contact(e, k, c, sn, any_c, vbx, vby, om, nm_eff)
+        if dist[i] < min_d:
+            min_d = dist[i]
+        stiff += st[i]
+    ub = u.reshape(2 * n)
+    vbx, vby, om = body_velocity(c, sn, s, body.pm, body.nm, ub, fx, fy, any_c)
+    nm_eff = body.nm
+    for e in literal_unroll(effects):
+        vbx, vby, om, nm_eff = H.rigid_mobility(e, body, w, vbx, vby, om, nm_eff)
+    for e in literal_unroll(effects):
+        vbx, vby, om = H.rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff)
     vx = c * vbx - sn * vby
     vy = sn * vbx + c * vby
     return vx, vy, om, any_c, cx, cy, min_d, stiff
@@ -108,14 +118,16 @@ def integrate_rigid(state, k, rec):
     (rows, code) : (int, int)
         Rows written and the stop code (record.CHUNK_FULL when ``rec`` filled up).
     """
-    p = k.params
-    s = k.body.s
+    flow, pillar, body, p, w, _, effects = k
+    s = body.s
     n = s.shape[0]
     t = state[0]
     xc = state[1]
     yc = state[2]
     th = state[3]
     stopped_since = state[4]
+    r_cut = pillar.r_cut
+    tip_m = body.tip_m
     half = 0.5 * (s[n - 1] - s[0])
     sh = s[n - 1]
     st_ = s[0]
@@ -123,7 +135,9 @@ def integrate_rigid(state, k, rec):
     code = np.int64(R.CHUNK_FULL)
     cap = rec.shape[0]
     while rows < cap:
-        vx, vy, om, any_c, cx, cy, min_d, stiff = rigid_velocity(k, xc, yc, th)
+        vx, vy, om, any_c, cx, cy, min_d, stiff = rigid_velocity(
+            flow, pillar, body, w, effects, xc, yc, th
+        )
         c = math.cos(th)
         sn = math.sin(th)
         hvx = vx - om * sh * sn
@@ -153,22 +167,23 @@ def integrate_rigid(state, k, rec):
             break
         # Step size.
         speed = com_speed + abs(om) * half + 1e-12
-        free = min_d - k.pillar.r_cut
+        free = min_d - r_cut
         disp = min(p.max_disp, max(p.contact_disp, 0.5 * free))
         dt = min(disp / speed, p.dt_max)
         if stiff > 0.0:
-            dt = min(dt, 0.5 / (k.body.tip_m * stiff))
+            dt = min(dt, 0.5 / (tip_m * stiff))
         if p.mode == 1 and t + dt > p.t_stop:
             dt = max(p.t_stop - t, 1e-12)
         # Midpoint step.
-        vx2, vy2, om2, _, _, _, _, _ = rigid_velocity(
-            k, xc + 0.5 * dt * vx, yc + 0.5 * dt * vy, th + 0.5 * dt * om
-        )
+        xm = xc + 0.5 * dt * vx
+        ym = yc + 0.5 * dt * vy
+        thm = th + 0.5 * dt * om
+        vx2, vy2, om2, _, _, _, _, _ = rigid_velocity(flow, pillar, body, w, effects, xm, ym, thm)
         xc += dt * vx2
         yc += dt * vy2
         th += dt * om2
-        for e in literal_unroll(k.effects):
-            xc, yc, th = H.rigid_noise(e, k, dt, c, sn, xc, yc, th)
+        for e in literal_unroll(effects):
+            xc, yc, th = H.rigid_noise(e, body, dt, c, sn, xc, yc, th)
         t += dt
     state[0] = t
     state[1] = xc

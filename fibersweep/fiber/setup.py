@@ -172,7 +172,9 @@ def prepare(
     f_ref = settings.contact.f_ref or 6.0 * math.pi * field.fluid.viscosity * a * abs(u_center)
     pillar = make_pillar(geo, settings.contact, a, f_ref)
     place = check_start(geo, float(field.dx), settings, start, pillar)
-    ctx = DynamicsContext(bead_radius=a, dx=float(field.dx), depth=geo.depth)
+    ctx = DynamicsContext(
+        bead_radius=a, dx=float(field.dx), depth=geo.depth, viscosity=field.fluid.viscosity
+    )
     kernel_effects = effects.kernel(ctx)
     return Setup(
         field,

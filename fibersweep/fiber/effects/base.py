@@ -29,11 +29,14 @@ class DynamicsContext:
         Flow-field node spacing [µm].
     depth : float
         Channel depth H_ch [µm].
+    viscosity : float
+        Fluid viscosity μ [pN·s/µm²].
     """
 
     bead_radius: float
     dx: float
     depth: float
+    viscosity: float = 1.0
 
 
 @dataclass(frozen=True)

@@ -46,9 +46,9 @@ class Brownian(Effect):
 
 
 @implements("rigid_noise", BrownianKernel)
-def rigid_noise(e, k, dt, c, sn, xc, yc, th):
+def rigid_noise(e, body, dt, c, sn, xc, yc, th):
     """Rigid model: Δq = sqrt(2 kT Δt) chol(N) ξ in the body frame (c, sn: the step's angle)."""
-    chol = k.body.chol
+    chol = body.chol
     amp = math.sqrt(2.0 * e.kT * dt)
     g0 = np.random.standard_normal()  # noqa: NPY002 - Numba RNG
     g1 = np.random.standard_normal()  # noqa: NPY002 - Numba RNG

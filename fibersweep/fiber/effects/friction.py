@@ -110,39 +110,41 @@ def coulomb_friction(c, sn, s, nm, fx, fy, mu_f, vbx, vby, om, ft):
 
 
 @implements("rigid_contact", FrictionKernel)
-def rigid_contact(e, k, c, sn, any_c, vbx, vby, om, nm_eff):
+def rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff):
     """Rigid model: the tangential forces of the contacting beads, solved together."""
     if any_c:
-        w = k.work
         vbx, vby, om = coulomb_friction(
-            c, sn, k.body.s, nm_eff, w.fx, w.fy, e.mu_f, vbx, vby, om, w.tang
+            c, sn, body.s, nm_eff, w.fx, w.fy, e.mu_f, vbx, vby, om, w.tang
         )
     return vbx, vby, om
 
 
 @implements("bead_forces", FrictionKernel)
-def bead_forces(e, k, any_c):
+def bead_forces(e, body, w, bw, any_c):
     """Bead-spring model: the rigid-body solve for the body the (nearly rigid) fiber moves as.
 
     Body frame from the end-to-end axis; frictionless body velocity P u_b + N (F_c, τ_c)
-    with u_b the background velocities ``k.work.f``; the tangential forces are added
-    to the total forces ``k.work.fx, fy``.
+    with u_b the background velocities ``bw.f``; the tangential forces are added
+    to the total forces ``w.fx, fy``.
     """
     if any_c:
-        w = k.work
-        b = k.body
         x = w.x
         y = w.y
+        fx = w.fx
+        fy = w.fy
+        tang = w.tang
+        cfx = bw.cfx
+        cfy = bw.cfy
         n = x.shape[0]
         ex = x[n - 1] - x[0]
         ey = y[n - 1] - y[0]
         le = math.hypot(ex, ey)
         c = ex / le
         sn = ey / le
-        vbx, vby, om = body_velocity(c, sn, b.s, b.pm, b.nm, w.f, w.cfx, w.cfy, True)
-        coulomb_friction(c, sn, b.s, b.nm, w.cfx, w.cfy, e.mu_f, vbx, vby, om, w.tang)
+        vbx, vby, om = body_velocity(c, sn, body.s, body.pm, body.nm, bw.f, cfx, cfy, True)
+        coulomb_friction(c, sn, body.s, body.nm, cfx, cfy, e.mu_f, vbx, vby, om, tang)
         for i in range(n):
-            fn = math.hypot(w.cfx[i], w.cfy[i])
+            fn = math.hypot(cfx[i], cfy[i])
             if fn > 0.0:
-                w.fx[i] += w.tang[i] * (-w.cfy[i] / fn)
-                w.fy[i] += w.tang[i] * (w.cfx[i] / fn)
+                fx[i] += tang[i] * (-cfy[i] / fn)
+                fy[i] += tang[i] * (cfx[i] / fn)

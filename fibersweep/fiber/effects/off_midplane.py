@@ -54,9 +54,8 @@ class OffMidplane(Effect):
 
 
 @implements("background", OffMidplaneKernel)
-def background(e, k):
+def background(e, u):
     """Both models: scale the interpolated midplane velocities to the fiber's layer."""
-    u = k.work.u
     for i in range(u.shape[0]):
         u[i, 0] *= e.scale
         u[i, 1] *= e.scale

@@ -26,10 +26,13 @@ __all__ = ["PillarHydro", "PillarHydroKernel"]
 
 
 class PillarHydroKernel(NamedTuple):
-    """Kernel record: multiplier k on the Faxén drag [-] and its screening length [µm]."""
+    """Kernel record: multiplier k on the Faxén drag [-], its screening length [µm],
+    the bead radius a [µm] and the viscosity μ [pN·s/µm²]."""
 
     strength: float
     length: float
+    a: float
+    mu: float
 
 
 @register
@@ -42,24 +45,22 @@ class PillarHydro(Effect):
         self._require(0.0 <= self.value <= 20.0, "must be in [0, 20]")
 
     def kernel(self, ctx: DynamicsContext) -> PillarHydroKernel:
-        return PillarHydroKernel(float(self.value), float(ctx.depth))
+        return PillarHydroKernel(
+            float(self.value), float(ctx.depth), float(ctx.bead_radius), float(ctx.viscosity)
+        )
 
 
 @implements("rigid_mobility", PillarHydroKernel)
-def rigid_mobility(e, k, vbx, vby, om, nm_eff):
+def rigid_mobility(e, body, w, vbx, vby, om, nm_eff):
     """Rigid model: V = A⁻¹ V₀ and N' = A⁻¹ N (see :mod:`fibersweep.fiber.wallhydro`)."""
-    w = k.work
-    p = k.params
-    if wall_drag(w.dist, p.a, e.strength, e.length, p.mu, w.zeta) > 0:
-        vbx, vby, om = rigid_wall_velocity(k.body.s, nm_eff, w.zeta, vbx, vby, om, w.nm_eff)
+    if wall_drag(w.dist, e.a, e.strength, e.length, e.mu, w.zeta) > 0:
+        vbx, vby, om = rigid_wall_velocity(body.s, nm_eff, w.zeta, vbx, vby, om, w.nm_eff)
         return vbx, vby, om, w.nm_eff
     return vbx, vby, om, nm_eff
 
 
 @implements("bead_mobility", PillarHydroKernel)
-def bead_mobility(e, k):
+def bead_mobility(e, w, bw):
     """Bead-spring model: M -> (M⁻¹ + Z)⁻¹ and u -> (I + M Z)⁻¹ u (Woodbury)."""
-    w = k.work
-    p = k.params
-    if wall_drag(w.dist, p.a, e.strength, e.length, p.mu, w.zeta) > 0:
-        mobility_with_wall_drag(w.mob, w.zeta, w.f)
+    if wall_drag(w.dist, e.a, e.strength, e.length, e.mu, w.zeta) > 0:
+        mobility_with_wall_drag(bw.mob, w.zeta, bw.f)
