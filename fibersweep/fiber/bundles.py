@@ -114,9 +114,8 @@ class Work(NamedTuple):
 
     ``x, y`` bead centres [µm], ``u`` (n, 2) background velocities [µm/s],
     ``fx, fy`` forces [pN] (rigid: contact; bead-spring: total), ``st`` contact
-    stiffness [pN/µm], ``dist`` distance to the pillar [µm], ``tang`` friction
-    forces [pN], ``zeta`` wall drags [pN s/µm], ``nm_eff`` (3, 3) modified body
-    mobility.
+    stiffness [pN/µm], ``dist`` distance to the pillar [µm]. (An effect's own
+    scratch lives in its kernel record.)
     """
 
     x: np.ndarray
@@ -126,9 +125,6 @@ class Work(NamedTuple):
     fy: np.ndarray
     st: np.ndarray
     dist: np.ndarray
-    tang: np.ndarray
-    zeta: np.ndarray
-    nm_eff: np.ndarray
 
 
 class BeadWork(NamedTuple):
@@ -169,8 +165,7 @@ def _work(n: int) -> Work:
     return Work(
         *(np.zeros(n) for _ in range(2)),
         np.zeros((n, 2)),
-        *(np.zeros(n) for _ in range(6)),
-        np.zeros((3, 3)),
+        *(np.zeros(n) for _ in range(4)),
     )
 
 

@@ -1,7 +1,8 @@
 """Kernel hooks of the dynamic effects: compile-time dispatch on the effect's record type.
 
 An effect that acts inside the Numba integrators hands them a small record
-(a ``typing.NamedTuple`` of floats, its *kernel record*) and implements one or
+(a ``typing.NamedTuple`` of floats, plus any scratch arrays it needs: its
+*kernel record*) and implements one or
 more of the stages below for that record type with :func:`implements`. The
 integrators receive the run's records as a tuple (``Kernel.effects``) and, at
 each stage, loop over it with ``numba.literal_unroll``: the loop is unrolled at

@@ -38,6 +38,7 @@ __all__ = ["simulate", "simulate_for", "simulate_reversible"]
 
 log = logging.getLogger(__name__)
 
+
 def _integrate(
     setup: Setup,
     k: Kernel,

@@ -173,7 +173,11 @@ def prepare(
     pillar = make_pillar(geo, settings.contact, a, f_ref)
     place = check_start(geo, float(field.dx), settings, start, pillar)
     ctx = DynamicsContext(
-        bead_radius=a, dx=float(field.dx), depth=geo.depth, viscosity=field.fluid.viscosity
+        bead_radius=a,
+        dx=float(field.dx),
+        depth=geo.depth,
+        viscosity=field.fluid.viscosity,
+        n_beads=place.n,
     )
     kernel_effects = effects.kernel(ctx)
     return Setup(

@@ -31,12 +31,15 @@ class DynamicsContext:
         Channel depth H_ch [µm].
     viscosity : float
         Fluid viscosity μ [pN·s/µm²].
+    n_beads : int
+        Beads of the fiber (for scratch arrays a kernel record carries).
     """
 
     bead_radius: float
     dx: float
     depth: float
     viscosity: float = 1.0
+    n_beads: int = 1
 
 
 @dataclass(frozen=True)
@@ -57,7 +60,7 @@ class Effect:
         ``numpy.random.Generator``.
     ``kernel(ctx)``
         An effect that acts inside the Numba integrators returns its *kernel
-        record* (a ``typing.NamedTuple`` of floats, defined in its module) and
+        record* (a ``typing.NamedTuple`` of floats and scratch arrays, defined in its module) and
         implements the kernel stages it needs for that record type in the same
         module (:func:`fibersweep.fiber.hooks.implements`); the integrators are
         compiled per set of active effects, so an effect that is off costs nothing.

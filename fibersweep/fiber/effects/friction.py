@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numba as nb
+import numpy as np
 
 from fibersweep.fiber.effects.base import DynamicsContext, Effect
 from fibersweep.fiber.effects.registry import register
@@ -27,9 +28,11 @@ __all__ = ["Friction", "FrictionKernel", "coulomb_friction"]
 
 
 class FrictionKernel(NamedTuple):
-    """Kernel record: the friction coefficient μ_f [-]."""
+    """Kernel record: the friction coefficient μ_f [-] and the beads' tangential
+    forces (n,) [pN] (scratch of the solve)."""
 
     mu_f: float
+    tang: np.ndarray
 
 
 @register
@@ -42,7 +45,7 @@ class Friction(Effect):
         self._require(self.value >= 0.0, "must be >= 0")
 
     def kernel(self, ctx: DynamicsContext) -> FrictionKernel:
-        return FrictionKernel(float(self.value))
+        return FrictionKernel(float(self.value), np.zeros(ctx.n_beads))
 
 
 @nb.njit(cache=True)
@@ -114,7 +117,7 @@ def rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff):
     """Rigid model: the tangential forces of the contacting beads, solved together."""
     if any_c:
         vbx, vby, om = coulomb_friction(
-            c, sn, body.s, nm_eff, w.fx, w.fy, e.mu_f, vbx, vby, om, w.tang
+            c, sn, body.s, nm_eff, w.fx, w.fy, e.mu_f, vbx, vby, om, e.tang
         )
     return vbx, vby, om
 
@@ -132,7 +135,7 @@ def bead_forces(e, body, w, bw, any_c):
         y = w.y
         fx = w.fx
         fy = w.fy
-        tang = w.tang
+        tang = e.tang
         cfx = bw.cfx
         cfy = bw.cfy
         n = x.shape[0]
