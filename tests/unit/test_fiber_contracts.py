@@ -92,3 +92,18 @@ def test_effect_at_zero_is_bit_identical_to_none(coarse_field, model, name):
         assert np.array_equal(col, b.columns()[key]), key
     if a.beads is not None:
         assert np.array_equal(a.beads, b.beads)
+
+
+def test_stage_implementations_must_match_the_stage_signature():
+    class Rec(typing.NamedTuple):
+        x: float
+
+    with pytest.raises(ValueError, match="unknown kernel stage"):
+        hooks.implements("nonsense", Rec)
+    with pytest.raises(TypeError, match="takes \\(e, u\\)"):
+
+        @hooks.implements("background", Rec)
+        def wrong(e, velocities):  # pragma: no cover - never called
+            return None
+
+    assert hooks.stages_of(Rec) == frozenset()
