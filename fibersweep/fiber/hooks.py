@@ -47,6 +47,10 @@ Numba's disk cache (``cache=True``) checks only the file of the cached
 integrator, not the files of what it calls (true of every cross-module call,
 e.g. ``contact.pillar_forces``): after editing a stage, remove the
 ``__pycache__/*.nbi``/``*.nbc`` files of ``rigid.py`` and ``beadspring.py``.
+The cache index also stores the record types by module: do the same after
+renaming or removing an effect module (a stale index names a module that no
+longer exists and cannot be read). For that reason kernel records must be
+defined in ``fibersweep.fiber.effects`` modules, which are always imported.
 """
 
 from __future__ import annotations
@@ -81,6 +85,7 @@ STAGES = (
 )
 
 _IMPLS: dict[tuple[str, type], Callable] = {}
+_RECORD_PACKAGE = "fibersweep.fiber.effects."
 
 
 class Baseline(NamedTuple):
@@ -102,6 +107,12 @@ def implements(stage: str, record: type) -> Callable[[Callable], Callable]:
             raise TypeError(
                 f"{fn.__qualname__}: stage {stage!r} takes ({', '.join(want)}), "
                 f"got ({', '.join(got)})"
+            )
+        if not record.__module__.startswith(_RECORD_PACKAGE):
+            raise TypeError(
+                f"{record.__qualname__}: kernel records must be defined in a module of "
+                f"{_RECORD_PACKAGE.rstrip('.')} (Numba's disk cache stores their type by "
+                f"module, and an index naming a module that is missing cannot be read)"
             )
         if (stage, record) in _IMPLS and _IMPLS[(stage, record)] is not fn:
             raise TypeError(f"{record.__name__} implements {stage!r} twice")

@@ -107,3 +107,20 @@ def test_stage_implementations_must_match_the_stage_signature():
             return None
 
     assert hooks.stages_of(Rec) == frozenset()
+
+
+def test_kernel_records_live_in_the_effects_package():
+    """The disk cache of the integrators names record types by module; a record defined
+    elsewhere (a module that may be missing in another process) is refused."""
+
+    class Outside(typing.NamedTuple):
+        x: float
+
+    with pytest.raises(TypeError, match="fibersweep.fiber.effects"):
+
+        @hooks.implements("background", Outside)
+        def background(e, u):  # pragma: no cover - never called
+            return None
+
+    for cls in EFFECTS.values():
+        assert cls.__module__.startswith("fibersweep.fiber.effects.")
