@@ -4,7 +4,12 @@ Usage: python scripts/bench_fiber.py [--dx 4] [--cache .fibersweep-cache] [--rep
 
 Timings on a shared machine are noisy, so the script reports the ratio of the
 two models measured in the same process, after a warm-up that compiles the
-Numba kernels (compilation is excluded; it is paid once per process).
+Numba kernels (compilation is excluded; it is paid once per process), and for
+the rigid model both the median and the minimum over ``--repeat`` runs (the
+minimum is the steadier figure on a loaded machine). The rigid model is also
+timed with the dynamic effects on (``--effects``), each set compiled before timing.
+To compare two versions of the code, run this same script against each
+(``PYTHONPATH=...``) one after the other.
 """
 
 from __future__ import annotations
@@ -25,21 +30,32 @@ STARTS = {
 }
 
 
+EFFECT_SETS = {
+    "friction 0.3": {"friction": 0.3},
+    "pillar_hydro 1": {"pillar_hydro": 1.0},
+    "off_midplane 0.2": {"off_midplane": 0.2},
+}
+
+
 def _time(field, settings, start, repeat):
+    """(median, minimum) wall time [s] of ``repeat`` runs, and the last result."""
     out = []
     res = None
     for _ in range(repeat):
         t0 = time.perf_counter()
         res = simulate(field, settings, start)
         out.append(time.perf_counter() - t0)
-    return statistics.median(out), res
+    return statistics.median(out), min(out), res
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dx", type=float, default=4.0)
     ap.add_argument("--cache", default=".fibersweep-cache")
-    ap.add_argument("--repeat", type=int, default=5, help="rigid repetitions (median)")
+    ap.add_argument("--repeat", type=int, default=20, help="rigid repetitions (median, min)")
+    ap.add_argument(
+        "--no-effects", action="store_true", help="skip the rigid runs with effects on"
+    )
     args = ap.parse_args()
     field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
     rigid = FiberSettings()
@@ -49,16 +65,24 @@ def main() -> None:
     simulate(field, beads.model_copy(update={"x0": 1100.0}), warm)
     print(f"flow field dx = {args.dx} µm; fiber L = l_obs; Numba compiled before timing")
     for label, start in STARTS.items():
-        tr, rr = _time(field, rigid, start, args.repeat)
-        tb, rb = _time(field, beads, start, 1)
+        tr, tr_min, rr = _time(field, rigid, start, args.repeat)
+        tb, _, rb = _time(field, beads, start, 1)
         print(f"\n{label}")
-        print(f"  rigid       : {tr:8.3f} s  {rr.n_steps:7d} steps  class {rr.cls}  "
-              f"delta {rr.delta:+.4f}")  # fmt: skip
+        print(f"  rigid       : {tr:8.4f} s (min {tr_min:.4f})  {rr.n_steps:7d} steps  "
+              f"class {rr.cls}  delta {rr.delta:+.4f}")  # fmt: skip
         print(f"  bead-spring : {tb:8.3f} s  (dt = 5e-5 s)       class {rb.cls}  "
               f"delta {rb.delta:+.4f}")  # fmt: skip
         print(f"  ratio bead-spring / rigid = {tb / tr:.0f}")
         src_steps = rr.t_end / 1e-7
         print(f"  the source's scheme (dt = 1e-7 s) would need {src_steps:.1e} steps")
+        if args.no_effects:
+            continue
+        for name, eff in EFFECT_SETS.items():
+            st = rigid.model_copy(update={"effects": eff})
+            simulate(field, st, warm)  # compile this effect set
+            te, te_min, re_ = _time(field, st, start, args.repeat)
+            print(f"  rigid + {name:17s}: {te:8.4f} s (min {te_min:.4f})  "
+                  f"{re_.n_steps:7d} steps  class {re_.cls}")  # fmt: skip
 
 
 if __name__ == "__main__":

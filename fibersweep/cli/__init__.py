@@ -26,6 +26,7 @@ from fibersweep.cli import fiber
 from fibersweep.cli import sweep
 from fibersweep.cli import discrepancy
 from fibersweep.cli import show
+from fibersweep.cli import init
 
 # isort: on
 
@@ -39,6 +40,7 @@ __all__ = [
     "discrepancy",
     "fiber",
     "flow",
+    "init",
     "show",
     "main",
     "sweep",

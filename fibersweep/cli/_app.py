@@ -118,6 +118,21 @@ def _load(path: Path, overrides: list[str] | None = None, max_points: int | None
     return load_config(path, overrides or (), max_points=max_points)
 
 
+def _version(value: bool) -> None:
+    if value:
+        from fibersweep import __version__
+
+        typer.echo(f"fibersweep {__version__}")
+        raise typer.Exit()
+
+
 @app.callback()
-def main() -> None:
+def main(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_version, is_eager=True, help="Print the version and exit."
+        ),
+    ] = False,
+) -> None:
     """fibersweep: LBM flow once, many fiber runs, phase diagrams."""

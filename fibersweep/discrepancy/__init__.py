@@ -2,6 +2,9 @@
 
 Modules (data flow order):
 
+- :mod:`.observables`: the registry of observables (one entry per measured
+  quantity: kind, unit, range and NaN rule, noise law, scoring scale, how it
+  is read from a run) that every module below iterates;
 - :mod:`.schema`: measured-fiber table (documented schema), validating loader, writer;
 - :mod:`.noise`: measurement model (start and outcome noise);
 - :mod:`.synth`: measured-like data from the model with hidden effects;

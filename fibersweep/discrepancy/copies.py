@@ -13,7 +13,8 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.noise import N_DRAWS, NoiseModel
+from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.observables import noise_draws
 from fibersweep.discrepancy.simulate import Simulator
 
 __all__ = ["CopyMaker"]
@@ -29,7 +30,10 @@ class CopyMaker:
     noise : NoiseModel
         Start and measurement noise.
     seed : int
-        Root seed; copy k draws from ``default_rng([seed, k])``.
+        Root seed; copy k draws its starts and run seeds from
+        ``default_rng([seed, 7919, k])`` and the measurement noise of each
+        observable from its own stream keyed by the name
+        (:func:`~fibersweep.discrepancy.observables.noise_draws`).
     simulator : Simulator
     """
 
@@ -38,20 +42,20 @@ class CopyMaker:
         self.noise = noise
         self.seed = int(seed)
         self.sim = simulator
-        self._draws: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._draws: dict[int, tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]] = {}
         self._cache: dict[tuple, pd.DataFrame] = {}
 
     @property
     def n(self) -> int:
         return len(self.starts)
 
-    def draws(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(jittered starts (n, 3), run seeds (n,), measurement-noise normals) of copy k."""
+    def draws(self, k: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """(jittered starts (n, 3), run seeds (n,), noise normals per observable (n,)) of copy k."""
         if k not in self._draws:
             rng = np.random.default_rng([self.seed, 7919, k])
             starts = self.noise.jitter_starts(self.starts, rng)
             seeds = rng.integers(0, 2**31 - 1, size=self.n)
-            z = rng.standard_normal((self.n, N_DRAWS))
+            z = noise_draws([self.seed, 7919, k], self.n)
             self._draws[k] = (starts, seeds, z)
         return self._draws[k]
 
@@ -77,7 +81,7 @@ class CopyMaker:
         if key not in self._cache:
             starts, seeds, z = self.draws(k)
             raw = self.sim.run(starts[idx], dict(eff), seeds[idx], desc=desc)
-            out = self.noise.observe(raw, z=z[idx])
+            out = self.noise.observe(raw, {name: zn[idx] for name, zn in z.items()})
             self._cache[key] = out
             if rows is None:
                 self._cache[full_key] = out

@@ -22,13 +22,8 @@ import numpy as np
 import pandas as pd
 from scipy.stats import wasserstein_distance
 
-from fibersweep.discrepancy.scores import (
-    CATEGORICAL,
-    N_CATEGORIES,
-    OBSERVABLES,
-    residual_matrix,
-    score_matrix,
-)
+from fibersweep.discrepancy.observables import OBSERVABLES, scored
+from fibersweep.discrepancy.scores import residual_matrix, score_matrix
 from fibersweep.discrepancy.stats import (
     PermTest,
     bootstrap_mean_ci,
@@ -36,7 +31,6 @@ from fibersweep.discrepancy.stats import (
     holm,
     permutation_test,
 )
-from fibersweep.fiber.result import CLASSES
 
 __all__ = [
     "ObservableGap",
@@ -46,6 +40,7 @@ __all__ = [
     "describe",
     "feature_vector",
     "weighted_loss",
+    "combined_excess",
 ]
 
 
@@ -57,26 +52,22 @@ def value_matrices(
     Parameters
     ----------
     observed : DataFrame, n rows
-        Canonical measured table (class names, contact bool) or an outcome
-        table from :class:`~fibersweep.discrepancy.simulate.Simulator` (class codes).
+        Canonical measured table (class names, contact bool) or an outcome table
+        from :class:`~fibersweep.discrepancy.simulate.Simulator`.
     copies : sequence of DataFrame, each n rows
-        Model outcome tables (class codes, contact 0/1, NaN for failures).
+        Model outcome tables (missing values for failures).
     observables : sequence of str
 
     Returns
     -------
     dict name -> ndarray, shape (n, 1 + len(copies))
+        In registry order; category indices for categorical observables
+        (:meth:`~fibersweep.discrepancy.observables.Observable.values`).
     """
     out = {}
-    for name in observables:
-        col = observed[name]
-        if name == "class" and not pd.api.types.is_numeric_dtype(col):
-            lookup = {c: float(i) for i, c in enumerate(CLASSES)}
-            obs = np.array([lookup.get(v, np.nan) for v in col], dtype=np.float64)
-        else:
-            obs = col.to_numpy(dtype=np.float64)
-        mats = [obs] + [c[name].to_numpy(dtype=np.float64) for c in copies]
-        out[name] = np.column_stack(mats)
+    for name in (o for o in OBSERVABLES if o in observables):
+        values = OBSERVABLES[name].values
+        out[name] = np.column_stack([values(observed[name])] + [values(c[name]) for c in copies])
     return out
 
 
@@ -184,7 +175,7 @@ def assess_gap(
     alpha : float
         Family-wise error rate (Holm over the observables).
     """
-    names = [o for o in OBSERVABLES if o in values]
+    names = [o for o in scored() if o in values]
     tests: dict[str, PermTest] = {}
     per_fiber: dict[str, np.ndarray] = {}
     biases: dict[str, list[PermTest]] = {}
@@ -224,17 +215,18 @@ def assess_gap(
 def feature_vector(gap: GapResult) -> np.ndarray:
     """Signature of a gap: excess z per observable, then signed bias z per component.
 
-    Shape (len(OBSERVABLES) + 4 + 1 + 4,); observables not present give zeros,
-    so vectors from different data sets are comparable.
+    Shape (k + sum of the residual widths,) over the k scored observables of the
+    registry (categories or 1 each); observables not present give zeros, so
+    vectors from different data sets are comparable.
     """
     parts = []
-    for name in OBSERVABLES:
+    names = scored()
+    for name in names:
         g = gap.gaps.get(name)
         parts.append(np.array([g.test.z if g else 0.0]))
-    for name in OBSERVABLES:
-        width = N_CATEGORIES[name] if name in CATEGORICAL else 1
+    for name in names:
         g = gap.gaps.get(name)
-        parts.append(np.array(g.bias_z) if g else np.zeros(width))
+        parts.append(np.array(g.bias_z) if g else np.zeros(OBSERVABLES[name].width))
     v = np.concatenate(parts)
     return np.where(np.isfinite(v), v, 0.0)
 
@@ -258,6 +250,28 @@ def weighted_loss(
 ) -> dict[str, np.ndarray]:
     """Per-fiber observed score of each observable times its weight, shape (n,) each."""
     return {n: score_matrix(n, V)[:, 0] * weights.get(n, 0.0) for n, V in values.items()}
+
+
+def combined_excess(gap: GapResult, weights: Mapping[str, float]) -> np.ndarray:
+    """Per-fiber excess score summed over observables, each times its weight.
+
+    Parameters
+    ----------
+    gap : GapResult
+        Its ``per_fiber`` excess scores (NaN counts as 0).
+    weights : mapping name -> float
+        From :func:`observable_weights` (1 / spread of the copies' scores).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        In units of the per-fiber spread of the copies' scores; empty without observables.
+    """
+    tot = None
+    for name, e in gap.per_fiber.items():
+        v = np.where(np.isfinite(e), e, 0.0) * weights.get(name, 0.0)
+        tot = v if tot is None else tot + v
+    return tot if tot is not None else np.zeros(0)
 
 
 def paired_improvement(
@@ -286,51 +300,63 @@ def describe(values: Mapping[str, np.ndarray]) -> dict[str, object]:
     Returns
     -------
     dict
-        ``confusion`` (observed class x modal model class counts), ``contact_mismatch``
-        (rate), ``delta_wasserstein``, per continuous observable the paired
-        residual mean and sd (observed minus the copies' mean), ``t_pass_ratio``
-        (median observed / model).
+        In registry order: per class observable the ``confusion`` matrix (observed
+        x modal model category counts) and ``<name>_agreement``; per binary one
+        ``<name>_mismatch`` (rate); per continuous one ``<name>_residual`` (paired
+        residual mean and sd: observed minus the copies' mean) and its extra
+        ``measures``: ``<name>_wasserstein`` (distance of the distributions, e.g.
+        delta) and ``<name>_ratio`` (median observed / model, e.g. t_pass).
     """
     out: dict[str, object] = {}
-    if "class" in values:
-        V = values["class"]
-        k = len(CLASSES)
-        counts = np.stack([(V[:, 1:] == c).sum(axis=1) for c in range(k)], axis=1)
-        modal = np.where(counts.sum(axis=1) > 0, counts.argmax(axis=1), -1)
-        conf = np.zeros((k, k), dtype=int)
-        for o, m in zip(V[:, 0], modal, strict=True):
-            if np.isfinite(o) and m >= 0:
-                conf[int(o), m] += 1
-        out["confusion"] = {"labels": list(CLASSES), "counts": conf.tolist()}
-        out["class_agreement"] = float(np.trace(conf) / max(conf.sum(), 1))
-    if "contact" in values:
-        V = values["contact"]
-        p = np.nanmean(V[:, 1:], axis=1)
-        ok = np.isfinite(V[:, 0]) & np.isfinite(p)
-        out["contact_mismatch"] = float(np.mean(np.abs(V[ok, 0] - np.round(p[ok]))))
-    for name in ("delta", "theta_c", "y_c", "t_pass", "dwell"):
-        if name not in values:
-            continue
-        V = values[name]
-        fin = np.isfinite(V[:, 1:])
-        cnt = fin.sum(axis=1)
-        mean = np.where(
-            cnt > 0, np.where(fin, V[:, 1:], 0.0).sum(axis=1) / np.maximum(cnt, 1), np.nan
-        )
-        r = V[:, 0] - mean
-        r = r[np.isfinite(r)]
-        out[f"{name}_residual"] = {
-            "mean": float(r.mean()) if len(r) else None,
-            "sd": float(r.std()) if len(r) > 1 else None,
-            "n": int(len(r)),
-        }
-        if name == "delta":
-            obs = V[:, 0][np.isfinite(V[:, 0])]
-            mod = V[:, 1:][np.isfinite(V[:, 1:])]
-            if len(obs) and len(mod):
-                out["delta_wasserstein"] = float(wasserstein_distance(obs, mod))
-        if name == "t_pass":
-            ratio = V[:, 0] / mean
-            ratio = ratio[np.isfinite(ratio)]
-            out["t_pass_ratio"] = float(np.median(ratio)) if len(ratio) else None
+    for name, V in values.items():
+        o = OBSERVABLES[name]
+        if o.kind == "class":
+            out.update(_confusion(name, V, o.categories))
+        elif o.kind == "binary":
+            p = np.nanmean(V[:, 1:], axis=1)
+            ok = np.isfinite(V[:, 0]) & np.isfinite(p)
+            out[f"{name}_mismatch"] = float(np.mean(np.abs(V[ok, 0] - np.round(p[ok]))))
+        else:
+            out.update(_residual_measures(name, V, o.measures))
+    return out
+
+
+def _confusion(name: str, V: np.ndarray, labels: tuple[str, ...]) -> dict[str, object]:
+    """Observed category x modal model category counts, and the agreement rate."""
+    k = len(labels)
+    counts = np.stack([(V[:, 1:] == c).sum(axis=1) for c in range(k)], axis=1)
+    modal = np.where(counts.sum(axis=1) > 0, counts.argmax(axis=1), -1)
+    conf = np.zeros((k, k), dtype=int)
+    for o, m in zip(V[:, 0], modal, strict=True):
+        if np.isfinite(o) and m >= 0:
+            conf[int(o), m] += 1
+    key = "confusion" if name == "class" else f"{name}_confusion"
+    return {
+        key: {"labels": list(labels), "counts": conf.tolist()},
+        f"{name}_agreement": float(np.trace(conf) / max(conf.sum(), 1)),
+    }
+
+
+def _residual_measures(name: str, V: np.ndarray, measures: tuple[str, ...]) -> dict[str, object]:
+    """Paired residual (observed minus the copies' mean) and the observable's extra measures."""
+    out: dict[str, object] = {}
+    fin = np.isfinite(V[:, 1:])
+    cnt = fin.sum(axis=1)
+    mean = np.where(cnt > 0, np.where(fin, V[:, 1:], 0.0).sum(axis=1) / np.maximum(cnt, 1), np.nan)
+    r = V[:, 0] - mean
+    r = r[np.isfinite(r)]
+    out[f"{name}_residual"] = {
+        "mean": float(r.mean()) if len(r) else None,
+        "sd": float(r.std()) if len(r) > 1 else None,
+        "n": int(len(r)),
+    }
+    if "wasserstein" in measures:
+        obs = V[:, 0][np.isfinite(V[:, 0])]
+        mod = V[:, 1:][np.isfinite(V[:, 1:])]
+        if len(obs) and len(mod):
+            out[f"{name}_wasserstein"] = float(wasserstein_distance(obs, mod))
+    if "ratio" in measures:
+        ratio = V[:, 0] / mean
+        ratio = ratio[np.isfinite(ratio)]
+        out[f"{name}_ratio"] = float(np.median(ratio)) if len(ratio) else None
     return out

@@ -10,17 +10,20 @@ copies ``f(measured + ε')`` and the observation ``f(true)`` are exchangeable.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
+from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.errors import InputError
 
-__all__ = ["NoiseModel", "N_DRAWS"]
+__all__ = ["NoiseModel"]
 
-#: Standard normal draws per fiber for the outcome noise (delta, theta_c, y_c, t_pass, dwell).
-N_DRAWS = 5
+
+def _default_outcome_sd() -> dict[str, float]:
+    return {n: o.noise.sd for n, o in OBSERVABLES.items() if o.noise is not None}
 
 
 @dataclass(frozen=True)
@@ -35,33 +38,43 @@ class NoiseModel:
         Start lateral position [/h_obs].
     length : float
         Fiber length [/l_obs].
-    delta : float
-        Lateral displacement [/h_obs].
-    theta_c : float
-        Contact angle [deg].
-    y_c : float
-        Contact position [/h_obs].
-    t_pass : float
-        Relative error of the time to pass (log-normal) [-]; 0.01 is about one
-        frame at 100 fps over a 1 s track.
-    dwell : float
-        Error of the time from first contact to passing [s] (one frame at 100 fps).
+    outcome : mapping name -> float
+        Error of each observable with a noise law, in its unit (relative for a
+        log-normal law), e.g. ``delta`` [/h_obs], ``theta_c`` [deg], ``t_pass``
+        [-], ``dwell`` [s]; observables left out get their registry default
+        (:mod:`fibersweep.discrepancy.observables`).
     """
 
     theta0: float = 1.0
     y0: float = 0.01
     length: float = 0.01
-    delta: float = 0.01
-    theta_c: float = 1.0
-    y_c: float = 0.01
-    t_pass: float = 0.01
-    dwell: float = 0.01
+    outcome: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
+        sd = _default_outcome_sd()
+        unknown = [k for k in self.outcome if k not in sd]
+        if unknown:
+            raise InputError(
+                f"noise: no measurement noise law for {', '.join(unknown)}; valid: {', '.join(sd)}"
+            )
+        sd.update({k: float(v) for k, v in self.outcome.items()})
+        object.__setattr__(self, "outcome", sd)
+        for name, v in self.as_dict().items():
             if not (np.isfinite(v) and v >= 0):
-                raise InputError(f"noise.{f.name}: must be a finite number >= 0, got {v!r}")
+                raise InputError(f"noise.{name}: must be a finite number >= 0, got {v!r}")
+
+    def __hash__(self) -> int:  # the outcome dict is never mutated after __post_init__
+        return hash((self.theta0, self.y0, self.length, tuple(self.outcome.items())))
+
+    def sd(self, name: str) -> float:
+        """Standard deviation of the start column or observable ``name``."""
+        if name in ("theta0", "y0", "length"):
+            return float(getattr(self, name))
+        return self.outcome[name]
+
+    def as_dict(self) -> dict[str, float]:
+        """Flat ``{name: sd}``: the start columns, then the observables (for reports)."""
+        return {"theta0": self.theta0, "y0": self.y0, "length": self.length, **self.outcome}
 
     def jitter_starts(self, starts: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Measured-like starts: ``starts`` plus start noise.
@@ -84,39 +97,29 @@ class NoiseModel:
         out[:, 2] = np.abs(out[:, 2] - 0.05) + 0.05
         return out
 
-    def observe(
-        self, outcomes: pd.DataFrame, rng: np.random.Generator | None = None, z=None
-    ) -> pd.DataFrame:
-        """Outcomes as a measurement would report them (noise on continuous values).
+    def observe(self, outcomes: pd.DataFrame, z: Mapping[str, np.ndarray]) -> pd.DataFrame:
+        """Outcomes as a measurement would report them (each observable's noise law).
 
-        Class and contact are observed without error. NaN stays NaN. The noise
-        is drawn for every row whether or not a value is defined, so that the
-        random stream does not depend on the outcomes (common random numbers).
+        Observables without a noise law (class, contact) are observed without
+        error. NaN stays NaN. The draws come per observable name
+        (:func:`~fibersweep.discrepancy.observables.noise_draws`) for every row
+        whether or not a value is defined, so the random stream depends neither
+        on the outcomes nor on the other observables (common random numbers).
 
         Parameters
         ----------
-        outcomes : DataFrame
-            Columns delta, theta_c, y_c, t_pass, dwell (others are kept as they are).
-        rng : numpy.random.Generator, optional
-            Source of the noise, if ``z`` is not given.
-        z : ndarray, shape (n, 5), optional
-            Standard normal draws to use (delta, theta_c, y_c, t_pass, dwell).
+        outcomes : DataFrame, n rows
+            Outcome columns (others are kept as they are).
+        z : mapping name -> ndarray, shape (n,)
+            Standard normal draws of each observable with a noise law present.
         """
         out = outcomes.copy()
         n = len(out)
-        if z is None:
-            if rng is None:
-                raise ValueError("observe needs rng or z")
-            z = rng.standard_normal((n, N_DRAWS))
-        z = np.asarray(z, dtype=np.float64)
-        if z.shape != (n, N_DRAWS):
-            raise ValueError(f"z must have shape ({n}, {N_DRAWS}), got {z.shape}")
-        for k, col in enumerate(("delta", "theta_c", "y_c")):
-            if col in out:
-                out[col] = out[col].to_numpy(dtype=np.float64) + getattr(self, col) * z[:, k]
-        if "t_pass" in out:
-            out["t_pass"] = out["t_pass"].to_numpy(dtype=np.float64) * np.exp(self.t_pass * z[:, 3])
-        if "dwell" in out:
-            # reflected at 0: a measured contact never comes after the pass
-            out["dwell"] = np.abs(out["dwell"].to_numpy(dtype=np.float64) + self.dwell * z[:, 4])
+        for name, o in OBSERVABLES.items():
+            if o.noise is None or name not in out:
+                continue
+            zn = np.asarray(z[name], dtype=np.float64)
+            if zn.shape != (n,):
+                raise ValueError(f"z[{name!r}] must have shape ({n},), got {zn.shape}")
+            out[name] = o.noise.apply(out[name].to_numpy(dtype=np.float64), self.sd(name), zn)
         return out

@@ -23,11 +23,10 @@ import numpy as np
 import yaml
 
 from fibersweep.atomic import atomic_write
-from fibersweep.discrepancy.gap import GapResult
+from fibersweep.discrepancy.gap import GapResult, combined_excess
 from fibersweep.discrepancy.localise import binned_map
-from fibersweep.discrepancy.scores import OBSERVABLES
-from fibersweep.discrepancy.workflow import DiscrepancyResult, _combined_excess
-from fibersweep.fiber.result import CLASSES
+from fibersweep.discrepancy.observables import OBSERVABLES, log_scale, scored
+from fibersweep.discrepancy.workflow import DiscrepancyResult
 from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, save_figure, subplots
 
 __all__ = ["summary", "write_report"]
@@ -109,7 +108,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "n_fibers": len(res.observed),
         "n_heldout": len(res.heldout_rows),
         "observables": list(res.observables),
-        "observables_absent": [o for o in OBSERVABLES if o not in res.observables],
+        "observables_absent": [o for o in scored() if o not in res.observables],
         "alpha": res.settings.alpha,
         "gap": _gap_dict(res.gap),
         "descriptive": res.descriptive,
@@ -147,9 +146,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
             "fit_evals": res.plan.fit_evals,
             "seed": res.settings.seed,
             "budget": res.settings.budget,
-            "noise": {
-                k: getattr(res.settings.noise, k) for k in res.settings.noise.__dataclass_fields__
-            },
+            "noise": res.settings.noise.as_dict(),
         },
     }
     return _clean(out)
@@ -162,7 +159,7 @@ def _fmt(x: Any, spec: str = ".3g") -> str:
 def _class_groups(codes: np.ndarray) -> list[tuple[str, dict[str, object], np.ndarray]]:
     """(label, marker style, row mask) per class present, failed runs last (plots/style)."""
     out = []
-    for k, name in enumerate(CLASSES):
+    for k, name in enumerate(OBSERVABLES["class"].categories):
         mask = codes == k
         if mask.any():
             out.append((name, CLASS_STYLE[name], mask))
@@ -176,19 +173,17 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
     import matplotlib
     from matplotlib.lines import Line2D
 
-    from fibersweep.discrepancy.gap import value_matrices
-
     made = []
     obs = res.observed
     held = res.heldout_rows
     o_ho = obs.iloc[held].reset_index(drop=True)
-    cls_obs = value_matrices(o_ho, [], ["class"])["class"][:, 0]
+    codes = OBSERVABLES["class"].values  # category index, NaN for a failed run
     panels = [
-        ("measured", cls_obs),
-        ("baseline model", res.baseline_copies[0]["class"].to_numpy()[held]),
+        ("measured", codes(o_ho["class"])),
+        ("baseline model", codes(res.baseline_copies[0]["class"])[held]),
     ]
     if effect and effect in res.effect_copies:
-        panels.append((f"with {effect}", res.effect_copies[effect][0]["class"].to_numpy()))
+        panels.append((f"with {effect}", codes(res.effect_copies[effect][0]["class"])))
     fig, axes = subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), sharey=True)
     size = (12 + 30 * (o_ho["length"] - 0.4)).to_numpy()
     seen: dict[str, dict[str, object]] = {}
@@ -217,7 +212,7 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
     save_figure(fig, out / "phase_before_after.png", dpi=110)
     made.append("phase_before_after.png")
 
-    exc = _combined_excess(res.gap, res.weights)
+    exc = combined_excess(res.gap, res.weights)
     th, y0, L = (obs[c].to_numpy(dtype=np.float64) for c in ("theta0", "y0", "length"))
     fig, axes = subplots(1, 2, figsize=(9, 3.8))
     for ax, (x, xl) in zip(axes, ((th, "θ0 [deg]"), (L, "L / l_obs")), strict=True):
@@ -263,6 +258,18 @@ def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]
     return made
 
 
+def _score_text() -> str:
+    """How each observable is scored, from the registry."""
+    cat = [n for n in scored() if OBSERVABLES[n].categorical]
+    logs = [n for n in scored() if OBSERVABLES[n].transform is log_scale]
+    on_log = f"; {', '.join(logs)} on a log scale" if logs else ""
+    return (
+        f"Score: log-loss ({', '.join(cat)}) or fair CRPS (continuous{on_log}) of "
+        "each observation against the model's jittered copies. Noise floor: the same score of "
+        "the model's own copies (permutation test, Holm-corrected)."
+    )
+
+
 def _markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
     v = s["verdict"]
     lines = [
@@ -284,9 +291,7 @@ def _markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
         "",
         "## Gap per observable (all fibers, baseline model)",
         "",
-        "Score: log-loss (class, contact) or fair CRPS (continuous; t_pass on a log scale) of "
-        "each observation against the model's jittered copies. Noise floor: the same score of "
-        "the model's own copies (permutation test, Holm-corrected).",
+        _score_text(),
         "",
         "| observable | n | score | noise floor | z | p (Holm) | significant | excess [95 % CI] "
         "| signed residual z |",

@@ -9,24 +9,20 @@ fiber_id    no        any unique label (default: the row number)
 theta0      yes       start angle from +x, counter-clockwise [degrees]
 y0          yes       start centre-of-mass lateral position from the base / h_obs
 length      yes       fiber length / l_obs
-class       yes       Below, Above, Pole-vaulting or Trapping (case-insensitive)
-delta       no        (y_f - y0) / h_obs far downstream; empty (NaN) for Trapping
-contact     no        whether the fiber touched the pillar (bool, 0/1, true/false)
-theta_c     no        fiber angle at first contact [degrees]; NaN without contact
-y_c         no        lateral position of the contact point from the base / h_obs;
-                      NaN without contact
-t_pass      no        time to pass the pillar [s]; NaN for Trapping
-t_contact   no        time of first contact on the clock of t_pass [s]; NaN without
-                      contact. With t_pass it gives the observable ``dwell``
-                      = t_pass - t_contact (contact to passing)
-angle_unit  no        'deg' (default) or 'rad' for theta0 and theta_c, same in every row
+angle_unit  no        'deg' (default) or 'rad' for every angle column, same in every row
 ==========  ========  ==========================================================
+
+plus one column per observable of the registry
+(:data:`fibersweep.discrepancy.observables.OBSERVABLES`, listed at the end of
+this docstring with its unit, range and NaN rule). An observable derived from
+other columns (``dwell`` = t_pass - t_contact) is computed here.
 
 An optional observed column that is absent is simply not tested. An optional
 column that is present must be complete: NaN is allowed only where the quantity
-is undefined (delta and t_pass for Trapping, theta_c, y_c and t_contact without
-contact).
-Leave a column out entirely if it was not measured.
+does not exist (``Observable.defined``: e.g. delta and t_pass for Trapping,
+theta_c, y_c and t_contact without contact); a value given where it does not
+exist is an error for the strict ones. Leave a column out entirely if it was
+not measured.
 
 Trajectories (optional second table): columns ``fiber_id, t [s], x [µm],
 y [µm], theta [deg]``, rows time-ordered per fiber; every fiber_id must be in
@@ -39,9 +35,9 @@ Validation never drops a row or a column: every problem raises
 asks to ignore extra columns (``discrepancy --ignore-extra-columns``).
 Without an ``angle_unit`` column, every angle column is checked for radians:
 theta0 when every |theta0| is below 0.2 with a non-zero spread (the SPEC's
-±10° is ±0.17 rad); theta_c when at least three contact angles are given and
-every |theta_c| is at most π (contact angles in degrees spread over tens of
-degrees); the trajectories' theta when their first samples match theta0
+±10° is ±0.17 rad); an angle observable (theta_c) when at least three values
+are given and every one is at most π in size (contact angles in degrees spread
+over tens of degrees); the trajectories' theta when their first samples match theta0
 converted to radians far better than theta0 itself. ``angle_unit = 'deg'``
 states degrees and turns the guess off.
 """
@@ -58,8 +54,8 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.atomic import atomic_path
+from fibersweep.discrepancy.observables import OBSERVABLES, Observable, table_columns
 from fibersweep.errors import InputError
-from fibersweep.fiber.result import CLASSES
 
 __all__ = [
     "START_COLUMNS",
@@ -74,31 +70,24 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 START_COLUMNS = ("theta0", "y0", "length")
-OBSERVED_COLUMNS = ("class", "delta", "contact", "theta_c", "y_c", "t_pass", "t_contact")
+#: Observed columns of the schema (the registry's observables that are table columns).
+OBSERVED_COLUMNS = table_columns()
 TRAJECTORY_COLUMNS = ("fiber_id", "t", "x", "y", "theta")
 
-# Plausible ranges (inclusive); values outside point to a unit error.
-_RANGES = {
-    "theta0": (-90.0, 90.0),
-    "y0": (-6.0, 7.0),  # the SPEC channel spans about -5 .. 5.7 h_obs from the base
-    "length": (0.05, 5.0),
-    "delta": (-10.0, 10.0),
-    "theta_c": (-180.0, 180.0),
-    "y_c": (-0.5, 1.5),
-    "t_pass": (0.0, 1e4),
-    "t_contact": (0.0, 1e4),
+# Plausible start ranges (inclusive; values outside point to a unit error) and unit hints.
+# The observed columns' ranges and hints are in the observable registry.
+_START_RANGES = {
+    "theta0": ((-90.0, 90.0), "theta0 must be in degrees"),
+    # the SPEC channel spans about -5 .. 5.7 h_obs from the base
+    "y0": ((-6.0, 7.0), "y0 must be in units of h_obs (divide µm by the pillar height)"),
+    "length": (
+        (0.05, 5.0),
+        "length must be in units of l_obs (divide µm by the pillar base length)",
+    ),
 }
-_UNIT_HINT = {
-    "y0": "y0 must be in units of h_obs (divide µm by the pillar height)",
-    "length": "length must be in units of l_obs (divide µm by the pillar base length)",
-    "delta": "delta must be in units of h_obs",
-    "y_c": "y_c must be measured from the base in units of h_obs",
-    "t_pass": "t_pass must be in seconds",
-    "t_contact": "t_contact must be in seconds",
-    "theta0": "theta0 must be in degrees",
-    "theta_c": "theta_c must be in degrees",
-}
-_CLASS_LOOKUP = {c.lower(): c for c in CLASSES}
+# Where a quantity does not exist, per condition of Observable.defined
+_WITHOUT = {"not_trapped": "for Trapping", "contact": "without contact"}
+_GIVEN = {"not_trapped": "for a Trapping fiber", "contact": "for a fiber without contact"}
 _BOOL_LOOKUP = {"true": True, "false": False, "1": True, "0": False, "yes": True, "no": False}
 _MAX_ROWS_SHOWN = 8
 
@@ -163,7 +152,7 @@ def _to_float(df: pd.DataFrame, col: str, problems: list[str]) -> np.ndarray | N
     return num.to_numpy(dtype=np.float64)
 
 
-def _to_bool(series: pd.Series, problems: list[str]) -> np.ndarray | None:
+def _to_bool(series: pd.Series, name: str, problems: list[str]) -> np.ndarray | None:
     if series.dtype == bool:
         return series.to_numpy()
     out = np.zeros(len(series), dtype=bool)
@@ -177,7 +166,7 @@ def _to_bool(series: pd.Series, problems: list[str]) -> np.ndarray | None:
         else:
             bad[k] = True
     if bad.any():
-        problems.append(f"contact: not a boolean (true/false/0/1) in {_rows(bad)}")
+        problems.append(f"{name}: not a boolean (true/false/0/1) in {_rows(bad)}")
         return None
     return out
 
@@ -190,17 +179,18 @@ def _looks_like_radians(col: str, v: np.ndarray) -> str | None:
     biggest = float(np.max(np.abs(finite)))
     if col == "theta0" and biggest < 0.2:
         return f"every |theta0| is below 0.2 with a non-zero spread (max {biggest:.3g})"
-    if col == "theta_c" and biggest <= math.pi + 1e-9:
+    if col != "theta0" and biggest <= math.pi + 1e-9:
         return (
-            f"all {len(finite)} contact angles lie within ±π (max |theta_c| {biggest:.3g}), "
-            "while contact angles in degrees spread over tens of degrees"
+            f"all {len(finite)} {OBSERVABLES[col].angle}s lie within ±π "
+            f"(max |{col}| {biggest:.3g}), while {OBSERVABLES[col].angle}s in degrees "
+            "spread over tens of degrees"
         )
     return None
 
 
 def _angles_to_degrees(df: pd.DataFrame, vals: dict[str, np.ndarray], problems: list[str]) -> None:
     """Convert radians if ``angle_unit`` says so; otherwise catch radians by their range."""
-    angle_cols = [c for c in ("theta0", "theta_c") if c in vals]
+    angle_cols = ["theta0", *(n for n, o in OBSERVABLES.items() if o.angle and n in vals)]
     if "angle_unit" in df.columns:
         units = df["angle_unit"].astype(str).str.strip().str.lower()
         bad = ~units.isin(["deg", "rad"])
@@ -213,7 +203,7 @@ def _angles_to_degrees(df: pd.DataFrame, vals: dict[str, np.ndarray], problems: 
         if units.iloc[0] == "rad":
             for c in angle_cols:
                 vals[c] = np.degrees(vals[c])
-            log.info("converted theta0/theta_c from radians (angle_unit column)")
+            log.info("converted %s from radians (angle_unit column)", "/".join(angle_cols))
         return
     for c in angle_cols:
         why = _looks_like_radians(c, vals[c])
@@ -226,7 +216,7 @@ def _angles_to_degrees(df: pd.DataFrame, vals: dict[str, np.ndarray], problems: 
 
 def _unknown_columns(columns: list[str]) -> list[str]:
     """One problem line per column the schema does not know, with a did-you-mean."""
-    known = ["fiber_id", "angle_unit", *START_COLUMNS, *OBSERVED_COLUMNS]
+    known = ["fiber_id", "angle_unit", *START_COLUMNS, *table_columns()]
     lowered = {k.lower(): k for k in known}
     problems = []
     for c in columns:
@@ -268,13 +258,15 @@ def validate_measured(
         Listing every problem found, each naming the column and the rows.
     """
     problems: list[str] = []
-    missing = [c for c in (*START_COLUMNS, "class") if c not in df.columns]
+    columns = table_columns()
+    required = [*START_COLUMNS, *(c for c in columns if OBSERVABLES[c].required)]
+    missing = [c for c in required if c not in df.columns]
     if missing:
         raise InputError(
             f"{source}: missing required column(s) {', '.join(missing)}; "
             f"the columns present are {', '.join(map(str, df.columns)) or '(none)'}"
         )
-    known = {"fiber_id", "angle_unit", *START_COLUMNS, *OBSERVED_COLUMNS}
+    known = {"fiber_id", "angle_unit", *START_COLUMNS, *columns}
     extra = [c for c in df.columns if c not in known]
     if extra and ignore_extra:
         log.warning("%s: ignoring extra columns %s", source, extra)
@@ -283,85 +275,23 @@ def validate_measured(
     if len(df) == 0:
         raise InputError(f"{source}: the table has no rows")
     df = df.reset_index(drop=True)
+    present = [OBSERVABLES[c] for c in columns if c in df.columns]
 
     vals: dict[str, np.ndarray] = {}
-    for col in (*START_COLUMNS, "delta", "theta_c", "y_c", "t_pass", "t_contact"):
-        if col in df.columns:
-            v = _to_float(df, col, problems)
-            if v is not None:
-                vals[col] = v
+    for col in (*START_COLUMNS, *(o.name for o in present if o.kind == "continuous")):
+        v = _to_float(df, col, problems)
+        if v is not None:
+            vals[col] = v
     if "theta0" in vals:
         _angles_to_degrees(df, vals, problems)
+    labels = {o.name: _to_labels(df[o.name], o, problems) for o in present if o.kind == "class"}
+    flags = {o.name: _to_bool(df[o.name], o.name, problems) for o in present if o.kind == "binary"}
+    trapped = (labels["class"] == "Trapping").to_numpy()
+    contact = flags.get("contact")
 
-    classes = df["class"].astype(str).str.strip().str.lower().map(_CLASS_LOOKUP)
-    bad = classes.isna().to_numpy()
-    if bad.any():
-        problems.append(
-            f"class: unknown value in {_rows(bad)} "
-            f"(e.g. {df['class'][bad].iloc[0]!r}); valid: {', '.join(CLASSES)}"
-        )
-    trapped = (classes == "Trapping").to_numpy()
-    contact = _to_bool(df["contact"], problems) if "contact" in df.columns else None
-
-    # Where NaN is allowed: undefined quantities only.
-    nan_ok = {
-        "delta": trapped,
-        "t_pass": trapped,
-        "theta_c": ~contact if contact is not None else None,
-        "y_c": ~contact if contact is not None else None,
-        "t_contact": ~contact if contact is not None else None,
-    }
     for col, v in vals.items():
-        inf = np.isinf(v)
-        if inf.any():
-            problems.append(f"{col}: infinite value in {_rows(inf)}")
-        nan = np.isnan(v)
-        allowed = nan_ok.get(col)
-        if col in ("theta_c", "y_c", "t_contact") and contact is None:
-            allowed = np.ones_like(nan)  # without a contact column NaN means 'no contact'
-        bad_nan = nan & ~allowed if allowed is not None else nan
-        if bad_nan.any():
-            why = {
-                "delta": "NaN is allowed only for Trapping",
-                "t_pass": "NaN is allowed only for Trapping",
-                "theta_c": "NaN is allowed only without contact",
-                "y_c": "NaN is allowed only without contact",
-                "t_contact": "NaN is allowed only without contact",
-            }.get(col, "a value is required")
-            problems.append(
-                f"{col}: missing/NaN value in {_rows(bad_nan)} ({why}; "
-                "leave the column out if it was not measured)"
-            )
-        lo, hi = _RANGES[col]
-        out = np.isfinite(v) & ((v < lo) | (v > hi))
-        if col in ("t_pass", "t_contact"):
-            out = np.isfinite(v) & ((v <= lo) | (v > hi))
-        if out.any():
-            problems.append(
-                f"{col}: out of range [{lo:g}, {hi:g}] in {_rows(out)} "
-                f"(e.g. {v[out][0]:.4g}); {_UNIT_HINT[col]}"
-            )
-    if contact is not None and "class" in df.columns:
-        must = (classes.isin(["Trapping", "Pole-vaulting"])).to_numpy() & ~contact
-        if must.any():
-            problems.append(
-                f"contact: false for a Trapping or Pole-vaulting fiber in {_rows(must)} "
-                "(both classes require contact)"
-            )
-        for col in ("theta_c", "y_c", "t_contact"):
-            if col in vals:
-                given = np.isfinite(vals[col]) & ~contact
-                if given.any():
-                    problems.append(f"{col}: given for a fiber without contact in {_rows(given)}")
-    if "t_contact" in vals and "t_pass" in vals:
-        late = np.isfinite(vals["t_contact"]) & np.isfinite(vals["t_pass"])
-        late &= vals["t_contact"] > vals["t_pass"]
-        if late.any():
-            problems.append(f"t_contact: later than t_pass in {_rows(late)}")
-    if "delta" in vals:
-        given = np.isfinite(vals["delta"]) & trapped
-        if given.any():
-            problems.append(f"delta: given for a Trapping fiber in {_rows(given)} (undefined)")
+        _check_values(col, v, trapped, contact, problems)
+    _check_consistency(labels["class"], contact, vals, trapped, problems)
 
     if "fiber_id" in df.columns:
         ids = df["fiber_id"].astype(str)
@@ -378,21 +308,101 @@ def validate_measured(
     out = pd.DataFrame({"fiber_id": ids.to_numpy()})
     for col in START_COLUMNS:
         out[col] = vals[col]
-    out["class"] = classes.to_numpy(dtype=object)
-    observed = ["class"]
-    for col in OBSERVED_COLUMNS[1:]:
-        if col == "contact" and contact is not None:
-            out["contact"] = contact
-            observed.append(col)
-        elif col == "t_contact" and col in vals:
-            out["t_contact"] = vals[col]
-            if "t_pass" in vals:  # the observable is the time from contact to passing
-                out["dwell"] = vals["t_pass"] - vals["t_contact"]
-                observed.append("dwell")
-        elif col in vals:
-            out[col] = vals[col]
-            observed.append(col)
+    canonical = {**labels, **flags, **vals}
+    observed = []
+    for name, o in OBSERVABLES.items():  # registry order
+        if name in canonical:
+            out[name] = canonical[name]
+        elif o.derive is not None and all(c in vals for c in o.derived_from):
+            out[name] = o.derive(vals)  # e.g. dwell = t_pass - t_contact
+        else:
+            continue
+        if o.scored:
+            observed.append(name)
     return MeasuredData(table=out, observed=tuple(observed), source=source)
+
+
+def _to_labels(series: pd.Series, o: Observable, problems: list[str]) -> pd.Series:
+    """Canonical category names (case-insensitive match); NaN where unknown (reported)."""
+    lookup = {c.lower(): c for c in o.categories}
+    labels = series.astype(str).str.strip().str.lower().map(lookup)
+    bad = labels.isna().to_numpy()
+    if bad.any():
+        problems.append(
+            f"{o.name}: unknown value in {_rows(bad)} "
+            f"(e.g. {series[bad].iloc[0]!r}); valid: {', '.join(o.categories)}"
+        )
+    return labels
+
+
+def _check_values(
+    col: str,
+    v: np.ndarray,
+    trapped: np.ndarray,
+    contact: np.ndarray | None,
+    problems: list[str],
+) -> None:
+    """Finite, NaN only where the quantity does not exist, within the plausible range."""
+    inf = np.isinf(v)
+    if inf.any():
+        problems.append(f"{col}: infinite value in {_rows(inf)}")
+    nan = np.isnan(v)
+    if col in _START_RANGES:
+        (lo, hi), hint = _START_RANGES[col]
+        allowed, why, lower_open = np.zeros_like(nan), "a value is required", False
+    else:
+        o = OBSERVABLES[col]
+        (lo, hi), hint, lower_open = o.bounds or (-np.inf, np.inf), o.unit_hint, o.lower_open
+        defined = o.defined_mask(trapped, contact)
+        # without a contact column NaN means 'no contact'
+        allowed = ~defined if defined is not None else np.ones_like(nan)
+        why = "a value is required"
+        if o.defined:
+            why = "NaN is allowed only " + " or ".join(_WITHOUT[c] for c in o.defined)
+    bad_nan = nan & ~allowed
+    if bad_nan.any():
+        problems.append(
+            f"{col}: missing/NaN value in {_rows(bad_nan)} ({why}; "
+            "leave the column out if it was not measured)"
+        )
+    below = (v <= lo) if lower_open else (v < lo)
+    out = np.isfinite(v) & (below | (v > hi))
+    if out.any():
+        problems.append(
+            f"{col}: out of range [{lo:g}, {hi:g}] in {_rows(out)} (e.g. {v[out][0]:.4g}); {hint}"
+        )
+
+
+def _check_consistency(
+    classes: pd.Series,
+    contact: np.ndarray | None,
+    vals: dict[str, np.ndarray],
+    trapped: np.ndarray,
+    problems: list[str],
+) -> None:
+    """Rules between columns: contact of the contact classes, values given where undefined."""
+    if contact is not None:
+        must = (classes.isin(["Trapping", "Pole-vaulting"])).to_numpy() & ~contact
+        if must.any():
+            problems.append(
+                f"contact: false for a Trapping or Pole-vaulting fiber in {_rows(must)} "
+                "(both classes require contact)"
+            )
+    for col, v in vals.items():
+        o = OBSERVABLES.get(col)
+        if o is None or not o.strict or not o.defined:
+            continue
+        defined = o.defined_mask(trapped, contact)
+        if defined is not None:
+            given = np.isfinite(v) & ~defined
+            if given.any():
+                where = " or ".join(_GIVEN[c] for c in o.defined)
+                problems.append(f"{col}: given {where} in {_rows(given)}")
+    if "t_contact" in vals and "t_pass" in vals:
+        late = np.isfinite(vals["t_contact"]) & np.isfinite(vals["t_pass"])
+        late &= vals["t_contact"] > vals["t_pass"]
+        if late.any():
+            problems.append(f"t_contact: later than t_pass in {_rows(late)}")
 
 
 def _trajectory_radians(traj: pd.DataFrame, fibers: pd.DataFrame) -> str | None:
@@ -510,3 +520,31 @@ def write_table(df: pd.DataFrame, path: str | Path) -> Path:
         else:
             df.to_csv(tmp, index=False)
     return p
+
+
+def observed_columns_doc() -> str:
+    """The registry's observed columns as a reStructuredText table (unit, range, NaN rule)."""
+    without = {"not_trapped": "for Trapping", "contact": "without contact"}
+    rows = []
+    for name, o in OBSERVABLES.items():
+        if o.derived_from:
+            rows.append((name, "-", f"{o.description} [{o.unit}], derived"))
+            continue
+        if o.kind == "class":
+            what = f"{o.description}: {', '.join(o.categories)} (case-insensitive)"
+        elif o.kind == "binary":
+            what = f"{o.description} (bool, 0/1, true/false)"
+        else:
+            lo, hi = o.bounds or (-math.inf, math.inf)
+            what = f"{o.description} [{o.unit}] in {'(' if o.lower_open else '['}{lo:g}, {hi:g}]"
+        if o.defined:
+            what += "; NaN " + " or ".join(without[c] for c in o.defined)
+        rows.append((name, "yes" if o.required else "no", what))
+    rule = "==========  ========  " + "=" * 58
+    lines = ["", "Observed columns (from the registry)", "-" * 36, rule]
+    lines += ["column      required  meaning [unit]", rule]
+    lines += [f"{n:<10}  {r:<8}  {w}" for n, r, w in rows]
+    return "\n".join([*lines, rule, ""])
+
+
+__doc__ = (__doc__ or "") + observed_columns_doc()

@@ -11,24 +11,22 @@ them; this is what :mod:`fibersweep.discrepancy.stats` permutes.
 
 Scores (lower is better, all proper):
 
-- continuous observables: the *fair* CRPS of an m-member ensemble (Ferro 2014),
+- continuous observables, on their scoring scale (``Observable.transform``, e.g.
+  log t_pass): the *fair* CRPS of an m-member ensemble (Ferro 2014),
   ``mean_k |x_k - y| - sum_{k != l} |x_k - x_l| / (2 m (m - 1))``, unbiased for
   the CRPS of the distribution the members come from;
-- categorical observables (class, contact): the log-loss of the additively
-  smoothed ensemble frequency ``(n_c + alpha) / (m + K alpha)``; the smoothing
-  keeps a class the copies never produced at a finite cost.
+- categorical observables (kinds class and binary: class, contact): the log-loss
+  of the additively smoothed ensemble frequency ``(n_c + alpha) / (m + K alpha)``;
+  the smoothing keeps a class the copies never produced at a finite cost.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from fibersweep.fiber.result import CLASSES
+from fibersweep.discrepancy.observables import OBSERVABLES, Observable
 
 __all__ = [
-    "OBSERVABLES",
-    "CATEGORICAL",
-    "N_CATEGORIES",
     "crps_fair_loo",
     "logloss_loo",
     "score_matrix",
@@ -36,21 +34,20 @@ __all__ = [
     "transform",
 ]
 
-#: Observables compared, in report order.
-OBSERVABLES = ("class", "contact", "delta", "theta_c", "y_c", "t_pass", "dwell")
-CATEGORICAL = ("class", "contact")
-N_CATEGORIES = {"class": len(CLASSES), "contact": 2}
 #: Additive smoothing of ensemble frequencies (Jeffreys' 1/2).
 ALPHA = 0.5
 
 
+def _observable(name: str) -> Observable:
+    try:
+        return OBSERVABLES[name]
+    except KeyError:
+        raise ValueError(f"unknown observable {name!r}; valid: {', '.join(OBSERVABLES)}") from None
+
+
 def transform(name: str, values: np.ndarray) -> np.ndarray:
-    """Value on the scale it is scored on: log time to pass, everything else as is."""
-    v = np.asarray(values, dtype=np.float64)
-    if name == "t_pass":
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(v > 0, np.log(np.where(v > 0, v, 1.0)), np.nan)
-    return v
+    """Values on the scale observable ``name`` is scored on (e.g. log time to pass)."""
+    return _observable(name).transform(np.asarray(values, dtype=np.float64))
 
 
 def crps_fair_loo(V: np.ndarray) -> np.ndarray:
@@ -117,7 +114,7 @@ def logloss_loo(codes: np.ndarray, n_categories: int, alpha: float = ALPHA) -> n
     return S
 
 
-def _codes(name: str, V: np.ndarray) -> np.ndarray:
+def _codes(V: np.ndarray) -> np.ndarray:
     v = np.asarray(V, dtype=np.float64)
     return np.where(np.isfinite(v), v, -1).astype(np.int64)
 
@@ -128,15 +125,14 @@ def score_matrix(name: str, V: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     name : str
-        One of OBSERVABLES. 'class' holds category codes (index in CLASSES) as
-        floats with NaN for failures, 'contact' holds 0/1/NaN.
+        An observable of the registry. Categorical ones hold category indices
+        as floats (:meth:`Observable.values`) with NaN where undefined.
     V : ndarray, shape (n, m)
         Column 0 observed, the rest model copies.
     """
-    if name in CATEGORICAL:
-        return logloss_loo(_codes(name, V), N_CATEGORIES[name])
-    if name not in OBSERVABLES:
-        raise ValueError(f"unknown observable {name!r}; valid: {', '.join(OBSERVABLES)}")
+    o = _observable(name)
+    if o.categorical:
+        return logloss_loo(_codes(V), o.width)
     return crps_fair_loo(transform(name, V))
 
 
@@ -149,9 +145,10 @@ def residual_matrix(name: str, V: np.ndarray) -> np.ndarray:
         c = number of categories for categorical observables (one-hot minus
         leave-one-out frequency), 1 otherwise. NaN where undefined.
     """
-    if name in CATEGORICAL:
-        k = N_CATEGORIES[name]
-        c = _codes(name, V)
+    o = _observable(name)
+    if o.categorical:
+        k = o.width
+        c = _codes(V)
         fin = c >= 0
         onehot = np.stack([(c == q) for q in range(k)], axis=2).astype(np.float64)
         tot = onehot.sum(axis=1, keepdims=True)

@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
+from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.errors import RUN_ERRORS, FibersweepError, InputError, RunBug
 from fibersweep.fiber.result import CLASSES, FiberStart
 from fibersweep.fiber.settings import FiberSettings
@@ -32,8 +33,8 @@ __all__ = ["OUTCOME_COLUMNS", "Simulator", "BudgetExhausted", "outcome_row"]
 
 log = logging.getLogger(__name__)
 
-OUTCOME_COLUMNS = ("class", "contact", "delta", "theta_c", "y_c", "t_pass", "dwell", "t_contact")
-_CLASS_CODE = {c: i for i, c in enumerate(CLASSES)}
+#: Outcome columns of a batch, one per observable of the registry, in its order.
+OUTCOME_COLUMNS = tuple(OBSERVABLES)
 
 _WORKER: dict[str, Any] = {}
 
@@ -43,25 +44,20 @@ class BudgetExhausted(FibersweepError):
 
 
 def outcome_row(result: Any) -> dict[str, Any]:
-    """Observable columns of a RunResult (class as its code in CLASSES, NaN if failed)."""
-    ok = result.status == "ok" and result.cls in _CLASS_CODE
-    return {
-        "class": float(_CLASS_CODE[result.cls]) if ok else math.nan,
-        "contact": float(bool(result.contact)) if ok else math.nan,
-        "delta": float(result.delta) if ok else math.nan,
-        "theta_c": float(result.theta_c) if ok and result.contact else math.nan,
-        "y_c": float(result.y_c) if ok and result.contact else math.nan,
-        "t_pass": float(result.t_pass) if ok else math.nan,
-        # time from first contact to passing the pillar (contact fibers that pass)
-        "dwell": float(result.t_pass - result.t_contact) if ok and result.contact else math.nan,
-        "t_contact": float(result.t_contact) if ok and result.contact else math.nan,
-        "status": "ok" if ok else "failed",
-        "reason": "" if ok else (result.reason or f"class {result.cls!r}"),
-    }
+    """Observable values of a RunResult (registry order), missing for a failed run.
+
+    Values follow :mod:`fibersweep.discrepancy.observables` (class name, contact
+    0.0/1.0, floats in the observables' units); plus ``status`` and ``reason``.
+    """
+    ok = result.status == "ok" and result.cls in CLASSES
+    row = {name: o.outcome(result if ok else None) for name, o in OBSERVABLES.items()}
+    row["status"] = "ok" if ok else "failed"
+    row["reason"] = "" if ok else (result.reason or f"class {result.cls!r}")
+    return row
 
 
 def _failed(reason: str) -> dict[str, Any]:
-    row = {c: math.nan for c in OUTCOME_COLUMNS}
+    row = {name: o.outcome(None) for name, o in OBSERVABLES.items()}
     row.update(status="failed", reason=reason)
     return row
 

@@ -18,15 +18,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.noise import N_DRAWS, NoiseModel
+from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
-from fibersweep.fiber.result import CLASSES
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 
-__all__ = ["synthesize", "parse_effects"]
+__all__ = ["synthesize", "parse_effects", "measured_table"]
 
 log = logging.getLogger(__name__)
 
@@ -45,6 +45,66 @@ def parse_effects(items: list[str] | None) -> dict[str, float]:
         except ValueError:
             raise InputError(f"--effect {name}: value {val!r} is not a number") from None
     build_effects(out)  # unknown names and bad values fail here, listing the valid ones
+    return out
+
+
+def measured_table(
+    outcomes: pd.DataFrame, starts: np.ndarray, fiber_ids: list[str] | None = None
+) -> pd.DataFrame:
+    """A measured-fiber table (schema columns) from measured-like outcomes.
+
+    Parameters
+    ----------
+    outcomes : DataFrame, n rows
+        Outcome table with measurement noise (:meth:`NoiseModel.observe`), one
+        column per observable of the registry.
+    starts : ndarray, shape (n, 3)
+        Reported starts: theta0 [deg], y0 [/h], length [/l_obs].
+    fiber_ids : list of str, optional
+        Default ``f0000, f0001, ...``.
+
+    Returns
+    -------
+    DataFrame
+        ``fiber_id``, the start columns and every observed column of the schema;
+        an observable derived from others (dwell) is written back into them.
+    """
+    n = len(outcomes)
+    table = pd.DataFrame(
+        {
+            "fiber_id": fiber_ids if fiber_ids is not None else [f"f{i:04d}" for i in range(n)],
+            "theta0": starts[:, 0],
+            "y0": starts[:, 1],
+            "length": starts[:, 2],
+        }
+    )
+    for name, o in OBSERVABLES.items():
+        if not o.derived_from:
+            table[name] = o.to_table(outcomes[name])
+    for name, o in OBSERVABLES.items():
+        if o.underive is not None:
+            o.underive(table, outcomes[name].to_numpy(dtype=np.float64))
+    return table
+
+
+def _missing(table: pd.DataFrame) -> np.ndarray:
+    """Per row, the continuous observables missing where they must exist ('' if none).
+
+    Returns
+    -------
+    ndarray, shape (n,), str
+        Descriptions joined by ', ' (e.g. 'time to pass the pillar').
+    """
+    trapped = (table["class"] == "Trapping").to_numpy()
+    contact = table["contact"].to_numpy(dtype=bool) if "contact" in table else None
+    out = np.full(len(table), "", dtype=object)
+    for name in table.columns.intersection(list(OBSERVABLES)):
+        o = OBSERVABLES[name]
+        need = o.defined_mask(trapped, contact)
+        if o.kind != "continuous" or need is None:
+            continue
+        gone = need & ~np.isfinite(table[name].to_numpy(dtype=np.float64))
+        out[gone] = [f"{w}, {o.description}" if w else o.description for w in out[gone]]
     return out
 
 
@@ -95,41 +155,25 @@ def synthesize(
     true = lo + (hi - lo) * rng.random((n, 3))
     reported = noise.jitter_starts(true, rng)
     seeds = rng.integers(0, 2**31 - 1, size=n)
-    z = rng.standard_normal((n, N_DRAWS))
+    z = noise_draws([seed, 4242], n)
     effects = {**fiber.effects, **effects}  # hidden effects on top of the config's own
     with Simulator(
         field, fiber, workers=workers, progress=progress, executor=executor, scheduler=scheduler
     ) as sim:
         raw = sim.run(true, effects, seeds, desc="synth")
-    obs = noise.observe(raw, z=z)
+    obs = noise.observe(raw, z)
     ok = (obs["status"] == "ok").to_numpy()
-    table = pd.DataFrame(
-        {
-            "fiber_id": [f"f{i:04d}" for i in range(n)],
-            "theta0": reported[:, 0],
-            "y0": reported[:, 1],
-            "length": reported[:, 2],
-            "class": [CLASSES[int(c)] if np.isfinite(c) else "" for c in obs["class"]],
-            "delta": obs["delta"].to_numpy(),
-            "contact": obs["contact"].to_numpy() > 0.5,
-            "theta_c": obs["theta_c"].to_numpy(),
-            "y_c": obs["y_c"].to_numpy(),
-            "t_pass": obs["t_pass"].to_numpy(),
-            # first contact on the same clock: t_pass - dwell (both as measured)
-            "t_contact": np.where(
-                np.isfinite(obs["dwell"]), obs["t_pass"] - obs["dwell"], obs["t_contact"]
-            ),
-        }
-    )
-    # A passing fiber whose rear never crossed the pillar line within the run has no
-    # time to pass: such a run is incomplete, so it is treated like a failure.
-    incomplete = ok & (table["class"] != "Trapping").to_numpy() & ~np.isfinite(table["t_pass"])
+    table = measured_table(obs, reported)
+    # A run that leaves a quantity undefined where it must exist (a passing fiber whose
+    # rear never crossed the pillar line has no time to pass) is incomplete: a failure.
+    missing = _missing(table)
+    incomplete = ok & (missing != "")
     keep = ok & ~incomplete
     failures = [
         {
             "fiber_id": table["fiber_id"][i],
             "true_start": true[i].tolist(),
-            "reason": raw["reason"][i] or "no time to pass",
+            "reason": raw["reason"][i] or f"no {missing[i]}",
         }
         for i in np.flatnonzero(~keep)
     ]
@@ -141,7 +185,7 @@ def synthesize(
     validate_measured(table, source="synth")  # the writer's own output must follow the schema
     truth = {
         "effects": effects,
-        "noise": {k: getattr(noise, k) for k in noise.__dataclass_fields__},
+        "noise": noise.as_dict(),
         "seed": seed,
         "n_requested": n,
         "n_written": int(keep.sum()),

@@ -26,6 +26,7 @@ from fibersweep.discrepancy.fit import Fit, Signature, fit_effect, rank_effects
 from fibersweep.discrepancy.gap import (
     GapResult,
     assess_gap,
+    combined_excess,
     describe,
     feature_vector,
     observable_weights,
@@ -221,14 +222,6 @@ def _features(table: pd.DataFrame) -> np.ndarray:
     return np.column_stack(cols)
 
 
-def _combined_excess(gap: GapResult, weights: dict[str, float]) -> np.ndarray:
-    tot = None
-    for name, e in gap.per_fiber.items():
-        v = np.where(np.isfinite(e), e, 0.0) * weights.get(name, 0.0)
-        tot = v if tot is None else tot + v
-    return tot if tot is not None else np.zeros(0)
-
-
 def _subset(dfs: list[pd.DataFrame], rows: np.ndarray) -> list[pd.DataFrame]:
     return [d.iloc[rows].reset_index(drop=True) for d in dfs]
 
@@ -289,7 +282,7 @@ def run_discrepancy(
         w_gap = {o: (w if o in gap.flagged else 0.0) for o, w in weights.items()}
         # (3) where it lives
         X = _features(observed)
-        region = find_region(X, _combined_excess(gap, weights))
+        region = find_region(X, combined_excess(gap, weights))
         by_obs = {o: find_region(X, gap.per_fiber[o]) for o in gap.flagged}
         region_text = by_obs[gap.flagged[0]].describe() if gap.any else region.describe()
 

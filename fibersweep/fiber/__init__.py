@@ -6,7 +6,10 @@ Public entry points: :func:`fibersweep.fiber.run.simulate`,
 Modules: ``mobility`` (RPY, rigid body mobility, cached per length), ``contact``
 and ``bezier`` (rough / smooth pillar forces), ``rigid`` (rigid multiblob RK2
 kernel), ``elastic`` and ``beadspring`` (the source's model, BDF2 kernel),
-``setup`` (input checks, kernel parameters), ``effects`` (registry of optional
-effects), ``record``/``kparams`` (kernel record layout and parameter vector),
-``settings``/``result`` (contracts).
+``models`` (registry of the models), ``setup`` (input checks), ``bundles``
+(the typed kernel inputs, built once per run by ``build_kernel``), ``hooks``
+(the kernel stages effects implement, dispatched at compile time), ``effects``
+(registry of optional effects; each dynamic one owns its kernel stages),
+``wallhydro`` (pillar wall-drag law), ``record`` (record layout, stop codes,
+the stop rule both integrators share), ``settings``/``result`` (contracts).
 """

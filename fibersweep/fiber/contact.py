@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -29,6 +30,7 @@ __all__ = [
     "ROUGH",
     "SMOOTH",
     "Pillar",
+    "PillarArrays",
     "contact_forces",
     "make_pillar",
     "outline_distance",
@@ -38,6 +40,35 @@ __all__ = [
 
 ROUGH = 0
 SMOOTH = 1
+
+
+class PillarArrays(NamedTuple):
+    """The pillar as the Numba kernels read it (:meth:`Pillar.arrays`).
+
+    Attributes
+    ----------
+    kind : int
+        ROUGH (0) or SMOOTH (1).
+    verts : ndarray, shape (3, 2)
+        Triangle vertices (CCW) [µm].
+    pbx, pby : ndarray, shape (m,)
+        Rough pillar bead centres [µm] (empty for smooth).
+    curves : ndarray, shape (6, 3, 2)
+        Smooth outline's Bézier control points [µm].
+    r_cut, r_eq : float
+        Cutoff R_ref and the distance where |F| = F_ref (a + a_obs, or a) [µm].
+    f_ref : float
+        Force scale [pN].
+    """
+
+    kind: int
+    verts: np.ndarray
+    pbx: np.ndarray
+    pby: np.ndarray
+    curves: np.ndarray
+    r_cut: float
+    r_eq: float
+    f_ref: float
 
 
 @nb.njit(cache=True)
@@ -65,40 +96,15 @@ def outline_distance(px: float, py: float, verts: np.ndarray) -> float:
 
 
 @nb.njit(cache=True)
-def pillar_forces(
-    kind: int,
-    bx: np.ndarray,
-    by: np.ndarray,
-    verts: np.ndarray,
-    pbx: np.ndarray,
-    pby: np.ndarray,
-    curves: np.ndarray,
-    r_cut: float,
-    r_eq: float,
-    f_ref: float,
-    fx: np.ndarray,
-    fy: np.ndarray,
-    stiff: np.ndarray,
-    dist: np.ndarray,
-):
+def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
     """Contact forces on fiber beads (overwrites fx, fy, stiff, dist).
 
     Parameters
     ----------
-    kind : int
-        ROUGH (0) or SMOOTH (1).
+    pil : PillarArrays
+        The pillar (kind, outline, beads or curves, cutoff, force scale).
     bx, by : ndarray, shape (n,)
         Fiber bead centres [µm].
-    verts : ndarray, shape (3, 2)
-        Triangle vertices (CCW) [µm].
-    pbx, pby : ndarray, shape (m,)
-        Pillar bead centres (rough) [µm].
-    curves : ndarray, shape (6, 3, 2)
-        Bézier control points (smooth) [µm].
-    r_cut, r_eq : float
-        Cutoff R_ref and the distance where |F| = F_ref (a + a_obs, or a) [µm].
-    f_ref : float
-        Force scale [pN].
     fx, fy : ndarray, shape (n,)
         Force on each bead [pN].
     stiff : ndarray, shape (n,)
@@ -114,6 +120,14 @@ def pillar_forces(
         Whether any force is non-zero, and the pillar-side point of the
         strongest pair (the contact point) [µm].
     """
+    kind = pil.kind
+    verts = pil.verts
+    pbx = pil.pbx
+    pby = pil.pby
+    curves = pil.curves
+    r_cut = pil.r_cut
+    r_eq = pil.r_eq
+    f_ref = pil.f_ref
     n = bx.shape[0]
     r2c = r_cut * r_cut
     den = r2c - r_eq * r_eq
@@ -208,6 +222,19 @@ class Pillar:
     r_eq: float
     f_ref: float
 
+    def arrays(self) -> PillarArrays:
+        """The kernel bundle of this pillar."""
+        return PillarArrays(
+            int(self.kind),
+            np.ascontiguousarray(self.vertices, dtype=np.float64),
+            np.ascontiguousarray(self.beads[:, 0], dtype=np.float64),
+            np.ascontiguousarray(self.beads[:, 1], dtype=np.float64),
+            np.ascontiguousarray(self.curves, dtype=np.float64),
+            float(self.r_cut),
+            float(self.r_eq),
+            float(self.f_ref),
+        )
+
     @property
     def layer(self) -> float:
         """Thickness of the contact layer R_ref − r_eq [µm]."""
@@ -257,16 +284,9 @@ def contact_forces(pillar: Pillar, positions: np.ndarray) -> tuple[np.ndarray, n
     n = p.shape[0]
     fx, fy, st, d = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     pillar_forces(
-        pillar.kind,
+        pillar.arrays(),
         np.ascontiguousarray(p[:, 0]),
         np.ascontiguousarray(p[:, 1]),
-        pillar.vertices,
-        np.ascontiguousarray(pillar.beads[:, 0]),
-        np.ascontiguousarray(pillar.beads[:, 1]),
-        pillar.curves,
-        pillar.r_cut,
-        pillar.r_eq,
-        pillar.f_ref,
         fx,
         fy,
         st,

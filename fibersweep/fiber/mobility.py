@@ -19,8 +19,10 @@ import numpy as np
 __all__ = [
     "BodyMobility",
     "body_mobility",
+    "body_velocity",
     "fiber_offsets",
     "rigid_map",
+    "rpy_fill",
     "rpy_matrix",
     "rpy_pair",
     "rpy_scalars",
@@ -44,7 +46,8 @@ def rpy_scalars(r: float, a: float, mu: float) -> tuple[float, float]:
 
 
 @nb.njit(cache=True)
-def _rpy_fill(x: np.ndarray, y: np.ndarray, a: float, mu: float, out: np.ndarray) -> None:
+def rpy_fill(x: np.ndarray, y: np.ndarray, a: float, mu: float, out: np.ndarray) -> None:
+    """Write the grand RPY mobility of beads at (x, y) (n,) [µm] into ``out`` (2n, 2n)."""
     n = x.shape[0]
     for i in range(n):
         for j in range(i, n):
@@ -91,7 +94,7 @@ def rpy_matrix(positions: np.ndarray, a: float, mu: float) -> np.ndarray:
     if p.ndim != 2 or p.shape[1] != 2:
         raise ValueError(f"positions must have shape (n, 2), got {p.shape}")
     out = np.empty((2 * p.shape[0], 2 * p.shape[0]))
-    _rpy_fill(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), a, mu, out)
+    rpy_fill(np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), a, mu, out)
     return out
 
 
@@ -172,3 +175,50 @@ def body_mobility(n: int, a: float, mu: float) -> BodyMobility:
     chol = np.linalg.cholesky(big_n)
     chol.setflags(write=False)
     return BodyMobility(n, float(a), float(mu), s, big_n, p, chol, tip)
+
+
+@nb.njit(cache=True)
+def body_velocity(c, sn, s, pm, nm, ub, fx, fy, with_force):
+    """Body-frame velocity P u_b + N (F_b, τ) of a rigid fiber of beads at offsets ``s``.
+
+    Parameters
+    ----------
+    c, sn : float
+        cos and sin of the fiber angle.
+    s : ndarray, shape (n,)
+        Bead offsets along the axis [µm].
+    pm, nm : ndarray, shapes (3, 2n), (3, 3)
+        Body-frame P and N.
+    ub : ndarray, shape (2n,)
+        Background velocities of the beads, lab frame (x0, y0, x1, ...) [µm/s].
+    fx, fy : ndarray, shape (n,)
+        Forces on the beads, lab frame [pN]; used only when ``with_force``.
+    with_force : bool
+
+    Returns
+    -------
+    (vbx, vby, om)
+        Body velocity (body frame) [µm/s, rad/s].
+    """
+    n = s.shape[0]
+    vbx = 0.0
+    vby = 0.0
+    om = 0.0
+    for i in range(n):
+        ubx = c * ub[2 * i] + sn * ub[2 * i + 1]
+        uby = -sn * ub[2 * i] + c * ub[2 * i + 1]
+        vbx += pm[0, 2 * i] * ubx + pm[0, 2 * i + 1] * uby
+        vby += pm[1, 2 * i] * ubx + pm[1, 2 * i + 1] * uby
+        om += pm[2, 2 * i] * ubx + pm[2, 2 * i + 1] * uby
+    if with_force:
+        fbx = 0.0
+        fby = 0.0
+        tq = 0.0
+        for i in range(n):
+            fbx += c * fx[i] + sn * fy[i]
+            fby += -sn * fx[i] + c * fy[i]
+            tq += s[i] * (c * fy[i] - sn * fx[i])
+        vbx += nm[0, 0] * fbx + nm[0, 1] * fby + nm[0, 2] * tq
+        vby += nm[1, 0] * fbx + nm[1, 1] * fby + nm[1, 2] * tq
+        om += nm[2, 0] * fbx + nm[2, 1] * fby + nm[2, 2] * tq
+    return vbx, vby, om

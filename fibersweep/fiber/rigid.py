@@ -22,14 +22,17 @@ import math
 
 import numba as nb
 import numpy as np
+from numba import literal_unroll
 
-from fibersweep.fiber import kparams as K
+from fibersweep.fiber import hooks as H
 from fibersweep.fiber import record as R
 from fibersweep.fiber.contact import pillar_forces
-from fibersweep.fiber.wallhydro import rigid_wall_velocity, wall_drag
+from fibersweep.fiber.mobility import body_velocity
 from fibersweep.flow.field import interpolate_ib
 
-__all__ = ["body_velocity", "coulomb_friction", "integrate_rigid", "rigid_velocity", "seed_numba"]
+__all__ = ["CHUNK", "integrate_rigid", "rigid_velocity", "run_rigid", "seed_numba"]
+
+CHUNK = 20_000  # record rows per kernel call
 
 
 @nb.njit(cache=True)
@@ -39,213 +42,65 @@ def seed_numba(seed: int) -> None:
 
 
 @nb.njit(cache=True)
-def body_velocity(c, sn, s, pm, nm, ub, fx, fy, with_force):
-    """Body-frame velocity P u_b + N (F_b, τ) of a rigid fiber of beads at offsets ``s``.
-
-    Parameters
-    ----------
-    c, sn : float
-        cos and sin of the fiber angle.
-    s : ndarray, shape (n,)
-        Bead offsets along the axis [µm].
-    pm, nm : ndarray, shapes (3, 2n), (3, 3)
-        Body-frame P and N.
-    ub : ndarray, shape (2n,)
-        Background velocities of the beads, lab frame (x0, y0, x1, ...) [µm/s].
-    fx, fy : ndarray, shape (n,)
-        Forces on the beads, lab frame [pN]; used only when ``with_force``.
-    with_force : bool
-
-    Returns
-    -------
-    (vbx, vby, om)
-        Body velocity (body frame) [µm/s, rad/s].
-    """
-    n = s.shape[0]
-    vbx = 0.0
-    vby = 0.0
-    om = 0.0
-    for i in range(n):
-        ubx = c * ub[2 * i] + sn * ub[2 * i + 1]
-        uby = -sn * ub[2 * i] + c * ub[2 * i + 1]
-        vbx += pm[0, 2 * i] * ubx + pm[0, 2 * i + 1] * uby
-        vby += pm[1, 2 * i] * ubx + pm[1, 2 * i + 1] * uby
-        om += pm[2, 2 * i] * ubx + pm[2, 2 * i + 1] * uby
-    if with_force:
-        fbx = 0.0
-        fby = 0.0
-        tq = 0.0
-        for i in range(n):
-            fbx += c * fx[i] + sn * fy[i]
-            fby += -sn * fx[i] + c * fy[i]
-            tq += s[i] * (c * fy[i] - sn * fx[i])
-        vbx += nm[0, 0] * fbx + nm[0, 1] * fby + nm[0, 2] * tq
-        vby += nm[1, 0] * fbx + nm[1, 1] * fby + nm[1, 2] * tq
-        om += nm[2, 0] * fbx + nm[2, 1] * fby + nm[2, 2] * tq
-    return vbx, vby, om
-
-
-@nb.njit(cache=True)
-def coulomb_friction(c, sn, s, nm, fx, fy, mu_f, vbx, vby, om, ft):
-    """Coulomb friction on the contacting beads of a rigid fiber (projected Gauss-Seidel).
-
-    Each bead's tangential force (along t̂ = ẑ × n̂, n̂ the direction of its
-    contact force) is set to stop its tangential motion, clipped to ±μ_f |F_n|
-    (stick or slide); the normal forces are fixed. All in the body frame.
-
-    Parameters
-    ----------
-    c, sn : float
-        cos and sin of the fiber angle.
-    s : ndarray, shape (n,)
-        Bead offsets [µm].
-    nm : ndarray, shape (3, 3)
-        Body mobility N.
-    fx, fy : ndarray, shape (n,)
-        Contact forces (lab frame) [pN].
-    mu_f : float
-        Friction coefficient.
-    vbx, vby, om : float
-        Frictionless body velocity (body frame) [µm/s, rad/s].
-    ft : ndarray, shape (n,)
-        Written with each bead's tangential force along its t̂ [pN].
-
-    Returns
-    -------
-    (vbx, vby, om)
-        Body velocity with friction (body frame).
-    """
-    n = s.shape[0]
-    for i in range(n):
-        ft[i] = 0.0
-    for _ in range(30):
-        change = 0.0
-        for i in range(n):
-            fnx = c * fx[i] + sn * fy[i]
-            fny = -sn * fx[i] + c * fy[i]
-            fn = math.sqrt(fnx * fnx + fny * fny)
-            if fn == 0.0:
-                continue
-            tx = -fny / fn
-            ty = fnx / fn
-            vt = vbx * tx + (vby + om * s[i]) * ty
-            # m_t = t̂ᵀ K_i N K_iᵀ t̂ with K_iᵀ t̂ = (tx, ty, s_i ty)
-            kz = s[i] * ty
-            g0 = nm[0, 0] * tx + nm[0, 1] * ty + nm[0, 2] * kz
-            g1 = nm[1, 0] * tx + nm[1, 1] * ty + nm[1, 2] * kz
-            g2 = nm[2, 0] * tx + nm[2, 1] * ty + nm[2, 2] * kz
-            mt = tx * g0 + ty * g1 + kz * g2
-            lim = mu_f * fn
-            new = min(lim, max(-lim, ft[i] - vt / mt))
-            d = new - ft[i]
-            if d != 0.0:
-                ft[i] = new
-                vbx += g0 * d
-                vby += g1 * d
-                om += g2 * d
-                change = max(change, abs(d) / lim)
-        if change < 1e-6:
-            break
-    return vbx, vby, om
-
-
-@nb.njit(cache=True)
-def rigid_velocity(
-    xc,
-    yc,
-    th,
-    s,
-    pm,
-    nm,
-    ux,
-    uy,
-    dx,
-    verts,
-    pbx,
-    pby,
-    curves,
-    prm,
-    bx,
-    by,
-    u,
-    fx,
-    fy,
-    st,
-    dist,
-    ft_,
-):
+def rigid_velocity(flow, pillar, body, w, effects, xc, yc, th):
     """Lab-frame body velocity of a rigid fiber at (xc, yc, th).
 
     Parameters
     ----------
+    flow, pillar, body : bundles.FlowArrays, contact.PillarArrays, bundles.BodyArrays
+    w : bundles.Work
+        Receives the bead positions, background velocities, contact forces,
+        stiffnesses and distances.
+    effects : tuple
+        Kernel records of the active effects (``Kernel.effects``).
     xc, yc, th : float
         Centre [µm] and angle [rad] of the axis (towards bead n-1).
-    s : ndarray, shape (n,)
-        Bead offsets along the axis [µm].
-    pm, nm : ndarray, shapes (3, 2n), (3, 3)
-        Body-frame P and N.
-    ux, uy, dx : field arrays (nx, ny) [µm/s] and spacing [µm].
-    verts, pbx, pby, curves : pillar arrays (see contact.pillar_forces).
-    prm : ndarray
-        Kernel parameters (kparams).
-    bx, by, u, fx, fy, st, dist, ft_ : work arrays, shapes (n,), (n,), (n, 2), (n,) x5.
 
     Returns
     -------
     (vx, vy, om, any_contact, cx, cy, min_dist, stiff_sum)
+        Velocity [µm/s, rad/s], contact flag and point [µm], smallest distance to
+        the pillar [µm], summed contact stiffness [pN/µm].
     """
+    # Bind the arrays once (each read of a bundle's field costs a reference count).
+    s = body.s
+    x = w.x
+    y = w.y
+    u = w.u
+    fx = w.fx
+    fy = w.fy
+    st = w.st
+    dist = w.dist
     n = s.shape[0]
     c = math.cos(th)
     sn = math.sin(th)
     for i in range(n):
-        bx[i] = xc + s[i] * c
-        by[i] = yc + s[i] * sn
-    interpolate_ib(ux, uy, dx, bx, by, u)
-    any_c, cx, cy = pillar_forces(
-        int(prm[K.P_KIND]),
-        bx,
-        by,
-        verts,
-        pbx,
-        pby,
-        curves,
-        prm[K.P_R_CUT],
-        prm[K.P_R_EQ],
-        prm[K.P_F_REF],
-        fx,
-        fy,
-        st,
-        dist,
-    )
-    vscale = prm[K.P_VSCALE]
+        x[i] = xc + s[i] * c
+        y[i] = yc + s[i] * sn
+    interpolate_ib(flow.ux, flow.uy, flow.dx, x, y, u)
+    any_c, cx, cy = pillar_forces(pillar, x, y, fx, fy, st, dist)
+    for e in literal_unroll(effects):
+        H.background(e, u)
     min_d = 1e300
     stiff = 0.0
     for i in range(n):
-        u[i, 0] *= vscale
-        u[i, 1] *= vscale
         if dist[i] < min_d:
             min_d = dist[i]
         stiff += st[i]
     ub = u.reshape(2 * n)
-    vbx, vby, om = body_velocity(c, sn, s, pm, nm, ub, fx, fy, any_c)
-    nm_eff = nm
-    hyd_s = prm[K.P_HYD_S]
-    if hyd_s > 0.0:
-        zeta = np.empty(n)
-        if wall_drag(dist, prm[K.P_A], hyd_s, prm[K.P_HYD_L], prm[K.P_MU], zeta) > 0:
-            nm_eff = np.empty((3, 3))
-            vbx, vby, om = rigid_wall_velocity(s, nm, zeta, vbx, vby, om, nm_eff)
-    if any_c:
-        mu_f = prm[K.P_MU_F]
-        if mu_f > 0.0:
-            vbx, vby, om = coulomb_friction(c, sn, s, nm_eff, fx, fy, mu_f, vbx, vby, om, ft_)
+    vbx, vby, om = body_velocity(c, sn, s, body.pm, body.nm, ub, fx, fy, any_c)
+    nm_eff = body.nm
+    for e in literal_unroll(effects):
+        vbx, vby, om, nm_eff = H.rigid_mobility(e, body, w, vbx, vby, om, nm_eff)
+    for e in literal_unroll(effects):
+        vbx, vby, om = H.rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff)
     vx = c * vbx - sn * vby
     vy = sn * vbx + c * vby
     return vx, vy, om, any_c, cx, cy, min_d, stiff
 
 
 @nb.njit(cache=True)
-def integrate_rigid(state, s, pm, nm, chol, tip_m, ux, uy, dx, verts, pbx, pby, curves, prm, rec):
+def integrate_rigid(state, k, rec):
     """Advance a rigid fiber until a stop condition or until ``rec`` is full.
 
     Parameters
@@ -253,10 +108,8 @@ def integrate_rigid(state, s, pm, nm, chol, tip_m, ux, uy, dx, verts, pbx, pby, 
     state : ndarray, shape (5,)
         [t, xc, yc, th, t_stopped_since] (updated in place; the last is NaN when
         the fiber is not in a stopped contact).
-    s, pm, nm, chol : body-frame offsets (n,), P (3, 2n), N (3, 3), chol(N) (3, 3).
-    tip_m : float
-        Largest bead mobility of the rigid body [µm/(pN s)].
-    ux, uy, dx, verts, pbx, pby, curves, prm : see :func:`rigid_velocity`.
+    k : bundles.Kernel
+        The run's inputs (compiled once per set of active effects).
     rec : ndarray, shape (cap, record.NCOLS)
         One row per step, written from row 0.
 
@@ -265,155 +118,72 @@ def integrate_rigid(state, s, pm, nm, chol, tip_m, ux, uy, dx, verts, pbx, pby, 
     (rows, code) : (int, int)
         Rows written and the stop code (record.CHUNK_FULL when ``rec`` filled up).
     """
+    flow, pillar, body, p, w, _, effects = k
+    s = body.s
     n = s.shape[0]
-    bx = np.empty(n)
-    by = np.empty(n)
-    u = np.empty((n, 2))
-    fx = np.empty(n)
-    fy = np.empty(n)
-    st = np.empty(n)
-    dist = np.empty(n)
-    ft_ = np.zeros(n)
     t = state[0]
     xc = state[1]
     yc = state[2]
     th = state[3]
     stopped_since = state[4]
+    r_cut = pillar.r_cut
+    tip_m = body.tip_m
     half = 0.5 * (s[n - 1] - s[0])
     sh = s[n - 1]
     st_ = s[0]
-    kT = prm[K.P_KT]
-    mode = int(prm[K.P_MODE])
     rows = 0
-    code = R.CHUNK_FULL
+    code = np.int64(R.CHUNK_FULL)
     cap = rec.shape[0]
     while rows < cap:
         vx, vy, om, any_c, cx, cy, min_d, stiff = rigid_velocity(
-            xc,
-            yc,
-            th,
-            s,
-            pm,
-            nm,
-            ux,
-            uy,
-            dx,
-            verts,
-            pbx,
-            pby,
-            curves,
-            prm,
-            bx,
-            by,
-            u,
-            fx,
-            fy,
-            st,
-            dist,
-            ft_,
+            flow, pillar, body, w, effects, xc, yc, th
         )
         c = math.cos(th)
         sn = math.sin(th)
         hvx = vx - om * sh * sn
         hvy = vy + om * sh * c
         com_speed = math.sqrt(vx * vx + vy * vy)
-        r = rec[rows]
-        r[R.T] = t
-        r[R.XC] = xc
-        r[R.YC] = yc
-        r[R.TH] = th
-        r[R.VX] = vx
-        r[R.VY] = vy
-        r[R.OM] = om
-        r[R.CONTACT] = 1.0 if any_c else 0.0
-        r[R.CX] = cx
-        r[R.CY] = cy
-        r[R.MIN_DIST] = min_d
-        r[R.HEAD_SPEED] = math.sqrt(hvx * hvx + hvy * hvy)
-        r[R.COM_SPEED] = com_speed
-        r[R.HX] = xc + sh * c
-        r[R.HY] = yc + sh * sn
-        r[R.TX] = xc + st_ * c
-        r[R.TY] = yc + st_ * sn
+        hx = xc + sh * c
+        tx = xc + st_ * c
+        R.write_row(
+            rec[rows], t, xc, yc, th, vx, vy, om, 1.0 if any_c else 0.0, cx, cy, min_d,
+            math.sqrt(hvx * hvx + hvy * hvy), com_speed, hx, yc + sh * sn, tx, yc + st_ * sn,
+        )  # fmt: skip
         rows += 1
         # Stop tests on the state just recorded.
-        if not (math.isfinite(vx) and math.isfinite(vy) and math.isfinite(om)):
-            code = R.NAN
-            break
-        if min_d < 0.5 * prm[K.P_A]:
-            code = R.PENETRATION
-            break
-        ylo = yc - half * abs(sn)
-        yhi = yc + half * abs(sn)
-        if ylo < prm[K.P_Y_LO] or yhi > prm[K.P_Y_HI]:
-            code = R.WALL
-            break
-        if any_c and com_speed < prm[K.P_TRAP_SPEED]:
-            if not math.isfinite(stopped_since):
-                stopped_since = t
-            if t - stopped_since >= prm[K.P_TRAP_TIME]:
-                code = R.TRAPPED
-                break
-        else:
-            stopped_since = math.nan
-        if mode == 0:
-            if min(r[R.HX], r[R.TX]) > prm[K.P_X_STOP]:
-                code = R.PASSED
-                break
-        elif t >= prm[K.P_T_STOP]:
-            code = R.TIME_REACHED
-            break
-        if t >= prm[K.P_T_MAX]:
-            code = R.TIME_LIMIT
+        code, stopped_since = R.stop_test(
+            p,
+            t,
+            math.isfinite(vx) and math.isfinite(vy) and math.isfinite(om),
+            min_d,
+            yc - half * abs(sn),
+            yc + half * abs(sn),
+            any_c and com_speed < p.trap_speed,
+            stopped_since,
+            min(hx, tx),
+            0.0,
+        )
+        if code != R.CHUNK_FULL:
             break
         # Step size.
         speed = com_speed + abs(om) * half + 1e-12
-        free = min_d - prm[K.P_R_CUT]
-        disp = min(prm[K.P_MAX_DISP], max(prm[K.P_CONTACT_DISP], 0.5 * free))
-        dt = min(disp / speed, prm[K.P_DT_MAX])
+        free = min_d - r_cut
+        disp = min(p.max_disp, max(p.contact_disp, 0.5 * free))
+        dt = min(disp / speed, p.dt_max)
         if stiff > 0.0:
             dt = min(dt, 0.5 / (tip_m * stiff))
-        if mode == 1 and t + dt > prm[K.P_T_STOP]:
-            dt = max(prm[K.P_T_STOP] - t, 1e-12)
+        if p.mode == 1 and t + dt > p.t_stop:
+            dt = max(p.t_stop - t, 1e-12)
         # Midpoint step.
-        vx2, vy2, om2, _, _, _, _, _ = rigid_velocity(
-            xc + 0.5 * dt * vx,
-            yc + 0.5 * dt * vy,
-            th + 0.5 * dt * om,
-            s,
-            pm,
-            nm,
-            ux,
-            uy,
-            dx,
-            verts,
-            pbx,
-            pby,
-            curves,
-            prm,
-            bx,
-            by,
-            u,
-            fx,
-            fy,
-            st,
-            dist,
-            ft_,
-        )
+        xm = xc + 0.5 * dt * vx
+        ym = yc + 0.5 * dt * vy
+        thm = th + 0.5 * dt * om
+        vx2, vy2, om2, _, _, _, _, _ = rigid_velocity(flow, pillar, body, w, effects, xm, ym, thm)
         xc += dt * vx2
         yc += dt * vy2
         th += dt * om2
-        if kT > 0.0:
-            amp = math.sqrt(2.0 * kT * dt)
-            g0 = np.random.standard_normal()  # noqa: NPY002 - Numba RNG
-            g1 = np.random.standard_normal()  # noqa: NPY002 - Numba RNG
-            g2 = np.random.standard_normal()  # noqa: NPY002 - Numba RNG
-            q0 = amp * (chol[0, 0] * g0)
-            q1 = amp * (chol[1, 0] * g0 + chol[1, 1] * g1)
-            q2 = amp * (chol[2, 0] * g0 + chol[2, 1] * g1 + chol[2, 2] * g2)
-            xc += c * q0 - sn * q1
-            yc += sn * q0 + c * q1
-            th += q2
+        for e in literal_unroll(effects):
+            xc, yc, th = H.rigid_noise(e, body, dt, c, sn, xc, yc, th)
         t += dt
     state[0] = t
     state[1] = xc
@@ -421,3 +191,23 @@ def integrate_rigid(state, s, pm, nm, chol, tip_m, ux, uy, dx, verts, pbx, pby, 
     state[3] = th
     state[4] = stopped_since
     return rows, code
+
+
+def run_rigid(
+    k, x0: float, y0: float, th0: float, beads0: np.ndarray | None = None
+) -> tuple[np.ndarray, None, int]:
+    """Integrate a rigid run from centre (x0, y0) [µm] and angle th0 [rad] (``beads0`` unused).
+
+    Returns
+    -------
+    (rec, None, code)
+        Record rows (record.COLS) and the stop code.
+    """
+    state = np.array([0.0, x0, y0, th0, math.nan])
+    chunks = []
+    while True:
+        rec = np.empty((CHUNK, R.NCOLS))
+        rows, code = integrate_rigid(state, k, rec)
+        chunks.append(rec[:rows])
+        if code != R.CHUNK_FULL:
+            return np.concatenate(chunks), None, code

@@ -25,78 +25,46 @@ from fibersweep.analysis.observables import (
 )
 from fibersweep.errors import InputError
 from fibersweep.fiber import record as R
-from fibersweep.fiber.mobility import body_mobility, fiber_offsets
+from fibersweep.fiber.bundles import Kernel, build_kernel
+from fibersweep.fiber.mobility import fiber_offsets
+from fibersweep.fiber.models import MODELS
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
-from fibersweep.fiber.rigid import integrate_rigid, seed_numba
+from fibersweep.fiber.rigid import seed_numba
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.fiber.setup import Setup, kernel_arrays, kernel_params, prepare
+from fibersweep.fiber.setup import Setup, prepare
 from fibersweep.flow.field import FlowField
 
 __all__ = ["simulate", "simulate_for", "simulate_reversible"]
 
 log = logging.getLogger(__name__)
 
-CHUNK = 20_000  # record rows per kernel call
-
-
-def _run_rigid(
-    setup: Setup, prm: np.ndarray, x0: float, y0: float, th0: float
-) -> tuple[np.ndarray, None, int]:
-    st = setup.settings
-    bm = body_mobility(setup.n, float(st.bead_radius), float(setup.field.fluid.viscosity))
-    arrays = kernel_arrays(setup)
-    state = np.array([0.0, x0, y0, th0, math.nan])
-    chunks = []
-    while True:
-        rec = np.empty((CHUNK, R.NCOLS))
-        rows, code = integrate_rigid(
-            state, bm.offsets, bm.P, bm.N, bm.chol, bm.tip_mobility, *arrays, prm, rec
-        )
-        chunks.append(rec[:rows])
-        if code != R.CHUNK_FULL:
-            return np.concatenate(chunks), None, code
-
 
 def _integrate(
     setup: Setup,
-    prm: np.ndarray,
+    k: Kernel,
     x0: float,
     y0: float,
     th0: float,
     beads0: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray | None, int]:
     """Run the selected model; returns (record rows, bead positions or None, stop code)."""
-    if setup.settings.model == "rigid":
-        return _run_rigid(setup, prm, x0, y0, th0)
-    from fibersweep.fiber.beadspring import run_bead_spring
-
-    return run_bead_spring(setup, prm, x0, y0, th0, beads0)
+    return MODELS[setup.settings.model].integrate(k, x0, y0, th0, beads0)
 
 
 def _seed(rng: np.random.Generator, setup: Setup) -> None:
-    if setup.params.kT > 0.0:
+    if setup.effects.random:
         seed_numba(int(rng.integers(0, 2**31 - 1)))
 
 
-def _steps(settings: FiberSettings, rec: np.ndarray) -> int:
-    """Time steps taken: one record row per step (rigid) or t_end / Δt (bead-spring)."""
-    if settings.model == "rigid":
-        return int(len(rec) - 1)
-    from fibersweep.fiber.beadspring import DEFAULT_DT
-
-    dt = settings.step.dt if settings.step.dt is not None else DEFAULT_DT
-    return int(round(float(rec[-1, R.T]) / dt))
-
-
 def _result(
-    setup: Setup, rec: np.ndarray, beads: np.ndarray | None, code: int, wall: float
+    setup: Setup, k: Kernel, rec: np.ndarray, beads: np.ndarray | None, code: int, wall: float
 ) -> RunResult:
     st = setup.settings
     geo = setup.field.geometry
     traj = trajectory_from_record(rec, beads)
     common = dict(
         start=setup.start,
-        n_steps=_steps(st, rec),
+        n_steps=MODELS[st.model].steps(k, rec),
         wall_time=wall,
         model=st.model,
         n_beads=setup.n,
@@ -173,15 +141,15 @@ def simulate(
     rng = np.random.default_rng(rng_seed)
     setup = prepare(field, settings, start, rng)
     _seed(rng, setup)
-    prm = kernel_params(setup)
+    k = build_kernel(setup)
     try:
-        rec, beads, code = _integrate(setup, prm, setup.x0, setup.y0_abs, setup.th0)
+        rec, beads, code = _integrate(setup, k, setup.x0, setup.y0_abs, setup.th0)
     except (FloatingPointError, np.linalg.LinAlgError, ZeroDivisionError) as exc:
         log.warning("run %s failed: %s", start, exc)
         return RunResult(
             start=start, status="failed", reason=f"numerical error: {exc}", model=settings.model
         )
-    result = _result(setup, rec, beads, code, time.perf_counter() - t_wall)
+    result = _result(setup, k, rec, beads, code, time.perf_counter() - t_wall)
     return setup.effects.result(result, start)
 
 
@@ -206,10 +174,10 @@ def simulate_reversible(
     setup = prepare(field.reversed(), settings, start, rng)
     _seed(rng, setup)
     t_total = fwd.t_end
-    prm = kernel_params(setup, mode=1, t_stop=t_total)
+    k = build_kernel(setup, mode=1, t_stop=t_total)
     th_f = math.radians(fwd.theta_f)
     beads_f = fwd_beads[-1] if fwd_beads is not None else None
-    rec, beads, code = _integrate(setup, prm, fwd.x_f, fwd.y_f, th_f, beads_f)
+    rec, beads, code = _integrate(setup, k, fwd.x_f, fwd.y_f, th_f, beads_f)
     if code < 0:
         return fwd, math.nan
     s = fiber_offsets(setup.n, settings.bead_radius)
@@ -247,6 +215,6 @@ def simulate_for(
     rng = np.random.default_rng(rng_seed)
     setup = prepare(field, settings, start, rng)
     _seed(rng, setup)
-    prm = kernel_params(setup, mode=1, t_stop=duration)
-    rec, beads, code = _integrate(setup, prm, setup.x0, setup.y0_abs, setup.th0)
+    k = build_kernel(setup, mode=1, t_stop=duration)
+    rec, beads, code = _integrate(setup, k, setup.x0, setup.y0_abs, setup.th0)
     return trajectory_from_record(rec, beads), R.STOP_REASONS.get(code, "")

@@ -1,4 +1,4 @@
-"""Validation of one run's input and the kernel parameter vector."""
+"""Validation of one run's input (the kernel bundles are built from it in :mod:`.bundles`)."""
 
 from __future__ import annotations
 
@@ -9,15 +9,14 @@ import numpy as np
 
 from fibersweep.errors import InputError
 from fibersweep.fiber.contact import Pillar, make_pillar, outline_distance
-from fibersweep.fiber.effects import DynamicsContext, DynamicsParams, EffectSet, build_effects
-from fibersweep.fiber.kparams import pack
+from fibersweep.fiber.effects import DynamicsContext, EffectSet, build_effects
 from fibersweep.fiber.mobility import fiber_offsets
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 from fibersweep.units import Geometry
 
-__all__ = ["MIN_BEADS", "Setup", "kernel_arrays", "kernel_params", "prepare"]
+__all__ = ["MIN_BEADS", "Setup", "StartPlacement", "check_start", "prepare"]
 
 MIN_BEADS = 2
 
@@ -38,7 +37,9 @@ class Setup:
         Start centre [µm] and directed angle of the axis towards bead n-1 [rad]
         (bead n-1 is the head: the one that leads).
     pillar : Pillar
-    params : DynamicsParams
+    kernel_effects : tuple
+        Kernel records of the active effects that act in the integrators
+        (:meth:`EffectSet.kernel`, sorted by effect name).
     u_center : float
         Signed centreline speed of the field [µm/s].
     effects : EffectSet
@@ -53,7 +54,7 @@ class Setup:
     y0_abs: float
     th0: float
     pillar: Pillar
-    params: DynamicsParams
+    kernel_effects: tuple
     u_center: float
     effects: EffectSet
 
@@ -159,8 +160,8 @@ def prepare(
 ) -> Setup:
     """Apply effects and check the start; InputError naming the parameter when it is bad."""
     effects = build_effects(settings.effects)
+    effects.check_model(settings.model)
     field = effects.field(field)
-    settings = effects.settings(settings)
     start = effects.start(start, rng)
     geo = field.geometry
     a = settings.bead_radius
@@ -171,8 +172,14 @@ def prepare(
     f_ref = settings.contact.f_ref or 6.0 * math.pi * field.fluid.viscosity * a * abs(u_center)
     pillar = make_pillar(geo, settings.contact, a, f_ref)
     place = check_start(geo, float(field.dx), settings, start, pillar)
-    ctx = DynamicsContext(bead_radius=a, dx=float(field.dx), depth=geo.depth)
-    params = effects.params(ctx)
+    ctx = DynamicsContext(
+        bead_radius=a,
+        dx=float(field.dx),
+        depth=geo.depth,
+        viscosity=field.fluid.viscosity,
+        n_beads=place.n,
+    )
+    kernel_effects = effects.kernel(ctx)
     return Setup(
         field,
         settings,
@@ -182,59 +189,7 @@ def prepare(
         place.y0_abs,
         place.th0,
         pillar,
-        params,
+        kernel_effects,
         u_center,
         effects,
-    )
-
-
-def kernel_params(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> np.ndarray:
-    """The kparams vector of a run."""
-    st = setup.settings
-    geo = setup.field.geometry
-    p = setup.params
-    a = st.bead_radius
-    u = abs(setup.u_center)
-    x_pass = float(setup.pillar.vertices[:, 0].max())
-    return pack(
-        a=a,
-        kind=setup.pillar.kind,
-        r_cut=setup.pillar.r_cut,
-        r_eq=setup.pillar.r_eq,
-        f_ref=setup.pillar.f_ref,
-        vscale=p.velocity_scale,
-        mu_f=p.friction,
-        hyd_s=p.hydro_strength,
-        hyd_l=p.hydro_length,
-        kT=p.kT,
-        max_disp=st.step.max_displacement,
-        contact_disp=st.step.contact_displacement,
-        dt_max=st.classify.trap_time / 20.0,
-        t_max=st.step.t_max,
-        x_stop=x_pass + st.step.x_end,
-        t_stop=t_stop,
-        mode=mode,
-        trap_speed=st.classify.trap_speed * u,
-        trap_time=st.classify.trap_time,
-        y_lo=a,
-        y_hi=geo.width - a,
-        dt=st.step.dt if st.step.dt is not None else math.nan,
-        stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²
-        bend=st.young_modulus * math.pi * a**4 / 4.0,
-        mu=setup.field.fluid.viscosity,
-    )
-
-
-def kernel_arrays(setup: Setup) -> tuple:
-    """(ux, uy, dx, verts, pbx, pby, curves): the field and pillar as the integrators read them."""
-    f = setup.field
-    pil = setup.pillar
-    return (
-        np.ascontiguousarray(f.ux, dtype=np.float64),
-        np.ascontiguousarray(f.uy, dtype=np.float64),
-        float(f.dx),
-        pil.vertices,
-        np.ascontiguousarray(pil.beads[:, 0]),
-        np.ascontiguousarray(pil.beads[:, 1]),
-        pil.curves,
     )

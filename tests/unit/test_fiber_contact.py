@@ -11,6 +11,7 @@ from fibersweep.fiber.bezier import bezier_nearest, cubic_real_roots
 from fibersweep.fiber.contact import (
     ROUGH,
     SMOOTH,
+    PillarArrays,
     contact_forces,
     make_pillar,
     outline_distance,
@@ -83,20 +84,20 @@ def test_rough_pillar_beads_on_outline():
 def test_rough_force_law_single_pair():
     """F = (F_ref/(a+a_obs)) w⁴ r away from the pillar bead; F_ref at a + a_obs; 0 past R_ref."""
     r_eq, r_cut = A + 0.6, 1.1 * (A + 0.6)
-    pb = np.array([0.0]), np.array([0.0])
-    # a triangle whose outline passes through the pillar bead at the origin
+    # one pillar bead at the origin, on the outline of a triangle
     verts_near = np.array([[-50.0, 0.0], [50.0, 0.0], [0.0, -80.0]])
+    pil = PillarArrays(
+        ROUGH, verts_near, np.array([0.0]), np.array([0.0]), np.zeros((6, 3, 2)), r_cut, r_eq, F_REF
+    )
     for r in (2.4, r_eq, 2.7, 2.85, r_cut, 3.0):
         fx, fy, st, d = np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1)
-        pillar_forces(ROUGH, np.array([0.0]), np.array([r]), verts_near, *pb,
-                      np.zeros((6, 3, 2)), r_cut, r_eq, F_REF, fx, fy, st, d)  # fmt: skip
+        pillar_forces(pil, np.array([0.0]), np.array([r]), fx, fy, st, d)
         w = max((r_cut**2 - r**2) / (r_cut**2 - r_eq**2), 0.0)
         expect = F_REF / r_eq * w**4 * r if r < r_cut else 0.0
         assert fx[0] == pytest.approx(0.0, abs=1e-9)
         assert fy[0] == pytest.approx(expect, rel=1e-12, abs=1e-12)  # pushed to +y, away
     fx, fy, st, d = np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1)
-    pillar_forces(ROUGH, np.array([0.0]), np.array([r_eq]), verts_near, *pb,
-                  np.zeros((6, 3, 2)), r_cut, r_eq, F_REF, fx, fy, st, d)  # fmt: skip
+    pillar_forces(pil, np.array([0.0]), np.array([r_eq]), fx, fy, st, d)
     assert fy[0] == pytest.approx(F_REF, rel=1e-12)
     # stiffness = |d|F|/dr| by central differences (tolerance 1e-5 relative)
     h = 1e-6

@@ -29,11 +29,20 @@ def test_registry_lists_valid_names_on_unknown():
         assert name in EFFECTS and name in msg
 
 
-def test_zero_effects_are_dropped_and_baseline_params():
+def test_zero_effects_are_dropped_and_nothing_reaches_the_kernel():
     es = build_effects({name: 0.0 for name in EFFECTS})
     assert es.effects == ()
-    p = es.params(CTX)
-    assert (p.velocity_scale, p.friction, p.hydro_strength, p.kT) == (1.0, 0.0, 0.0, 0.0)
+    assert es.kernel(CTX) == ()
+    assert not es.random
+
+
+def test_kernel_records_are_sorted_by_name():
+    """One set of effects gives one tuple type whatever the order it was named in
+    (one compiled integrator per set)."""
+    a = build_effects({"pillar_hydro": 1.0, "friction": 0.3, "off_midplane": 0.1}).kernel(CTX)
+    b = build_effects({"off_midplane": 0.1, "friction": 0.3, "pillar_hydro": 1.0}).kernel(CTX)
+    assert [type(r) for r in a] == [type(r) for r in b]
+    assert [type(r).__name__ for r in a][0].startswith("Friction")
 
 
 @pytest.mark.parametrize(
@@ -150,8 +159,8 @@ def test_coulomb_friction_sticks_or_slides():
     """One contacting bead (the head) with its contact force along +y (body frame = lab,
     θ = 0): strong friction stops its tangential (x) motion exactly; weak friction gives
     |F_t| = μ F_n and only slows it. Tolerances: round-off."""
+    from fibersweep.fiber.effects.friction import coulomb_friction
     from fibersweep.fiber.mobility import fiber_offsets
-    from fibersweep.fiber.rigid import coulomb_friction
 
     n = 8
     s = fiber_offsets(n, 2.0)

@@ -7,8 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber.mobility import body_mobility, rigid_map, rpy_matrix
-from fibersweep.fiber.rigid import body_velocity
+from fibersweep.fiber.mobility import body_mobility, body_velocity, rigid_map, rpy_matrix
 from fibersweep.fiber.wallhydro import mobility_with_wall_drag, rigid_wall_velocity, wall_drag
 
 A, MU = 2.0, 0.34

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from fibersweep.fiber.mobility import body_mobility, fiber_offsets
+from fibersweep.fiber.models import MODELS
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate_for
 from fibersweep.fiber.settings import FiberSettings
@@ -27,7 +28,7 @@ def shear_field():
     return FlowField.from_function(lambda X, Y: (SHEAR * (Y - Y_MID), 0.0 * X), GEO, 2.0)
 
 
-@pytest.mark.parametrize("model", ["rigid", "bead-spring"])
+@pytest.mark.parametrize("model", sorted(MODELS))
 def test_uniform_flow_translates_without_rotation(model):
     field = FlowField.from_function(lambda X, Y: (600.0 + 0 * X, 250.0 + 0 * X), GEO, 4.0)
     st = FiberSettings(model=model, x0=100.0)
@@ -56,7 +57,7 @@ def test_bead_chain_is_an_infinitely_thin_jeffery_rod():
         assert om == pytest.approx(-0.5 * SHEAR * (1 - math.cos(2 * th)), abs=1e-9 * SHEAR)
 
 
-@pytest.mark.parametrize("model", ["rigid", "bead-spring"])
+@pytest.mark.parametrize("model", sorted(MODELS))
 def test_tumbling_in_shear_follows_jeffery(shear_field, model):
     """Flip from θ = 170° to 10°: Jeffery with B = 1 gives cot θ = cot θ0 + γ̇ t, so the flip
     takes (cot 10° − cot 170°)/γ̇ = 0.1134 s. Tolerance 1 % (the cosine kernel's first moment

@@ -9,18 +9,20 @@ effect at 0 is dropped before the run (no cost). An unknown name raises
 
 Interface (see :class:`Effect`): override only the hooks you need.
 
-- ``transform_flow(FlowSettings) -> FlowSettings``: the flow problem (callers
-  that build the field apply it: ``build_effects(spec).flow(flow_settings)``).
 - ``transform_field(FlowField) -> FlowField``: the field one run sees.
-- ``transform_settings(FiberSettings) -> FiberSettings``: the run's settings.
 - ``transform_start(FiberStart, rng) -> FiberStart``: the initial condition;
   ``rng`` is a ``numpy.random.Generator`` seeded from ``simulate(rng_seed=...)``.
-- ``dynamics(DynamicsParams, DynamicsContext) -> DynamicsParams``: the floats
-  the Numba kernels read (velocity scale, friction, near-pillar slow-down, kT).
+- ``kernel(DynamicsContext) -> record``: for an effect acting inside the Numba
+  integrators, its kernel record (a NamedTuple of floats); the module also
+  implements the kernel stages for that record type
+  (:mod:`fibersweep.fiber.hooks`), so the force or mobility change lives here,
+  next to its parameter, and is compiled in only when the effect is on.
+- ``transform_result(RunResult, FiberStart) -> RunResult``: the report.
 - ``validate()``: range checks; raise InputError naming ``effects.<name>``.
 
 Built-in dynamic effects: ``friction``, ``pillar_hydro``, ``off_midplane``,
-``brownian`` (each module documents what its value means).
+``brownian`` (each module documents what its value means). A fittable effect
+also gets one line in :data:`fibersweep.discrepancy.library.LIBRARY`.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from fibersweep.fiber.effects.base import DynamicsContext, DynamicsParams, Effect
+from fibersweep.fiber.effects.base import DynamicsContext, Effect
 from fibersweep.fiber.effects.registry import (
     EFFECTS,
     EffectSet,
@@ -40,7 +42,6 @@ from fibersweep.fiber.effects.registry import (
 __all__ = [
     "EFFECTS",
     "DynamicsContext",
-    "DynamicsParams",
     "Effect",
     "EffectSet",
     "build_effects",

@@ -1,10 +1,10 @@
-"""Base class of the effects and the numeric parameters they hand to the dynamics kernels."""
+"""Base class of the effects and the context they get to build their kernel records."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, ClassVar
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar, NamedTuple
 
 import numpy as np
 
@@ -12,16 +12,14 @@ from fibersweep.errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     from fibersweep.fiber.result import FiberStart, RunResult
-    from fibersweep.fiber.settings import FiberSettings
     from fibersweep.flow.field import FlowField
-    from fibersweep.flow.settings import FlowSettings
 
-__all__ = ["DynamicsContext", "DynamicsParams", "Effect"]
+__all__ = ["DynamicsContext", "Effect"]
 
 
 @dataclass(frozen=True)
 class DynamicsContext:
-    """What an effect may need to know to set its dynamics parameters.
+    """What an effect may need to know to build its kernel record.
 
     Attributes
     ----------
@@ -31,40 +29,17 @@ class DynamicsContext:
         Flow-field node spacing [µm].
     depth : float
         Channel depth H_ch [µm].
+    viscosity : float
+        Fluid viscosity μ [pN·s/µm²].
+    n_beads : int
+        Beads of the fiber (for scratch arrays a kernel record carries).
     """
 
     bead_radius: float
     dx: float
     depth: float
-
-
-@dataclass(frozen=True)
-class DynamicsParams:
-    """Floats the Numba kernels read; the defaults are the baseline (no effect, no cost).
-
-    Attributes
-    ----------
-    velocity_scale : float
-        Factor on every bead's background velocity (off-midplane layers) [-].
-    friction : float
-        Coulomb friction coefficient on the pillar (tangential/normal force) [-].
-    hydro_strength : float
-        Multiplier on the Faxén drag of a bead beside the pillar (0 = no pillar hydrodynamics) [-].
-    hydro_length : float
-        Screening length of that drag [µm].
-    kT : float
-        Thermal energy for Brownian motion [pN·µm]; 0 = deterministic.
-    """
-
-    velocity_scale: float = 1.0
-    friction: float = 0.0
-    hydro_strength: float = 0.0
-    hydro_length: float = 1.0
-    kT: float = 0.0
-
-    def with_(self, **changes: float) -> DynamicsParams:
-        """A copy with some fields changed."""
-        return replace(self, **changes)
+    viscosity: float = 1.0
+    n_beads: int = 1
 
 
 @dataclass(frozen=True)
@@ -78,18 +53,18 @@ class Effect:
 
     Hooks, in the order :func:`fibersweep.fiber.run.simulate` applies them:
 
-    ``transform_flow(flow_settings)``
-        Change the flow problem (e.g. pillar size); used by callers that build
-        the field (the sweep / CLI), since ``simulate`` receives a field.
     ``transform_field(field)``
         Change the FlowField a run sees (e.g. inlet-speed scale).
-    ``transform_settings(settings)``
-        Change the FiberSettings of a run (e.g. contact parameters).
     ``transform_start(start, rng)``
         Change the initial condition (e.g. start noise), with a seeded
         ``numpy.random.Generator``.
-    ``dynamics(params, ctx)``
-        Change the numeric :class:`DynamicsParams` the Numba kernels read.
+    ``kernel(ctx)``
+        An effect that acts inside the Numba integrators returns its *kernel
+        record* (a ``typing.NamedTuple`` of floats and scratch arrays, defined in its module) and
+        implements the kernel stages it needs for that record type in the same
+        module (:func:`fibersweep.fiber.hooks.implements`); the integrators are
+        compiled per set of active effects, so an effect that is off costs nothing.
+        ``models`` lists the fiber models whose stages it implements.
     ``transform_result(result, start)``
         Change the finished run's report (e.g. back to nominal units), given
         the start the caller asked for.
@@ -97,6 +72,10 @@ class Effect:
 
     name: ClassVar[str] = ""
     unit: ClassVar[str] = ""
+    #: Fiber models the effect works in (its kernel stages exist for them).
+    models: ClassVar[tuple[str, ...]] = ("rigid", "bead-spring")
+    #: True when its kernel stages draw from Numba's random generator (seeded per run).
+    random: ClassVar[bool] = False
 
     value: float = 0.0
 
@@ -117,20 +96,14 @@ class Effect:
         """False when the value is the baseline 0."""
         return self.value != 0.0
 
-    def transform_flow(self, flow: FlowSettings) -> FlowSettings:
-        return flow
-
     def transform_field(self, field: FlowField) -> FlowField:
         return field
-
-    def transform_settings(self, settings: FiberSettings) -> FiberSettings:
-        return settings
 
     def transform_start(self, start: FiberStart, rng: np.random.Generator) -> FiberStart:
         return start
 
-    def dynamics(self, params: DynamicsParams, ctx: DynamicsContext) -> DynamicsParams:
-        return params
+    def kernel(self, ctx: DynamicsContext) -> NamedTuple | None:
+        return None
 
     def transform_result(self, result: RunResult, start: FiberStart) -> RunResult:
         return result

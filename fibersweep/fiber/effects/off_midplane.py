@@ -13,12 +13,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from fibersweep.errors import InputError
-from fibersweep.fiber.effects.base import DynamicsContext, DynamicsParams, Effect
+from fibersweep.fiber.effects.base import DynamicsContext, Effect
 from fibersweep.fiber.effects.registry import register
+from fibersweep.fiber.hooks import implements
 
 KERNEL_SECOND_MOMENT = 4.0 / 3.0 - 8.0 / math.pi**2  # in Δx², of φ(r) = ¼(1 + cos(πr/2))
+
+
+class OffMidplaneKernel(NamedTuple):
+    """Kernel record: factor on every bead's background velocity [-]."""
+
+    scale: float
 
 
 def layer_factor(dz_over_h: float, dx: float, depth: float) -> float:
@@ -36,11 +44,18 @@ class OffMidplane(Effect):
     def validate(self) -> None:
         self._require(abs(self.value) < 0.5, "|value| must be < 0.5")
 
-    def dynamics(self, params: DynamicsParams, ctx: DynamicsContext) -> DynamicsParams:
+    def kernel(self, ctx: DynamicsContext) -> OffMidplaneKernel:
         if abs(self.value) * ctx.depth >= 0.5 * ctx.depth - ctx.bead_radius:
             raise InputError(
                 f"effects.off_midplane: {self.value} puts the bead (radius "
                 f"{ctx.bead_radius} µm) through a wall of the {ctx.depth} µm channel"
             )
-        f = layer_factor(self.value, ctx.dx, ctx.depth)
-        return params.with_(velocity_scale=params.velocity_scale * f)
+        return OffMidplaneKernel(layer_factor(self.value, ctx.dx, ctx.depth))
+
+
+@implements("background", OffMidplaneKernel)
+def background(e, u):
+    """Both models: scale the interpolated midplane velocities to the fiber's layer."""
+    for i in range(u.shape[0]):
+        u[i, 0] *= e.scale
+        u[i, 1] *= e.scale

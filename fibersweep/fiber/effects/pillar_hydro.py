@@ -15,9 +15,29 @@ more.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
-from fibersweep.fiber.effects.base import DynamicsContext, DynamicsParams, Effect
+import numpy as np
+
+from fibersweep.fiber.effects.base import DynamicsContext, Effect
 from fibersweep.fiber.effects.registry import register
+from fibersweep.fiber.hooks import implements
+from fibersweep.fiber.wallhydro import mobility_with_wall_drag, rigid_wall_velocity, wall_drag
+
+__all__ = ["PillarHydro", "PillarHydroKernel"]
+
+
+class PillarHydroKernel(NamedTuple):
+    """Kernel record: multiplier k on the Faxén drag [-], its screening length [µm],
+    the bead radius a [µm], the viscosity μ [pN·s/µm²], and scratch: the beads'
+    drag coefficients ζ (n,) [pN s/µm] and the modified body mobility N' (3, 3)."""
+
+    strength: float
+    length: float
+    a: float
+    mu: float
+    zeta: np.ndarray
+    nm_eff: np.ndarray
 
 
 @register
@@ -29,5 +49,28 @@ class PillarHydro(Effect):
     def validate(self) -> None:
         self._require(0.0 <= self.value <= 20.0, "must be in [0, 20]")
 
-    def dynamics(self, params: DynamicsParams, ctx: DynamicsContext) -> DynamicsParams:
-        return params.with_(hydro_strength=self.value, hydro_length=ctx.depth)
+    def kernel(self, ctx: DynamicsContext) -> PillarHydroKernel:
+        return PillarHydroKernel(
+            float(self.value),
+            float(ctx.depth),
+            float(ctx.bead_radius),
+            float(ctx.viscosity),
+            np.zeros(ctx.n_beads),
+            np.zeros((3, 3)),
+        )
+
+
+@implements("rigid_mobility", PillarHydroKernel)
+def rigid_mobility(e, body, w, vbx, vby, om, nm_eff):
+    """Rigid model: V = A⁻¹ V₀ and N' = A⁻¹ N (see :mod:`fibersweep.fiber.wallhydro`)."""
+    if wall_drag(w.dist, e.a, e.strength, e.length, e.mu, e.zeta) > 0:
+        vbx, vby, om = rigid_wall_velocity(body.s, nm_eff, e.zeta, vbx, vby, om, e.nm_eff)
+        return vbx, vby, om, e.nm_eff
+    return vbx, vby, om, nm_eff
+
+
+@implements("bead_mobility", PillarHydroKernel)
+def bead_mobility(e, w, bw):
+    """Bead-spring model: M -> (M⁻¹ + Z)⁻¹ and u -> (I + M Z)⁻¹ u (Woodbury)."""
+    if wall_drag(w.dist, e.a, e.strength, e.length, e.mu, e.zeta) > 0:
+        mobility_with_wall_drag(bw.mob, e.zeta, bw.f)

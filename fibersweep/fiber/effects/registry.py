@@ -10,13 +10,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fibersweep.errors import InputError
-from fibersweep.fiber.effects.base import DynamicsContext, DynamicsParams, Effect
+from fibersweep.fiber.effects.base import DynamicsContext, Effect
 
 if TYPE_CHECKING:  # pragma: no cover
     from fibersweep.fiber.result import FiberStart, RunResult
-    from fibersweep.fiber.settings import FiberSettings
     from fibersweep.flow.field import FlowField
-    from fibersweep.flow.settings import FlowSettings
 
 __all__ = ["EFFECTS", "EffectSet", "build_effects", "get_effect", "register"]
 
@@ -50,20 +48,10 @@ class EffectSet:
 
     effects: tuple[Effect, ...] = ()
 
-    def flow(self, flow: FlowSettings) -> FlowSettings:
-        for e in self.effects:
-            flow = e.transform_flow(flow)
-        return flow
-
     def field(self, field: FlowField) -> FlowField:
         for e in self.effects:
             field = e.transform_field(field)
         return field
-
-    def settings(self, settings: FiberSettings) -> FiberSettings:
-        for e in self.effects:
-            settings = e.transform_settings(settings)
-        return settings
 
     def start(self, start: FiberStart, rng: np.random.Generator) -> FiberStart:
         for e in self.effects:
@@ -75,11 +63,28 @@ class EffectSet:
             result = e.transform_result(result, start)
         return result
 
-    def params(self, ctx: DynamicsContext) -> DynamicsParams:
-        p = DynamicsParams(hydro_length=ctx.bead_radius)
+    def kernel(self, ctx: DynamicsContext) -> tuple:
+        """The kernel records of the effects that act in the integrators, sorted by name.
+
+        The order is canonical, so one set of effects always gives one tuple type
+        (one compiled specialisation of each integrator).
+        """
+        recs = ((e.name, e.kernel(ctx)) for e in self.effects)
+        return tuple(r for _, r in sorted(recs, key=lambda nr: nr[0]) if r is not None)
+
+    @property
+    def random(self) -> bool:
+        """Whether a kernel stage draws from Numba's random generator."""
+        return any(e.random for e in self.effects)
+
+    def check_model(self, model: str) -> None:
+        """InputError naming the first effect that does not work in ``model``."""
         for e in self.effects:
-            p = e.dynamics(p, ctx)
-        return p
+            if model not in e.models:
+                raise InputError(
+                    f"effects.{e.name}: not available in the {model} model "
+                    f"(only {', '.join(e.models)})"
+                )
 
 
 def build_effects(spec: Mapping[str, float] | None) -> EffectSet:

@@ -1,0 +1,219 @@
+"""Kernel hooks of the dynamic effects: compile-time dispatch on the effect's record type.
+
+An effect that acts inside the Numba integrators hands them a small record
+(a ``typing.NamedTuple`` of floats, plus any scratch arrays it needs: its
+*kernel record*) and implements one or
+more of the stages below for that record type with :func:`implements`. The
+integrators receive the run's records as a tuple (``Kernel.effects``) and, at
+each stage, loop over it with ``numba.literal_unroll``: the loop is unrolled at
+compile time and each record's stage resolves (through ``numba.extending.overload``)
+to its implementation or, when it has none, to nothing. So the integrators are
+compiled once per *set* of active effects (Numba caches one specialisation per
+tuple type, in memory and on disk), and an effect that is off is not in the
+tuple: it costs nothing, not even a branch.
+
+Stages (arguments are the run's bundles, :mod:`fibersweep.fiber.bundles`:
+``body`` BodyArrays, ``w`` Work (bead positions ``w.x, w.y``,
+background velocities ``w.u``, forces, distances ``w.dist``, scratch), ``bw``
+BeadWork (bead-spring buffers)):
+
+``background(e, u)``
+    Both models, after interpolation: change the beads' background velocities
+    ``u`` (n, 2) [µm/s] in place.
+``rigid_mobility(e, body, w, vbx, vby, om, nm_eff)`` -> ``(vbx, vby, om, nm_eff)``
+    Rigid model: change the body velocity (body frame) by a change of mobility;
+    return the mobility ``nm_eff`` (3, 3) the later stages must use.
+``rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff)`` -> ``(vbx, vby, om)``
+    Rigid model: change the body velocity by extra contact forces (``w.fx, fy``
+    hold the contact forces; c, sn: cos and sin of the fiber angle).
+``rigid_noise(e, body, dt, c, sn, xc, yc, th)`` -> ``(xc, yc, th)``
+    Rigid model, after each step of length ``dt`` [s]: random increments.
+``bead_forces(e, body, w, bw, any_c)``
+    Bead-spring model, before the mobility is applied: add forces to the total
+    forces ``w.fx, fy`` [pN] (``bw.cfx, cfy`` hold the contact forces, ``bw.f``
+    the background velocities).
+``bead_mobility(e, w, bw)``
+    Bead-spring model: change the mobility ``bw.mob`` (2n, 2n) and the
+    background velocities ``bw.f`` (2n) in place.
+
+Only bundles, never the whole ``Kernel``, go to stages and inner kernels: a
+call copies its arguments, and a big bundle costs time on every call (the
+stage functions that do nothing are compiled away).
+
+Stage implementations are plain Python functions (Numba compiles them into the
+integrator) with the stage's signature.
+
+Numba's disk cache (``cache=True``) checks only the file of the cached
+integrator, not the files of what it calls (true of every cross-module call,
+e.g. ``contact.pillar_forces``): after editing a stage, remove the
+``__pycache__/*.nbi``/``*.nbc`` files of ``rigid.py`` and ``beadspring.py``.
+The cache index also stores the record types by module: do the same after
+renaming or removing an effect module (a stale index names a module that no
+longer exists and cannot be read). For that reason kernel records must be
+defined in ``fibersweep.fiber.effects`` modules, which are always imported.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable
+from typing import NamedTuple
+
+from numba.extending import overload
+
+__all__ = [
+    "BASELINE",
+    "STAGES",
+    "Baseline",
+    "background",
+    "bead_forces",
+    "bead_mobility",
+    "implements",
+    "rigid_contact",
+    "rigid_mobility",
+    "rigid_noise",
+    "stages_of",
+]
+
+STAGES = (
+    "background",
+    "rigid_mobility",
+    "rigid_contact",
+    "rigid_noise",
+    "bead_forces",
+    "bead_mobility",
+)
+
+_IMPLS: dict[tuple[str, type], Callable] = {}
+_RECORD_PACKAGE = "fibersweep.fiber.effects."
+
+
+class Baseline(NamedTuple):
+    """The record every effect tuple ends with (``literal_unroll`` needs a non-empty tuple)."""
+
+
+BASELINE = Baseline()
+
+
+def implements(stage: str, record: type) -> Callable[[Callable], Callable]:
+    """Decorator: the function is ``stage`` for effects whose kernel record is ``record``."""
+    if stage not in STAGES:
+        raise ValueError(f"unknown kernel stage {stage!r}; stages: {', '.join(STAGES)}")
+
+    def deco(fn: Callable) -> Callable:
+        want = list(inspect.signature(globals()[stage]).parameters)
+        got = list(inspect.signature(fn).parameters)
+        if got != want:
+            raise TypeError(
+                f"{fn.__qualname__}: stage {stage!r} takes ({', '.join(want)}), "
+                f"got ({', '.join(got)})"
+            )
+        if not record.__module__.startswith(_RECORD_PACKAGE):
+            raise TypeError(
+                f"{record.__qualname__}: kernel records must be defined in a module of "
+                f"{_RECORD_PACKAGE.rstrip('.')} (Numba's disk cache stores their type by "
+                f"module, and an index naming a module that is missing cannot be read)"
+            )
+        if (stage, record) in _IMPLS and _IMPLS[(stage, record)] is not fn:
+            raise TypeError(f"{record.__name__} implements {stage!r} twice")
+        _IMPLS[(stage, record)] = fn
+        return fn
+
+    return deco
+
+
+def stages_of(record: type) -> frozenset[str]:
+    """The stages implemented for kernel records of type ``record``."""
+    return frozenset(stage for stage, rec in _IMPLS if rec is record)
+
+
+def _impl(stage: str, e, noop: Callable) -> Callable:
+    # Numba requires the implementation's argument names to be the stub's.
+    return _IMPLS.get((stage, getattr(e, "instance_class", None)), noop)
+
+
+# Stubs: callable only inside Numba kernels, where they resolve per record type.
+
+
+def background(e, u):
+    """Both models: change the background velocities ``u`` (n, 2) in place."""
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def rigid_mobility(e, body, w, vbx, vby, om, nm_eff):
+    """Rigid model: ``(vbx, vby, om, nm_eff)`` after a change of mobility."""
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff):
+    """Rigid model: ``(vbx, vby, om)`` after extra contact forces."""
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def rigid_noise(e, body, dt, c, sn, xc, yc, th):
+    """Rigid model: ``(xc, yc, th)`` after the step's random increments."""
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def bead_forces(e, body, w, bw, any_c):
+    """Bead-spring model: add forces to ``w.fx, fy``."""
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def bead_mobility(e, w, bw):
+    """Bead-spring model: change ``bw.mob`` and ``bw.f`` in place."""
+    raise NotImplementedError("kernel stage: call from a Numba kernel")
+
+
+def _keep_mobility(e, body, w, vbx, vby, om, nm_eff):
+    return vbx, vby, om, nm_eff
+
+
+def _keep_velocity(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff):
+    return vbx, vby, om
+
+
+def _keep_pose(e, body, dt, c, sn, xc, yc, th):
+    return xc, yc, th
+
+
+def _keep_background(e, u):
+    return None
+
+
+def _keep_beads(e, w, bw):
+    return None
+
+
+def _keep_forces(e, body, w, bw, any_c):
+    return None
+
+
+@overload(background)
+def _ov_background(e, u):
+    return _impl("background", e, _keep_background)
+
+
+@overload(rigid_mobility)
+def _ov_rigid_mobility(e, body, w, vbx, vby, om, nm_eff):
+    return _impl("rigid_mobility", e, _keep_mobility)
+
+
+@overload(rigid_contact)
+def _ov_rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff):
+    return _impl("rigid_contact", e, _keep_velocity)
+
+
+@overload(rigid_noise)
+def _ov_rigid_noise(e, body, dt, c, sn, xc, yc, th):
+    return _impl("rigid_noise", e, _keep_pose)
+
+
+@overload(bead_forces)
+def _ov_bead_forces(e, body, w, bw, any_c):
+    return _impl("bead_forces", e, _keep_forces)
+
+
+@overload(bead_mobility)
+def _ov_bead_mobility(e, w, bw):
+    return _impl("bead_mobility", e, _keep_beads)
