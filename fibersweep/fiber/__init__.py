@@ -13,3 +13,7 @@ kernel), ``elastic`` and ``beadspring`` (the source's model, BDF2 kernel),
 ``wallhydro`` (pillar wall-drag law), ``record`` (record layout, stop codes,
 the stop rule both integrators share), ``settings``/``result`` (contracts).
 """
+
+from fibersweep.numba_cache import sync_kernel_cache
+
+sync_kernel_cache()  # before any cached kernel loads: drop caches of older sources

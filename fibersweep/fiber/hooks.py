@@ -45,11 +45,11 @@ integrator) with the stage's signature.
 
 Numba's disk cache (``cache=True``) checks only the file of the cached
 integrator, not the files of what it calls (true of every cross-module call,
-e.g. ``contact.pillar_forces``): after editing a stage, remove the
-``__pycache__/*.nbi``/``*.nbc`` files of ``rigid.py`` and ``beadspring.py``.
-The cache index also stores the record types by module: do the same after
-renaming or removing an effect module (a stale index names a module that no
-longer exists and cannot be read). For that reason kernel records must be
+e.g. ``contact.pillar_forces``), and its index stores the record types by
+module. :mod:`fibersweep.numba_cache` therefore drops the kernel caches
+whenever any source file of ``fiber`` or ``flow`` changed (checked on import),
+so an edited stage or a renamed effect module is compiled afresh. Kernel records
+must still be
 defined in ``fibersweep.fiber.effects`` modules, which are always imported.
 """
 
