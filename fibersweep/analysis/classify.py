@@ -34,8 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fibersweep.fiber.result import Trajectory
-from fibersweep.fiber.settings import ClassifySettings
+from fibersweep.analysis.settings import ClassifySettings
+from fibersweep.analysis.trajectory import Trajectory
 from fibersweep.units import Geometry
 
 __all__ = [

@@ -1,4 +1,4 @@
-"""Observables of a run from its per-step record: trajectory, thinning, contact data."""
+"""Observables of a run from its trajectory: thinning, first contact, passing time, angles."""
 
 from __future__ import annotations
 
@@ -7,9 +7,8 @@ import math
 import numpy as np
 
 from fibersweep.analysis.classify import stopped_mask
-from fibersweep.fiber import record as R
-from fibersweep.fiber.result import Trajectory
-from fibersweep.fiber.settings import ClassifySettings
+from fibersweep.analysis.settings import ClassifySettings
+from fibersweep.analysis.trajectory import Trajectory
 
 __all__ = [
     "fiber_angle",
@@ -17,28 +16,7 @@ __all__ = [
     "pass_time",
     "take",
     "thin_indices",
-    "trajectory_from_record",
 ]
-
-
-def trajectory_from_record(rec: np.ndarray, beads: np.ndarray | None = None) -> Trajectory:
-    """Full-resolution Trajectory from integrator rows (record.COLS), shape (m, NCOLS).
-
-    ``theta`` is the directed tail→head angle in degrees, unwrapped.
-    """
-    th = np.degrees(np.unwrap(rec[:, R.TH]))
-    return Trajectory(
-        t=rec[:, R.T].copy(),
-        x=rec[:, R.XC].copy(),
-        y=rec[:, R.YC].copy(),
-        theta=th,
-        head=rec[:, [R.HX, R.HY]].copy(),
-        tail=rec[:, [R.TX, R.TY]].copy(),
-        head_speed=rec[:, R.HEAD_SPEED].copy(),
-        com_speed=rec[:, R.COM_SPEED].copy(),
-        contact=rec[:, R.CONTACT] > 0.5,
-        beads=beads,
-    )
 
 
 def take(traj: Trajectory, idx: np.ndarray) -> Trajectory:

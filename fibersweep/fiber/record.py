@@ -7,7 +7,9 @@ import math
 import numba as nb
 import numpy as np
 
-__all__ = ["COLS", "NCOLS", "STOP_REASONS", "stop_test", "write_row"]
+from fibersweep.analysis.trajectory import Trajectory
+
+__all__ = ["COLS", "NCOLS", "STOP_REASONS", "stop_test", "trajectory_from_record", "write_row"]
 
 # Columns of one record row (one per accepted step, at the start of the step).
 T, XC, YC, TH, VX, VY, OM, CONTACT, CX, CY, MIN_DIST, HEAD_SPEED, COM_SPEED, HX, HY, TX, TY = range(
@@ -126,3 +128,23 @@ def stop_test(p, t, finite, min_d, y_min, y_max, stopped, stopped_since, x_rear,
     elif t >= p.t_max:
         code = np.int64(TIME_LIMIT)
     return code, stopped_since
+
+
+def trajectory_from_record(rec: np.ndarray, beads: np.ndarray | None = None) -> Trajectory:
+    """Full-resolution Trajectory from integrator rows (record.COLS), shape (m, NCOLS).
+
+    ``theta`` is the directed tail→head angle in degrees, unwrapped.
+    """
+    th = np.degrees(np.unwrap(rec[:, TH]))
+    return Trajectory(
+        t=rec[:, T].copy(),
+        x=rec[:, XC].copy(),
+        y=rec[:, YC].copy(),
+        theta=th,
+        head=rec[:, [HX, HY]].copy(),
+        tail=rec[:, [TX, TY]].copy(),
+        head_speed=rec[:, HEAD_SPEED].copy(),
+        com_speed=rec[:, COM_SPEED].copy(),
+        contact=rec[:, CONTACT] > 0.5,
+        beads=beads,
+    )

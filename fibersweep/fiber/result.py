@@ -11,11 +11,10 @@ import math
 from dataclasses import dataclass, field, fields
 from typing import Literal
 
-import numpy as np
+from fibersweep.analysis.trajectory import CLASSES, Trajectory
 
 __all__ = ["FiberStart", "Trajectory", "RunResult", "CLASSES", "STATUSES"]
 
-CLASSES = ("Below", "Above", "Pole-vaulting", "Trapping")
 STATUSES = ("ok", "failed")
 
 
@@ -36,61 +35,6 @@ class FiberStart:
     theta0: float
     y0: float
     length: float
-
-
-@dataclass(frozen=True)
-class Trajectory:
-    """Thinned record of a run (time-ordered samples).
-
-    Attributes
-    ----------
-    t : ndarray, shape (m,)
-        Time [s].
-    x, y : ndarray, shape (m,)
-        Centre of mass [µm].
-    theta : ndarray, shape (m,)
-        Directed angle of the tail-to-head vector from +x, unwrapped [degrees];
-        the head is the bead that leads at the start (so theta starts at theta0).
-    head : ndarray, shape (m, 2)
-        Head bead position [µm].
-    tail : ndarray, shape (m, 2)
-        Tail bead position [µm].
-    head_speed : ndarray, shape (m,)
-        Head bead speed [µm/s].
-    com_speed : ndarray, shape (m,)
-        Centre-of-mass speed [µm/s].
-    contact : ndarray, shape (m,), bool
-        Contact force non-zero at the sample.
-    beads : ndarray or None, shape (m, n, 2)
-        All bead positions [µm] when recorded.
-    """
-
-    t: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
-    theta: np.ndarray
-    head: np.ndarray
-    tail: np.ndarray
-    head_speed: np.ndarray
-    com_speed: np.ndarray
-    contact: np.ndarray
-    beads: np.ndarray | None = None
-
-    def columns(self) -> dict[str, np.ndarray]:
-        """Flat columns for a table (beads excluded; see ``beads``)."""
-        return {
-            "t": self.t,
-            "x": self.x,
-            "y": self.y,
-            "theta": self.theta,
-            "head_x": self.head[:, 0],
-            "head_y": self.head[:, 1],
-            "tail_x": self.tail[:, 0],
-            "tail_y": self.tail[:, 1],
-            "head_speed": self.head_speed,
-            "com_speed": self.com_speed,
-            "contact": self.contact,
-        }
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,6 @@ from fibersweep.analysis.observables import (
     pass_time,
     take,
     thin_indices,
-    trajectory_from_record,
 )
 from fibersweep.errors import InputError
 from fibersweep.fiber import record as R
@@ -61,7 +60,7 @@ def _result(
 ) -> RunResult:
     st = setup.settings
     geo = setup.field.geometry
-    traj = trajectory_from_record(rec, beads)
+    traj = R.trajectory_from_record(rec, beads)
     common = dict(
         start=setup.start,
         n_steps=MODELS[st.model].steps(k, rec),
@@ -217,4 +216,4 @@ def simulate_for(
     _seed(rng, setup)
     k = build_kernel(setup, mode=1, t_stop=duration)
     rec, beads, code = _integrate(setup, k, setup.x0, setup.y0_abs, setup.th0)
-    return trajectory_from_record(rec, beads), R.STOP_REASONS.get(code, "")
+    return R.trajectory_from_record(rec, beads), R.STOP_REASONS.get(code, "")

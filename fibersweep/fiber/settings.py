@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field
+
+from fibersweep.analysis.settings import ClassifySettings
 
 __all__ = [
     "ContactSettings",
@@ -49,36 +51,6 @@ class StepSettings(_Strict):
     x_end: float = Field(
         300.0, gt=0, description="stop when the rearmost bead is this far past the pillar [µm]"
     )
-
-
-class ClassifySettings(_Strict):
-    """Thresholds of the classification (a pure function of the trajectory)."""
-
-    head_blocked_speed: float = Field(
-        0.01, gt=0, description="head counts as blocked below this fraction of U_center"
-    )
-    trap_time: float = Field(
-        2.0, gt=0, description="in contact and stopped for this long [s] -> Trapping"
-    )
-    trap_speed: float = Field(
-        0.01, gt=0, description="'stopped' means COM speed below this fraction of U_center"
-    )
-    rule: str = Field(
-        "head-speed",
-        description="pole-vaulting rule: head-speed (the source's), pivot or switch",
-    )
-    pivot_fraction: float = Field(
-        0.5, gt=0, description="pivot rule: the head moves less than this x L while turning 90°"
-    )
-
-    @field_validator("rule")
-    @classmethod
-    def _known_rule(cls, name: str) -> str:
-        from fibersweep.analysis.classify import RULES  # the registry decides
-
-        if name not in RULES:
-            raise ValueError(f"unknown rule; valid: {', '.join(RULES)}")
-        return name
 
 
 class RecordSettings(_Strict):
