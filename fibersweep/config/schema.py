@@ -1,11 +1,8 @@
-"""The YAML schema of a fibersweep config, its loader, and sweep expansion.
+"""The config schema: the four sections, the sweep over starts and settings, combinations.
 
 A config has four sections, each optional: ``flow`` (:class:`FlowSettings`),
 ``fiber`` (:class:`FiberSettings`), ``sweep`` (:class:`SweepSettings`) and
-``run`` (:class:`RunSettings`). Unknown keys are errors. :func:`load_config`
-turns every validation problem into a :class:`ConfigError` that names the full
-path of the field, what was expected, what was given, the YAML line, and a
-did-you-mean for misspelled keys.
+``run`` (:class:`RunSettings`). Unknown keys are errors.
 """
 
 from __future__ import annotations
@@ -16,180 +13,35 @@ import itertools
 import re
 import types
 import typing
-from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Annotated, Any
+from typing import Any
 
 import numpy as np
-import yaml
 from pydantic import (
     BaseModel,
     ConfigDict,
-    Discriminator,
     Field,
-    StrictFloat,
-    Tag,
     ValidationError,
     field_validator,
     model_serializer,
     model_validator,
 )
 
+from fibersweep.config.axes import (
+    DEFAULT_MAX_POINTS,
+    Axis,
+    _show,
+    _Strict,
+    axis_count,
+    axis_values,
+    setting_axis_count,
+    setting_axis_values,
+)
+from fibersweep.config.errors import FieldError, error_parts
 from fibersweep.errors import InputError
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.settings import FlowSettings
-
-__all__ = [
-    "Axis",
-    "Combination",
-    "Config",
-    "ConfigError",
-    "FieldError",
-    "RunSettings",
-    "SweepSettings",
-    "apply_overrides",
-    "load_config",
-    "parse_config",
-    "setting_annotation",
-    "setting_axis_values",
-    "setting_column",
-]
-
-
-class ConfigError(InputError):
-    """A config problem a user can act on.
-
-    Attributes
-    ----------
-    problems : list of str
-        One message per problem, each naming the field.
-    """
-
-    def __init__(self, problems: list[str], source: str = "config") -> None:
-        self.problems = problems
-        self.source = source
-        head = f"{source}: {len(problems)} problem{'s' if len(problems) > 1 else ''}"
-        super().__init__(head + "\n" + "\n".join(f"  - {p}" for p in problems))
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-
-#: Most values one sweep axis may have (a range with a tiny step is refused before
-#: any array is made).
-MAX_AXIS_VALUES = 1_000_000
-#: Default limit on the number of sweep points (``run.max_points`` raises it).
-DEFAULT_MAX_POINTS = 200_000
-
-
-class RangeSpec(_Strict):
-    """Inclusive range ``start, start+step, ... <= stop``."""
-
-    start: StrictFloat
-    stop: StrictFloat
-    step: StrictFloat = Field(gt=0)
-
-    @model_validator(mode="after")
-    def _not_empty(self) -> RangeSpec:
-        if not all(np.isfinite([self.start, self.stop, self.step])):
-            raise ValueError(
-                f"range bounds must be finite; got start {self.start}, stop {self.stop}, "
-                f"step {self.step}"
-            )
-        if self.stop < self.start:
-            raise ValueError(f"empty range: start {self.start} > stop {self.stop}")
-        if self.count() > MAX_AXIS_VALUES:
-            raise ValueError(
-                f"range has {self.count():,} values (more than {MAX_AXIS_VALUES:,}); "
-                "use a larger step"
-            )
-        return self
-
-    def count(self) -> int:
-        """Number of values, computed without making them."""
-        return int(np.floor((self.stop - self.start) / self.step + 1e-9)) + 1
-
-    def values(self) -> np.ndarray:
-        n = self.count()
-        if n < 1:
-            raise ValueError(f"empty range: start {self.start} > stop {self.stop}")
-        return self.start + self.step * np.arange(n)
-
-
-class LinspaceSpec(_Strict):
-    """``num`` evenly spaced values from ``start`` to ``stop`` inclusive."""
-
-    start: StrictFloat
-    stop: StrictFloat
-    num: int = Field(ge=1, le=100_000, strict=True)
-
-    def count(self) -> int:
-        """Number of values."""
-        return self.num
-
-    def values(self) -> np.ndarray:
-        return np.linspace(self.start, self.stop, self.num)
-
-
-def _axis_kind(v: Any) -> str | None:
-    """Which form an axis is written in, so a bad one gets one clear message."""
-    if isinstance(v, RangeSpec) or (isinstance(v, dict) and "step" in v):
-        return "axis:range"
-    if isinstance(v, LinspaceSpec) or (isinstance(v, dict) and "num" in v):
-        return "axis:linspace"
-    if isinstance(v, (list, tuple)):
-        return "axis:list"
-    if isinstance(v, (int, float)) and not isinstance(v, bool):
-        return "axis:number"
-    return None
-
-
-Axis = Annotated[
-    Annotated[StrictFloat, Tag("axis:number")]
-    | Annotated[list[StrictFloat], Tag("axis:list")]
-    | Annotated[RangeSpec, Tag("axis:range")]
-    | Annotated[LinspaceSpec, Tag("axis:linspace")],
-    Discriminator(
-        _axis_kind,
-        custom_error_type="axis_form",
-        custom_error_message=(
-            "expected a number, a list of numbers, {start, stop, step} or {start, stop, num}"
-        ),
-    ),
-]
-
-
-class FieldError(ValueError):
-    """A check across several fields that fails at one of them.
-
-    Raised by model validators with the field's dotted ``path`` relative to the
-    model that raised it; the config loader reports the problem at that field's
-    line instead of at the model's.
-    """
-
-    def __init__(self, path: str | tuple, message: str) -> None:
-        super().__init__(message)
-        # a tuple keeps parts that hold dots themselves (a swept setting key)
-        self.path = tuple(path) if isinstance(path, tuple) else tuple(path.split("."))
-
-
-def axis_count(axis: Axis) -> int:
-    """Number of values of one sweep axis, without making them."""
-    if isinstance(axis, (RangeSpec, LinspaceSpec)):
-        return axis.count()
-    return len(axis) if isinstance(axis, (list, tuple)) else 1
-
-
-def axis_values(axis: Axis) -> np.ndarray:
-    """Values of one sweep axis, shape (k,), rounded to 12 digits for stable ids."""
-    if isinstance(axis, (RangeSpec, LinspaceSpec)):
-        vals = axis.values()
-    else:
-        vals = np.atleast_1d(np.asarray(axis, dtype=np.float64))
-    return np.round(vals, 12)
 
 
 class SweepSettings(_Strict):
@@ -371,59 +223,6 @@ class SweepSettings(_Strict):
 _START_AXES = ("theta0", "y0", "length")
 
 
-def _range_form(raw: dict) -> RangeSpec | LinspaceSpec | None:
-    keys = set(raw)
-    if keys == {"start", "stop", "step"}:
-        return RangeSpec.model_validate(raw)
-    if keys == {"start", "stop", "num"}:
-        return LinspaceSpec.model_validate(raw)
-    return None
-
-
-def setting_axis_count(raw: Any) -> int:
-    """Number of values of a setting axis, without making them (form assumed valid)."""
-    if isinstance(raw, dict):
-        spec = _range_form(raw)
-        return spec.count() if spec is not None else 1
-    return len(raw) if isinstance(raw, list) else 1
-
-
-def setting_axis_values(raw: Any) -> list[Any]:
-    """The values of a setting axis, in order.
-
-    Parameters
-    ----------
-    raw : Any
-        A single value (number, string, boolean), a list of values of any type
-        (each element one value), ``{start, stop, step}`` or ``{start, stop, num}``
-        (numbers rounded to 12 digits, as for the start axes).
-
-    Raises
-    ------
-    ValueError
-        Another mapping, an empty list, or a bad range.
-    """
-    if isinstance(raw, dict):
-        try:
-            spec = _range_form(raw)
-        except ValidationError as exc:
-            first = exc.errors()[0]
-            where = ".".join(str(p) for p in first["loc"])
-            msg = first["msg"].removeprefix("Value error, ")
-            raise ValueError(f"bad range{' ' + where if where else ''}: {msg}") from None
-        if spec is None:
-            raise ValueError(
-                "expected a value, a list of values, {start, stop, step} or {start, stop, num}; "
-                f"got a mapping with keys {', '.join(map(str, raw))}"
-            )
-        return [float(v) for v in np.round(spec.values(), 12)]
-    if isinstance(raw, list):
-        if not raw:
-            raise ValueError("no values")
-        return list(raw)
-    return [raw]
-
-
 def _unwrap(ann: Any) -> Any:
     """``X | None`` -> X (the other members of a union are kept)."""
     args = [a for a in typing.get_args(ann) if a is not type(None)]
@@ -510,12 +309,6 @@ def setting_column(key: str) -> tuple[str, str, str]:
     m = re.search(r"\[([^\]]+)\]", desc)
     unit = m.group(1) if m else ""
     return kind, unit, f"swept setting {key}: {desc}" if desc else f"swept setting {key}"
-
-
-def _show(values: np.ndarray, most: int = 3) -> str:
-    """A few offending values for an error message."""
-    shown = ", ".join(f"{x:g}" for x in values[:most])
-    return shown + (f" (and {values.size - most} more)" if values.size > most else "")
 
 
 class RunSettings(_Strict):
@@ -739,7 +532,7 @@ def _combination_error(
     exc: ValidationError, assignment: dict[str, Any], locs: dict[str, tuple]
 ) -> FieldError:
     """The first problem of an invalid combination, at the axis to blame when there is one."""
-    loc, msg, given = _error_parts(exc.errors()[0])
+    loc, msg, given = error_parts(exc.errors()[0])
     for key in assignment:
         path = tuple(key.split("."))
         n = min(len(path), len(loc))
@@ -780,255 +573,3 @@ def _check_effects(values: dict[str, Any], locs: dict[str, tuple]) -> list[str]:
 
 def _show_assignment(assignment: dict[str, Any]) -> str:
     return ", ".join(f"{k} = {v!r}" for k, v in assignment.items())
-
-
-# --------------------------------------------------------------------------- loading
-
-
-@dataclass(frozen=True)
-class _Located:
-    data: Any
-    lines: dict[tuple, int]
-
-
-class _Loader(yaml.SafeLoader):
-    """Safe loader (no tags run) that reads ``3e-1`` and ``1e5`` as numbers, as YAML 1.2 does.
-
-    YAML 1.1 (PyYAML's default) needs a dot in a float, so ``y0: 3e-1`` was a string
-    while the same in a list was coerced: one rule for every number here.
-    """
-
-
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
-    list("-+0123456789"),
-)
-
-
-def _yaml_with_lines(text: str) -> _Located:
-    """Parse YAML and record the 1-based line of every key path.
-
-    Raises
-    ------
-    ConfigError
-        A key written twice in one mapping (YAML would silently keep the last).
-    """
-    lines: dict[tuple, int] = {}
-    duplicates: list[str] = []
-
-    def walk(node: yaml.Node, path: tuple) -> None:
-        lines.setdefault(path, node.start_mark.line + 1)
-        if isinstance(node, yaml.MappingNode):
-            first: dict[Any, int] = {}
-            for k, v in node.value:
-                key = (*path, k.value)
-                line = k.start_mark.line + 1
-                if k.value in first:
-                    dotted = ".".join(str(p) for p in key)
-                    duplicates.append(
-                        f"{dotted}: key written twice (lines {first[k.value]} and {line}); keep one"
-                    )
-                    continue
-                first[k.value] = line
-                lines[key] = line
-                walk(v, key)
-        elif isinstance(node, yaml.SequenceNode):
-            for i, v in enumerate(node.value):
-                walk(v, (*path, i))
-
-    root = yaml.compose(text, Loader=_Loader)
-    if root is not None:
-        walk(root, ())
-    if duplicates:
-        raise ConfigError(duplicates)
-    return _Located(yaml.load(text, Loader=_Loader), lines)
-
-
-def _model_at(path: tuple) -> type[BaseModel] | None:
-    """The pydantic model that owns the mapping at ``path`` (for did-you-mean)."""
-    model: type[BaseModel] | None = Config
-    for part in path:
-        if model is None or not isinstance(part, str) or part not in model.model_fields:
-            return None
-        ann = model.model_fields[part].annotation
-        model = ann if isinstance(ann, type) and issubclass(ann, BaseModel) else None
-    return model
-
-
-def _error_parts(err: dict) -> tuple[tuple, str, Any]:
-    """(location, message, given input) of one pydantic error, union-branch names dropped."""
-    loc = tuple(p for p in err["loc"] if not (isinstance(p, str) and p[:1].isupper()))
-    # pydantic inserts union-branch names like 'list[float]'; drop them.
-    loc = tuple(
-        p for p in loc if not (isinstance(p, str) and ("[" in p or ":" in p or p in {"float"}))
-    )
-    msg = err["msg"].removeprefix("Value error, ")
-    raised = (err.get("ctx") or {}).get("error")
-    if isinstance(raised, FieldError):
-        # A cross-field check names the field it is about: report it there.
-        loc = loc + raised.path
-        msg = str(raised)
-    return loc, msg, err.get("input")
-
-
-def _describe(err: dict, lines: dict[tuple, int]) -> str:
-    loc, msg, given = _error_parts(err)
-    dotted = ".".join(str(p) for p in loc) or "<top level>"
-    line = None
-    for k in range(len(loc), -1, -1):
-        if loc[:k] in lines:
-            line = lines[loc[:k]]
-            break
-    # a YAML line number, or the label of a command-line override
-    where = f" (line {line})" if isinstance(line, int) else (f" ({line})" if line else "")
-    if err["type"] == "extra_forbidden":
-        parent = _model_at(loc[:-1])
-        hint = ""
-        if parent is not None:
-            close = difflib.get_close_matches(
-                str(loc[-1]), list(parent.model_fields), n=1, cutoff=0.5
-            )
-            if close:
-                hint = f"; did you mean '{close[0]}'?"
-            valid = ", ".join(parent.model_fields)
-            hint += f" Valid keys here: {valid}"
-        return f"{dotted}{where}: unknown key{hint}"
-    raised = (err.get("ctx") or {}).get("error")
-    given_s = (
-        "" if isinstance(given, dict) or isinstance(raised, FieldError) else f"; given {given!r}"
-    )
-    return f"{dotted}{where}: {msg}{given_s}"
-
-
-def parse_config(
-    data: Any, lines: dict[tuple, int | str] | None = None, source: str = "config"
-) -> Config:
-    """Validate a config mapping.
-
-    Raises
-    ------
-    ConfigError
-        With one message per problem, naming each field.
-    """
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise ConfigError([f"<top level>: expected a mapping, got {type(data).__name__}"], source)
-    try:
-        return Config.model_validate(data)
-    except ValidationError as exc:
-        seen: list[str] = []
-        for err in exc.errors():
-            msg = _describe(err, lines or {})
-            if msg not in seen:
-                seen.append(msg)
-        raise ConfigError(seen, source) from None
-
-
-def apply_overrides(
-    data: dict[str, Any], lines: dict[tuple, int | str], overrides: Sequence[str]
-) -> dict[str, Any]:
-    """Apply ``KEY=VALUE`` overrides (dotted keys, YAML values) to a config mapping.
-
-    Parameters
-    ----------
-    data : dict
-        The config as read from YAML (not modified).
-    lines : dict
-        Key path -> YAML line; each overridden path is relabelled with its
-        override, so a problem with it is reported as ``(override KEY=VALUE)``.
-    overrides : sequence of str
-        E.g. ``fiber.contact.chi=1.2``, ``sweep.y0=[0.3, 0.4]``, ``flow.dx=2``.
-        Values are YAML: numbers, booleans, strings, ``[lists]`` and ``{maps}``.
-
-    Returns
-    -------
-    dict
-        A new mapping with the overrides applied, in order (a later one wins).
-
-    Raises
-    ------
-    ConfigError
-        Malformed overrides, each named (the schema then checks keys and values).
-    """
-    out: dict[str, Any] = copy.deepcopy(data)
-    problems = []
-    for item in overrides:
-        key, sep, raw = item.partition("=")
-        path = tuple(p.strip() for p in key.split("."))
-        if len(path) > 2 and path[0] == "sweep":
-            # a swept setting is one dotted key inside sweep (or inside sweep.zip)
-            cut = 3 if path[1] == "zip" and len(path) > 3 else 2
-            path = (*path[: cut - 1], ".".join(path[cut - 1 :]))
-        if not sep or not all(path):
-            problems.append(
-                f"override {item!r}: expected KEY=VALUE with a dotted key, "
-                "e.g. fiber.contact.chi=1.2"
-            )
-            continue
-        try:
-            value = yaml.load(raw, Loader=_Loader) if raw.strip() else None
-        except yaml.YAMLError as exc:
-            problems.append(f"override {item!r}: the value is not valid YAML ({exc})")
-            continue
-        node = out
-        for depth, part in enumerate(path[:-1]):
-            child = node.setdefault(part, {})
-            if child is None:
-                child = node[part] = {}
-            if not isinstance(child, dict):
-                where = ".".join(path[: depth + 1])
-                problems.append(f"override {item!r}: {where} is a value, not a section")
-                break
-            node = child
-        else:
-            node[path[-1]] = value
-            label = f"override {item}"
-            lines[path] = label
-            for k in range(1, len(path)):
-                lines.setdefault(path[:k], label)
-    if problems:
-        raise ConfigError(problems)
-    return out
-
-
-def load_config(
-    path: str | Path, overrides: Sequence[str] = (), *, max_points: int | None = None
-) -> Config:
-    """Read and validate a YAML config file, with command-line overrides.
-
-    ``overrides`` are ``KEY=VALUE`` strings (:func:`apply_overrides`), validated by
-    the same schema with the same messages. ``max_points`` (the command line's
-    ``--max-points``) replaces ``run.max_points`` before validation, so a large
-    sweep can be allowed without editing the file.
-
-    Raises
-    ------
-    ConfigError
-        Unreadable file, invalid YAML, bad overrides or invalid settings (each named).
-    """
-    p = Path(path)
-    try:
-        text = p.read_text()
-    except OSError as exc:
-        raise ConfigError([f"cannot read config: {exc.strerror}"], str(p)) from None
-    try:
-        located = _yaml_with_lines(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError([f"invalid YAML: {exc}"], str(p)) from None
-    except ConfigError as exc:
-        raise ConfigError(exc.problems, str(p)) from None
-    data = located.data
-    if overrides:
-        if data is None:
-            data = {}
-        if isinstance(data, dict):
-            try:
-                data = apply_overrides(data, located.lines, overrides)
-            except ConfigError as exc:
-                raise ConfigError(exc.problems, str(p)) from None
-    if max_points is not None and isinstance(data, dict):
-        run = data.get("run") if isinstance(data.get("run"), dict) else {}
-        data = {**data, "run": {**run, "max_points": max_points}}
-    return parse_config(data, located.lines, str(p))
