@@ -7,8 +7,9 @@ package can import them (to register their commands) without an import cycle.
 from __future__ import annotations
 
 import atexit
+import enum
 import logging
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
@@ -37,6 +38,13 @@ Overrides = Annotated[
     ),
 ]
 Verbose = Annotated[bool, typer.Option("--verbose", "-v", help="Log progress details.")]
+
+
+def choices(name: str, values: Iterable[str]) -> type[enum.Enum]:
+    """A string Enum of ``values`` for a typer option, so --help lists the valid ones."""
+    return enum.Enum(name, {v: v for v in values}, type=str)
+
+
 Workers = Annotated[int | None, typer.Option(help="Worker processes (default: run.workers).")]
 
 

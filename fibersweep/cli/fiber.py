@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import typing
 from pathlib import Path
 from typing import Annotated
 
@@ -15,7 +16,12 @@ from fibersweep.cli._app import (
     _load,
     _setup_logging,
     app,
+    choices,
 )
+from fibersweep.fiber.settings import FiberSettings
+
+# the models FiberSettings accepts (the model registry matches them, tested)
+Model = choices("Model", typing.get_args(FiberSettings.model_fields["model"].annotation))
 
 
 @app.command()
@@ -29,7 +35,7 @@ def simulate(
         typer.Option("--plot", help="Write a chronophotograph (PNG/PDF/SVG by suffix)."),
     ] = None,
     model: Annotated[
-        str | None, typer.Option("--model", help="rigid or bead-spring [config fiber.model].")
+        Model | None, typer.Option("--model", help="Fiber model [default: fiber.model].")
     ] = None,
     reversible: Annotated[
         bool, typer.Option("--reversible", help="Also reverse the flow and report the return.")
@@ -43,7 +49,6 @@ def simulate(
 
     _setup_logging(verbose)
     with _errors():
-        from fibersweep.errors import InputError
         from fibersweep.fiber.result import FiberStart
         from fibersweep.fiber.run import simulate as run_one
         from fibersweep.fiber.run import simulate_reversible
@@ -52,9 +57,7 @@ def simulate(
         cfg = _load(config, overrides)
         fiber = cfg.fiber
         if model is not None:
-            if model not in ("rigid", "bead-spring"):
-                raise InputError(f"--model: expected rigid or bead-spring, got {model!r}")
-            fiber = fiber.model_copy(update={"model": model})
+            fiber = fiber.model_copy(update={"model": model.value})
         if plot is not None:
             rec = fiber.record.model_copy(
                 update={"trajectories": True, "samples": max(fiber.record.samples, 2000)}

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import enum
 from pathlib import Path
 from typing import Annotated
 
@@ -19,11 +18,16 @@ from fibersweep.cli._app import (
     _load,
     _setup_logging,
     app,
+    choices,
 )
 from fibersweep.errors import InputError, Terminated
+from fibersweep.plots import FORMATS
+from fibersweep.sweep.executors import EXECUTORS
 
-#: Choices of ``classify --rule``, from the rule registry.
-Rule = enum.Enum("Rule", {name: name for name in RULES}, type=str)
+# Option choices, from the registries.
+Rule = choices("Rule", RULES)
+Executor = choices("Executor", EXECUTORS)
+Format = choices("Format", FORMATS)
 
 
 def _fmt_s(s: float | None) -> str:
@@ -61,7 +65,7 @@ def run(
         bool, typer.Option("--dry-run", help="Show what is done and to do, and a time estimate.")
     ] = False,
     executor: Annotated[
-        str | None, typer.Option(help="local (process pool) or dask (default: run.executor).")
+        Executor | None, typer.Option(help="Where runs execute [default: run.executor].")
     ] = None,
     scheduler: Annotated[
         str | None, typer.Option(help="Dask scheduler tcp://HOST:PORT (implies dask).")
@@ -84,7 +88,7 @@ def run(
         cfg = _with_run_overrides(
             cfg,
             workers=workers,
-            executor=executor,
+            executor=executor.value if executor is not None else None,
             scheduler=scheduler,
             output=None if output is None else str(output),
         )
@@ -297,7 +301,7 @@ def plot_phase(
         Path | None,
         typer.Option("--output", "-o", "--out", help="Figure folder (default: RESULTS/figures)."),
     ] = None,
-    fmt: Annotated[str, typer.Option("--format", help="png, pdf or svg.")] = "png",
+    fmt: Annotated[Format, typer.Option("--format", help="Figure format.")] = "png",
     col: Annotated[
         str | None,
         typer.Option(
@@ -331,7 +335,9 @@ def plot_phase(
         combos = man.get("combinations") or {}
         if len({e.get("flow_key") for e in combos.values()}) > 1:  # one per flow field
             sep = {sid: e.get("separatrix") for sid, e in combos.items()}
-        paths = plot_all(runs, out or results / "figures", fmt, separatrix=sep, col=col, row=row)
+        paths = plot_all(
+            runs, out or results / "figures", Format(fmt).value, separatrix=sep, col=col, row=row
+        )
     for p in paths:
         typer.echo(f"wrote {p}")
 

@@ -24,6 +24,7 @@ from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
 
 from fibersweep.errors import InputError  # noqa: E402
 from fibersweep.fiber.result import CLASSES  # noqa: E402
+from fibersweep.plots import FORMATS  # noqa: E402
 from fibersweep.plots.style import (  # noqa: E402
     CLASS_STYLE,
     FAILED_STYLE,
@@ -46,7 +47,6 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-FORMATS = ("png", "pdf", "svg")
 WIDTH_IN = 7.0  # two-column figure width [in]
 THETA = r"$\theta_0$ [deg]"
 Y0 = r"$y_0/h_{obs}$"

@@ -224,7 +224,7 @@ def test_classify_round_trip_and_plots(reference, tmp_path):
     for f in figs:
         assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f.stat().st_size > 20_000
     res, text = _invoke("plot-phase", out, "--format", "svgz")
-    assert res.exit_code == 2 and "expected one of png, pdf, svg" in text
+    assert res.exit_code == 2 and "'svgz' is not one of 'png', 'pdf', 'svg'" in text, text
 
 
 def test_changed_settings_are_detected(reference, tmp_path):
