@@ -26,7 +26,8 @@ def main() -> None:
     changed = m[m["class_a"] != m["class_b"]]
     print(f"class changed: {len(changed)} of {len(m)}")
     if len(changed):
-        print(changed[["theta0_a", "y0_a", "length_a", "class_a", "class_b"]].to_string(index=False))
+        cols = ["theta0_a", "y0_a", "length_a", "class_a", "class_b"]
+        print(changed[cols].to_string(index=False))
     da, db = m["delta_a"].to_numpy(float), m["delta_b"].to_numpy(float)
     both = np.isfinite(da) & np.isfinite(db)
     nan_mismatch = int((np.isfinite(da) != np.isfinite(db)).sum())
