@@ -1,0 +1,223 @@
+"""Interpolated bounce-back (linear Bouzidi–Firdaouss–Lallemand) as small per-link tables.
+
+For a fluid node x whose link along e_p meets the wall at the fraction q of
+the link (:mod:`fibersweep.flow.cuts`), the population that comes back,
+f_p̄(x, t + 1) with p̄ = opp(p), is interpolated from post-collision values
+(Bouzidi, Firdaouss & Lallemand 2001):
+
+    q < 1/2:  f_p̄(x, t+1) = 2q f*_p(x) + (1 − 2q) f*_p(x − e_p)
+    q ≥ 1/2:  f_p̄(x, t+1) = f*_p(x) / 2q + (1 − 1/2q) f*_p̄(x)
+
+At q = 1/2 both reduce to half-way bounce-back. f*_p(x − e_p) is read where
+the lattice kernel itself finds the population p arriving at x (a plain
+neighbour, the half-way bounce-back of a channel wall, or the mirror image
+across the free-slip midplane), so the scheme composes with the other
+boundaries. If x − e_p were solid (not possible for one convex pillar, but
+checked) the link falls back to half-way bounce-back.
+
+Each link is a row (dst, src[3], coef[3]): ``flat[dst] = Σ coef · flat[src]``,
+flat indices into the whole population array (slot × plane + cell); the rows
+are applied by :func:`fibersweep.flow.kernels.apply_interpolated`. For the AA
+pattern (:mod:`fibersweep.flow.kernels_aa`) the same links give two tables:
+
+- ``before`` (after the even step, which leaves f*_p(x) in slot p̄ of x): the
+  value is stored in the solid slot from which the odd step gathers p̄ for x;
+- ``after`` (after the odd step, which pushed f*_p(x) into that solid slot and
+  f*_p(x − e_p) into slot p of x): the value goes to slot p̄ of x, which the next
+  even step reads.
+
+For the two-array pull kernel one table stores the value in the solid slot x pulls from.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+
+from fibersweep.flow.cuts import Cuts
+from fibersweep.flow.lattice import OPP, Grid, Q
+
+__all__ = ["LinkTable", "bfl_coefficients", "aa_interpolated", "pull_interpolated"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class LinkTable:
+    """Rows ``g.flat[dst] = Σ_k coef[:, k] g.flat[src[:, k]]`` (flat over the whole array).
+
+    Attributes
+    ----------
+    dst : ndarray, shape (n,), int64
+    src : ndarray, shape (n, 3), int64
+        f*_p(x), f*_p̄(x), f*_p(x − e_p) of each link, where they are stored.
+    coef : ndarray, shape (n, 3), float64
+        BFL weights (sum 1 per row, so they apply to the shifted g = f − w too).
+    q : ndarray, shape (n,), float64
+        Wall fraction of each link (for diagnostics).
+    """
+
+    dst: np.ndarray
+    src: np.ndarray
+    coef: np.ndarray
+    q: np.ndarray
+
+
+def bfl_coefficients(q: np.ndarray, has_upstream: np.ndarray | None = None) -> np.ndarray:
+    """Linear BFL weights on (f*_p(x), f*_p̄(x), f*_p(x − e_p)), shape (n, 3).
+
+    Parameters
+    ----------
+    q : ndarray, shape (n,)
+        Wall fraction of each link, 0 ≤ q ≤ 1.
+    has_upstream : ndarray, shape (n,), bool, optional
+        False where x − e_p is not fluid: such links with q < 1/2 fall back to
+        half-way bounce-back (weights (1, 0, 0)).
+    """
+    q = np.asarray(q, dtype=np.float64)
+    c = np.zeros((q.size, 3))
+    low = q < 0.5
+    c[low, 0] = 2.0 * q[low]
+    c[low, 2] = 1.0 - 2.0 * q[low]
+    c[~low, 0] = 0.5 / q[~low]
+    c[~low, 1] = 1.0 - 0.5 / q[~low]
+    if has_upstream is not None:
+        bad = low & ~np.asarray(has_upstream, dtype=bool)
+        c[bad] = (1.0, 0.0, 0.0)
+    return c
+
+
+class _Flat:
+    """Flat indices into a padded population array (slot, z, y, interior x)."""
+
+    def __init__(self, grid: Grid):
+        self.nx, self.ny = grid.nx, grid.ny
+        self.nyp, self.nxp = grid.ny + 2, grid.nx + 2
+        self.plane = (grid.nz + 2) * self.nyp * self.nxp
+
+    def __call__(self, slot, z, y, x_padded) -> np.ndarray:
+        return slot * self.plane + (z * self.nyp + y) * self.nxp + x_padded
+
+
+def _candidates(grid: Grid, cuts: Cuts, table: np.ndarray, wrap: bool):
+    """Yield, per layer k and direction q, the cut nodes whose ``table`` source of q is solid.
+
+    Yields (k, q, i, j, loc, di, dj): loc = (slot, z, y, x_padded) of that solid
+    source (x wrapped into the interior if ``wrap``), (di, dj) its in-plane offset.
+    """
+    for k in range(grid.nz):
+        rows = k * grid.ny + cuts.j
+        for q in range(1, Q):
+            slot, zs, ys, xo = (table[rows, q, c] for c in range(4))
+            ii = (cuts.i + xo - 1) % grid.nx
+            jj = ys - 1
+            hit = (jj >= 0) & (jj < grid.ny)
+            hit[hit] = grid.solid[ii[hit], jj[hit]]
+            if not hit.any():
+                continue
+            xp = ii[hit] + 1 if wrap else cuts.i[hit] + xo[hit]
+            di = (ii[hit] - cuts.i[hit] + 1) % grid.nx - 1
+            dj = jj[hit] - cuts.j[hit]
+            loc = (slot[hit], zs[hit], ys[hit], xp)
+            yield k, q, np.flatnonzero(hit), loc, di, dj
+
+
+def _location(table: np.ndarray, rows, q, i, grid: Grid, wrap: bool):
+    """(slot, z, y, x_padded) of ``table`` entry q for cells i of ``rows``; interior x, y."""
+    slot, zs, ys, xo = (table[rows, q, c] for c in range(4))
+    ii = (i + xo - 1) % grid.nx
+    xp = ii + 1 if wrap else i + xo
+    return (slot, zs, ys, xp), ii, ys - 1
+
+
+def _fluid(grid: Grid, ii: np.ndarray, jj: np.ndarray) -> np.ndarray:
+    ok = (jj >= 0) & (jj < grid.ny)
+    ok[ok] = ~grid.solid[ii[ok], jj[ok]]
+    return ok
+
+
+def _table(parts: list) -> LinkTable:
+    if not parts:
+        return LinkTable(
+            np.zeros(0, np.int64), np.zeros((0, 3), np.int64), np.zeros((0, 3)), np.zeros(0)
+        )
+    dst, src, coef, q = (np.concatenate([p[n] for p in parts]) for n in range(4))
+    return LinkTable(dst.astype(np.int64), src.astype(np.int64), coef, q)
+
+
+def _wall_q(cuts: Cuts, m: np.ndarray, di: np.ndarray, dj: np.ndarray) -> np.ndarray:
+    q = cuts.q[m, di + 1, dj + 1]
+    if not np.all(np.isfinite(q)):
+        raise ValueError("a solid neighbour has no wall fraction: cuts and grid disagree")
+    return q
+
+
+def aa_interpolated(
+    grid: Grid, cuts: Cuts, gather: np.ndarray, scatter: np.ndarray
+) -> tuple[LinkTable, LinkTable]:
+    """The ``before`` and ``after`` tables of the AA pattern (see the module docstring).
+
+    Parameters
+    ----------
+    grid : Grid
+    cuts : Cuts
+        Wall fractions of ``grid.solid``'s links.
+    gather, scatter : ndarray, shape (nz * ny, 19, 4), int64
+        From :func:`fibersweep.flow.lattice.aa_tables`.
+    """
+    flat = _Flat(grid)
+    before, after = [], []
+    fallback = 0
+    for k, q, m, loc, di, dj in _candidates(grid, cuts, gather, wrap=True):
+        p = OPP[q]  # the link x → wall is along e_p; p̄ = q comes back
+        i, j = cuts.i[m], cuts.j[m]
+        rows = k * grid.ny + j
+        x_cell = flat(0, k + 1, j + 1, i + 1)
+        solid_slot = flat(*loc)
+        wq = _wall_q(cuts, m, di, dj)
+        up_loc, ui, uj = _location(gather, rows, p, i, grid, wrap=True)
+        up = _fluid(grid, ui, uj)
+        fallback += int((~up & (wq < 0.5)).sum())
+        coef = bfl_coefficients(wq, up)
+        # after the even step: f*_p(x) in slot p̄ = q of x, f*_p̄(x) in slot p of x
+        src_b = np.column_stack([q * flat.plane + x_cell, p * flat.plane + x_cell, flat(*up_loc)])
+        before.append((solid_slot, src_b, coef, wq))
+        pushed_p, _, _ = _location(scatter, rows, p, i, grid, wrap=True)
+        if not np.array_equal(flat(*pushed_p), solid_slot):
+            raise AssertionError("AA tables: the odd step must push f*_p(x) into the slot it read")
+        pushed_q, _, _ = _location(scatter, rows, q, i, grid, wrap=True)
+        # after the odd step: f*_p(x) in the solid slot, f*_p̄(x) where x pushed it,
+        # f*_p(x − e_p) arrived in slot p of x; the result goes to slot p̄ of x
+        src_a = np.column_stack([solid_slot, flat(*pushed_q), p * flat.plane + x_cell])
+        after.append((q * flat.plane + x_cell, src_a, coef, wq))
+    if fallback:
+        log.info("interpolated bounce-back: %d links fall back to half-way", fallback)
+    return _table(before), _table(after)
+
+
+def pull_interpolated(grid: Grid, cuts: Cuts, sources: np.ndarray) -> LinkTable:
+    """Table for the two-array pull kernel: values stored in the solid slots that fluid pulls.
+
+    Parameters
+    ----------
+    grid : Grid
+    cuts : Cuts
+    sources : ndarray, shape (nz * ny, 19, 4), int64
+        From :func:`fibersweep.flow.lattice.pull_sources`; the kernel writes
+        post-collision f*_q(x) into slot q of x and fills the periodic ghost columns.
+    """
+    flat = _Flat(grid)
+    parts = []
+    for k, q, m, loc, di, dj in _candidates(grid, cuts, sources, wrap=False):
+        p = OPP[q]
+        i, j = cuts.i[m], cuts.j[m]
+        rows = k * grid.ny + j
+        x_cell = flat(0, k + 1, j + 1, i + 1)
+        wq = _wall_q(cuts, m, di, dj)
+        up_loc, ui, uj = _location(sources, rows, p, i, grid, wrap=False)
+        up = _fluid(grid, ui, uj)
+        src = np.column_stack([p * flat.plane + x_cell, q * flat.plane + x_cell, flat(*up_loc)])
+        parts.append((flat(*loc), src, bfl_coefficients(wq, up), wq))
+    return _table(parts)
