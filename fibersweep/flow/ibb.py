@@ -39,7 +39,14 @@ import numpy as np
 from fibersweep.flow.cuts import Cuts
 from fibersweep.flow.lattice import OPP, Grid, Q
 
-__all__ = ["LinkTable", "bfl_coefficients", "aa_interpolated", "pull_interpolated"]
+__all__ = [
+    "LinkTable",
+    "bfl_coefficients",
+    "family_coefficients",
+    "ibb_coefficients",
+    "aa_interpolated",
+    "pull_interpolated",
+]
 
 log = logging.getLogger(__name__)
 
@@ -83,10 +90,64 @@ def bfl_coefficients(q: np.ndarray, has_upstream: np.ndarray | None = None) -> n
     c[low, 2] = 1.0 - 2.0 * q[low]
     c[~low, 0] = 0.5 / q[~low]
     c[~low, 1] = 1.0 - 0.5 / q[~low]
+    return _fallback(c, q, has_upstream)
+
+
+def _fallback(c: np.ndarray, q: np.ndarray, has_upstream: np.ndarray | None) -> np.ndarray:
     if has_upstream is not None:
-        bad = low & ~np.asarray(has_upstream, dtype=bool)
+        bad = ~np.asarray(has_upstream, dtype=bool) & (np.abs(c[:, 2]) > 0)
         c[bad] = (1.0, 0.0, 0.0)
     return c
+
+
+def family_coefficients(q: np.ndarray, rho: np.ndarray) -> np.ndarray:
+    """Weights of the linear three-point scheme with wall at q and parameter ρ.
+
+    The schemes f_p̄ = α f*_p(x) + β f*_p(x − e_p) + γ f*_p̄(x) that conserve
+    rest populations and are exact for linear profiles with the wall at q
+    form a one-parameter family: β = (ρ − 1)/(ρ + 1), σ = 2/((ρ + 1) q),
+    α = σ/2 − β, γ = 1 − σ/2. BFL (q < 1/2) is ρ = (1 − q)/q, BFL (q ≥ 1/2)
+    ρ = 1 (β = 0), Ginzburg's central linear interpolation ρ = 1/(2q).
+    """
+    q = np.asarray(q, dtype=np.float64)
+    rho = np.asarray(rho, dtype=np.float64)
+    beta = (rho - 1.0) / (rho + 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sigma = 2.0 / ((rho + 1.0) * q)
+    return np.column_stack([0.5 * sigma - beta, beta, 1.0 - 0.5 * sigma])[:, [0, 2, 1]]
+
+
+def ibb_coefficients(
+    q: np.ndarray,
+    lam_plus: float,
+    lam: float,
+    has_upstream: np.ndarray | None = None,
+    scheme: str = "bfl",
+) -> np.ndarray:
+    """Weights on (f*_p(x), f*_p̄(x), f*_p(x − e_p)), shape (n, 3), for ``scheme``.
+
+    "bfl": linear BFL. "trt": the member of :func:`family_coefficients`
+    that is exact for Poiseuille flow with TRT (steady-state analysis: the
+    scheme puts the wall of a parabolic profile at q when
+    ρ = X/(q Λ+), X = q²/2 − 2Λ/3 + Λ+/2, Λ = Λ+ Λ−). ρ is limited to at
+    least 1/(2q), Ginzburg's central linear interpolation (CLI): members with
+    smaller ρ have larger weights and were unstable in tests (q = 0.1 diverged
+    with γ = −1). With Λ = 3/16 the exact member satisfies the limit exactly
+    for q ≥ 1/2, so this is CLI for q < 1/2 (Poiseuille wall error
+    (1/8 − q²/2) ∂²_q e⁻, independent of the viscosity; BFL's is
+    (1/2 − q)((1/2 + q)/2 + Λ+), two to three times larger) and exact for q ≥ 1/2.
+    """
+    q = np.asarray(q, dtype=np.float64)
+    if scheme == "bfl":
+        return bfl_coefficients(q, has_upstream)
+    if scheme != "trt":
+        raise ValueError(f"unknown interpolation scheme {scheme!r}")
+    x = 0.5 * q * q - 2.0 * lam / 3.0 + 0.5 * lam_plus
+    qs = np.maximum(q, 1e-12)
+    rho = x / (qs * lam_plus)
+    rho = np.maximum(rho, 1.0 / (2.0 * qs))
+    c = family_coefficients(qs, rho)
+    return _fallback(c, q, has_upstream)
 
 
 class _Flat:
@@ -102,10 +163,14 @@ class _Flat:
 
 
 def _candidates(grid: Grid, cuts: Cuts, table: np.ndarray, wrap: bool):
-    """Yield, per layer k and direction q, the cut nodes whose ``table`` source of q is solid.
+    """Yield, per layer k and direction q, cut nodes whose ``table`` source of q is across the wall.
 
-    Yields (k, q, i, j, loc, di, dj): loc = (slot, z, y, x_padded) of that solid
-    source (x wrapped into the interior if ``wrap``), (di, dj) its in-plane offset.
+    That source is a solid node, or a fluid node beyond a link that cuts a
+    corner of the pillar: its slot is then read only by this node in this
+    step, so it can carry the interpolated value as a solid slot does.
+    Yields (k, q, m, loc, di, dj): m indexes ``cuts``, loc = (slot, z, y,
+    x_padded) of that source (x wrapped into the interior if ``wrap``), (di, dj)
+    its in-plane offset.
     """
     for k in range(grid.nz):
         rows = k * grid.ny + cuts.j
@@ -113,15 +178,15 @@ def _candidates(grid: Grid, cuts: Cuts, table: np.ndarray, wrap: bool):
             slot, zs, ys, xo = (table[rows, q, c] for c in range(4))
             ii = (cuts.i + xo - 1) % grid.nx
             jj = ys - 1
-            hit = (jj >= 0) & (jj < grid.ny)
-            hit[hit] = grid.solid[ii[hit], jj[hit]]
+            di = (ii - cuts.i + 1) % grid.nx - 1
+            dj = jj - cuts.j
+            hit = (np.abs(di) <= 1) & (np.abs(dj) <= 1) & ((di != 0) | (dj != 0))
+            hit[hit] = np.isfinite(cuts.q[np.flatnonzero(hit), di[hit] + 1, dj[hit] + 1])
             if not hit.any():
                 continue
             xp = ii[hit] + 1 if wrap else cuts.i[hit] + xo[hit]
-            di = (ii[hit] - cuts.i[hit] + 1) % grid.nx - 1
-            dj = jj[hit] - cuts.j[hit]
             loc = (slot[hit], zs[hit], ys[hit], xp)
-            yield k, q, np.flatnonzero(hit), loc, di, dj
+            yield k, q, np.flatnonzero(hit), loc, di[hit], dj[hit]
 
 
 def _location(table: np.ndarray, rows, q, i, grid: Grid, wrap: bool):
@@ -150,12 +215,22 @@ def _table(parts: list) -> LinkTable:
 def _wall_q(cuts: Cuts, m: np.ndarray, di: np.ndarray, dj: np.ndarray) -> np.ndarray:
     q = cuts.q[m, di + 1, dj + 1]
     if not np.all(np.isfinite(q)):
-        raise ValueError("a solid neighbour has no wall fraction: cuts and grid disagree")
+        raise ValueError("a cut link has no wall fraction: cuts and grid disagree")
     return q
 
 
+def _coefficients(cuts: Cuts, q, up, omega_p: float, omega_m: float) -> np.ndarray:
+    lam_p, lam_m = 1.0 / omega_p - 0.5, 1.0 / omega_m - 0.5
+    return ibb_coefficients(q, lam_p, lam_p * lam_m, up, cuts.scheme)
+
+
 def aa_interpolated(
-    grid: Grid, cuts: Cuts, gather: np.ndarray, scatter: np.ndarray
+    grid: Grid,
+    cuts: Cuts,
+    gather: np.ndarray,
+    scatter: np.ndarray,
+    omega_p: float,
+    omega_m: float,
 ) -> tuple[LinkTable, LinkTable]:
     """The ``before`` and ``after`` tables of the AA pattern (see the module docstring).
 
@@ -166,6 +241,8 @@ def aa_interpolated(
         Wall fractions of ``grid.solid``'s links.
     gather, scatter : ndarray, shape (nz * ny, 19, 4), int64
         From :func:`fibersweep.flow.lattice.aa_tables`.
+    omega_p, omega_m : float
+        TRT relaxation rates (the "trt" weights depend on them).
     """
     flat = _Flat(grid)
     before, after = [], []
@@ -180,7 +257,7 @@ def aa_interpolated(
         up_loc, ui, uj = _location(gather, rows, p, i, grid, wrap=True)
         up = _fluid(grid, ui, uj)
         fallback += int((~up & (wq < 0.5)).sum())
-        coef = bfl_coefficients(wq, up)
+        coef = _coefficients(cuts, wq, up, omega_p, omega_m)
         # after the even step: f*_p(x) in slot p̄ = q of x, f*_p̄(x) in slot p of x
         src_b = np.column_stack([q * flat.plane + x_cell, p * flat.plane + x_cell, flat(*up_loc)])
         before.append((solid_slot, src_b, coef, wq))
@@ -197,7 +274,9 @@ def aa_interpolated(
     return _table(before), _table(after)
 
 
-def pull_interpolated(grid: Grid, cuts: Cuts, sources: np.ndarray) -> LinkTable:
+def pull_interpolated(
+    grid: Grid, cuts: Cuts, sources: np.ndarray, omega_p: float, omega_m: float
+) -> LinkTable:
     """Table for the two-array pull kernel: values stored in the solid slots that fluid pulls.
 
     Parameters
@@ -207,6 +286,8 @@ def pull_interpolated(grid: Grid, cuts: Cuts, sources: np.ndarray) -> LinkTable:
     sources : ndarray, shape (nz * ny, 19, 4), int64
         From :func:`fibersweep.flow.lattice.pull_sources`; the kernel writes
         post-collision f*_q(x) into slot q of x and fills the periodic ghost columns.
+    omega_p, omega_m : float
+        TRT relaxation rates.
     """
     flat = _Flat(grid)
     parts = []
@@ -219,5 +300,5 @@ def pull_interpolated(grid: Grid, cuts: Cuts, sources: np.ndarray) -> LinkTable:
         up_loc, ui, uj = _location(sources, rows, p, i, grid, wrap=False)
         up = _fluid(grid, ui, uj)
         src = np.column_stack([p * flat.plane + x_cell, q * flat.plane + x_cell, flat(*up_loc)])
-        parts.append((flat(*loc), src, bfl_coefficients(wq, up), wq))
+        parts.append((flat(*loc), src, _coefficients(cuts, wq, up, omega_p, omega_m), wq))
     return _table(parts)

@@ -35,6 +35,7 @@ __all__ = [
     "solve_lattice",
     "solve_nested",
     "coarser_settings",
+    "lattice_of",
 ]
 
 log = logging.getLogger(__name__)
@@ -106,6 +107,17 @@ class LatticeSolution:
     rho: np.ndarray
     grid: Grid
     report: SolveReport
+
+
+def lattice_of(settings: FlowSettings, pillar: bool = True) -> Grid:
+    """The lattice of ``settings``: the closed pillar for interpolated walls, else the open one."""
+    return make_grid(
+        settings.geometry.to_geometry(),
+        settings.dx,
+        settings.symmetry,
+        pillar=pillar,
+        closed=settings.pillar_boundary != "staircase",
+    )
 
 
 def choose_tau(grid: Grid) -> float:
@@ -181,7 +193,7 @@ def solve_lattice(
     """
     geom = settings.geometry.to_geometry()
     if grid is None:
-        grid = make_grid(geom, settings.dx, settings.symmetry, pillar=pillar)
+        grid = lattice_of(settings, pillar=pillar)
         if pillar:
             cuts = pillar_cuts(grid, geom.vertices, settings.pillar_boundary)
     boundary = "none" if not grid.solid.any() else ("staircase" if cuts is None else "interpolated")
@@ -344,7 +356,7 @@ def solve_nested(settings: FlowSettings, threads: int | None = None) -> LatticeS
     if coarse_settings is None:
         return solve_lattice(settings, threads=threads)
     coarse = solve_nested(coarse_settings, threads=threads)
-    fine_grid = make_grid(settings.geometry.to_geometry(), settings.dx, settings.symmetry)
+    fine_grid = lattice_of(settings)
     fx = _rates(settings, fine_grid)[3]
     density_scale = fx / coarse.report.force * (coarse.grid.dx / fine_grid.dx)
     u0, rho0 = prolong(coarse.u, coarse.rho, coarse.grid, fine_grid, density_scale)

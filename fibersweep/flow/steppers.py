@@ -42,7 +42,9 @@ class PullStepper:
         self.fx, self.omega_p, self.omega_m = fx, omega_p, omega_m
         self.links, self.solid_cells = boundary_links(grid)
         self.sources = pull_sources(grid)
-        self.table = None if cuts is None else pull_interpolated(grid, cuts, self.sources)
+        self.table = (
+            None if cuts is None else pull_interpolated(grid, cuts, self.sources, omega_p, omega_m)
+        )
         self.buf = np.zeros(0 if cuts is None else self.table.dst.size)
         self.e = tuple(np.ascontiguousarray(E[:, k]) for k in range(3))
         self.g = np.zeros(grid.padded_shape, dtype=np.float32)
@@ -88,7 +90,7 @@ class AAStepper:
         self.before, self.after, self.solid_cells = aa_links(grid, self.gather, self.scatter)
         self.tables = None
         if cuts is not None:
-            self.tables = aa_interpolated(grid, cuts, self.gather, self.scatter)
+            self.tables = aa_interpolated(grid, cuts, self.gather, self.scatter, omega_p, omega_m)
             self.buf = np.zeros(self.tables[0].dst.size)
         self.no_cells = np.zeros(0, dtype=np.int64)
         self.opp = np.ascontiguousarray(OPP)
