@@ -81,8 +81,9 @@ def cuts_from_distance(
         ``distance(x, y, e_x, e_y)`` with node-centre coordinates x, y in lattice
         units (arrays of equal shape): fraction q of the link to (x + e_x, y + e_y)
         at which it first enters the wall, NaN if it does not. Called for every
-        link from a fluid node; NaN for a link whose end is solid means the
-        end node lies on the wall (q = 1).
+        link from a fluid node. With ``closed=True`` (asked for links into a
+        solid node that do not enter the open wall region) the first point
+        where the link touches the wall; NaN there means q = 1.
     scheme : str
         Stored in the result (:attr:`Cuts.scheme`).
 
@@ -108,8 +109,12 @@ def cuts_from_distance(
         into_solid[inside] = solid[ii[inside], jj[inside]]
         with np.errstate(invalid="ignore"):
             t = np.asarray(distance(fi + 0.5, fj + 0.5, ex, ey), dtype=np.float64)
-        # a solid node on the outline is only touched at the link's end: q = 1
-        t[into_solid & np.isnan(t)] = 1.0
+        # a link into a solid node on the outline may only touch the wall (run
+        # along an edge, or meet it at its end): q is where it first touches
+        touch = into_solid & np.isnan(t)
+        if touch.any():
+            t[touch] = distance(fi[touch] + 0.5, fj[touch] + 0.5, ex, ey, closed=True)
+        t[touch & np.isnan(t)] = 1.0
         bad = into_solid & ~((t >= -1e-12) & (t <= 1.0 + 1e-12))
         if bad.any():
             raise ValueError(
@@ -134,10 +139,13 @@ def _polygon_entry(vertices: np.ndarray) -> Callable:
 
     Cyrus–Beck clipping of the segment against the open half-planes of the
     edges; NaN if the clipped part is shorter than ``ENTRY_MIN`` (the segment
-    misses the polygon, touches a vertex, or runs along an edge).
+    misses the polygon, touches a vertex, or runs along an edge). ``closed``:
+    against the closed polygon (a touching segment counts).
     """
 
-    def distance(x: np.ndarray, y: np.ndarray, ex: int, ey: int) -> np.ndarray:
+    def distance(
+        x: np.ndarray, y: np.ndarray, ex: int, ey: int, closed: bool = False
+    ) -> np.ndarray:
         t_in = np.zeros_like(x)
         t_out = np.ones_like(x)
         for k in range(len(vertices)):
@@ -150,8 +158,10 @@ def _polygon_entry(vertices: np.ndarray) -> Callable:
                 t = -c / s
             t_in = np.where(s > 0.0, np.maximum(t_in, t), t_in)
             t_out = np.where(s < 0.0, np.minimum(t_out, t), t_out)
-            t_out = np.where((s == 0.0) & (c <= 0.0), -1.0, t_out)  # parallel, outside
-        return np.where(t_out - t_in > ENTRY_MIN, t_in, np.nan)
+            edge = -1e-12 if closed else 0.0
+            t_out = np.where((s == 0.0) & (c <= edge), -1.0, t_out)  # parallel, outside
+        length = t_out - t_in
+        return np.where(length >= -1e-12 if closed else length > ENTRY_MIN, t_in, np.nan)
 
     return distance
 
@@ -188,7 +198,9 @@ def slab_cuts(grid: Grid, y_low: float, y_high: float, scheme: str = "trt") -> C
     ``grid.solid`` must be the nodes outside y_low < y < y_high (validation).
     """
 
-    def distance(x: np.ndarray, y: np.ndarray, ex: int, ey: int) -> np.ndarray:
+    def distance(
+        x: np.ndarray, y: np.ndarray, ex: int, ey: int, closed: bool = False
+    ) -> np.ndarray:
         if ey == 0:
             return np.full_like(x, np.nan)
         t = ((y_low if ey < 0 else y_high) - y) / ey
