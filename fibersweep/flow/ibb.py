@@ -37,13 +37,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from fibersweep.flow.cuts import Cuts
-from fibersweep.flow.lattice import OPP, Grid, Q
+from fibersweep.flow.lattice import OPP, E, Grid, Q
 
 __all__ = [
     "LinkTable",
     "bfl_coefficients",
     "family_coefficients",
     "ibb_coefficients",
+    "parabolic_correction",
     "aa_interpolated",
     "pull_interpolated",
 ]
@@ -58,10 +59,13 @@ class LinkTable:
     Attributes
     ----------
     dst : ndarray, shape (n,), int64
-    src : ndarray, shape (n, 3), int64
-        f*_p(x), f*_p̄(x), f*_p(x − e_p) of each link, where they are stored.
-    coef : ndarray, shape (n, 3), float64
-        BFL weights (sum 1 per row, so they apply to the shifted g = f − w too).
+    src : ndarray, shape (n, 6), int64
+        Where f*_p(x), f*_p̄(x), f*_p(x − e_p), f*_p̄(x − e_p), f*_p(x − 2e_p),
+        f*_p̄(x − 2e_p) of each link are stored.
+    coef : ndarray, shape (n, 6), float64
+        Interpolation weights plus the curvature correction
+        (:func:`parabolic_correction`); they sum to 1 per row, so they apply to
+        the shifted g = f − w too.
     q : ndarray, shape (n,), float64
         Wall fraction of each link (for diagnostics).
     """
@@ -150,6 +154,21 @@ def ibb_coefficients(
     return _fallback(c, q, has_upstream)
 
 
+def parabolic_correction(q: np.ndarray, scheme: str) -> np.ndarray:
+    """Weight κ of the curvature correction κ (D(x) − 2 D(x − e_p) + D(x − 2e_p)), D = f*_p − f*_p̄.
+
+    For the "trt" scheme at q < 1/2 (CLI) the steady-state analysis leaves a
+    wall error (1/8 − q²/2) ∂²e⁻_p; adding −(1 − 2q)/2 ∂²e⁻_p to the returned
+    population removes it (Poiseuille flow then exact at every q). Along the
+    link D(t) = 2 e⁻_p(t) + const in the bulk, so ∂²e⁻_p = (D(0) − 2D(−1) + D(−2))/2
+    and κ = −(1 − 2q)/4. Zero elsewhere ("bfl", and q ≥ 1/2 where "trt" is exact).
+    """
+    q = np.asarray(q, dtype=np.float64)
+    if scheme != "trt":
+        return np.zeros_like(q)
+    return np.where(q < 0.5, -(1.0 - 2.0 * q) / 4.0, 0.0)
+
+
 class _Flat:
     """Flat indices into a padded population array (slot, z, y, interior x)."""
 
@@ -203,10 +222,46 @@ def _fluid(grid: Grid, ii: np.ndarray, jj: np.ndarray) -> np.ndarray:
     return ok
 
 
+def _chain(grid: Grid, flat: _Flat, i, j, k: int, p: int, steps: int):
+    """Cells x − s e_p, s = 1..steps, of nodes (i, j, k): (all interior fluid, flat cells)."""
+    ex, ey, ez = (int(v) for v in E[p])
+    ok = np.ones(i.size, dtype=bool)
+    cells = []
+    for n in range(1, steps + 1):
+        ii = (i - n * ex) % grid.nx
+        jj = j - n * ey
+        kk = k - n * ez
+        ok &= (kk >= 0) & (kk < grid.nz) & _fluid(grid, ii, jj)
+        cells.append(flat(0, kk + 1, np.clip(jj, -1, grid.ny) + 1, ii + 1))
+    return ok, cells
+
+
+def _with_correction(src3, coef3, extra, kappa, ok, q, p):
+    """Append the curvature-correction columns (f*_p̄(x−c), f*_p(x−2c), f*_p̄(x−2c)).
+
+    ``extra``: their flat indices; the correction also weights f*_p(x), f*_p̄(x)
+    and f*_p(x − c) (columns 0–2). Where ``ok`` is False it is left out.
+    """
+    kappa = np.where(ok, kappa, 0.0)
+    coef = np.zeros((q.size, 6))
+    coef[:, :3] = coef3
+    coef[:, 0] += kappa
+    coef[:, 1] -= kappa
+    coef[:, 2] -= 2.0 * kappa
+    coef[:, 3] = 2.0 * kappa
+    coef[:, 4] = kappa
+    coef[:, 5] = -kappa
+    src = np.empty((q.size, 6), dtype=np.int64)
+    src[:, :3] = src3
+    for n, col in enumerate(extra):
+        src[:, 3 + n] = np.where(ok, col, src3[:, 0])  # unused where not ok (weight 0)
+    return src, coef
+
+
 def _table(parts: list) -> LinkTable:
     if not parts:
         return LinkTable(
-            np.zeros(0, np.int64), np.zeros((0, 3), np.int64), np.zeros((0, 3)), np.zeros(0)
+            np.zeros(0, np.int64), np.zeros((0, 6), np.int64), np.zeros((0, 6)), np.zeros(0)
         )
     dst, src, coef, q = (np.concatenate([p[n] for p in parts]) for n in range(4))
     return LinkTable(dst.astype(np.int64), src.astype(np.int64), coef, q)
@@ -258,17 +313,23 @@ def aa_interpolated(
         up = _fluid(grid, ui, uj)
         fallback += int((~up & (wq < 0.5)).sum())
         coef = _coefficients(cuts, wq, up, omega_p, omega_m)
-        # after the even step: f*_p(x) in slot p̄ = q of x, f*_p̄(x) in slot p of x
-        src_b = np.column_stack([q * flat.plane + x_cell, p * flat.plane + x_cell, flat(*up_loc)])
-        before.append((solid_slot, src_b, coef, wq))
+        kappa = parabolic_correction(wq, cuts.scheme)
+        ok, (c1, c2, c3) = _chain(grid, flat, i, j, k, p, 3)
+        P, Qb = p * flat.plane, q * flat.plane
+        # after the even step: f*_p(y) in slot p̄ = q of y, f*_p̄(y) in slot p of y
+        src_b = np.column_stack([Qb + x_cell, P + x_cell, flat(*up_loc)])
+        src_b, coef_b = _with_correction(src_b, coef, (P + c1, Qb + c2, P + c2), kappa, ok, wq, p)
+        before.append((solid_slot, src_b, coef_b, wq))
         pushed_p, _, _ = _location(scatter, rows, p, i, grid, wrap=True)
         if not np.array_equal(flat(*pushed_p), solid_slot):
             raise AssertionError("AA tables: the odd step must push f*_p(x) into the slot it read")
         pushed_q, _, _ = _location(scatter, rows, q, i, grid, wrap=True)
         # after the odd step: f*_p(x) in the solid slot, f*_p̄(x) where x pushed it,
         # f*_p(x − e_p) arrived in slot p of x; the result goes to slot p̄ of x
-        src_a = np.column_stack([solid_slot, flat(*pushed_q), p * flat.plane + x_cell])
-        after.append((q * flat.plane + x_cell, src_a, coef, wq))
+        # (f*_p(y) was pushed to slot p of y + e_p, f*_p̄(y) to slot p̄ of y − e_p)
+        src_a = np.column_stack([solid_slot, flat(*pushed_q), P + x_cell])
+        src_a, coef_a = _with_correction(src_a, coef, (Qb + c2, P + c1, Qb + c3), kappa, ok, wq, p)
+        after.append((Qb + x_cell, src_a, coef_a, wq))
     if fallback:
         log.info("interpolated bounce-back: %d links fall back to half-way", fallback)
     return _table(before), _table(after)
@@ -299,6 +360,18 @@ def pull_interpolated(
         wq = _wall_q(cuts, m, di, dj)
         up_loc, ui, uj = _location(sources, rows, p, i, grid, wrap=False)
         up = _fluid(grid, ui, uj)
-        src = np.column_stack([p * flat.plane + x_cell, q * flat.plane + x_cell, flat(*up_loc)])
-        parts.append((flat(*loc), src, _coefficients(cuts, wq, up, omega_p, omega_m), wq))
+        P, Qb = p * flat.plane, q * flat.plane
+        # post-collision f*_r(y) is stored in slot r of y
+        src = np.column_stack([P + x_cell, Qb + x_cell, flat(*up_loc)])
+        ok, (c1, c2, _) = _chain(grid, flat, i, j, k, p, 3)
+        src, coef = _with_correction(
+            src,
+            _coefficients(cuts, wq, up, omega_p, omega_m),
+            (Qb + c1, P + c2, Qb + c2),
+            parabolic_correction(wq, cuts.scheme),
+            ok,
+            wq,
+            p,
+        )
+        parts.append((flat(*loc), src, coef, wq))
     return _table(parts)

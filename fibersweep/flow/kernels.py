@@ -214,10 +214,10 @@ def apply_interpolated(
     g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
     dst : ndarray, shape (n,), int64
         Flat indices into the whole of ``g`` (slot × plane + cell).
-    src : ndarray, shape (n, 3), int64
-        Flat indices of the three interpolated populations.
-    coef : ndarray, shape (n, 3), float64
-        Their weights (:func:`fibersweep.flow.ibb.bfl_coefficients`).
+    src : ndarray, shape (n, k), int64
+        Flat indices of the interpolated populations.
+    coef : ndarray, shape (n, k), float64
+        Their weights (:class:`fibersweep.flow.ibb.LinkTable`).
     buf : ndarray, shape (n,), float64
         Scratch space.
     reset_cells : ndarray, shape (m,), int64
@@ -226,11 +226,10 @@ def apply_interpolated(
     plane = g.shape[1] * g.shape[2] * g.shape[3]
     flat = g.reshape(g.shape[0] * plane)
     for n in range(dst.shape[0]):
-        buf[n] = (
-            coef[n, 0] * flat[src[n, 0]]
-            + coef[n, 1] * flat[src[n, 1]]
-            + coef[n, 2] * flat[src[n, 2]]
-        )
+        acc = 0.0
+        for k in range(src.shape[1]):
+            acc += coef[n, k] * flat[src[n, k]]
+        buf[n] = acc
     for q in range(g.shape[0]):
         for c in range(reset_cells.shape[0]):
             flat[q * plane + reset_cells[c]] = 0.0
