@@ -1,30 +1,45 @@
-"""Interpolated bounce-back (linear Bouzidi–Firdaouss–Lallemand) as small per-link tables.
+"""Interpolated bounce-back at sub-grid walls, as small per-link tables.
 
 For a fluid node x whose link along e_p meets the wall at the fraction q of
 the link (:mod:`fibersweep.flow.cuts`), the population that comes back,
-f_p̄(x, t + 1) with p̄ = opp(p), is interpolated from post-collision values
-(Bouzidi, Firdaouss & Lallemand 2001):
+f_p̄(x, t + 1) with p̄ = opp(p), is a linear combination of post-collision
+values along the link. Two schemes:
 
-    q < 1/2:  f_p̄(x, t+1) = 2q f*_p(x) + (1 − 2q) f*_p(x − e_p)
-    q ≥ 1/2:  f_p̄(x, t+1) = f*_p(x) / 2q + (1 − 1/2q) f*_p̄(x)
+- "bfl" (Bouzidi, Firdaouss & Lallemand 2001):
+  q < 1/2: 2q f*_p(x) + (1 − 2q) f*_p(x − e_p); q ≥ 1/2: f*_p(x)/2q + (1 − 1/2q) f*_p̄(x).
+- "trt" (default): a member of the same linear family chosen with the TRT
+  steady-state analysis (exact steady solutions of TRT for parabolic
+  profiles, Ginzburg & d'Humières) so that plane Poiseuille flow is exact
+  at every q and every viscosity: for q ≥ 1/2 the exact linear member (weights
+  in [0, 1]); for q < 1/2 Ginzburg's central linear interpolation (CLI) plus a
+  curvature correction built from the second difference of f*_p − f*_p̄ at x,
+  x − e_p, x − 2e_p (:func:`parabolic_correction`); exact linear members
+  there need weights of 5 or more and were unstable.
+
+BFL leaves a Poiseuille wall error (1/2 − q)((1/2 + q)/2 + Λ+) ∂²e⁻ (q < 1/2),
+(q − 1/2)((q + 1/2)/2 − Λ+) ∂²e⁻ (q ≥ 1/2), which depends on the viscosity
+and the wall position; the validation tests show the difference.
 
 At q = 1/2 both reduce to half-way bounce-back. f*_p(x − e_p) is read where
 the lattice kernel itself finds the population p arriving at x (a plain
 neighbour, the half-way bounce-back of a channel wall, or the mirror image
 across the free-slip midplane), so the scheme composes with the other
-boundaries. If x − e_p were solid (not possible for one convex pillar, but
-checked) the link falls back to half-way bounce-back.
+boundaries. The curvature correction is used only where x − e_p, x − 2e_p,
+x − 3e_p are all interior fluid nodes (else plain CLI). If x − e_p were solid
+(not possible for one convex pillar, but checked) the link falls back to
+half-way bounce-back.
 
-Each link is a row (dst, src[3], coef[3]): ``flat[dst] = Σ coef · flat[src]``,
+Each link is a row (dst, src[6], coef[6]): ``flat[dst] = Σ coef · flat[src]``,
 flat indices into the whole population array (slot × plane + cell); the rows
 are applied by :func:`fibersweep.flow.kernels.apply_interpolated`. For the AA
 pattern (:mod:`fibersweep.flow.kernels_aa`) the same links give two tables:
 
-- ``before`` (after the even step, which leaves f*_p(x) in slot p̄ of x): the
-  value is stored in the solid slot from which the odd step gathers p̄ for x;
-- ``after`` (after the odd step, which pushed f*_p(x) into that solid slot and
-  f*_p(x − e_p) into slot p of x): the value goes to slot p̄ of x, which the next
-  even step reads.
+- ``before`` (after the even step, which leaves f*_r(y) in slot r̄ of every
+  node y): the value is stored in the slot across the wall from which the
+  odd step gathers p̄ for x;
+- ``after`` (after the odd step, which pushed f*_r(y) into slot r of y + e_r,
+  in particular f*_p(x) into that slot across the wall and f*_p(x − e_p) into
+  slot p of x): the value goes to slot p̄ of x, which the next even step reads.
 
 For the two-array pull kernel one table stores the value in the solid slot x pulls from.
 """
@@ -138,8 +153,8 @@ def ibb_coefficients(
     smaller ρ have larger weights and were unstable in tests (q = 0.1 diverged
     with γ = −1). With Λ = 3/16 the exact member satisfies the limit exactly
     for q ≥ 1/2, so this is CLI for q < 1/2 (Poiseuille wall error
-    (1/8 − q²/2) ∂²_q e⁻, independent of the viscosity; BFL's is
-    (1/2 − q)((1/2 + q)/2 + Λ+), two to three times larger) and exact for q ≥ 1/2.
+    (1/8 − q²/2) ∂²_q e⁻, independent of the viscosity, removed by
+    :func:`parabolic_correction`) and exact for q ≥ 1/2.
     """
     q = np.asarray(q, dtype=np.float64)
     if scheme == "bfl":

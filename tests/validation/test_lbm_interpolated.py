@@ -74,27 +74,27 @@ def errors_16():
 
 
 def test_walls_at_any_fraction_are_accurate_and_q_independent(errors_16):
-    # 16 nodes across: the half-way wall (q = 1/2, exact for Poiseuille with
-    # TRT Λ = 3/16) leaves 0.09 % (the duct's own O(Δx²) error, measured). Any
-    # q must stay below 1 % (the accuracy target for 20 nodes, here
-    # with fewer) and within 0.75 % of the half-way result, so the error does
-    # not depend on where the wall sits by more than the O(Δx²) wall error the
-    # linear scheme allows: (1/8 − q²/2) ∂²e⁻ for q < 1/2 is at most 1/8 Δx²
-    # u'' ≈ 0.5 % of the flux at 16 nodes. Measured: 0.66 % (q = 0.1) ..
-    # 0.10 % (q = 0.6).
+    # 16 nodes across: the half-way wall (q = 1/2, exact for plane Poiseuille
+    # with TRT Λ = 3/16) leaves 0.09 % (the duct's own O(Δx²) error, measured).
+    # The default scheme is exact for plane Poiseuille at every q (CLI plus the
+    # curvature correction below 1/2, the exact linear member above), so what
+    # remains is the same O(Δx²) error of the non-parabolic duct profile with a
+    # q-dependent constant: every q must stay within 3x the half-way error
+    # (0.26 %; the target is 1 % at 20 nodes) and the spread over q
+    # below 2x it. Measured: 0.059 % (q = 0.4) .. 0.145 % (q = 0.9).
     err = errors_16["trt"]
-    assert errors_16["half"] < 2e-3, errors_16["half"]
+    half = errors_16["half"]
+    assert half < 2e-3, half
     for q in QS:
-        assert err[q] < 1e-2, (q, err[q])
-        assert abs(err[q] - errors_16["half"]) < 7.5e-3, (q, err[q])
+        assert err[q] < 3.0 * half, (q, err[q], half)
+    assert max(err.values()) - min(err.values()) < 2.0 * half, err
 
 
 def test_default_scheme_beats_plain_bfl_at_every_fraction(errors_16):
-    # Steady-state analysis (module docstring of fibersweep.flow.ibb): BFL's
-    # Poiseuille wall error grows with the viscosity, (1/2 − q)((1/2 + q)/2 + Λ+)
-    # for q < 1/2, while the default is CLI (viscosity independent, smaller)
-    # there and exact for q ≥ 1/2. So the default error is never larger.
-    # Measured: 1.9x (q = 0.4) .. 5.2x (q = 0.9) smaller.
+    # Steady-state analysis (fibersweep.flow.ibb): BFL's Poiseuille wall error
+    # is (1/2 − q)((1/2 + q)/2 + Λ+) ∂²e⁻ for q < 1/2 and (q − 1/2)((q + 1/2)/2 − Λ+)
+    # ∂²e⁻ above, while the default removes it. So the default error is never
+    # larger. Measured: 2x (q = 0.6) .. 14x (q = 0.1) smaller.
     for q in QS:
         assert errors_16["trt"][q] < errors_16["bfl"][q], (q, errors_16)
 
@@ -103,7 +103,8 @@ def test_default_scheme_beats_plain_bfl_at_every_fraction(errors_16):
 def test_second_order_with_walls_between_nodes(q):
     # Halving Δx (8 -> 16 -> 32 nodes at the same q) must divide the error by
     # about 4; accept an observed order above 1.8 on both refinements.
-    # Measured: q = 0.25 (CLI branch) 2.03, 2.03; q = 0.75 (exact branch) 2.31, 2.21.
+    # Measured: q = 0.25 (corrected CLI branch) 2.65, 2.16; q = 0.75 (exact
+    # linear branch) 2.31, 2.21; errors 4.1e-3, 6.6e-4, 1.5e-4 and 5.7e-3, 1.2e-3, 2.5e-4.
     e = [walled_duct(n, q)[0] for n in (8, 16, 32)]
     orders = [math.log2(e[i] / e[i + 1]) for i in range(2)]
     assert min(orders) > 1.8, (e, orders)
@@ -111,7 +112,8 @@ def test_second_order_with_walls_between_nodes(q):
 
 def test_pull_kernel_applies_the_same_walls():
     # The two-array pull kernel uses its own link table for the same cuts: same
-    # steady state to the convergence tolerance (1e-5 relative in the error).
+    # steady state to the convergence tolerance (1e-5 relative in the error;
+    # measured identical to all printed digits, 3.15e-3).
     e_aa, _ = walled_duct(8, 0.3)
     e_pull, _ = walled_duct(8, 0.3, kernel="pull")
     assert abs(e_aa - e_pull) < 1e-5 * max(e_aa, 1e-3) + 1e-6, (e_aa, e_pull)
