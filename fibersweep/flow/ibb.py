@@ -24,8 +24,9 @@ At q = 1/2 both reduce to half-way bounce-back. f*_p(x − e_p) is read where
 the lattice kernel itself finds the population p arriving at x (a plain
 neighbour, the half-way bounce-back of a channel wall, or the mirror image
 across the free-slip midplane), so the scheme composes with the other
-boundaries. The curvature correction is used only where x − e_p, x − 2e_p,
-x − 3e_p are all interior fluid nodes (else plain CLI). If x − e_p were solid
+boundaries. The curvature correction is used only on in-plane links (e_z = 0)
+and where x − e_p, x − 2e_p, x − 3e_p are all fluid nodes (else plain CLI), so
+that the half-depth solve with its free-slip top equals the full-depth one. If x − e_p were solid
 (not possible for one convex pillar, but checked) the link falls back to
 half-way bounce-back.
 
@@ -240,7 +241,10 @@ def _fluid(grid: Grid, ii: np.ndarray, jj: np.ndarray) -> np.ndarray:
 def _chain(grid: Grid, flat: _Flat, i, j, k: int, p: int, steps: int):
     """Cells x − s e_p, s = 1..steps, of nodes (i, j, k): (all interior fluid, flat cells)."""
     ex, ey, ez = (int(v) for v in E[p])
-    ok = np.ones(i.size, dtype=bool)
+    # in-plane links only: a chain along e_z would leave the solved half-depth
+    # near the free-slip top, and using it only where it does not would make the
+    # half-depth and full-depth solves differ
+    ok = np.full(i.size, ez == 0)
     cells = []
     for n in range(1, steps + 1):
         ii = (i - n * ex) % grid.nx
