@@ -40,7 +40,7 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-SOLVER_VERSION = "d3q19-trt-guo-2"
+SOLVER_VERSION = "d3q19-trt-guo-3"  # 3: sub-grid (interpolated) pillar, closed solid set
 U_LATTICE = 1e-5  # duct centre speed in lattice units: Mach ~ 2e-5, lattice Re ~ 2e-3
 MACH_LIMIT = 0.1  # |u| in lattice units above this means divergence
 SERIAL_BELOW_CELLS = 250_000  # smaller grids run on one thread (fork/join costs more)
