@@ -21,6 +21,7 @@ import numpy as np
 __all__ = [
     "stream_collide",
     "fill_pillar",
+    "apply_interpolated",
     "fill_periodic",
     "moments",
     "init_populations",
@@ -191,6 +192,49 @@ def fill_pillar(g: np.ndarray, solid_cells: np.ndarray, links: np.ndarray) -> No
             flat[q * plane + solid_cells[c]] = 0.0
     for n in range(links.shape[0]):
         flat[links[n, 0] * plane + links[n, 1]] = flat[links[n, 2] * plane + links[n, 3]]
+
+
+@nb.njit(cache=True)
+def apply_interpolated(
+    g: np.ndarray,
+    dst: np.ndarray,
+    src: np.ndarray,
+    coef: np.ndarray,
+    buf: np.ndarray,
+    reset_cells: np.ndarray,
+) -> None:
+    """Interpolated bounce-back rows, then zero the solid cells, then store.
+
+    All values are computed first (sources may be solid slots that the reset
+    clears, destinations may be solid slots that it must not clear), so the
+    order of the rows does not matter.
+
+    Parameters
+    ----------
+    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
+    dst : ndarray, shape (n,), int64
+        Flat indices into the whole of ``g`` (slot × plane + cell).
+    src : ndarray, shape (n, k), int64
+        Flat indices of the interpolated populations.
+    coef : ndarray, shape (n, k), float64
+        Their weights (:class:`fibersweep.flow.ibb.LinkTable`).
+    buf : ndarray, shape (n,), float64
+        Scratch space.
+    reset_cells : ndarray, shape (m,), int64
+        Flat indices (one padded plane) zeroed in every slot.
+    """
+    plane = g.shape[1] * g.shape[2] * g.shape[3]
+    flat = g.reshape(g.shape[0] * plane)
+    for n in range(dst.shape[0]):
+        acc = 0.0
+        for k in range(src.shape[1]):
+            acc += coef[n, k] * flat[src[n, k]]
+        buf[n] = acc
+    for q in range(g.shape[0]):
+        for c in range(reset_cells.shape[0]):
+            flat[q * plane + reset_cells[c]] = 0.0
+    for n in range(dst.shape[0]):
+        flat[dst[n]] = buf[n]
 
 
 @nb.njit(cache=True, parallel=True)

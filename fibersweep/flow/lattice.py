@@ -113,8 +113,15 @@ class Grid:
         return self.nx * self.ny * self.nz
 
 
-def make_grid(geometry: Geometry, dx: float, symmetry: bool, pillar: bool = True) -> Grid:
-    """Lattice for ``geometry`` at spacing ``dx`` [µm] (half-way walls on the channel faces)."""
+def make_grid(
+    geometry: Geometry, dx: float, symmetry: bool, pillar: bool = True, closed: bool = False
+) -> Grid:
+    """Lattice for ``geometry`` at spacing ``dx`` [µm] (half-way walls on the channel faces).
+
+    ``closed``: nodes on the pillar outline (within 1e-9 Δx) are solid too, so
+    that every link into the pillar meets the wall at 0 < q ≤ 1 (interpolated
+    bounce-back); otherwise only nodes strictly inside are (staircase).
+    """
     nx = int(round(geometry.length / dx))
     ny = int(round(geometry.width / dx))
     nz_full = int(round(geometry.depth / dx))
@@ -122,8 +129,24 @@ def make_grid(geometry: Geometry, dx: float, symmetry: bool, pillar: bool = True
     x = (np.arange(nx) + 0.5) * dx
     y = (np.arange(ny) + 0.5) * dx
     X, Y = np.meshgrid(x, y, indexing="ij")
-    solid = geometry.inside_pillar(X, Y) if pillar else np.zeros((nx, ny), dtype=bool)
+    if not pillar:
+        solid = np.zeros((nx, ny), dtype=bool)
+    elif closed:
+        solid = _signed_inside(geometry.vertices, X, Y) > -1e-9 * dx
+    else:
+        solid = geometry.inside_pillar(X, Y)
     return Grid(nx, ny, nz, nz_full, symmetry, float(dx), solid)
+
+
+def _signed_inside(vertices: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Smallest distance [µm] of (x, y) to the edge lines of a convex CCW polygon, > 0 inside."""
+    out = np.full(np.broadcast(x, y).shape, np.inf)
+    for k in range(len(vertices)):
+        ax, ay = vertices[k]
+        bx, by = vertices[(k + 1) % len(vertices)]
+        cross = (bx - ax) * (y - ay) - (by - ay) * (x - ax)
+        out = np.minimum(out, cross / np.hypot(bx - ax, by - ay))
+    return out
 
 
 def boundary_links(grid: Grid) -> tuple[np.ndarray, np.ndarray]:

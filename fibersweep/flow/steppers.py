@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from fibersweep.flow import kernels, kernels_aa
+from fibersweep.flow.cuts import Cuts
+from fibersweep.flow.ibb import LinkTable, aa_interpolated, pull_interpolated
 from fibersweep.flow.lattice import (
     OPP,
     E,
@@ -20,21 +22,42 @@ from fibersweep.flow.lattice import (
 __all__ = ["STEPPERS", "PullStepper", "AAStepper", "make_stepper"]
 
 
+def _apply(g: np.ndarray, table: LinkTable, buf: np.ndarray, reset: np.ndarray) -> None:
+    kernels.apply_interpolated(g, table.dst, table.src, table.coef, buf, reset)
+
+
 class PullStepper:
-    """Fused pull-stream-collide between two arrays (228 B per cell update)."""
+    """Fused pull-stream-collide between two arrays (228 B per cell update).
+
+    ``cuts`` None: the pillar is a staircase of cells bounced back half-way;
+    otherwise interpolated bounce-back at the wall fractions ``cuts``.
+    """
 
     step_multiple = 1
 
-    def __init__(self, grid: Grid, u0, rho0, grad, fx: float, omega_p: float, omega_m: float):
+    def __init__(
+        self, grid: Grid, u0, rho0, grad, fx: float, omega_p: float, omega_m: float,
+        cuts: Cuts | None = None,
+    ):  # fmt: skip
         self.fx, self.omega_p, self.omega_m = fx, omega_p, omega_m
         self.links, self.solid_cells = boundary_links(grid)
         self.sources = pull_sources(grid)
+        self.table = (
+            None if cuts is None else pull_interpolated(grid, cuts, self.sources, omega_p, omega_m)
+        )
+        self.buf = np.zeros(0 if cuts is None else self.table.dst.size)
         self.e = tuple(np.ascontiguousarray(E[:, k]) for k in range(3))
         self.g = np.zeros(grid.padded_shape, dtype=np.float32)
         self.gn = np.zeros_like(self.g)
         kernels.init_populations(self.g, u0, rho0, grad, omega_p, True, W, *self.e)
         kernels.fill_periodic(self.g)
-        kernels.fill_pillar(self.g, self.solid_cells, self.links)
+        self._fill(self.g)
+
+    def _fill(self, g: np.ndarray) -> None:
+        if self.table is None:
+            kernels.fill_pillar(g, self.solid_cells, self.links)
+        else:
+            _apply(g, self.table, self.buf, self.solid_cells)
 
     def advance(self, n: int) -> None:
         """n steps."""
@@ -42,7 +65,7 @@ class PullStepper:
             kernels.stream_collide(
                 self.g, self.gn, self.sources, self.fx, self.omega_p, self.omega_m
             )
-            kernels.fill_pillar(self.gn, self.solid_cells, self.links)
+            self._fill(self.gn)
             self.g, self.gn = self.gn, self.g
 
     def moments(self, out: np.ndarray) -> None:
@@ -51,14 +74,24 @@ class PullStepper:
 
 
 class AAStepper:
-    """In-place AA pattern on one array (152 B per cell update); steps come in pairs."""
+    """In-place AA pattern on one array (152 B per cell update); steps come in pairs.
+
+    ``cuts`` as for :class:`PullStepper`.
+    """
 
     step_multiple = 2
 
-    def __init__(self, grid: Grid, u0, rho0, grad, fx: float, omega_p: float, omega_m: float):
+    def __init__(
+        self, grid: Grid, u0, rho0, grad, fx: float, omega_p: float, omega_m: float,
+        cuts: Cuts | None = None,
+    ):  # fmt: skip
         self.fx, self.omega_p, self.omega_m = fx, omega_p, omega_m
         self.gather, self.scatter = aa_tables(grid)
         self.before, self.after, self.solid_cells = aa_links(grid, self.gather, self.scatter)
+        self.tables = None
+        if cuts is not None:
+            self.tables = aa_interpolated(grid, cuts, self.gather, self.scatter, omega_p, omega_m)
+            self.buf = np.zeros(self.tables[0].dst.size)
         self.no_cells = np.zeros(0, dtype=np.int64)
         self.opp = np.ascontiguousarray(OPP)
         self.e = tuple(np.ascontiguousarray(E[:, k]) for k in range(3))
@@ -80,11 +113,17 @@ class AAStepper:
             raise ValueError(f"the AA stepper advances in pairs of steps, got {n}")
         for _ in range(n // 2):
             kernels_aa.aa_even(self.g, self.opp, self.fx, self.omega_p, self.omega_m)
-            kernels_aa.apply_links(self.g, self.before, self.no_cells)
+            if self.tables is None:
+                kernels_aa.apply_links(self.g, self.before, self.no_cells)
+            else:
+                _apply(self.g, self.tables[0], self.buf, self.no_cells)
             kernels_aa.aa_odd(
                 self.g, self.gather, self.scatter, self.fx, self.omega_p, self.omega_m
             )
-            kernels_aa.apply_links(self.g, self.after, self.solid_cells)
+            if self.tables is None:
+                kernels_aa.apply_links(self.g, self.after, self.solid_cells)
+            else:
+                _apply(self.g, self.tables[1], self.buf, self.solid_cells)
 
     def moments(self, out: np.ndarray) -> None:
         """(δρ, ux, uy, uz) of the state the next (even) step collides."""
@@ -94,10 +133,13 @@ class AAStepper:
 STEPPERS = {"pull": PullStepper, "aa": AAStepper}
 
 
-def make_stepper(name: str, *args) -> PullStepper | AAStepper:
-    """The stepper called ``name`` ("aa" or "pull"); unknown names fail listing the valid ones."""
+def make_stepper(name: str, *args, cuts: Cuts | None = None) -> PullStepper | AAStepper:
+    """The stepper called ``name`` ("aa" or "pull"); unknown names fail listing the valid ones.
+
+    ``cuts``: wall fractions for interpolated bounce-back (None: staircase pillar).
+    """
     try:
         cls = STEPPERS[name]
     except KeyError:
         raise ValueError(f"unknown LBM kernel {name!r}; valid: {sorted(STEPPERS)}") from None
-    return cls(*args)
+    return cls(*args, cuts=cuts)

@@ -48,7 +48,20 @@ def test_bad_bracket_is_reported():
 
 
 def test_separatrix_on_coarse_lbm_field(coarse_field):
-    # SPEC section 2: near 1/3; an independent BGK (tau = 1) check at dx = 4 µm gives 0.36.
-    # Our TRT field puts walls exactly half-way; we accept 0.36 +- 0.02.
+    # SPEC section 2: near 1/3. The default field (interpolated pillar, dx = 4 µm)
+    # must give 1/3 within 0.04, the spread of the published and lattice values
+    # around it (0.31..0.36 across placements and resolutions; measured 0.324).
     sep = separatrix_y(coarse_field)
-    assert abs(sep - 0.36) < 0.02, sep
+    assert abs(sep - 1.0 / 3.0) < 0.04, sep
+
+
+def test_separatrix_on_coarse_staircase_field(flow_cache_dir):
+    # SPEC section 2: an independent coarse check (BGK tau = 1, dx = 4 µm, staircase
+    # pillar, traced properly) gives 0.350; the staircase TRT field must match it
+    # within 0.01 (measured 0.351).
+    from fibersweep.flow.cache import get_flow_field
+    from fibersweep.flow.settings import FlowSettings
+
+    field, _ = get_flow_field(FlowSettings(dx=4.0, pillar_boundary="staircase"), flow_cache_dir)
+    sep = separatrix_y(field)
+    assert abs(sep - 0.350) < 0.01, sep

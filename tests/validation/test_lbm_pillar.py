@@ -22,16 +22,35 @@ def small_half():
     return settings, solve_lattice(settings)
 
 
+def _plane_flux(sol) -> np.ndarray:
+    """Σ_yz ρ ux through every x-plane of nodes, shape (nx,)."""
+    return ((1.0 + sol.rho) * sol.u[0]).sum(axis=(0, 1))
+
+
 def test_mass_flux_constant_along_x(small_half):
     # Steady mass conservation: the x-momentum flux Σ_yz ρ ux through every
-    # x-plane is the same. Tolerance 1e-4 relative (measured 4e-7; the
-    # residual is the convergence tolerance and float32 storage).
+    # x-plane is the same. With the interpolated pillar the node sum is exact
+    # only in planes that do not meet the pillar: tolerance 1e-4 relative there
+    # (measured 1e-7; the residual is the convergence tolerance and float32
+    # storage). In planes through the pillar the sum of node values misses the
+    # fractions of cells between the last nodes and the sub-grid wall: a
+    # quadrature error, bounded by 2 % (measured 0.6 %).
     _, sol = small_half
-    rho = 1.0 + sol.rho
-    flux = (rho * sol.u[0]).sum(axis=(0, 1))
-    assert np.ptp(flux) / flux.mean() < 1e-4, np.ptp(flux) / flux.mean()
+    flux = _plane_flux(sol)
+    cols = sol.grid.solid.any(axis=1)
+    near = np.convolve(cols, np.ones(5), mode="same") > 0  # within 2 planes of the pillar
+    assert np.ptp(flux[~near]) / flux.mean() < 1e-4, np.ptp(flux[~near]) / flux.mean()
+    assert np.ptp(flux) / flux.mean() < 2e-2, np.ptp(flux) / flux.mean()
     # the pillar really is there: the flux passes around it
     assert sol.grid.solid.sum() > 100
+
+
+def test_mass_flux_exactly_constant_with_staircase_pillar():
+    # Half-way bounce-back on a staircase of cells conserves mass link by link:
+    # the plane flux is the same everywhere, tolerance 1e-4 (measured 6e-7).
+    settings = FlowSettings(geometry=SMALL, dx=4.0, tolerance=1e-7, pillar_boundary="staircase")
+    flux = _plane_flux(solve_lattice(settings))
+    assert np.ptp(flux) / flux.mean() < 1e-4, np.ptp(flux) / flux.mean()
 
 
 def test_half_depth_with_symmetry_plane_equals_full_depth(small_half):
