@@ -68,12 +68,13 @@ class FlowSettings(_Strict):
     tolerance: float = Field(1e-6, gt=0, lt=1, description="relative change per check to stop")
     check_every: int = Field(100, ge=1, description="steps between convergence checks")
     max_steps: int = Field(200_000, ge=1, description="hard limit on LBM steps")
-    pillar_boundary: Literal["interpolated", "bfl", "staircase"] = Field(
-        "interpolated",
+    pillar_boundary: Literal["staircase", "interpolated", "bfl"] = Field(
+        "staircase",
         description=(
-            "pillar wall: interpolated bounce-back at the exact sub-grid wall (linear scheme "
-            "exact for Poiseuille flow with TRT), plain linear Bouzidi-Firdaouss-Lallemand "
-            "('bfl'), or the staircase of lattice cells bounced back half-way"
+            "pillar wall: the staircase of lattice cells bounced back half-way (default "
+            "until the convergence study picks one), interpolated bounce-back at the exact "
+            "sub-grid wall (linear scheme exact for Poiseuille flow with TRT), or plain "
+            "linear Bouzidi-Firdaouss-Lallemand ('bfl')"
         ),
     )
     symmetry: bool = Field(True, description="solve half the depth with a free-slip midplane")

@@ -48,7 +48,7 @@ def test_miss_then_hit_memory_mapped_read_only(tmp_path):
         {"magic": 0.25},
         {"tolerance": 1e-6},
         {"symmetry": False},
-        {"pillar_boundary": "staircase"},
+        {"pillar_boundary": "interpolated"},
         {"geometry": TINY.geometry.model_copy(update={"pillar_height": 10.0})},
         {"fluid": TINY.fluid.model_copy(update={"u_center": 500.0})},
     ],

@@ -17,8 +17,9 @@ SMALL = GeometrySettings(width=200.0, depth=40.0, length=400.0, pillar_height=75
 
 @pytest.fixture(scope="module")
 def small_half():
-    """3D lattice solution of a small pillar channel (half depth, symmetric), dx = 4 µm."""
-    settings = FlowSettings(geometry=SMALL, dx=4.0, tolerance=1e-7)
+    """3D lattice solution of a small pillar channel (half depth, symmetric), dx = 4 µm,
+    interpolated (sub-grid) pillar."""
+    settings = FlowSettings(geometry=SMALL, dx=4.0, tolerance=1e-7, pillar_boundary="interpolated")
     return settings, solve_lattice(settings)
 
 
