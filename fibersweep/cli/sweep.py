@@ -84,7 +84,7 @@ def run(
     with _interruptible(), _errors():
         cfg = _load(config, overrides, max_points=max_points)
         if scheduler and executor is None:
-            executor = "dask"
+            executor = Executor("dask")
         cfg = _with_run_overrides(
             cfg,
             workers=workers,

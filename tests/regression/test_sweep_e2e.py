@@ -356,3 +356,12 @@ def test_parquet_fields_carry_units_and_the_config(reference):
     assert schema.field("y_f").metadata[b"unit"] == "µm".encode()
     meta = json.loads(schema.metadata[b"fibersweep"])
     assert meta["config"]["flow"]["dx"] == 4.0 and meta["overrides"] == []
+
+
+def test_scheduler_alone_implies_dask(tmp_path, coarse_field, flow_cache_dir):
+    """--scheduler without --executor selects Dask (a dry run connects to nothing)."""
+    cfg = _config(tmp_path, flow_cache_dir, "sched")
+    res, text = _invoke("run", cfg, "--scheduler", "tcp://127.0.0.1:9", "--dry-run")
+    assert res.exit_code == 0, text
+    res, text = _invoke("run", cfg, "--executor", "slurm", "--dry-run")
+    assert res.exit_code == 2 and "'slurm' is not one of 'local', 'dask'" in text, text
