@@ -287,7 +287,7 @@ def test_bad_config_and_arguments_exit_2(tmp_path):
     res, text = _invoke("run", ok, "--workers", "0")
     assert res.exit_code == 2 and "run.workers" in text, text
     res, text = _invoke("run", ok, "--executor", "slurm")
-    assert res.exit_code == 2 and "run.executor" in text, text
+    assert res.exit_code == 2 and "'slurm' is not one of 'local', 'dask'" in text, text
     res, text = _invoke("run", tmp_path / "nope.yaml")
     assert res.exit_code == 2 and "cannot read config" in text
 
