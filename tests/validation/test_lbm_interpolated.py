@@ -133,6 +133,7 @@ def test_mass_is_conserved_to_rounding():
         geometry=GeometrySettings(width=200.0, depth=40.0, length=400.0, pillar_height=75.0),
         dx=4.0,
         tolerance=1e-7,
+        pillar_boundary="interpolated",
     )
     sol = solve_lattice(settings)
     assert sol.report.boundary == "interpolated" and sol.report.steps > 1000
