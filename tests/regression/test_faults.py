@@ -48,12 +48,20 @@ def _config(tmp: Path, cache: Path, name: str) -> Path:
     return p
 
 
+def _default_signals() -> None:
+    # A signal ignored in the test process (SIG_IGN) stays ignored across exec, and
+    # Python then keeps ignoring SIGINT: start every sweep as a shell would.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def _run(cfg: Path) -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "fibersweep.cli", "run", str(cfg)],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
+        preexec_fn=_default_signals,
     )
 
 
