@@ -40,6 +40,13 @@ def library_versions() -> dict[str, str]:
     return out
 
 
+def _git(src: Path, *args: str) -> str:
+    """Output of ``git -C SRC ARGS`` (stripped); raises on failure."""
+    return subprocess.run(
+        ["git", "-C", str(src), *args], capture_output=True, text=True, timeout=5, check=True
+    ).stdout.strip()
+
+
 def git_revision(src: Path | None = None) -> str | None:
     """Commit of fibersweep's own source checkout (``+dirty`` if modified), or None.
 
@@ -54,29 +61,11 @@ def git_revision(src: Path | None = None) -> str | None:
     try:
         if 'name = "fibersweep"' not in (src / "pyproject.toml").read_text():
             return None
-        top = subprocess.run(
-            ["git", "-C", str(src), "rev-parse", "--show-toplevel"],
-            capture_output=True,
-            text=True,
-            timeout=5,
-            check=True,
-        ).stdout.strip()
+        top = _git(src, "rev-parse", "--show-toplevel")
         if Path(top).resolve() != src:
             return None
-        rev = subprocess.run(
-            ["git", "-C", str(src), "rev-parse", "HEAD"],
-            capture_output=True,
-            text=True,
-            timeout=5,
-            check=True,
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "-C", str(src), "status", "--porcelain", "--untracked-files=no"],
-            capture_output=True,
-            text=True,
-            timeout=5,
-            check=True,
-        ).stdout.strip()
+        rev = _git(src, "rev-parse", "HEAD")
+        dirty = _git(src, "status", "--porcelain", "--untracked-files=no")
     except (OSError, subprocess.SubprocessError, UnicodeDecodeError):
         return None
     return rev + ("+dirty" if dirty else "") if rev else None
