@@ -15,6 +15,7 @@ __all__ = [
     "flux_separatrix",
     "fore_aft_asymmetry",
     "peak_speeds",
+    "subgrid_wall",
 ]
 
 
@@ -35,8 +36,10 @@ def stream_function(field: FlowField) -> np.ndarray:
 def flux_below_pillar(field: FlowField) -> np.ndarray:
     """Flux between the wall y = 0 and the pillar base, per column through the pillar.
 
-    The half-way wall under the pillar lies half a cell above the last fluid
-    node; the velocity is taken to fall linearly to zero there.
+    The wall under the pillar lies half a cell above the last fluid node for
+    the staircase pillar (half-way bounce-back), on the exact base line for a
+    sub-grid wall (:func:`subgrid_wall`); the velocity is taken to fall
+    linearly to zero there.
 
     Returns
     -------
@@ -46,11 +49,20 @@ def flux_below_pillar(field: FlowField) -> np.ndarray:
     psi = stream_function(field)
     cols = np.flatnonzero(field.solid.any(axis=1))
     out = np.empty(cols.size)
+    y_base = field.geometry.base_center[1]
+    exact = subgrid_wall(field)
     for n, i in enumerate(cols):
         j_solid = int(np.flatnonzero(field.solid[i])[0])
         j_last = j_solid - 1
-        out[n] = psi[i, j_last] + 0.5 * field.ux[i, j_last] * (0.5 * field.dx)
+        gap = y_base - field.y_nodes[j_last] if exact else 0.5 * field.dx
+        out[n] = psi[i, j_last] + 0.5 * field.ux[i, j_last] * gap
     return out
+
+
+def subgrid_wall(field: FlowField) -> bool:
+    """True if the field was solved with the pillar wall at its exact sub-grid position."""
+    settings = field.meta.get("settings", {}) if field.meta else {}
+    return settings.get("pillar_boundary", "staircase") != "staircase"
 
 
 @dataclass(frozen=True)

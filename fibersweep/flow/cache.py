@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from fibersweep.flow.field import FlowField
+from fibersweep.flow.ghost import GHOST_METHOD, extend_into_wall
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.solver import SOLVER_VERSION, solve_flow
 
@@ -135,11 +136,16 @@ def load_entry(
         raise
     except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
         raise CorruptCacheError(f"{path}: unreadable cache entry ({exc})") from exc
+    geometry = settings.geometry.to_geometry()
+    if settings.pillar_boundary != "staircase" and meta.get("wall_ghosts") != GHOST_METHOD:
+        # entry written before ghost values were stored: derive them (in memory)
+        ux, uy = extend_into_wall(ux, uy, solid, geometry.vertices, float(settings.dx))
+        meta = {**meta, "wall_ghosts": GHOST_METHOD}
     return FlowField(
         ux=ux,
         uy=uy,
         dx=float(settings.dx),
-        geometry=settings.geometry.to_geometry(),
+        geometry=geometry,
         fluid=settings.fluid.to_fluid(),
         solid=solid,
         meta=meta,

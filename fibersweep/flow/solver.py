@@ -14,6 +14,7 @@ from dataclasses import asdict
 from fibersweep import __version__
 from fibersweep.errors import SolverError
 from fibersweep.flow.field import FlowField
+from fibersweep.flow.ghost import GHOST_METHOD, extend_into_wall
 from fibersweep.flow.lbm import (
     MACH_LIMIT,
     SOLVER_VERSION,
@@ -66,8 +67,11 @@ def solve_flow(settings: FlowSettings, threads: int | None = None) -> FlowField:
     Returns
     -------
     FlowField
-        ux, uy [µm/s] of shape (nx, ny), z-averaged with the IB kernel at z = H/2;
-        ``meta`` holds the solver report and settings.
+        ux, uy [µm/s] of shape (nx, ny), z-averaged with the IB kernel at z = H/2
+        (zero on pillar nodes, except with a sub-grid pillar wall: there the
+        solid nodes within reach of the IB stencil hold ghost values that make
+        the interpolated field vanish on the exact wall, see
+        :mod:`fibersweep.flow.ghost`); ``meta`` holds the solver report and settings.
     """
     return field_from_solution(settings, solve_nested(settings, threads=threads))
 
@@ -83,6 +87,9 @@ def field_from_solution(settings: FlowSettings, sol: LatticeSolution) -> FlowFie
         raise SolverError(f"centreline speed far from the pillar is {u_ref!r}; cannot scale")
     scale = fluid.u_center / u_ref
     ux, uy = midplane_average(sol.u, grid) * scale
+    ghosts = settings.pillar_boundary != "staircase"
+    if ghosts:  # sub-grid wall: solid nodes near it get mirrored values (ghost.py)
+        ux, uy = extend_into_wall(ux, uy, grid.solid, geom.vertices, grid.dx)
     meta = {
         "solver_version": SOLVER_VERSION,
         "package_version": __version__,
@@ -93,6 +100,8 @@ def field_from_solution(settings: FlowSettings, sol: LatticeSolution) -> FlowFie
         "dx_um": grid.dx,
         "units": {"length": "um", "velocity": "um/s"},
     }
+    if ghosts:
+        meta["wall_ghosts"] = GHOST_METHOD
     u3d = full_depth(sol.u, grid) * scale if settings.keep_3d else None
     return FlowField(
         ux=ux,
