@@ -60,7 +60,35 @@ def flow(
             f"U_center reached: {info.u_center_reached:.3f} µm/s "
             f"(target {cfg.flow.fluid.u_center:g} µm/s)"
         )
+        from fibersweep.flow.uncertainty import other_level, separatrix_estimate
+
+        try:
+            level = other_level(cfg.flow, cfg.run.cache_dir)
+            est = separatrix_estimate(field, None if level is None else level[1])
+        except ValueError as exc:  # no streamline bracket (e.g. a toy channel)
+            typer.echo(f"separatrix far upstream: not located ({exc})")
+        else:
+            _echo_separatrix(est, cfg.flow.pillar_boundary)
         if plot is not None:
             from fibersweep.plots.flow import plot_flow
 
             typer.echo(f"wrote {plot_flow(field, plot)}")
+
+
+def _echo_separatrix(est, boundary: str) -> None:
+    """Print a :class:`fibersweep.flow.uncertainty.SeparatrixEstimate`."""
+    typer.echo(
+        f"separatrix far upstream: y/h_obs = {est.traced:.4f} +- {est.error:.4f} "
+        f"({boundary} pillar)"
+    )
+    typer.echo(
+        f"  model spread: traced {est.traced:.4f} vs flux {est.flux:.4f} -> {est.model_spread:.4f}"
+    )
+    if est.grid_error is None:
+        typer.echo("  grid error: no level at 2 dx or dx/2 in the cache (not estimated)")
+    else:
+        typer.echo(
+            f"  grid error: Richardson (p = 2) with cached dx = {est.other_dx:g} µm "
+            f"(traced {est.other_traced:.4f}) -> {est.grid_error:.4f}, "
+            f"extrapolated {est.extrapolated:.4f}"
+        )

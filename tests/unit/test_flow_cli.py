@@ -92,3 +92,28 @@ def test_tau_of_one_half_is_rejected():
 def test_flow_settings_geometry_is_used(tmp_path):
     s = FlowSettings.model_validate(TINY_FLOW)
     assert isinstance(s.geometry, GeometrySettings) and s.geometry.width == 40.0
+
+
+def test_flow_reports_separatrix_with_error_estimate(tmp_path):
+    # first dx = 4 alone: only the traced-vs-flux spread; then dx = 2 in the same
+    # cache: its estimate adds the Richardson grid error from the cached dx = 4
+    cfg = _config(tmp_path, {**TINY_FLOW, "pillar_boundary": "interpolated"})
+    coarse = runner.invoke(app, ["flow", cfg])
+    assert coarse.exit_code == 0, coarse.output
+    assert "separatrix far upstream:" in coarse.output
+    assert "grid error: no level at 2 dx or dx/2" in coarse.output
+    fine = runner.invoke(app, ["flow", cfg, "flow.dx=2"])
+    assert fine.exit_code == 0, fine.output
+    assert "grid error: Richardson (p = 2) with cached dx = 4 µm" in fine.output
+
+
+def test_separatrix_estimate_parts(coarse_field):
+    from fibersweep.flow.uncertainty import separatrix_estimate
+
+    est = separatrix_estimate(coarse_field)
+    assert est.model_spread == pytest.approx(abs(est.traced - est.flux))
+    assert est.error == est.model_spread and est.grid_error is None
+    # the SPEC channel: the separatrix lies near a third of h_obs (SPEC section 2)
+    assert 0.28 < est.traced < 0.40
+    with pytest.raises(ValueError, match="2 dx or dx/2"):
+        separatrix_estimate(coarse_field, coarse_field)
