@@ -120,13 +120,16 @@ def duct_guess(grid: Grid, g_over_nu: float) -> np.ndarray:
 
 
 def velocity_gradient(u: np.ndarray, grid: Grid) -> np.ndarray:
-    """∂_a u_b, shape (3, 3, nz, ny, nx), by central differences.
+    """∂_a u_b, shape (3, 3, nz, ny, nx), float32, by central differences.
+
+    float32 like the populations it initialises (half the memory of float64:
+    2.8 GB -> 1.4 GB at dx = 1 µm).
 
     Ghost values: periodic in x, antisymmetric (u = 0 half-way) across walls,
     mirror (ux, uy even, uz odd) across a symmetric top. Pillar nodes hold u = 0,
     which makes the difference at a fluid node next to the pillar one-sided-like.
     """
-    grad = np.empty((3, 3, *u.shape[1:]))
+    grad = np.empty((3, 3, *u.shape[1:]), dtype=np.float32)
     for b in range(3):
         c = u[b]
         gx = 0.5 * (np.roll(c, -1, axis=2) - np.roll(c, 1, axis=2))

@@ -214,6 +214,12 @@ def solve_lattice(
     rho0 = np.zeros(shape3) if initial_rho is None else np.asarray(initial_rho, np.float64)
     if rho0.shape != shape3:
         raise ValueError(f"initial_rho must have shape {shape3}, got {rho0.shape}")
+    stepper = make_stepper(
+        kernel, grid, u0, rho0, velocity_gradient(u0, grid), fx, omega_p, omega_m, cuts=cuts
+    )
+    # the populations now hold the start: drop the float64 copies before the time
+    # loop (1.2 GB at dx = 1 µm; solve_nested hands them over without keeping them)
+    del u0, rho0, initial, initial_rho
     previous_threads = numba.get_num_threads()
     if threads:
         candidates = [threads]
@@ -222,16 +228,12 @@ def solve_lattice(
     else:
         candidates = [previous_threads, 1]  # chosen by measurement in _run
     try:
-        return _run(
-            settings, grid, u0, rho0, fx, tau, omega_p, omega_m, candidates, kernel, cuts, boundary
-        )
+        return _run(settings, grid, stepper, fx, tau, omega_m, candidates, boundary)
     finally:
         numba.set_num_threads(previous_threads)
 
 
-def _run(
-    settings, grid, u0, rho0, fx, tau, omega_p, omega_m, candidates, kernel, cuts, boundary
-) -> LatticeSolution:
+def _run(settings, grid, stepper, fx, tau, omega_m, candidates, boundary) -> LatticeSolution:
     """Time loop of :func:`solve_lattice` (arguments as computed there).
 
     With several thread counts in ``candidates`` each is timed over one check
@@ -241,9 +243,6 @@ def _run(
     """
     timing: dict[int, float] = {}
     interval = 0
-    stepper = make_stepper(
-        kernel, grid, u0, rho0, velocity_gradient(u0, grid), fx, omega_p, omega_m, cuts=cuts
-    )
     fluid = ~grid.solid.T[None, :, :]  # (1, ny, nx) broadcast over z
     fluid3 = np.broadcast_to(fluid, (grid.nz, grid.ny, grid.nx))
     mom = np.zeros((4, grid.nz, grid.ny, grid.nx))
@@ -276,7 +275,12 @@ def _run(
         steps += n
         stepper.moments(mom)
         uxy = mom[1:3] * fluid
-        speed_max = float(np.sqrt((mom[1:4] ** 2).sum(axis=0) * fluid).max())
+        sq = mom[1] ** 2  # |u|² built in place: one extra (nz, ny, nx) array, not four
+        sq += mom[2] ** 2
+        sq += mom[3] ** 2
+        sq *= fluid
+        speed_max = float(np.sqrt(sq.max()))
+        del sq
         if not math.isfinite(speed_max):
             raise SolverError(
                 f"LBM diverged: non-finite velocity after {steps} steps (tau={tau:g})"
@@ -286,8 +290,9 @@ def _run(
                 f"LBM diverged: lattice speed {speed_max:.3g} > {MACH_LIMIT} (Mach too high) "
                 f"after {steps} steps (tau={tau:g})"
             )
-        residual = float(np.linalg.norm(uxy - u_prev) / max(np.linalg.norm(uxy), 1e-300))
-        u_prev = uxy.copy()
+        change = math.sqrt(sum(float(np.sum((uxy[c] - u_prev[c]) ** 2)) for c in range(2)))
+        residual = change / max(float(np.linalg.norm(uxy)), 1e-300)
+        u_prev = uxy
         log.debug("step %d residual %.3e", steps, residual)
         if residual < settings.tolerance:
             converged = True
@@ -359,8 +364,10 @@ def solve_nested(settings: FlowSettings, threads: int | None = None) -> LatticeS
     fine_grid = lattice_of(settings)
     fx = _rates(settings, fine_grid)[3]
     density_scale = fx / coarse.report.force * (coarse.grid.dx / fine_grid.dx)
-    u0, rho0 = prolong(coarse.u, coarse.rho, coarse.grid, fine_grid, density_scale)
-    fine = solve_lattice(settings, initial=u0, initial_rho=rho0, threads=threads)
+    start = list(prolong(coarse.u, coarse.rho, coarse.grid, fine_grid, density_scale))
+    # popped into the call so that solve_lattice holds the only reference and can
+    # free them once the populations are set
+    fine = solve_lattice(settings, initial=start.pop(0), initial_rho=start.pop(0), threads=threads)
     c = coarse.report
     report = replace(
         fine.report,
