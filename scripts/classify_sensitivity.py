@@ -5,8 +5,10 @@ every ok run again, without simulating, with
 
 * the head-speed rule (the source's) at head_blocked_speed = 0.005 ... 0.05 U_center,
 * the pivot and switch rules,
-* the head-speed rule on the trajectory thinned to every 2nd and 4th sample
-  (first and last kept),
+* the head-speed rule on the stored trajectory re-thinned to 100 and 50 samples
+  the way the simulation stores it (fibersweep.analysis.observables.thin_indices:
+  contact and stop transitions kept, slowest head per time bin), and thinned
+  naively to every 2nd sample (shows what the trap rule needs),
 
 and prints, for each variant, the class counts and the fraction of runs whose
 label differs from the reference (head-speed at 0.01, full stored sampling),
@@ -28,6 +30,7 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.analysis.classify import RULES, classify
+from fibersweep.analysis.observables import thin_indices
 from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.sweep.manifest import read_manifest
@@ -35,12 +38,11 @@ from fibersweep.sweep.reclassify import trajectory_from_frame
 from fibersweep.sweep.store import read_runs, read_trajectories
 
 THRESHOLDS = (0.005, 0.01, 0.02, 0.03, 0.05)
-THINNING = (2, 4)
+SAMPLES = (100, 50)
 
 
-def thin(tr, k: int):
-    """Every k-th sample of a trajectory, the last one kept."""
-    idx = np.unique(np.concatenate([np.arange(0, len(tr.t), k), [len(tr.t) - 1]]))
+def thin(tr, idx: np.ndarray):
+    """The trajectory at sample indices ``idx``."""
     beads = None if tr.beads is None else tr.beads[idx]
     return replace(
         tr,
@@ -80,8 +82,11 @@ def labels(out: Path) -> pd.DataFrame:
         for name in RULES:
             if name != "head-speed":
                 row[name] = classify(tr, geometry, u_center, ref, name)
-        for k in THINNING:
-            row[f"every {k}th"] = classify(thin(tr, k), geometry, u_center, ref)
+        for n in SAMPLES:
+            idx = thin_indices(tr, n, u_center, ref)
+            row[f"{n} samples"] = classify(thin(tr, idx), geometry, u_center, ref)
+        every2 = np.unique(np.r_[np.arange(0, len(tr.t), 2), len(tr.t) - 1])
+        row["every 2nd"] = classify(thin(tr, every2), geometry, u_center, ref)
         rows.append(row)
     return pd.DataFrame(rows)
 
