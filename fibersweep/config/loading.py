@@ -209,6 +209,8 @@ def apply_overrides(
         else:
             node[path[-1]] = value
             label = f"override {item}"
+            for stale in [k for k in lines if len(k) > len(path) and k[: len(path)] == path]:
+                del lines[stale]  # the file's lines inside a replaced value
             lines[path] = label
             for k in range(1, len(path)):
                 lines.setdefault(path[:k], label)
