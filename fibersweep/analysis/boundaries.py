@@ -18,7 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-__all__ = ["COORDS", "BRACKET_COLUMNS", "brackets", "boundary_lines"]
+__all__ = ["COORDS", "BRACKET_COLUMNS", "brackets", "class_map", "map_edges"]
 
 #: The start coordinates of a run: θ0 [deg], y0/h_obs, L/l_obs.
 COORDS = ("theta0", "y0", "length")
@@ -120,56 +120,87 @@ def brackets(
     return pd.concat(frames, ignore_index=True)
 
 
-def boundary_lines(
-    found: pd.DataFrame, x: str = "theta0", y: str = "y0", finest: float | None = None
-) -> list[np.ndarray]:
-    """Polylines through the boundary points located along ``y``, joined across ``x``.
+def _spacing(values: np.ndarray) -> float:
+    """Median spacing of the distinct values (1.0 when there is one)."""
+    u = np.unique(np.round(values, _DIGITS))
+    return float(np.median(np.diff(u))) if u.size > 1 else 1.0
 
-    For each pair of classes (either order), the bracket midpoints along ``y``
-    at each ``x`` value are joined to those at the next ``x`` value that has
-    brackets of any pair, rank by rank, when both columns hold the same number
-    of brackets of that pair (the boundary is then followed without guessing);
-    otherwise the line breaks there and each point stands alone.
+
+def class_map(
+    points: pd.DataFrame,
+    x: str = "theta0",
+    y: str = "y0",
+    shape: tuple[int, int] = (400, 300),
+    scale: tuple[float, float] | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """Nearest-neighbour class map of the classified runs over their (x, y) extent.
+
+    Each pixel takes the class of the nearest classified run, distances measured
+    in units of ``scale`` (default: the median spacing of the grid's values on
+    each axis, so a refined column does not claim the space between columns):
+    where runs are dense (a refined boundary) the map's boundary follows them
+    to their resolution, between them it steps half-way.
 
     Parameters
     ----------
-    found : DataFrame
-        :func:`brackets`' table of one panel (one group and one value of the
-        third coordinate); only class brackets along ``y`` are used.
+    points : DataFrame
+        Runs of one panel (columns ``x``, ``y``, ``class``, optionally ``status``
+        and ``round``: the spacing is taken from round 0 when present).
     x, y : str
-        The panel's horizontal and vertical coordinates.
-    finest : float, optional
-        Keep only brackets at most this wide on ``y`` (the located ones).
+        Coordinates.
+    shape : (int, int)
+        Pixels along y and x.
+    scale : (float, float), optional
+        Distance units along x and y.
 
     Returns
     -------
-    list of ndarray, each shape (n, 2)
-        (x, y) vertices; a single vertex is a boundary point joined to nothing.
+    xs : ndarray, shape (nx,)
+        Pixel centres along x.
+    ys : ndarray, shape (ny,)
+        Pixel centres along y.
+    labels : ndarray of int, shape (ny, nx)
+        Index into ``names``; -1 where there is no classified run at all.
+    names : list of str
     """
-    b = found[(found["axis"] == y) & (found["kind"] == "class")]
-    if finest is not None:
-        b = b[(b["hi"] - b["lo"]) <= finest * (1 + 1e-9)]
-    if b.empty:
-        return []
-    pair = [tuple(sorted(p)) for p in zip(b["class_lo"], b["class_hi"], strict=True)]
-    b = b.assign(_pair=pair)
-    columns = np.unique(np.round(b[x].to_numpy(dtype=float), _DIGITS))
-    lines: list[np.ndarray] = []
-    for _, q in b.groupby("_pair", sort=True):
-        cols = {
-            c: np.sort(q.loc[np.isclose(q[x].astype(float), c, atol=1e-9), y].to_numpy(dtype=float))
-            for c in columns
-        }
-        open_: list[list[tuple[float, float]]] = []
-        prev: np.ndarray | None = None
-        for c in columns:
-            ys = cols[c]
-            if prev is not None and len(prev) == len(ys) and len(ys):
-                for line, yv in zip(open_, ys, strict=True):
-                    line.append((c, yv))
-            else:
-                lines.extend(np.array(v) for v in open_)
-                open_ = [[(c, yv)] for yv in ys]
-            prev = ys
-        lines.extend(np.array(v) for v in open_)
-    return lines
+    from scipy.spatial import cKDTree
+
+    ok = _classified(points)
+    ny, nx = shape
+    if ok.empty:
+        return np.zeros(nx), np.zeros(ny), np.full((ny, nx), -1), []
+    px, py = ok[x].to_numpy(dtype=float), ok[y].to_numpy(dtype=float)
+    if scale is None:
+        grid = ok[ok["round"].fillna(0) == 0] if "round" in ok else ok
+        grid = grid if len(grid) else ok
+        scale = (_spacing(grid[x].to_numpy(float)), _spacing(grid[y].to_numpy(float)))
+    xs = np.linspace(px.min(), px.max(), nx)
+    ys = np.linspace(py.min(), py.max(), ny)
+    names = sorted(ok["class"].astype(str).unique())
+    code = {c: i for i, c in enumerate(names)}
+    tree = cKDTree(np.column_stack([px / scale[0], py / scale[1]]))
+    gx, gy = np.meshgrid(xs / scale[0], ys / scale[1])
+    _, idx = tree.query(np.column_stack([gx.ravel(), gy.ravel()]))
+    labels = np.array([code[c] for c in ok["class"].astype(str)])[idx].reshape(ny, nx)
+    return xs, ys, labels, names
+
+
+def map_edges(xs: np.ndarray, ys: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """Segments between neighbouring pixels of different labels (the map's boundaries).
+
+    Returns
+    -------
+    ndarray, shape (n, 2, 2)
+        Each segment's two (x, y) ends, on the pixel edges.
+    """
+    if xs.size < 2 or ys.size < 2:
+        return np.zeros((0, 2, 2))
+    hx, hy = 0.5 * (xs[1] - xs[0]), 0.5 * (ys[1] - ys[0])
+    out = []
+    j, i = np.nonzero(labels[:, 1:] != labels[:, :-1])  # vertical edges
+    xe = xs[i] + hx
+    out.append(np.stack([np.column_stack([xe, ys[j] - hy]), np.column_stack([xe, ys[j] + hy])], 1))
+    j, i = np.nonzero(labels[1:, :] != labels[:-1, :])  # horizontal edges
+    ye = ys[j] + hy
+    out.append(np.stack([np.column_stack([xs[i] - hx, ye]), np.column_stack([xs[i] + hx, ye])], 1))
+    return np.concatenate(out)

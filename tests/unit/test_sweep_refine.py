@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fibersweep.analysis.boundaries import boundary_lines, brackets
+from fibersweep.analysis.boundaries import class_map, map_edges
 from fibersweep.config import Config, RefineSettings
 from fibersweep.sweep.plan import make_tasks, sweep_settings
 from fibersweep.sweep.refine import propose, stored_rounds
@@ -154,12 +154,25 @@ def test_delta_jump_is_bisected_only_when_asked():
     assert ((b["lo"] <= 0.62) & (0.62 <= b["hi"]) & (b["hi"] - b["lo"] <= TOL_Y + 1e-12)).all()
 
 
-def test_boundary_lines_join_columns_with_the_same_brackets():
+def test_class_map_boundary_lies_in_the_located_brackets():
+    """The figure's boundary (nearest-neighbour map) crosses each column inside its bracket."""
     refine = RefineSettings(axes=["y0"], tolerance={"y0": TOL_Y}, max_runs=10_000)
-    pts, _, _ = _refine(refine, tilted)
-    lines = boundary_lines(brackets(pts, ["y0"]))
-    assert len(lines) == 1 and lines[0].shape == (len(THETA), 2)
-    np.testing.assert_allclose(lines[0][:, 1], 0.3 + 0.01 * lines[0][:, 0], atol=TOL_Y / 2)
+    pts, prop, _ = _refine(refine, tilted)
+    pts = pts.assign(
+        round=np.r_[np.zeros(len(_grid()), int), np.ones(len(pts) - len(_grid()), int)]
+    )
+    xs, ys, labels, names = class_map(pts, shape=(2001, 201))
+    assert names == ["Above", "Below"]
+    for r in prop.brackets.itertuples():
+        i = int(np.argmin(np.abs(xs - r.theta0)))
+        col = labels[:, i]
+        k = int(np.flatnonzero(col[1:] != col[:-1])[0])  # the one change along this column
+        y_edge = 0.5 * (ys[k] + ys[k + 1])
+        pixel = ys[1] - ys[0]
+        assert r.lo - pixel <= y_edge <= r.hi + pixel, (r, y_edge)
+        assert np.sum(col[1:] != col[:-1]) == 1
+    segs = map_edges(xs, ys, labels)
+    assert segs.shape[1:] == (2, 2) and len(segs) > 0
 
 
 def _cfg(refine: dict) -> Config:
