@@ -230,11 +230,11 @@ def next_round(
     pts = refinement_points(tasks, stored)
     used = int((pts["round"] > 0).sum())
     prop = propose(pts, refine, refine.max_runs - used)
+    open_ = int((prop.brackets.get("state", pd.Series(dtype=str)) == "open").sum())
     if rnd >= refine.rounds:
-        reason, new = "rounds", []
+        reason, new = ("rounds" if open_ else "located"), []
     else:
         new = refinement_tasks(settings, tasks, prop.new, rnd + 1)
-        open_ = int((prop.brackets.get("state", pd.Series(dtype=str)) == "open").sum())
         reason = "budget" if open_ > len(new) else "running" if new else "located"
     return new, refinement_summary(prop.brackets, rnd, used, reason)
 
