@@ -10,7 +10,7 @@ simulator:
   * uniform: the grid of step --tol in y0 on the same θ0 columns, which brackets every
     boundary it sees to --tol: the uniform grid that resolves the same.
 
-Reported: the runs of each and their ratio; then, taking the uniform grid as the reference,
+Reported: the runs of each and their ratio (and of the CPU seconds the runs took); then, taking the uniform grid as the reference,
 every boundary segment it finds (neighbouring points of different classes) is looked for
 among the refinement's brackets at the same θ0: a segment is found when a refined bracket
 of the same two classes overlaps it (their intervals meet within --tol); the missed ones
@@ -77,14 +77,17 @@ def segments(runs: pd.DataFrame, delta_jump: float | None = None) -> pd.DataFram
     return b.sort_values(["theta0", "lo"]).reset_index(drop=True)
 
 
-def match(reference: pd.DataFrame, found: pd.DataFrame, tol: float) -> np.ndarray:
-    """For each reference segment: is there a found one of the same classes within ``tol``?"""
+def match(
+    reference: pd.DataFrame, found: pd.DataFrame, tol: float, same_classes: bool = True
+) -> np.ndarray:
+    """For each reference segment: is there a found one (of the same classes) within ``tol``?"""
     ok = np.zeros(len(reference), dtype=bool)
     for k, r in enumerate(reference.itertuples()):
         f = found[np.isclose(found["theta0"], r.theta0, atol=1e-9)]
-        pair = {r.class_lo, r.class_hi}
-        same = [{a, b} == pair for a, b in zip(f["class_lo"], f["class_hi"], strict=True)]
-        f = f[same]
+        if same_classes:
+            pair = {r.class_lo, r.class_hi}
+            same = [{a, b} == pair for a, b in zip(f["class_lo"], f["class_hi"], strict=True)]
+            f = f[same]
         ok[k] = bool(((f["lo"] <= r.hi + tol) & (f["hi"] >= r.lo - tol)).any())
     return ok
 
@@ -97,28 +100,50 @@ def timed_sweep(cfg) -> tuple[pd.DataFrame, float, dict]:
 
 
 def figure(runs: pd.DataFrame, missed: pd.DataFrame, separatrix, path: Path) -> None:
+    """The refined runs and their boundaries: whole range, and zoomed on the boundaries."""
     from matplotlib.lines import Line2D
 
-    from fibersweep.plots.phase import phase_figure
-    from fibersweep.plots.style import paper_style, save_figure
+    from fibersweep.fiber.result import CLASSES
+    from fibersweep.plots.phase import BOUNDARY_STYLE, draw_boundaries
+    from fibersweep.plots.style import CLASS_STYLE, paper_style, save_figure, subplots
 
+    ok = runs[runs["status"] == "ok"]
+    grid = (ok["round"] == 0).to_numpy()
+    near = ok.loc[~grid, "y0"]
+    zoom = (float(near.min()) - 0.03, float(near.max()) + 0.03) if len(near) else (0, 1)
     with paper_style():
-        fig = phase_figure(runs, separatrix, "class", col=None)
-        ax = fig.axes[0]
+        fig, axes = subplots(1, 2, figsize=(7.0, 3.3), squeeze=False)
+        for ax, ylim in zip(axes[0], (None, zoom), strict=True):
+            for c in CLASSES:
+                q = ok[ok["class"] == c]
+                if len(q):
+                    size = np.where(q["round"].to_numpy() > 0, 6.0, 14.0 if ylim is None else 30.0)
+                    ax.scatter(
+                        q["theta0"], q["y0"], s=size, lw=0.3, edgecolor="k", **CLASS_STYLE[c]
+                    )
+            draw_boundaries(ax, ok)
+            if separatrix is not None:
+                ax.axhline(separatrix, color="0.2", lw=1.0, ls="--", zorder=1)
+            if len(missed):
+                ax.scatter(missed["theta0"], missed["y0"], marker="x", s=45, color="red", zorder=6)
+            if ylim is not None:
+                ax.set_ylim(*ylim)
+                ax.set_title("zoom on the boundaries", fontsize=8)
+            else:
+                ax.set_title(f"L = {LENGTH} l_obs: {len(runs)} runs", fontsize=8)
+            ax.set_xlabel(r"$\theta_0$ [deg]")
+        axes[0, 0].set_ylabel(r"$y_0/h_{obs}$")
+        hs = [
+            Line2D([], [], ls="", markersize=5, label=c, **CLASS_STYLE[c])
+            for c in CLASSES
+            if (ok["class"] == c).any()
+        ]
+        hs.append(Line2D([], [], label="located boundary", **BOUNDARY_STYLE))
+        if separatrix is not None:
+            hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label="separatrix"))
         if len(missed):
-            ax.scatter(missed["theta0"], missed["y0"], marker="x", s=40, color="red", zorder=6)
-            fig.legends[0].remove()
-            handles = fig.axes[0].get_legend_handles_labels()[0]
-            del handles
-            fig.legend(
-                handles=[Line2D([], [], ls="", marker="x", color="red", label="missed segment")],
-                loc="lower right",
-                frameon=False,
-            )
-        ax.set_title(
-            f"L = {LENGTH} l_obs: {len(runs)} runs, boundaries located to 0.005 h_obs",
-            fontsize=8,
-        )
+            hs.append(Line2D([], [], ls="", marker="x", color="red", label="missed"))
+        fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)
         save_figure(fig, path, format="png")
 
 
@@ -142,7 +167,8 @@ def main() -> None:
     ref_b, uni_b = segments(refined, args.delta_jump), segments(uniform)
     width = ref_b["hi"] - ref_b["lo"]
     found = match(uni_b, ref_b, args.tol)
-    extra = ~match(ref_b, uni_b, args.tol)
+    placed = match(uni_b, ref_b, args.tol, same_classes=False)
+    extra = ~match(ref_b, uni_b, args.tol, same_classes=False)
     n_cols = refined["theta0"].nunique()
     print(f"L = {LENGTH} l_obs, θ0 in {THETA_RANGE} step {args.dtheta} ({n_cols} columns), "
           f"y0/h in [0, 1]; tolerance {args.tol} h_obs; coarse step {args.coarse}"
@@ -154,10 +180,15 @@ def main() -> None:
           f"{info.get('stopped')}; {t_ref:.0f} s")  # fmt: skip
     print(f"uniform: {n_uni} runs, {len(uni_b)} class brackets; {t_uni:.0f} s")
     print(f"ratio uniform / refined runs: {n_uni / n_ref:.2f}x")
-    print(f"uniform-grid boundary segments found by the refinement: {int(found.sum())} of "
-          f"{len(uni_b)}; missed {int((~found).sum())}")  # fmt: skip
+    cpu_ref, cpu_uni = float(refined["cpu_time"].sum()), float(uniform["cpu_time"].sum())
+    print(f"CPU time of the runs: refined {cpu_ref:.1f} s, uniform {cpu_uni:.1f} s, ratio "
+          f"{cpu_uni / cpu_ref:.2f}x (runs near a boundary take longer)")  # fmt: skip
+    print(f"uniform-grid boundary segments: {len(uni_b)}; located by the refinement with the "
+          f"same classes {int(found.sum())}, at the same place with other classes "
+          f"{int((placed & ~found).sum())}, missed {int((~placed).sum())}")  # fmt: skip
     for r in uni_b[~found].itertuples():
-        print(f"  missed: θ0 = {r.theta0:g}, y0 in [{r.lo:.3f}, {r.hi:.3f}], "
+        what = "other classes" if placed[r.Index] else "missed"
+        print(f"  {what}: θ0 = {r.theta0:g}, y0 in [{r.lo:.3f}, {r.hi:.3f}], "
               f"{r.class_lo} | {r.class_hi}")  # fmt: skip
     print(f"refined brackets with no uniform-grid counterpart: {int(extra.sum())}")
     for r in ref_b[extra].itertuples():
@@ -166,7 +197,7 @@ def main() -> None:
     failed = int((refined["status"] != "ok").sum()) + int((uniform["status"] != "ok").sum())
     print(f"failed runs: {failed}")
     if args.figure is not None:
-        missed = uni_b[~found].assign(y0=lambda d: 0.5 * (d["lo"] + d["hi"]))
+        missed = uni_b[~placed].assign(y0=lambda d: 0.5 * (d["lo"] + d["hi"]))
         sep = (read_manifest(args.out / "refined") or {}).get("separatrix")
         figure(refined, missed, sep, args.figure)
         print(f"wrote {args.figure}")

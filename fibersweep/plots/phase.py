@@ -38,6 +38,7 @@ __all__ = [
     "FORMATS",
     "contact_figure",
     "delta_hist_figure",
+    "draw_boundaries",
     "facet_keys",
     "phase_figure",
     "plot_all",
@@ -173,7 +174,7 @@ def _sizes(panel: pd.DataFrame, s: float) -> np.ndarray | float:
 BOUNDARY_STYLE = {"color": "0.1", "lw": 1.0}
 
 
-def _boundaries(ax: Axes, panel: pd.DataFrame) -> bool:
+def draw_boundaries(ax: Axes, panel: pd.DataFrame) -> bool:
     """Draw the class boundaries of a refined panel; True if any was drawn.
 
     The lines are the edges of the nearest-neighbour class map of the panel's
@@ -304,7 +305,7 @@ def phase_figure(
                         q["theta0"], q["y0"], s=_sizes(q, s), lw=0.4, edgecolor="k", **_style(c)
                     )
             if _refined(p):
-                boundaries |= _boundaries(ax, p)
+                boundaries |= draw_boundaries(ax, p)
         else:
             has = good[np.isfinite(good["delta"].to_numpy(dtype=float))]
             sc = ax.scatter(
