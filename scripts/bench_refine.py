@@ -10,8 +10,9 @@ simulator:
   * uniform: the grid of step --tol in y0 on the same θ0 columns, which brackets every
     boundary it sees to --tol: the uniform grid that resolves the same.
 
-Reported: the runs of each and their ratio (and of the CPU seconds the runs took); then, taking the uniform grid as the reference,
-every boundary segment it finds (neighbouring points of different classes) is looked for
+Reported: the runs of each and their ratio (and of the CPU seconds the runs took); then,
+taking the uniform grid as the reference, every boundary segment it finds (neighbouring
+points of different classes) is looked for
 among the refinement's brackets at the same θ0: a segment is found when a refined bracket
 of the same two classes overlaps it (their intervals meet within --tol); the missed ones
 are listed. Refined brackets the uniform grid has no counterpart for are counted too (a
