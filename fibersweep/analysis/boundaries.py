@@ -18,7 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-__all__ = ["COORDS", "BRACKET_COLUMNS", "brackets", "class_map", "map_edges"]
+__all__ = ["COORDS", "BRACKET_COLUMNS", "brackets", "class_map"]
 
 #: The start coordinates of a run: θ0 [deg], y0/h_obs, L/l_obs.
 COORDS = ("theta0", "y0", "length")
@@ -183,24 +183,3 @@ def class_map(
     _, idx = tree.query(np.column_stack([gx.ravel(), gy.ravel()]))
     labels = np.array([code[c] for c in ok["class"].astype(str)])[idx].reshape(ny, nx)
     return xs, ys, labels, names
-
-
-def map_edges(xs: np.ndarray, ys: np.ndarray, labels: np.ndarray) -> np.ndarray:
-    """Segments between neighbouring pixels of different labels (the map's boundaries).
-
-    Returns
-    -------
-    ndarray, shape (n, 2, 2)
-        Each segment's two (x, y) ends, on the pixel edges.
-    """
-    if xs.size < 2 or ys.size < 2:
-        return np.zeros((0, 2, 2))
-    hx, hy = 0.5 * (xs[1] - xs[0]), 0.5 * (ys[1] - ys[0])
-    out = []
-    j, i = np.nonzero(labels[:, 1:] != labels[:, :-1])  # vertical edges
-    xe = xs[i] + hx
-    out.append(np.stack([np.column_stack([xe, ys[j] - hy]), np.column_stack([xe, ys[j] + hy])], 1))
-    j, i = np.nonzero(labels[1:, :] != labels[:-1, :])  # horizontal edges
-    ye = ys[j] + hy
-    out.append(np.stack([np.column_stack([xs[i] - hx, ye]), np.column_stack([xs[i] + hx, ye])], 1))
-    return np.concatenate(out)

@@ -183,19 +183,22 @@ def draw_boundaries(ax: Axes, panel: pd.DataFrame) -> bool:
     refinement's tolerance; between grid columns they step half-way, which is
     all the runs say there.
     """
-    from matplotlib.collections import LineCollection
-
-    from fibersweep.analysis.boundaries import class_map, map_edges
+    from fibersweep.analysis.boundaries import class_map
 
     drawn = False
     for _, g in panel.groupby(["settings", "length"] if "settings" in panel else ["length"]):
-        segs = map_edges(*class_map(g)[:3])
-        if len(segs):
-            lines = LineCollection(
-                segs, colors=BOUNDARY_STYLE["color"], linewidths=BOUNDARY_STYLE["lw"], zorder=4
-            )
-            ax.add_collection(lines)
+        xs, ys, labels, names = class_map(g)
+        for k in range(len(names) if len(names) > 1 else 0):
+            # the 0.5 level of each class's indicator: the map's edges, corners cut
+            cs = ax.contour(
+                xs, ys, (labels == k).astype(float), levels=[0.5], zorder=4,
+                colors=BOUNDARY_STYLE["color"], linewidths=BOUNDARY_STYLE["lw"],
+            )  # fmt: skip
+            cs.sticky_edges.x.clear()  # keep the panel's margins around the points
+            cs.sticky_edges.y.clear()
             drawn = True
+    if drawn:
+        ax.autoscale_view()
     return drawn
 
 

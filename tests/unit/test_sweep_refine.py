@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fibersweep.analysis.boundaries import class_map, map_edges
+from fibersweep.analysis.boundaries import class_map
 from fibersweep.config import Config, RefineSettings
 from fibersweep.sweep.plan import make_tasks, sweep_settings
 from fibersweep.sweep.refine import propose, stored_rounds
@@ -171,8 +171,6 @@ def test_class_map_boundary_lies_in_the_located_brackets():
         pixel = ys[1] - ys[0]
         assert r.lo - pixel <= y_edge <= r.hi + pixel, (r, y_edge)
         assert np.sum(col[1:] != col[:-1]) == 1
-    segs = map_edges(xs, ys, labels)
-    assert segs.shape[1:] == (2, 2) and len(segs) > 0
 
 
 def _cfg(refine: dict) -> Config:
