@@ -5,7 +5,7 @@ SPEC geometry on the coarse dx = 4 µm field of the shared test cache, L = 0.8 l
 runs of the one table (column ``round``); every class bracket left in the table is
 within tolerance or the budget/rounds ran out; a further round continues from the stored
 ones; a partly lost round is re-derived and only its missing runs run again; the dry run
-says what is known of the rounds; the phase figure draws the boundaries.
+says what is known of the rounds. (The figure's boundaries: tests/unit/test_plots_boundaries.py.)
 """
 
 from __future__ import annotations
@@ -106,10 +106,3 @@ def test_partly_lost_round_resumes_without_duplicates(refined):
         again[cols].sort_values("id").reset_index(drop=True),
         df[cols].sort_values("id").reset_index(drop=True),
     )
-
-
-def test_phase_figure_draws_the_located_boundaries(refined, tmp_path):
-    tmp, *_ = refined
-    res, text = _invoke("plot-phase", tmp / "out", "-o", tmp_path)
-    assert res.exit_code == 0, text
-    assert (tmp_path / "phase.png").stat().st_size > 0
