@@ -202,6 +202,9 @@ def _dry_run_refinement(cfg, plan, extra, rnd: int, info) -> None:
 
 _STOPPED = {
     "located": "every boundary bracket is within tolerance",
+    "stuck": "the others end at failed runs: --retry-failed re-runs them",
+    "retry-failed": "--retry-failed runs no new point: a plain run continues the refinement",
+    "interrupted": "interrupted: run the same command again to continue",
     "budget": "budget sweep.refine.max_runs spent",
     "rounds": "sweep.refine.rounds reached",
     "running": "more rounds to run",
@@ -218,7 +221,7 @@ def _refinement_line(info: dict, refine) -> str:
         f"{info.get('open', 0)} open"
     )
     if info.get("stuck"):
-        line += f", {info['stuck']} stuck at failed runs"
+        line += f", {info['stuck']} stuck (midpoint failed or not run)"
     return f"{line} ({why})"
 
 

@@ -133,7 +133,9 @@ def refinement_summary(found: pd.DataFrame, rounds: int, runs: int, reason: str)
     rounds, runs : int
         Refinement rounds and runs known so far (the grid excluded).
     reason : str
-        Why it stopped ('located', 'budget', 'rounds', 'interrupted', ...).
+        Why it stopped: 'located' (every bracket within tolerance), 'stuck' (the
+        others' midpoints failed or were not run), 'budget', 'rounds',
+        'running' (a next round is known), 'interrupted', 'retry-failed'.
     """
     states: Mapping[str, int] = (
         found["state"].value_counts().to_dict() if "state" in found and len(found) else {}
@@ -146,12 +148,6 @@ def refinement_summary(found: pd.DataFrame, rounds: int, runs: int, reason: str)
         "stuck": int(states.get("stuck", 0)),
         "stopped": reason,
     }
-
-
-def located_fraction(found: pd.DataFrame, axes: Sequence[str] | None = None) -> float:
-    """Fraction of brackets (on ``axes``) located within tolerance (1.0 when none)."""
-    f = found if axes is None else found[found["axis"].isin(list(axes))]
-    return 1.0 if f.empty else float((f["state"] == "located").mean())
 
 
 def refinement_points(tasks: Sequence[SweepTask], stored: pd.DataFrame) -> pd.DataFrame:
@@ -230,12 +226,14 @@ def next_round(
     pts = refinement_points(tasks, stored)
     used = int((pts["round"] > 0).sum())
     prop = propose(pts, refine, refine.max_runs - used)
-    open_ = int((prop.brackets.get("state", pd.Series(dtype=str)) == "open").sum())
+    states = prop.brackets.get("state", pd.Series(dtype=str))
+    open_, stuck = int((states == "open").sum()), int((states == "stuck").sum())
+    done = "stuck" if stuck else "located"
     if rnd >= refine.rounds:
-        reason, new = ("rounds" if open_ else "located"), []
+        reason, new = ("rounds" if open_ else done), []
     else:
         new = refinement_tasks(settings, tasks, prop.new, rnd + 1)
-        reason = "budget" if open_ > len(new) else "running" if new else "located"
+        reason = "budget" if open_ > len(new) else "running" if new else done
     return new, refinement_summary(prop.brackets, rnd, used, reason)
 
 

@@ -397,9 +397,11 @@ def _refine_step(
     stored = read_runs(out)
     assert cfg.sweep.refine is not None
     new, info = next_round(cfg.sweep.refine, plan.settings, plan.tasks, stored, rnd)
-    if new and retry_failed and not {t.key for t in new} <= set(stored["id"]):
+    have = set(stored["id"])
+    not_run = sum(t.key not in have for t in [*plan.tasks, *new])
+    if retry_failed and not_run:
         # --retry-failed runs no new point: a plain run continues the refinement
-        info["stopped"] = "retry-failed (a plain `fibersweep run` continues the refinement)"
+        info.update(stopped="retry-failed", not_run=not_run)
         return [], info
     return new, info
 
