@@ -342,23 +342,8 @@ def _run_locked(
     writer = PartWriter(out, meta, cfg.run.flush_every, cfg.run.flush_seconds)
     writer.start_timer()
     try:
-        while True:
-            by_key: dict[str, SweepTask] = {t.key: t for t in plan.todo}
-            if plan.todo:
-                for oc in ex.run(run_task, plan.todo, init_worker, initargs):
-                    if oc.value is not None:
-                        row, traj = dict(oc.value["row"]), oc.value["trajectory"]
-                        row["attempts"] = oc.attempts
-                    else:
-                        row, traj = failed_row(by_key[oc.key], oc.error, oc.attempts), None
-                    writer.add(row, traj if keep_traj else None)
-                    summary.ran += 1
-                    label = row["class"] if row["status"] == "ok" else "failed"
-                    summary.counts[label] += 1
-                    if row["status"] != "ok":
-                        summary.failures.append(f"{row['id']}: {row['reason']}")
-                    if progress is not None:
-                        progress(row)
+        while True:  # the grid, then each refinement round
+            _run_batch(ex, plan.todo, initargs, writer, keep_traj, summary, progress)
             if refine is None:
                 break
             new, summary.refinement = _refine_step(cfg, out, plan, writer, rnd, retry_failed)
@@ -386,6 +371,35 @@ def _run_locked(
         _finish(cfg, out, meta, manifest, writer, state, summary, plan)
     log.info("sweep done: %d runs in %.1f s", summary.ran, summary.wall_s)
     return summary
+
+
+def _run_batch(
+    ex: Any,
+    todo: list[SweepTask],
+    initargs: tuple,
+    writer: PartWriter,
+    keep_traj: bool,
+    summary: SweepSummary,
+    progress: Callable[[Mapping[str, Any]], None] | None,
+) -> None:
+    """Run ``todo`` on the executor; queue each row (and trajectory) for writing."""
+    if not todo:
+        return
+    by_key = {t.key: t for t in todo}
+    for oc in ex.run(run_task, todo, init_worker, initargs):
+        if oc.value is not None:
+            row, traj = dict(oc.value["row"]), oc.value["trajectory"]
+            row["attempts"] = oc.attempts
+        else:
+            row, traj = failed_row(by_key[oc.key], oc.error, oc.attempts), None
+        writer.add(row, traj if keep_traj else None)
+        summary.ran += 1
+        label = row["class"] if row["status"] == "ok" else "failed"
+        summary.counts[label] += 1
+        if row["status"] != "ok":
+            summary.failures.append(f"{row['id']}: {row['reason']}")
+        if progress is not None:
+            progress(row)
 
 
 def _refine_step(
