@@ -7,8 +7,9 @@ the boundary crosses the line somewhere between them. A pair of one class whose
 δ differ by more than a threshold brackets a jump of δ (a band the classes do not
 name, or one too thin for the points to have seen).
 
-Pure functions of a runs table; shared by the adaptive refinement
-(:mod:`fibersweep.sweep.refine`) and the phase figures.
+Pure functions of a runs table: :func:`brackets` drives the adaptive refinement
+(:mod:`fibersweep.sweep.refine`), :func:`class_map` gives the phase figures their
+boundary lines.
 """
 
 from __future__ import annotations
