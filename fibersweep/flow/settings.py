@@ -71,10 +71,11 @@ class FlowSettings(_Strict):
     pillar_boundary: Literal["staircase", "interpolated", "bfl"] = Field(
         "staircase",
         description=(
-            "pillar wall: the staircase of lattice cells bounced back half-way (default "
-            "until the convergence study picks one), interpolated bounce-back at the exact "
-            "sub-grid wall (linear scheme exact for Poiseuille flow with TRT), or plain "
-            "linear Bouzidi-Firdaouss-Lallemand ('bfl')"
+            "pillar wall: the staircase of lattice cells bounced back half-way (default; "
+            "first order, its separatrix depends on where the pillar sits on the grid), "
+            "interpolated bounce-back at the exact sub-grid wall (second order, 2.5x less "
+            "placement-sensitive: docs/fidelity.md), or plain linear "
+            "Bouzidi-Firdaouss-Lallemand ('bfl')"
         ),
     )
     symmetry: bool = Field(True, description="solve half the depth with a free-slip midplane")
