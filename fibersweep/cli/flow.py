@@ -15,6 +15,7 @@ from fibersweep.cli._app import (
     _load,
     _setup_logging,
     app,
+    flow_progress,
 )
 
 
@@ -40,7 +41,8 @@ def flow(
         from fibersweep.flow.cache import get_flow_field
 
         t0 = time.perf_counter()
-        field, info = get_flow_field(cfg.flow, cfg.run.cache_dir, force=force)
+        with flow_progress():
+            field, info = get_flow_field(cfg.flow, cfg.run.cache_dir, force=force)
         took = time.perf_counter() - t0
         nx, ny, nz, nz_full = info.grid
         depth = f"half depth, {nz} of {nz_full} nodes + symmetry plane" if nz < nz_full else "full"

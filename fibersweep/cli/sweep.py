@@ -19,10 +19,15 @@ from fibersweep.cli._app import (
     _setup_logging,
     app,
     choices,
+    flow_progress,
+    progress_interval,
 )
 from fibersweep.errors import InputError, Terminated
 from fibersweep.plots import FORMATS
 from fibersweep.sweep.executors import EXECUTORS
+
+#: Default of the classify thresholds: the sweep's own.
+SWEEP_CLASSIFY = "the sweep's fiber.classify"
 
 # Option choices, from the registries.
 Rule = choices("Rule", RULES)
@@ -56,7 +61,10 @@ def run(
     overrides: Overrides = None,
     workers: Workers = None,
     resume: Annotated[
-        bool, typer.Option("--resume/--no-resume", help="Keep finished runs (default).")
+        bool,
+        typer.Option(
+            "--resume/--no-resume", help="Keep finished runs; --no-resume moves them aside."
+        ),
     ] = True,
     retry_failed: Annotated[
         bool, typer.Option("--retry-failed", help="Re-run only the failed runs.")
@@ -65,17 +73,18 @@ def run(
         bool, typer.Option("--dry-run", help="Show what is done and to do, and a time estimate.")
     ] = False,
     executor: Annotated[
-        Executor | None, typer.Option(help="Where runs execute [default: run.executor].")
+        Executor | None, typer.Option(help="Where runs execute.", show_default="run.executor")
     ] = None,
     scheduler: Annotated[
         str | None, typer.Option(help="Dask scheduler tcp://HOST:PORT (implies dask).")
     ] = None,
     output: Annotated[
-        Path | None, typer.Option("--output", "-o", help="Output directory (default: run.output).")
+        Path | None,
+        typer.Option("--output", "-o", help="Output directory.", show_default="run.output"),
     ] = None,
     max_points: Annotated[
         int | None,
-        typer.Option(help="Allow sweeps up to this many points (default: run.max_points)."),
+        typer.Option(help="Allow sweeps up to this many points.", show_default="run.max_points"),
     ] = None,
     verbose: Verbose = False,
 ) -> None:
@@ -182,12 +191,13 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
         _print_plan(plan, cfg.run.workers)
         if not plan.todo:
             return
-        import sys
-
         # On a terminal: a live bar; into a log file: a line every 10 s, not thousands.
-        every = 0.2 if sys.stderr.isatty() else 10.0
         bar = tqdm(
-            total=len(plan.todo), unit="run", dynamic_ncols=True, smoothing=0.1, mininterval=every
+            total=len(plan.todo),
+            unit="run",
+            dynamic_ncols=True,
+            smoothing=0.1,
+            mininterval=progress_interval(),
         )
 
     def progress(row) -> None:
@@ -202,10 +212,11 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
     line, cached = _fields_line(cfg)
     typer.echo(line if cached else f"{line}; computing into {cfg.run.cache_dir} ...")
     try:
-        summary = run_sweep(
-            cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan,
-            overrides=overrides,
-        )  # fmt: skip
+        with flow_progress():
+            summary = run_sweep(
+                cfg, resume=resume, retry_failed=retry_failed, progress=progress,
+                on_plan=on_plan, overrides=overrides,
+            )  # fmt: skip
     except KeyboardInterrupt as exc:
         if bar is not None:
             bar.close()
@@ -247,20 +258,37 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
 def classify(
     results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
     head_blocked_speed: Annotated[
-        float | None, typer.Option(help="Head blocked below this fraction of U_center.")
+        float | None,
+        typer.Option(
+            help="Head blocked below this fraction of U_center.", show_default=SWEEP_CLASSIFY
+        ),
     ] = None,
     trap_time: Annotated[
-        float | None, typer.Option(help="In contact and stopped this long [s] -> Trapping.")
+        float | None,
+        typer.Option(
+            help="In contact and stopped this long [s] -> Trapping.", show_default=SWEEP_CLASSIFY
+        ),
     ] = None,
     trap_speed: Annotated[
-        float | None, typer.Option(help="'Stopped': COM speed below this fraction of U_center.")
+        float | None,
+        typer.Option(
+            help="'Stopped': COM speed below this fraction of U_center.",
+            show_default=SWEEP_CLASSIFY,
+        ),
     ] = None,
     rule: Annotated[
         Rule | None,
-        typer.Option(help="Pole-vaulting rule: head-speed (the source's), pivot or switch."),
+        typer.Option(
+            help="Pole-vaulting rule: head-speed (the source's), pivot or switch.",
+            show_default=SWEEP_CLASSIFY,
+        ),
     ] = None,
     pivot_fraction: Annotated[
-        float | None, typer.Option(help="pivot rule: head travel below this x L while turning.")
+        float | None,
+        typer.Option(
+            help="pivot rule: head travel below this x L while turning.",
+            show_default=SWEEP_CLASSIFY,
+        ),
     ] = None,
     config: Annotated[
         Path | None, typer.Option("--config", "-c", help="Take thresholds from this config.")
@@ -299,20 +327,24 @@ def plot_phase(
     results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
     out: Annotated[
         Path | None,
-        typer.Option("--output", "-o", "--out", help="Figure folder (default: RESULTS/figures)."),
+        typer.Option(
+            "--output", "-o", "--out", help="Figure folder.", show_default="RESULTS/figures"
+        ),
     ] = None,
     fmt: Annotated[Format, typer.Option("--format", help="Figure format.")] = "png",
     col: Annotated[
         str | None,
         typer.Option(
             "--col",
-            help="Panel columns by this column, e.g. a swept key fiber.effects.friction "
-            "(default: the first swept key that varies, else length).",
+            help="Panel columns by this column, e.g. a swept key fiber.effects.friction.",
+            show_default="the first swept key that varies, else length",
         ),
     ] = None,
     row: Annotated[
         str | None,
-        typer.Option("--row", help="Panel rows by this column (default: the next that varies)."),
+        typer.Option(
+            "--row", help="Panel rows by this column.", show_default="the next key that varies"
+        ),
     ] = None,
     verbose: Verbose = False,
 ) -> None:
