@@ -162,16 +162,53 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     per_run = plan.mean_run_s
     how = "mean of the finished runs"
     line, _ = _fields_line(cfg)
-    cached = plan.todo and flow_keys_for(cfg)[plan.todo[len(plan.todo) // 2].flow_key][1]
-    if per_run is None and cached and plan.todo:
-        per_run = estimate_run_s(cfg, plan.todo)
-        how = "timed on one run of this sweep"
+    fields = flow_keys_for(cfg)
+    flow_s = 0.0
+    if plan.todo:
+        task = plan.todo[len(plan.todo) // 2]
+        cached = fields[task.flow_key][1]
+        missing = [flow for flow, is_cached in fields.values() if not is_cached]
+        if per_run is None and cached:
+            per_run = estimate_run_s(cfg, plan.todo)
+            how = "timed on one run of this sweep"
+        if missing:
+            flow_s, per_run_timed, note = _estimate_fields(cfg, task, missing)
+            typer.echo(f"  {note}")
+            if per_run is None:
+                per_run, how = per_run_timed, "timed on one run on a probe field"
     # same rule as SweepPlan.estimate_s: no more workers busy than runs to do
     est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(cfg.run.workers)
+    if est is not None:
+        est += flow_s
     typer.echo(
         f"  {line}; estimate {_fmt_s(est)} on {cfg.run.workers} workers"
         + (f" ({per_run:.2f} s per run, {how})" if per_run is not None else "")
+        + (f", flow fields {_fmt_s(flow_s)} included" if flow_s else "")
     )
+
+
+def _estimate_fields(cfg, task, missing) -> tuple[float, float, str]:
+    """Seconds for the fields not cached, seconds per run, and a line on how."""
+    from fibersweep.fiber.result import FiberStart
+    from fibersweep.sweep.estimate import PROBE_STEPS, estimate_uncached
+    from fibersweep.sweep.plan import sweep_settings
+
+    sub = next((s.config for s in sweep_settings(cfg) if s.id == task.settings), cfg)
+    start = FiberStart(theta0=task.theta0, y0=task.y0, length=task.length)
+    total = 0.0
+    per_run = None
+    notes = []
+    for flow in missing:
+        e = estimate_uncached(flow, sub.fiber, start)
+        total += e.flow_s
+        per_run = e.run_s if per_run is None else per_run
+        grids = " then ".join(f"{dx:g} µm ({cells / 1e6:.2g} M cells)" for dx, cells in e.grids)
+        notes.append(
+            f"flow field on {grids}: about {_fmt_s(e.flow_s)} "
+            f"({e.mlups:.0f} MLUPS timed over {PROBE_STEPS} steps; typical step counts)"
+        )
+    note = notes[0] if len(notes) == 1 else f"{len(notes)} flow fields: {'; '.join(notes)}"
+    return total, per_run, note
 
 
 def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = None) -> bool:
