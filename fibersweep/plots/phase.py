@@ -149,10 +149,21 @@ def _select(runs: pd.DataFrame, key: str | None, value: object) -> pd.DataFrame:
     return runs[col == value]
 
 
-def _marker_size(panel: pd.DataFrame) -> float:
-    """Markers that fill, but do not overlap on, the sweep's grid."""
-    cells = max(1, panel["theta0"].nunique() * panel["y0"].nunique())
-    return float(np.clip(2400.0 / cells, 5.0, 42.0))
+def _marker_size(panel: pd.DataFrame, runs: pd.DataFrame, ax: Axes) -> float:
+    """Marker area [pt²] that fills, but does not overlap on, the closest grid points.
+
+    The closest pair of distinct θ0 (and y0) values of ``panel``, over the range of
+    ``runs``, at the size of ``ax`` on its figure.
+    """
+    fig_w, fig_h = ax.figure.get_size_inches()
+    pos = ax.get_position()
+    diam = 14.0
+    for col, size_pt in (("theta0", pos.width * fig_w * 72), ("y0", pos.height * fig_h * 72)):
+        vals = np.unique(panel[col].to_numpy(dtype=float))
+        span = float(np.ptp(runs[col].to_numpy(dtype=float))) or 1.0
+        if vals.size > 1:
+            diam = min(diam, 0.85 * float(np.diff(vals).min()) / (1.1 * span) * size_pt)
+    return float(np.clip(diam, 2.5, 6.5) ** 2)
 
 
 def _label_axes(axes: np.ndarray, n: int) -> None:
@@ -246,7 +257,7 @@ def phase_figure(
     seps: set[float] = set()
     for ax, cv, rv in cells:
         p = _select(_select(runs, col, cv), row, rv)
-        s = _marker_size(p) if len(p) else 10.0
+        s = _marker_size(p, runs, ax) if len(p) else 10.0
         sep = _panel_separatrix(p, separatrix)
         if sep is not None:
             seps.add(round(sep, 6))
@@ -275,6 +286,12 @@ def phase_figure(
         title = [f"{_label(k)} = {_fmt(v)}" for k, v in ((col, cv), (row, rv)) if k is not None]
         if title and (len(cols) > 1 or len(rows) > 1):
             ax.set_title(", ".join(title), fontsize=7 if len(title) > 1 else None)
+        elif n_panels == 1:
+            ax.set_title(_single_length(runs))
+    thetas = np.unique(runs["theta0"].to_numpy(dtype=float))
+    if 1 < thetas.size <= 9:  # few start angles: a tick at each
+        for ax, _, _ in cells:
+            ax.set_xticks(thetas)
     if row is None:
         _label_axes(axes, n_panels)
     else:
@@ -307,6 +324,12 @@ def phase_figure(
     return fig
 
 
+def _single_length(runs: pd.DataFrame) -> str:
+    """The fiber length of a table with one length, as a title; '' otherwise."""
+    lengths = runs["length"].dropna().unique() if "length" in runs else []
+    return f"{_label('length')} = {_fmt(float(lengths[0]))}" if len(lengths) == 1 else ""
+
+
 def _panel_separatrix(
     panel: pd.DataFrame, separatrix: float | None | dict[str, float | None]
 ) -> float | None:
@@ -336,7 +359,7 @@ def contact_figure(runs: pd.DataFrame) -> Figure:
     ax.set_xlabel(r"$\theta_c$ at first contact [deg]")
     ax.set_ylabel(r"$y_c/h_{obs}$ at first contact")
     nl = runs["length"].nunique()
-    lens = "" if nl <= 1 else f", {nl} lengths"
+    lens = f", {_single_length(runs)}" if nl == 1 else f", {nl} lengths"
     ax.set_title(f"{len(c)} runs with contact{lens}")
     if len(c):
         ax.legend(frameon=False, loc="upper left", bbox_to_anchor=(1.0, 1.0))
@@ -365,16 +388,21 @@ def delta_hist_figure(runs: pd.DataFrame) -> Figure:
         x = d[fin & mask]
         if x.size:
             ax.hist(x, bins=bins, histtype="step", lw=1.5, color=color,
-                    label=f"{label}: n = {x.size}, sd = {np.std(x):.3g}")  # fmt: skip
+                    label=f"{label}: n = {x.size}, sd = {np.std(x):.4f}")  # fmt: skip
+    # log counts, from 0.5 so that a bin holding a single run stands clear of the axis
     ax.set_yscale("log")
+    ax.set_ylim(0.5, 4.0 * ax.get_ylim()[1])  # room above the bars for the legend
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel(r"$\delta = (y_f - y_0)/h_{obs}$")
     ax.set_ylabel("runs per bin")
     ax.legend(frameon=False, loc="upper right")
     n_trap = int((ok["class"] == "Trapping").sum())
+    notes = [t for t in (_single_length(runs),) if t]
     if n_trap:
-        ax.set_title(f"{n_trap} trapped runs have no δ", fontsize=8, color="0.3")
+        notes.append(f"{n_trap} trapped runs have no δ")
+    if notes:
+        ax.set_title(", ".join(notes))
     return fig
 
 
