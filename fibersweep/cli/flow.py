@@ -28,41 +28,74 @@ def flow(
     ] = False,
     plot: Annotated[
         Path | None,
-        typer.Option("--plot", help="Write a figure of the field (PNG/PDF/SVG by suffix)."),
+        typer.Option(
+            "--plot",
+            help="Write a figure of the field (PNG/PDF/SVG by suffix); with several fields, "
+            "one per field, its key added to the name.",
+        ),
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Compute (or load from the cache) the steady flow field of CONFIG."""
+    """Compute (or load from the cache) the steady flow field of CONFIG.
+
+    A sweep over flow settings (``sweep: {flow.dx: [4, 2]}``) has one field per
+    distinct flow setting: each is computed (or found) once and reported.
+    """
+    _setup_logging(verbose)
+    with _errors(), flow_progress():
+        cfg = _load(config, overrides)
+        fields = _distinct_fields(cfg)
+        for k, (key, (flow_settings, label)) in enumerate(fields.items()):
+            if len(fields) > 1:
+                typer.echo(f"field {k + 1} of {len(fields)} ({label}):")
+            where = plot
+            if plot is not None and len(fields) > 1:
+                where = plot.with_name(f"{plot.stem}-{key}{plot.suffix}")
+            _report(flow_settings, cfg.run.cache_dir, force, where, "  " if len(fields) > 1 else "")
+
+
+def _distinct_fields(cfg) -> dict[str, tuple]:
+    """Flow key -> (FlowSettings, the swept flow values that make it), in sweep order."""
+    from fibersweep.flow.cache import cache_key
+
+    out: dict[str, tuple] = {}
+    for combo in cfg.combinations():
+        key = cache_key(combo.config.flow)
+        if key not in out:
+            values = {k: v for k, v in combo.values.items() if k.startswith("flow.")}
+            label = ", ".join(f"{k}={v}" for k, v in values.items()) or "base flow settings"
+            out[key] = (combo.config.flow, label)
+    return out
+
+
+def _report(settings, cache_dir: str, force: bool, plot: Path | None, pad: str) -> None:
+    """Compute or load one field and print what it is."""
     import time
 
-    _setup_logging(verbose)
-    with _errors():
-        cfg = _load(config, overrides)
-        from fibersweep.flow.cache import get_flow_field
+    from fibersweep.flow.cache import get_flow_field
 
-        t0 = time.perf_counter()
-        with flow_progress():
-            field, info = get_flow_field(cfg.flow, cfg.run.cache_dir, force=force)
-        took = time.perf_counter() - t0
-        nx, ny, nz, nz_full = info.grid
-        depth = f"half depth, {nz} of {nz_full} nodes + symmetry plane" if nz < nz_full else "full"
-        typer.echo(f"cache: {'hit' if info.hit else 'miss (computed)'}  {info.path}")
-        typer.echo(f"grid: {nx} x {ny} x {nz} nodes ({depth}), dx = {cfg.flow.dx:g} µm")
-        conv = "converged" if info.converged else "NOT converged (max_steps reached)"
-        coarse = f" (after {info.coarse_steps} on coarser grids)" if info.coarse_steps else ""
-        typer.echo(
-            f"solver: {cfg.flow.collision.upper()}, {info.steps} steps{coarse}, {conv}, "
-            f"relative change per check {info.residual:.2e} (tolerance {cfg.flow.tolerance:g})"
-        )
-        typer.echo(
-            f"time: solve {info.seconds:.1f} s"
-            + (f" (when cached); load {took:.2f} s" if info.hit else f"; total {took:.1f} s")
-        )
-        typer.echo(
-            f"U_center reached: {info.u_center_reached:.3f} µm/s "
-            f"(target {cfg.flow.fluid.u_center:g} µm/s)"
-        )
-        if plot is not None:
-            from fibersweep.plots.flow import plot_flow
+    t0 = time.perf_counter()
+    field, info = get_flow_field(settings, cache_dir, force=force)
+    took = time.perf_counter() - t0
+    nx, ny, nz, nz_full = info.grid
+    depth = f"half depth, {nz} of {nz_full} nodes + symmetry plane" if nz < nz_full else "full"
+    typer.echo(f"{pad}cache: {'hit' if info.hit else 'miss (computed)'}  {info.path}")
+    typer.echo(f"{pad}grid: {nx} x {ny} x {nz} nodes ({depth}), dx = {settings.dx:g} µm")
+    conv = "converged" if info.converged else "NOT converged (max_steps reached)"
+    coarse = f" (after {info.coarse_steps} on coarser grids)" if info.coarse_steps else ""
+    typer.echo(
+        f"{pad}solver: {settings.collision.upper()}, {info.steps} steps{coarse}, {conv}, "
+        f"relative change per check {info.residual:.2e} (tolerance {settings.tolerance:g})"
+    )
+    typer.echo(
+        f"{pad}time: solve {info.seconds:.1f} s"
+        + (f" (when cached); load {took:.2f} s" if info.hit else f"; total {took:.1f} s")
+    )
+    typer.echo(
+        f"{pad}U_center reached: {info.u_center_reached:.3f} µm/s "
+        f"(target {settings.fluid.u_center:g} µm/s)"
+    )
+    if plot is not None:
+        from fibersweep.plots.flow import plot_flow
 
-            typer.echo(f"wrote {plot_flow(field, plot)}")
+        typer.echo(f"{pad}wrote {plot_flow(field, plot)}")

@@ -104,7 +104,8 @@ def run(
         if dry_run:
             _dry_run(cfg, resume, retry_failed)
             return
-        failed = _run(cfg, resume, retry_failed, overrides or [])
+        with flow_progress():  # a bar over the solver's steps if a field is computed
+            failed = _run(cfg, resume, retry_failed, overrides or [])
     if failed:
         raise typer.Exit(1)
 
@@ -178,12 +179,12 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
                 per_run, how = per_run_timed, "timed on one run on a probe field"
     # same rule as SweepPlan.estimate_s: no more workers busy than runs to do
     est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(cfg.run.workers)
-    if est is not None:
+    if est is not None and flow_s:
         est += flow_s
+        how += f"; flow fields {_fmt_s(flow_s)} included"
     typer.echo(
         f"  {line}; estimate {_fmt_s(est)} on {cfg.run.workers} workers"
         + (f" ({per_run:.2f} s per run, {how})" if per_run is not None else "")
-        + (f", flow fields {_fmt_s(flow_s)} included" if flow_s else "")
     )
 
 
@@ -249,11 +250,10 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
     line, cached = _fields_line(cfg)
     typer.echo(line if cached else f"{line}; computing into {cfg.run.cache_dir} ...")
     try:
-        with flow_progress():
-            summary = run_sweep(
-                cfg, resume=resume, retry_failed=retry_failed, progress=progress,
-                on_plan=on_plan, overrides=overrides,
-            )  # fmt: skip
+        summary = run_sweep(
+            cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan,
+            overrides=overrides,
+        )  # fmt: skip
     except KeyboardInterrupt as exc:
         if bar is not None:
             bar.close()

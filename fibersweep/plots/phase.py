@@ -149,21 +149,10 @@ def _select(runs: pd.DataFrame, key: str | None, value: object) -> pd.DataFrame:
     return runs[col == value]
 
 
-def _marker_size(panel: pd.DataFrame, runs: pd.DataFrame, ax: Axes) -> float:
-    """Marker area [pt²] that fills, but does not overlap on, the closest grid points.
-
-    The closest pair of distinct θ0 (and y0) values of ``panel``, over the range of
-    ``runs``, at the size of ``ax`` on its figure.
-    """
-    fig_w, fig_h = ax.figure.get_size_inches()
-    pos = ax.get_position()
-    diam = 14.0
-    for col, size_pt in (("theta0", pos.width * fig_w * 72), ("y0", pos.height * fig_h * 72)):
-        vals = np.unique(panel[col].to_numpy(dtype=float))
-        span = float(np.ptp(runs[col].to_numpy(dtype=float))) or 1.0
-        if vals.size > 1:
-            diam = min(diam, 0.85 * float(np.diff(vals).min()) / (1.1 * span) * size_pt)
-    return float(np.clip(diam, 2.5, 6.5) ** 2)
+def _marker_size(panel: pd.DataFrame) -> float:
+    """Markers that fill, but do not overlap on, the sweep's grid."""
+    cells = max(1, panel["theta0"].nunique() * panel["y0"].nunique())
+    return float(np.clip(2400.0 / cells, 5.0, 42.0))
 
 
 def _label_axes(axes: np.ndarray, n: int) -> None:
@@ -257,7 +246,7 @@ def phase_figure(
     seps: set[float] = set()
     for ax, cv, rv in cells:
         p = _select(_select(runs, col, cv), row, rv)
-        s = _marker_size(p, runs, ax) if len(p) else 10.0
+        s = min(_marker_size(p), _spacing_limit(p, runs, ax)) if len(p) else 10.0
         sep = _panel_separatrix(p, separatrix)
         if sep is not None:
             seps.add(round(sep, 6))
@@ -328,6 +317,26 @@ def _single_length(runs: pd.DataFrame) -> str:
     """The fiber length of a table with one length, as a title; '' otherwise."""
     lengths = runs["length"].dropna().unique() if "length" in runs else []
     return f"{_label('length')} = {_fmt(float(lengths[0]))}" if len(lengths) == 1 else ""
+
+
+def _spacing_limit(panel: pd.DataFrame, runs: pd.DataFrame, ax: Axes) -> float:
+    """Largest marker area [pt²] that does not overlap on the closest grid points.
+
+    The closest pair of distinct θ0 (and y0) values of ``panel``'s grid (refinement
+    points, ``round`` > 0, left out), over the range of ``runs``, at the size of
+    ``ax`` on its figure: a grid denser in one place than another keeps apart.
+    """
+    if "round" in panel:
+        panel = panel[panel["round"].fillna(0) == 0]
+    fig_w, fig_h = ax.figure.get_size_inches()
+    pos = ax.get_position()
+    diam = 14.0
+    for col, size_pt in (("theta0", pos.width * fig_w * 72), ("y0", pos.height * fig_h * 72)):
+        vals = np.unique(panel[col].to_numpy(dtype=float))
+        span = float(np.ptp(runs[col].to_numpy(dtype=float))) or 1.0
+        if vals.size > 1:
+            diam = min(diam, 0.85 * float(np.diff(vals).min()) / (1.1 * span) * size_pt)
+    return float(max(diam, 2.5) ** 2)
 
 
 def _panel_separatrix(
