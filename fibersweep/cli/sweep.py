@@ -159,6 +159,15 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     from fibersweep.sweep.runner import estimate_run_s, flow_keys_for
 
     plan = plan_sweep(cfg, None, resume=resume, retry_failed=retry_failed)
+    extra, rnd, info = [], 0, None
+    if cfg.sweep.refine is not None and not plan.fresh:
+        from fibersweep.sweep.refine import stored_rounds
+        from fibersweep.sweep.store import read_runs
+
+        stored = read_runs(plan.out)
+        extra, rnd, info = stored_rounds(cfg.sweep.refine, plan.settings, plan.tasks, stored)
+        if extra:
+            plan = plan_sweep(cfg, None, retry_failed=retry_failed, extra=extra)
     _print_plan(plan, cfg.run.workers)
     per_run = plan.mean_run_s
     how = "mean of the finished runs"
@@ -185,7 +194,58 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     typer.echo(
         f"  {line}; estimate {_fmt_s(est)} on {cfg.run.workers} workers"
         + (f" ({per_run:.2f} s per run, {how})" if per_run is not None else "")
+        + (" for the runs known so far" if cfg.sweep.refine is not None else "")
     )
+    if cfg.sweep.refine is not None:
+        _dry_run_refinement(cfg, plan, extra, rnd, info)
+
+
+def _dry_run_refinement(cfg, plan, extra, rnd: int, info) -> None:
+    """What is known of the refinement rounds: those the stored runs determine."""
+    refine = cfg.sweep.refine
+    head = (
+        f"  refinement ({', '.join(refine.axes)}): up to {refine.max_runs} more runs in up to "
+        f"{refine.rounds} rounds; "
+    )
+    if info is None:
+        typer.echo(
+            head + "the rounds are not yet known: each is chosen from the classes of the "
+            "runs before it, once they have run"
+        )
+        return
+    if plan.todo:
+        typer.echo(
+            head + f"round {rnd} is to do ({len(plan.todo)} runs above); later rounds are "
+            "not yet known: they depend on its classes"
+        )
+        return
+    done = _refinement_line(info, refine).removeprefix("refinement: ")
+    typer.echo(head + "stored: " + done)
+
+
+_STOPPED = {
+    "located": "every boundary bracket is within tolerance",
+    "stuck": "the others end at failed runs: --retry-failed re-runs them",
+    "retry-failed": "--retry-failed runs no new point: a plain run continues the refinement",
+    "interrupted": "interrupted: run the same command again to continue",
+    "budget": "budget sweep.refine.max_runs spent",
+    "rounds": "sweep.refine.rounds reached",
+    "running": "more rounds to run",
+    "unsaved": "results could not be written",
+}
+
+
+def _refinement_line(info: dict, refine) -> str:
+    """One line on a refinement: rounds, runs, brackets located / open / stuck, why it stopped."""
+    why = _STOPPED.get(info.get("stopped", ""), info.get("stopped", ""))
+    line = (
+        f"refinement: {info.get('rounds', 0)} rounds, {info.get('runs', 0)} of "
+        f"{refine.max_runs} runs; boundary brackets: {info.get('located', 0)} located, "
+        f"{info.get('open', 0)} open"
+    )
+    if info.get("stuck"):
+        line += f", {info['stuck']} stuck (midpoint failed or not run)"
+    return f"{line} ({why})"
 
 
 def _estimate_fields(cfg, task, missing) -> tuple[float, float, str]:
@@ -247,12 +307,27 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
             )
             bar.update(1)
 
+    def on_round(rnd: int, plan) -> None:
+        nonlocal bar
+        if bar is not None:
+            bar.close()
+            bar = None
+        typer.echo(
+            f"refinement round {rnd}: {len(plan.todo)} runs to do "
+            f"({len(plan.tasks)} points in the sweep so far)"
+        )
+        if plan.todo:
+            import sys
+
+            every = 0.2 if sys.stderr.isatty() else 10.0
+            bar = tqdm(total=len(plan.todo), unit="run", dynamic_ncols=True, mininterval=every)
+
     line, cached = _fields_line(cfg)
     typer.echo(line if cached else f"{line}; computing into {cfg.run.cache_dir} ...")
     try:
         summary = run_sweep(
             cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan,
-            overrides=overrides,
+            overrides=overrides, on_round=on_round,
         )  # fmt: skip
     except KeyboardInterrupt as exc:
         if bar is not None:
@@ -280,6 +355,8 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
         + ", ".join(f"{k} {v}" for k, v in summary.table_counts.items())
         + f", failed {summary.failed}"
     )
+    if summary.refinement is not None:
+        typer.echo(_refinement_line(summary.refinement, cfg.sweep.refine))
     for line in summary.failures[:10]:
         typer.secho(f"  failed {line}", err=True, fg=typer.colors.RED)
     if summary.failed:

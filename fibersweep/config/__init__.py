@@ -25,6 +25,7 @@ from fibersweep.config.loading import apply_overrides, load_config, parse_config
 from fibersweep.config.schema import (
     Combination,
     Config,
+    RefineSettings,
     RunSettings,
     SweepSettings,
     setting_annotation,
@@ -41,6 +42,7 @@ __all__ = [
     "FieldError",
     "LinspaceSpec",
     "RangeSpec",
+    "RefineSettings",
     "RunSettings",
     "SweepSettings",
     "apply_overrides",

@@ -22,7 +22,7 @@ from pydantic import (
 )
 
 from fibersweep.config.errors import ConfigError, FieldError, error_parts
-from fibersweep.config.schema import Config
+from fibersweep.config.schema import Config, _unwrap
 
 
 @dataclass(frozen=True)
@@ -91,7 +91,7 @@ def _model_at(path: tuple) -> type[BaseModel] | None:
     for part in path:
         if model is None or not isinstance(part, str) or part not in model.model_fields:
             return None
-        ann = model.model_fields[part].annotation
+        ann = _unwrap(model.model_fields[part].annotation)  # an optional section too
         model = ann if isinstance(ann, type) and issubclass(ann, BaseModel) else None
     return model
 
@@ -113,8 +113,7 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
             close = difflib.get_close_matches(
                 str(loc[-1]), list(parent.model_fields), n=1, cutoff=0.5
             )
-            if close:
-                hint = f"; did you mean '{close[0]}'?"
+            hint = f"; did you mean '{close[0]}'?" if close else "."
             valid = ", ".join(parent.model_fields)
             hint += f" Valid keys here: {valid}"
         return f"{dotted}{where}: unknown key{hint}"
@@ -181,8 +180,9 @@ def apply_overrides(
     for item in overrides:
         key, sep, raw = item.partition("=")
         path = tuple(p.strip() for p in key.split("."))
-        if len(path) > 2 and path[0] == "sweep":
-            # a swept setting is one dotted key inside sweep (or inside sweep.zip)
+        if len(path) > 2 and path[0] == "sweep" and path[1] != "refine":
+            # a swept setting is one dotted key inside sweep (or inside sweep.zip);
+            # sweep.refine is a section of its own
             cut = 3 if path[1] == "zip" and len(path) > 3 else 2
             path = (*path[: cut - 1], ".".join(path[cut - 1 :]))
         if not sep or not all(path):
@@ -209,6 +209,8 @@ def apply_overrides(
         else:
             node[path[-1]] = value
             label = f"override {item}"
+            for stale in [k for k in lines if len(k) > len(path) and k[: len(path)] == path]:
+                del lines[stale]  # the file's lines inside a replaced value
             lines[path] = label
             for k in range(1, len(path)):
                 lines.setdefault(path[:k], label)

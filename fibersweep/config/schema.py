@@ -44,6 +44,72 @@ from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.settings import FlowSettings
 
 
+class RefineSettings(_Strict):
+    """Adaptive refinement of class boundaries (``sweep.refine``).
+
+    Starting from the grid, each round bisects every pair of neighbouring points
+    (neighbours along one refine axis, every other coordinate and setting equal)
+    whose classes differ, or whose δ differ by more than ``delta_jump``, until
+    every such bracket is at most ``tolerance`` wide on its axis, the budget
+    ``max_runs`` is spent or ``rounds`` rounds have run.
+    """
+
+    axes: list[str] = Field(
+        min_length=1, description="start axes to bisect along (theta0, y0, length)"
+    )
+    tolerance: dict[str, float] = Field(
+        description="largest bracket width per refine axis when a boundary counts as "
+        "located [deg for theta0, h_obs for y0, l_obs for length]"
+    )
+    max_runs: int = Field(ge=1, strict=True, description="most refinement runs (the grid excluded)")
+    rounds: int = Field(
+        12, ge=1, le=60, strict=True, description="most refinement rounds (round 0 is the grid)"
+    )
+    delta_jump: float | None = Field(
+        None,
+        gt=0,
+        description="also bisect neighbours of one class whose δ differ by more than this [h_obs]",
+    )
+
+    @field_validator("axes")
+    @classmethod
+    def _known_axes(cls, axes: list[str]) -> list[str]:
+        for i, a in enumerate(axes):
+            if a not in _START_AXES:
+                close = difflib.get_close_matches(str(a), _START_AXES, n=1, cutoff=0.5)
+                hint = f"did you mean '{close[0]}'? " if close else ""
+                raise FieldError(
+                    (i,),
+                    f"{a!r} cannot be refined; {hint}valid: {', '.join(_START_AXES)} "
+                    "(setting axes are swept on their listed values only)",
+                )
+        if len(set(axes)) != len(axes):
+            raise ValueError(f"an axis is listed twice: {axes}")
+        return axes
+
+    @model_validator(mode="after")
+    def _tolerances(self) -> RefineSettings:
+        for key, tol in self.tolerance.items():
+            if key not in self.axes:
+                raise FieldError(
+                    ("tolerance", key),
+                    f"not a refine axis; refine axes: {', '.join(self.axes)}",
+                )
+            if not (np.isfinite(tol) and tol > 0):
+                raise FieldError(("tolerance", key), f"must be a positive number; got {tol}")
+        missing = [a for a in self.axes if a not in self.tolerance]
+        if missing:
+            raise FieldError(
+                "tolerance",
+                f"no tolerance for {', '.join(missing)}; give one per refine axis, "
+                f"e.g. tolerance: {{{missing[0]}: {_TOL_EXAMPLE.get(missing[0], 0.01)}}}",
+            )
+        return self
+
+
+_TOL_EXAMPLE = {"theta0": 0.5, "y0": 0.005, "length": 0.01}
+
+
 class SweepSettings(_Strict):
     """Sweep over the start angle, lateral position and length, and any other setting.
 
@@ -66,6 +132,9 @@ class SweepSettings(_Strict):
         None,
         description="setting keys swept together: a mapping key -> values (same lengths), "
         "or a list of such mappings",
+    )
+    refine: RefineSettings | None = Field(
+        None, description="adaptive refinement of class boundaries (off when absent)"
     )
 
     @field_validator("theta0", "y0", "length")
@@ -97,9 +166,24 @@ class SweepSettings(_Strict):
     @model_serializer(mode="wrap")
     def _without_empty_zip(self, handler: Any) -> dict[str, Any]:
         data = handler(self)
-        if isinstance(data, dict) and data.get("zip") is None:
-            data.pop("zip", None)  # written only when used
+        if isinstance(data, dict):
+            for key in ("zip", "refine"):  # written only when used
+                if data.get(key) is None:
+                    data.pop(key, None)
         return data
+
+    @model_validator(mode="after")
+    def _refine_axes_swept(self) -> SweepSettings:
+        """A refine axis needs at least two grid values to bisect between."""
+        if self.refine is not None:
+            for i, a in enumerate(self.refine.axes):
+                if axis_count(getattr(self, a)) < 2:
+                    raise FieldError(
+                        ("refine", "axes", i),
+                        f"{a} has one value in the grid: nothing to bisect; "
+                        f"sweep {a} over at least two values or drop it from refine.axes",
+                    )
+        return self
 
     @model_validator(mode="after")
     def _setting_axes_valid(self) -> SweepSettings:
@@ -373,9 +457,12 @@ class Config(_Strict):
         combinations.
         """
         starts, combos = self.sweep.size, self.sweep.n_combinations
-        n = starts * combos
+        extra = self.sweep.refine.max_runs if self.sweep.refine is not None else 0
+        n = starts * combos + extra
         if n > self.run.max_points:
             how = f" ({starts:,} starts x {combos:,} setting combinations)" if combos > 1 else ""
+            if extra:
+                how += f" (with the {extra:,} refinement runs of sweep.refine.max_runs)"
             raise FieldError(
                 "sweep",
                 f"{n:,} points{how}, more than run.max_points ({self.run.max_points:,}); "
@@ -408,7 +495,7 @@ class Config(_Strict):
             return [Combination({}, self)]
         locs = {k: ("sweep", *loc) for loc, k, _ in self.sweep.axis_items()}
         base = self.model_dump(mode="json")
-        base["sweep"] = {k: base["sweep"][k] for k in _START_AXES}
+        base["sweep"] = {k: base["sweep"][k] for k in _START_AXES}  # refine: the sweep's
         out = []
         for assignment in assignments:
             data = copy.deepcopy(base)

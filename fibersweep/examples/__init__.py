@@ -3,7 +3,8 @@
 * ``starter.yaml``: a commented starter (written as ``fibersweep.yaml``);
 * ``quick.yaml``: a coarse grid and a small sweep across the separatrix;
 * ``paper.yaml``: the source's 1323-run study at its resolution;
-* ``friction_axis.yaml``: settings as sweep axes (friction x pillar surface).
+* ``friction_axis.yaml``: settings as sweep axes (friction x pillar surface);
+* ``refine.yaml``: adaptive refinement of the class boundaries.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ EXAMPLES = {
     "quick.yaml": "quick.yaml",
     "paper.yaml": "paper.yaml",
     "friction_axis.yaml": "friction_axis.yaml",
+    "refine.yaml": "refine.yaml",
 }
 
 

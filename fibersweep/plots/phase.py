@@ -38,6 +38,7 @@ __all__ = [
     "FORMATS",
     "contact_figure",
     "delta_hist_figure",
+    "draw_boundaries",
     "facet_keys",
     "phase_figure",
     "plot_all",
@@ -149,10 +150,56 @@ def _select(runs: pd.DataFrame, key: str | None, value: object) -> pd.DataFrame:
     return runs[col == value]
 
 
+def _refined(runs: pd.DataFrame) -> bool:
+    """Whether the table holds refinement runs (``round`` > 0)."""
+    return "round" in runs and bool((runs["round"].fillna(0) > 0).any())
+
+
 def _marker_size(panel: pd.DataFrame) -> float:
-    """Markers that fill, but do not overlap on, the sweep's grid."""
+    """Markers that fill, but do not overlap on, the sweep's grid (refinement points left out)."""
+    if _refined(panel):
+        panel = panel[panel["round"].fillna(0) == 0]
     cells = max(1, panel["theta0"].nunique() * panel["y0"].nunique())
     return float(np.clip(2400.0 / cells, 5.0, 42.0))
+
+
+def _sizes(panel: pd.DataFrame, s: float) -> np.ndarray | float:
+    """Grid points at ``s``; refinement points smaller, so the boundaries they trace show."""
+    if "round" not in panel:
+        return s
+    return np.where(panel["round"].fillna(0).to_numpy() > 0, 0.3 * s, s)
+
+
+#: Look of the located class boundaries.
+BOUNDARY_STYLE = {"color": "0.1", "lw": 1.0}
+
+
+def draw_boundaries(ax: Axes, panel: pd.DataFrame) -> bool:
+    """Draw the class boundaries of a refined panel; True if any was drawn.
+
+    The lines are the edges of the nearest-neighbour class map of the panel's
+    runs (:func:`fibersweep.analysis.boundaries.class_map`): along a refined
+    axis they pass between the closest runs of different classes, to the
+    refinement's tolerance; between grid columns they step half-way, which is
+    all the runs say there.
+    """
+    from fibersweep.analysis.boundaries import class_map
+
+    drawn = False
+    for _, g in panel.groupby(["settings", "length"] if "settings" in panel else ["length"]):
+        xs, ys, labels, names = class_map(g)
+        for k in range(len(names) if len(names) > 1 else 0):
+            # the 0.5 level of each class's indicator: the map's edges, corners cut
+            cs = ax.contour(
+                xs, ys, (labels == k).astype(float), levels=[0.5], zorder=4,
+                colors=BOUNDARY_STYLE["color"], linewidths=BOUNDARY_STYLE["lw"],
+            )  # fmt: skip
+            cs.sticky_edges.x.clear()  # keep the panel's margins around the points
+            cs.sticky_edges.y.clear()
+            drawn = True
+    if drawn:
+        ax.autoscale_view()
+    return drawn
 
 
 def _label_axes(axes: np.ndarray, n: int) -> None:
@@ -244,6 +291,7 @@ def phase_figure(
     sc = None
     present = _present(runs)
     seps: set[float] = set()
+    boundaries = False
     for ax, cv, rv in cells:
         p = _select(_select(runs, col, cv), row, rv)
         s = min(_marker_size(p), _spacing_limit(p, runs, ax)) if len(p) else 10.0
@@ -256,12 +304,16 @@ def phase_figure(
             for c in present:
                 q = _of_class(good, c)
                 if len(q):
-                    ax.scatter(q["theta0"], q["y0"], s=s, lw=0.4, edgecolor="k", **_style(c))
+                    ax.scatter(
+                        q["theta0"], q["y0"], s=_sizes(q, s), lw=0.4, edgecolor="k", **_style(c)
+                    )
+            if _refined(p):
+                boundaries |= draw_boundaries(ax, p)
         else:
             has = good[np.isfinite(good["delta"].to_numpy(dtype=float))]
             sc = ax.scatter(
-                has["theta0"], has["y0"], c=has["delta"], s=s, cmap="RdBu_r", norm=norm,
-                marker="o", lw=0.3, edgecolor="0.3",
+                has["theta0"], has["y0"], c=has["delta"], s=_sizes(has, s), cmap="RdBu_r",
+                norm=norm, marker="o", lw=0.3, edgecolor="0.3",
             )  # fmt: skip
             trap = good[good["class"] == "Trapping"]
             if len(trap):
@@ -292,6 +344,8 @@ def phase_figure(
     legend_sep = next(iter(seps)) if len(seps) == 1 else None
     if by == "class":
         hs = _legend_handles(present, legend_sep, failed)
+        if boundaries:
+            hs.append(Line2D([], [], label="located boundary", **BOUNDARY_STYLE))  # type: ignore[arg-type]
         if len(seps) > 1:
             hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label="separatrix (per field)"))
         fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)

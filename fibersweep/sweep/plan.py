@@ -248,6 +248,7 @@ def plan_sweep(
     resume: bool = True,
     retry_failed: bool = False,
     repair: bool = False,
+    extra: Sequence[SweepTask] = (),
 ) -> SweepPlan:
     """Compare a config with its output directory and decide what to run.
 
@@ -265,6 +266,9 @@ def plan_sweep(
     repair : bool
         Move unreadable parts into a ``quarantine-*`` folder (their runs are then
         to do). When False (a dry run) they are only left out and reported.
+    extra : sequence of SweepTask
+        Points beyond the grid (refinement rounds, :mod:`fibersweep.sweep.refine`),
+        planned like the grid's (a point already in the grid is kept once).
 
     Raises
     ------
@@ -278,6 +282,9 @@ def plan_sweep(
     stored_swept = [k for k in (manifest or {}).get("swept", []) if k not in swept]
     columns = swept + stored_swept
     tasks = make_tasks(cfg, columns=columns, settings=settings)
+    if extra:
+        have = {t.key for t in tasks}
+        tasks += [t for t in extra if t.key not in have]
     notes: list[str] = []
     bad = [p for p, _ in unreadable_parts(out)]
     if bad and repair:

@@ -18,7 +18,7 @@ from typing import Any
 from fibersweep.config import Config
 from fibersweep.errors import ResultsError
 from fibersweep.fiber.result import CLASSES
-from fibersweep.sweep.executors import make_executor
+from fibersweep.sweep.executors import EXECUTORS, make_executor
 from fibersweep.sweep.lock import output_lock
 from fibersweep.sweep.manifest import provenance, read_manifest, write_manifest
 from fibersweep.sweep.plan import (
@@ -28,6 +28,7 @@ from fibersweep.sweep.plan import (
     result_settings,
     sweep_settings,
 )
+from fibersweep.sweep.refine import next_round, stored_rounds
 from fibersweep.sweep.store import (
     PartWriter,
     clean_temporaries,
@@ -86,6 +87,7 @@ class SweepSummary:
     wall_s: float = 0.0
     interrupted: bool = False
     failures: list[str] = field(default_factory=list)
+    refinement: dict[str, Any] | None = None
 
 
 def flow_field_for(cfg: Config, *, mmap: bool = True) -> tuple[Any, Any]:
@@ -220,8 +222,15 @@ def run_sweep(
     progress: Callable[[Mapping[str, Any]], None] | None = None,
     on_plan: Callable[[SweepPlan], None] | None = None,
     overrides: Sequence[str] = (),
+    on_round: Callable[[int, SweepPlan], None] | None = None,
 ) -> SweepSummary:
-    """Run every to-do point of a sweep and record it.
+    """Run every to-do point of a sweep and record it; then refine, round by round.
+
+    With ``sweep.refine``, each round reads the classes of the stored runs and
+    bisects the brackets wider than the tolerance (:func:`fibersweep.sweep.refine.propose`);
+    its points are ordinary runs of the same table (column ``round``). The rounds
+    are derived again from the stored runs on every call, so a second call
+    continues an interrupted refinement without running anything twice.
 
     Parameters
     ----------
@@ -236,6 +245,8 @@ def run_sweep(
     overrides : sequence of str
         The command line's ``KEY=VALUE`` overrides, recorded in the manifest as
         given (``cfg`` already has them applied).
+    on_round : callable, optional
+        Called with the round number and its plan before a refinement round runs.
 
     Returns
     -------
@@ -245,7 +256,7 @@ def run_sweep(
     """
     out = Path(cfg.run.output)
     with output_lock(out, "run"):
-        return _run_locked(cfg, out, resume, retry_failed, progress, on_plan, overrides)
+        return _run_locked(cfg, out, resume, retry_failed, progress, on_plan, overrides, on_round)
 
 
 def _run_locked(
@@ -256,8 +267,16 @@ def _run_locked(
     progress: Callable[[Mapping[str, Any]], None] | None,
     on_plan: Callable[[SweepPlan], None] | None,
     overrides: Sequence[str] = (),
+    on_round: Callable[[int, SweepPlan], None] | None = None,
 ) -> SweepSummary:
     fields, plan = prepare(cfg, resume=resume, retry_failed=retry_failed)
+    refine = cfg.sweep.refine
+    extra: list[SweepTask] = []
+    rnd = 0
+    if refine is not None and not plan.fresh:  # continue from the stored rounds
+        extra, rnd, _ = stored_rounds(refine, plan.settings, plan.tasks, read_runs(out))
+        if extra:
+            plan = plan_sweep(cfg, None, retry_failed=retry_failed, repair=True, extra=extra)
     if on_plan is not None:
         on_plan(plan)
     if plan.fresh:
@@ -294,7 +313,8 @@ def _run_locked(
         "overrides": manifest["overrides"],
     }
     summary = SweepSummary(out=out)
-    needed = {t.settings for t in plan.todo}
+    # a refinement round may run any setting: every one is set up
+    needed = {t.settings for t in (plan.tasks if refine is not None else plan.todo)}
     spec = WorkerSpec(
         log_level=logging.getLogger("fibersweep").getEffectiveLevel(),
         settings=tuple(
@@ -309,42 +329,95 @@ def _run_locked(
             if st.id in needed
         ),
     )
-    ex = make_executor(cfg.run.executor, cfg.run.workers, cfg.run.scheduler, cfg.run.retries)
+    keep = refine is not None and "keep" in EXECUTORS[cfg.run.executor].OPTIONS
+    # rounds reuse the workers when the executor can keep them
+    ex = make_executor(
+        cfg.run.executor, cfg.run.workers, cfg.run.scheduler, cfg.run.retries, keep=keep
+    )
     # Dask workers keep their own signal handling; pool workers leave Ctrl-C to us.
     initargs = (spec, cfg.run.executor == "local")
-    by_key: dict[str, SweepTask] = {t.key: t for t in plan.todo}
     keep_traj = cfg.fiber.record.trajectories
     t0 = time.perf_counter()
     state = "stopped"
     writer = PartWriter(out, meta, cfg.run.flush_every, cfg.run.flush_seconds)
     writer.start_timer()
     try:
-        if plan.todo:
-            for oc in ex.run(run_task, plan.todo, init_worker, initargs):
-                if oc.value is not None:
-                    row, traj = dict(oc.value["row"]), oc.value["trajectory"]
-                    row["attempts"] = oc.attempts
-                else:
-                    row, traj = failed_row(by_key[oc.key], oc.error, oc.attempts), None
-                writer.add(row, traj if keep_traj else None)
-                summary.ran += 1
-                label = row["class"] if row["status"] == "ok" else "failed"
-                summary.counts[label] += 1
-                if row["status"] != "ok":
-                    summary.failures.append(f"{row['id']}: {row['reason']}")
-                if progress is not None:
-                    progress(row)
+        while True:  # the grid, then each refinement round
+            _run_batch(ex, plan.todo, initargs, writer, keep_traj, summary, progress)
+            if refine is None:
+                break
+            new, summary.refinement = _refine_step(cfg, out, plan, writer, rnd, retry_failed)
+            manifest["refinement"] = summary.refinement
+            if not new:
+                break
+            rnd += 1
+            extra += new
+            plan = plan_sweep(cfg, None, retry_failed=retry_failed, repair=True, extra=extra)
+            if on_round is not None:
+                on_round(rnd, plan)
     except KeyboardInterrupt:  # Ctrl-C, or SIGTERM (errors.Terminated)
         summary.interrupted = True
         state = "interrupted"
+        if summary.refinement is not None:
+            summary.refinement["stopped"] = "interrupted"
         raise
     else:
         state = "complete"
     finally:
         summary.wall_s = time.perf_counter() - t0
+        manifest["sweep_size"] = len(plan.tasks)
+        if keep:
+            ex.close()  # type: ignore[attr-defined]
         _finish(cfg, out, meta, manifest, writer, state, summary, plan)
     log.info("sweep done: %d runs in %.1f s", summary.ran, summary.wall_s)
     return summary
+
+
+def _run_batch(
+    ex: Any,
+    todo: list[SweepTask],
+    initargs: tuple,
+    writer: PartWriter,
+    keep_traj: bool,
+    summary: SweepSummary,
+    progress: Callable[[Mapping[str, Any]], None] | None,
+) -> None:
+    """Run ``todo`` on the executor; queue each row (and trajectory) for writing."""
+    if not todo:
+        return
+    by_key = {t.key: t for t in todo}
+    for oc in ex.run(run_task, todo, init_worker, initargs):
+        if oc.value is not None:
+            row, traj = dict(oc.value["row"]), oc.value["trajectory"]
+            row["attempts"] = oc.attempts
+        else:
+            row, traj = failed_row(by_key[oc.key], oc.error, oc.attempts), None
+        writer.add(row, traj if keep_traj else None)
+        summary.ran += 1
+        label = row["class"] if row["status"] == "ok" else "failed"
+        summary.counts[label] += 1
+        if row["status"] != "ok":
+            summary.failures.append(f"{row['id']}: {row['reason']}")
+        if progress is not None:
+            progress(row)
+
+
+def _refine_step(
+    cfg: Config, out: Path, plan: SweepPlan, writer: PartWriter, rnd: int, retry_failed: bool
+) -> tuple[list[SweepTask], dict[str, Any]]:
+    """Write what ran, read the classes back, and make the next round's tasks."""
+    if not writer.flush():
+        return [], {"stopped": "unsaved", "rounds": rnd}
+    stored = read_runs(out)
+    assert cfg.sweep.refine is not None
+    new, info = next_round(cfg.sweep.refine, plan.settings, plan.tasks, stored, rnd)
+    have = set(stored["id"])
+    not_run = sum(t.key not in have for t in [*plan.tasks, *new])
+    if retry_failed and not_run:
+        # --retry-failed runs no new point: a plain run continues the refinement
+        info.update(stopped="retry-failed", not_run=not_run)
+        return [], info
+    return new, info
 
 
 def _flow_swept(columns: list[str]) -> bool:

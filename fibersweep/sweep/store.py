@@ -88,6 +88,7 @@ RUN_COLUMNS: dict[str, pa.DataType] = {
     "worker": pa.string(),
     "attempts": pa.int64(),
     "finished_at": pa.float64(),
+    "round": pa.int64(),
 }
 
 #: Unit and frame of the runs-table columns, stored as Parquet field metadata
@@ -117,6 +118,7 @@ COLUMN_DOCS: dict[str, tuple[str, str]] = {
     "worker": ("", "host:pid of the worker that ran it"),
     "attempts": ("", "times the run was started (worker crashes re-run it)"),
     "finished_at": ("s", "Unix time the run finished"),
+    "round": ("", "refinement round that first ran the run (0: the grid; see sweep.refine)"),
 }
 
 _seq = 0

@@ -45,6 +45,8 @@ class SweepTask:
         Key of the flow field it moves in ('' for the spec's single one).
     values : tuple of (str, Any)
         The swept settings' values (dotted key, value), written as columns.
+    round : int
+        Refinement round that added the run (0: the grid).
     """
 
     key: str
@@ -54,10 +56,11 @@ class SweepTask:
     settings: str = ""
     flow_key: str = ""
     values: tuple[tuple[str, Any], ...] = ()
+    round: int = 0
 
     def columns(self) -> dict[str, Any]:
-        """Row columns naming the run's settings: ``settings`` and one per swept key."""
-        return {"settings": self.settings, **dict(self.values)}
+        """Row columns of the run's settings: ``settings``, ``round``, one per swept key."""
+        return {"settings": self.settings, "round": self.round, **dict(self.values)}
 
 
 @dataclass(frozen=True)

@@ -92,3 +92,27 @@ def test_tau_of_one_half_is_rejected():
 def test_flow_settings_geometry_is_used(tmp_path):
     s = FlowSettings.model_validate(TINY_FLOW)
     assert isinstance(s.geometry, GeometrySettings) and s.geometry.width == 40.0
+
+
+def test_flow_axis_computes_and_reports_each_distinct_field(tmp_path):
+    """`sweep: {flow.geometry.pillar_height: [12, 8]}` and a fiber axis: two fields, not four."""
+    path = tmp_path / "c.yaml"
+    sweep = {
+        "flow.geometry.pillar_height": [12.0, 8.0],
+        "fiber.effects.friction": [0.0, 0.3],
+    }
+    path.write_text(yaml.safe_dump({"flow": TINY_FLOW, "sweep": sweep,
+                                    "run": {"cache_dir": str(tmp_path / "cache")}}))  # fmt: skip
+    png = tmp_path / "flow.png"
+    res = runner.invoke(app, ["flow", str(path), "--plot", str(png)])
+    assert res.exit_code == 0, res.output
+    out = res.output
+    assert "field 1 of 2 (flow.geometry.pillar_height=12.0):" in out
+    assert "field 2 of 2 (flow.geometry.pillar_height=8.0):" in out
+    assert out.count("cache: miss") == 2 and "field 3" not in out
+    entries = sorted(p.name for p in (tmp_path / "cache").glob("flow-*"))
+    assert len(entries) == 2
+    figures = sorted(p.name for p in tmp_path.glob("flow-*.png"))
+    assert figures == sorted(f"flow-{e.removeprefix('flow-')}.png" for e in entries)
+    again = runner.invoke(app, ["flow", str(path)])
+    assert again.exit_code == 0 and again.output.count("cache: hit") == 2
