@@ -22,4 +22,7 @@ fs plot-phase results/quick -o "$out"
 fs run configs/friction_axis.yaml
 fs plot-phase results/friction_axis -o "$work/friction"
 cp "$work/friction/phase.png" "$out/phase_friction.png"
+fs run configs/refine.yaml
+fs plot-phase results/refine -o "$work/refine"
+cp "$work/refine/phase.png" "$out/phase_refine.png"
 ls -l "$out"
