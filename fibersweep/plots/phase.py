@@ -348,7 +348,8 @@ def phase_figure(
             hs.append(Line2D([], [], label="located boundary", **BOUNDARY_STYLE))  # type: ignore[arg-type]
         if len(seps) > 1:
             hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label="separatrix (per field)"))
-        fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)
+        fig.legend(handles=hs, loc="outside upper center", ncol=_legend_columns(hs, n_panels),
+                   frameon=False)  # fmt: skip
     else:
         visible = [a for a in axes.flat if a.get_visible()]
         cb = fig.colorbar(sc, ax=visible, shrink=0.9, extend="both")
@@ -363,7 +364,8 @@ def phase_figure(
         if legend_sep is not None:
             hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label=_sep_label(legend_sep)))
         if hs:
-            fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)
+            fig.legend(handles=hs, loc="outside upper center", ncol=_legend_columns(hs, n_panels),
+                   frameon=False)  # fmt: skip
     return fig
 
 
@@ -371,6 +373,11 @@ def _single_length(runs: pd.DataFrame) -> str:
     """The fiber length of a table with one length, as a title; '' otherwise."""
     lengths = runs["length"].dropna().unique() if "length" in runs else []
     return f"{_label('length')} = {_fmt(float(lengths[0]))}" if len(lengths) == 1 else ""
+
+
+def _legend_columns(handles: list, n_panels: int) -> int:
+    """One row above a wide figure; at most three columns above a single panel."""
+    return max(1, min(len(handles), 3 if n_panels == 1 else 6))
 
 
 def _spacing_limit(panel: pd.DataFrame, runs: pd.DataFrame, ax: Axes) -> float:
