@@ -17,6 +17,7 @@ import numba
 import numpy as np
 
 from fibersweep.errors import SolverError
+from fibersweep.flow import progress
 from fibersweep.flow.analytic import duct_center_velocity
 from fibersweep.flow.cuts import Cuts, pillar_cuts
 from fibersweep.flow.initial import duct_guess, hele_shaw_guess, velocity_gradient
@@ -256,6 +257,10 @@ def _run(
     residual = math.inf
     converged = False
     t0 = time.perf_counter()
+    progress.report(
+        progress.SolveProgress(settings.dx, 0, settings.max_steps, residual, settings.tolerance,
+                               grid.cells)
+    )  # fmt: skip
     while steps < settings.max_steps:
         n = max(mult, min(check, (settings.max_steps - steps) // mult * mult))
         if interval < len(candidates):
@@ -289,6 +294,11 @@ def _run(
         residual = float(np.linalg.norm(uxy - u_prev) / max(np.linalg.norm(uxy), 1e-300))
         u_prev = uxy.copy()
         log.debug("step %d residual %.3e", steps, residual)
+        progress.report(
+            progress.SolveProgress(
+                settings.dx, steps, settings.max_steps, residual, settings.tolerance, grid.cells
+            )
+        )
         if residual < settings.tolerance:
             converged = True
             break
