@@ -45,7 +45,7 @@ def choices(name: str, values: Iterable[str]) -> type[enum.Enum]:
     return enum.Enum(name, {v: v for v in values}, type=str)
 
 
-Workers = Annotated[int | None, typer.Option(help="Worker processes (default: run.workers).")]
+Workers = Annotated[int | None, typer.Option(help="Worker processes.", show_default="run.workers")]
 
 
 @contextmanager
@@ -113,11 +113,80 @@ def _ignore_stop_signals() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+class _TqdmLogHandler(logging.Handler):
+    """Log lines written through ``tqdm.write``, so they never glue to a progress bar.
+
+    The same idea as ``tqdm.contrib.logging.logging_redirect_tqdm``, installed once
+    per command instead of inside a ``with`` block.
+    """
+
+    def emit(self, record: logging.LogRecord) -> None:
+        import sys
+
+        from tqdm import tqdm
+
+        try:
+            tqdm.write(self.format(record), file=sys.stderr)
+        except Exception:  # never let a log line end the command
+            self.handleError(record)
+
+
 def _setup_logging(verbose: bool) -> None:
-    logging.basicConfig(
-        level=logging.INFO if verbose else logging.WARNING,
-        format="%(asctime)s %(name)s %(levelname)s: %(message)s",
-    )
+    """Log WARNING and above (INFO with ``-v``) to stderr, through tqdm."""
+    root = logging.getLogger()
+    for h in [h for h in root.handlers if isinstance(h, _TqdmLogHandler)]:
+        root.removeHandler(h)
+    handler = _TqdmLogHandler()
+    handler.setFormatter(logging.Formatter("%(asctime)s %(name)s %(levelname)s: %(message)s"))
+    root.addHandler(handler)
+    root.setLevel(logging.INFO if verbose else logging.WARNING)
+
+
+def progress_interval() -> float:
+    """Seconds between bar refreshes: live on a terminal, every 10 s into a log file."""
+    import sys
+
+    return 0.2 if sys.stderr.isatty() else 10.0
+
+
+@contextmanager
+def flow_progress() -> Iterator[None]:
+    """Show a bar over the LBM steps, with the residual, for any flow solve in the block.
+
+    One bar per grid (the nested solve does the coarser grids first). Nothing is
+    shown when the field comes from the cache.
+    """
+    from tqdm import tqdm
+
+    from fibersweep.flow.progress import SolveProgress, on_progress
+
+    bars: dict[float, tqdm] = {}
+
+    def show(p: SolveProgress) -> None:
+        bar = bars.get(p.dx)
+        if bar is None:
+            for other in bars.values():
+                other.close()
+            bar = bars[p.dx] = tqdm(
+                desc=f"flow field, dx = {p.dx:g} µm ({p.cells / 1e6:.2g} M cells)",
+                unit=" steps",
+                dynamic_ncols=True,
+                mininterval=progress_interval(),
+            )
+        if p.steps == 0:
+            bar.set_postfix_str("starting (the first solve also compiles the kernels)")
+        else:
+            bar.set_postfix_str(
+                f"residual {p.residual:.1e} (stops at {p.tolerance:.0e})", refresh=False
+            )
+            bar.update(p.steps - bar.n)
+
+    try:
+        with on_progress(show):
+            yield
+    finally:
+        for bar in bars.values():
+            bar.close()
 
 
 def _load(path: Path, overrides: list[str] | None = None, max_points: int | None = None):

@@ -17,6 +17,7 @@ from fibersweep.cli._app import (
     _setup_logging,
     app,
     choices,
+    flow_progress,
 )
 from fibersweep.fiber.settings import FiberSettings
 
@@ -35,7 +36,7 @@ def simulate(
         typer.Option("--plot", help="Write a chronophotograph (PNG/PDF/SVG by suffix)."),
     ] = None,
     model: Annotated[
-        Model | None, typer.Option("--model", help="Fiber model [default: fiber.model].")
+        Model | None, typer.Option("--model", help="Fiber model.", show_default="fiber.model")
     ] = None,
     reversible: Annotated[
         bool, typer.Option("--reversible", help="Also reverse the flow and report the return.")
@@ -63,7 +64,8 @@ def simulate(
                 update={"trajectories": True, "samples": max(fiber.record.samples, 2000)}
             )
             fiber = fiber.model_copy(update={"record": rec})
-        field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
+        with flow_progress():
+            field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
         start = FiberStart(theta0=theta0, y0=y0, length=length)
         back = math.nan
         if reversible:

@@ -15,6 +15,7 @@ from fibersweep.cli._app import (
     _load,
     _setup_logging,
     app,
+    flow_progress,
 )
 
 
@@ -41,7 +42,7 @@ def flow(
     distinct flow setting: each is computed (or found) once and reported.
     """
     _setup_logging(verbose)
-    with _errors():
+    with _errors(), flow_progress():
         cfg = _load(config, overrides)
         fields = _distinct_fields(cfg)
         for k, (key, (flow_settings, label)) in enumerate(fields.items()):

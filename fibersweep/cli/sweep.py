@@ -19,10 +19,15 @@ from fibersweep.cli._app import (
     _setup_logging,
     app,
     choices,
+    flow_progress,
+    progress_interval,
 )
 from fibersweep.errors import InputError, Terminated
 from fibersweep.plots import FORMATS
 from fibersweep.sweep.executors import EXECUTORS
+
+#: Default of the classify thresholds: the sweep's own.
+SWEEP_CLASSIFY = "the sweep's fiber.classify"
 
 # Option choices, from the registries.
 Rule = choices("Rule", RULES)
@@ -56,7 +61,10 @@ def run(
     overrides: Overrides = None,
     workers: Workers = None,
     resume: Annotated[
-        bool, typer.Option("--resume/--no-resume", help="Keep finished runs (default).")
+        bool,
+        typer.Option(
+            "--resume/--no-resume", help="Keep finished runs; --no-resume moves them aside."
+        ),
     ] = True,
     retry_failed: Annotated[
         bool, typer.Option("--retry-failed", help="Re-run only the failed runs.")
@@ -65,17 +73,18 @@ def run(
         bool, typer.Option("--dry-run", help="Show what is done and to do, and a time estimate.")
     ] = False,
     executor: Annotated[
-        Executor | None, typer.Option(help="Where runs execute [default: run.executor].")
+        Executor | None, typer.Option(help="Where runs execute.", show_default="run.executor")
     ] = None,
     scheduler: Annotated[
         str | None, typer.Option(help="Dask scheduler tcp://HOST:PORT (implies dask).")
     ] = None,
     output: Annotated[
-        Path | None, typer.Option("--output", "-o", help="Output directory (default: run.output).")
+        Path | None,
+        typer.Option("--output", "-o", help="Output directory.", show_default="run.output"),
     ] = None,
     max_points: Annotated[
         int | None,
-        typer.Option(help="Allow sweeps up to this many points (default: run.max_points)."),
+        typer.Option(help="Allow sweeps up to this many points.", show_default="run.max_points"),
     ] = None,
     verbose: Verbose = False,
 ) -> None:
@@ -95,7 +104,8 @@ def run(
         if dry_run:
             _dry_run(cfg, resume, retry_failed)
             return
-        failed = _run(cfg, resume, retry_failed, overrides or [])
+        with flow_progress():  # a bar over the solver's steps if a field is computed
+            failed = _run(cfg, resume, retry_failed, overrides or [])
     if failed:
         raise typer.Exit(1)
 
@@ -162,12 +172,25 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     per_run = plan.mean_run_s
     how = "mean of the finished runs"
     line, _ = _fields_line(cfg)
-    cached = plan.todo and flow_keys_for(cfg)[plan.todo[len(plan.todo) // 2].flow_key][1]
-    if per_run is None and cached and plan.todo:
-        per_run = estimate_run_s(cfg, plan.todo)
-        how = "timed on one run of this sweep"
+    fields = flow_keys_for(cfg)
+    flow_s = 0.0
+    if plan.todo:
+        task = plan.todo[len(plan.todo) // 2]
+        cached = fields[task.flow_key][1]
+        missing = [flow for flow, is_cached in fields.values() if not is_cached]
+        if per_run is None and cached:
+            per_run = estimate_run_s(cfg, plan.todo)
+            how = "timed on one run of this sweep"
+        if missing:
+            flow_s, per_run_timed, note = _estimate_fields(cfg, task, missing)
+            typer.echo(f"  {note}")
+            if per_run is None:
+                per_run, how = per_run_timed, "timed on one run on a probe field"
     # same rule as SweepPlan.estimate_s: no more workers busy than runs to do
     est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(cfg.run.workers)
+    if est is not None and flow_s:
+        est += flow_s
+        how += f"; flow fields {_fmt_s(flow_s)} included"
     typer.echo(
         f"  {line}; estimate {_fmt_s(est)} on {cfg.run.workers} workers"
         + (f" ({per_run:.2f} s per run, {how})" if per_run is not None else "")
@@ -225,6 +248,30 @@ def _refinement_line(info: dict, refine) -> str:
     return f"{line} ({why})"
 
 
+def _estimate_fields(cfg, task, missing) -> tuple[float, float, str]:
+    """Seconds for the fields not cached, seconds per run, and a line on how."""
+    from fibersweep.fiber.result import FiberStart
+    from fibersweep.sweep.estimate import PROBE_STEPS, estimate_uncached
+    from fibersweep.sweep.plan import sweep_settings
+
+    sub = next((s.config for s in sweep_settings(cfg) if s.id == task.settings), cfg)
+    start = FiberStart(theta0=task.theta0, y0=task.y0, length=task.length)
+    total = 0.0
+    per_run = None
+    notes = []
+    for flow in missing:
+        e = estimate_uncached(flow, sub.fiber, start)
+        total += e.flow_s
+        per_run = e.run_s if per_run is None else per_run
+        grids = " then ".join(f"{dx:g} µm ({cells / 1e6:.2g} M cells)" for dx, cells in e.grids)
+        notes.append(
+            f"flow field on {grids}: about {_fmt_s(e.flow_s)} "
+            f"({e.mlups:.0f} MLUPS timed over {PROBE_STEPS} steps; typical step counts)"
+        )
+    note = notes[0] if len(notes) == 1 else f"{len(notes)} flow fields: {'; '.join(notes)}"
+    return total, per_run, note
+
+
 def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = None) -> bool:
     """Run the sweep with a progress bar; True if any run of the table failed."""
     from collections import Counter
@@ -242,12 +289,13 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
         _print_plan(plan, cfg.run.workers)
         if not plan.todo:
             return
-        import sys
-
         # On a terminal: a live bar; into a log file: a line every 10 s, not thousands.
-        every = 0.2 if sys.stderr.isatty() else 10.0
         bar = tqdm(
-            total=len(plan.todo), unit="run", dynamic_ncols=True, smoothing=0.1, mininterval=every
+            total=len(plan.todo),
+            unit="run",
+            dynamic_ncols=True,
+            smoothing=0.1,
+            mininterval=progress_interval(),
         )
 
     def progress(row) -> None:
@@ -324,20 +372,37 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
 def classify(
     results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
     head_blocked_speed: Annotated[
-        float | None, typer.Option(help="Head blocked below this fraction of U_center.")
+        float | None,
+        typer.Option(
+            help="Head blocked below this fraction of U_center.", show_default=SWEEP_CLASSIFY
+        ),
     ] = None,
     trap_time: Annotated[
-        float | None, typer.Option(help="In contact and stopped this long [s] -> Trapping.")
+        float | None,
+        typer.Option(
+            help="In contact and stopped this long [s] -> Trapping.", show_default=SWEEP_CLASSIFY
+        ),
     ] = None,
     trap_speed: Annotated[
-        float | None, typer.Option(help="'Stopped': COM speed below this fraction of U_center.")
+        float | None,
+        typer.Option(
+            help="'Stopped': COM speed below this fraction of U_center.",
+            show_default=SWEEP_CLASSIFY,
+        ),
     ] = None,
     rule: Annotated[
         Rule | None,
-        typer.Option(help="Pole-vaulting rule: head-speed (the source's), pivot or switch."),
+        typer.Option(
+            help="Pole-vaulting rule: head-speed (the source's), pivot or switch.",
+            show_default=SWEEP_CLASSIFY,
+        ),
     ] = None,
     pivot_fraction: Annotated[
-        float | None, typer.Option(help="pivot rule: head travel below this x L while turning.")
+        float | None,
+        typer.Option(
+            help="pivot rule: head travel below this x L while turning.",
+            show_default=SWEEP_CLASSIFY,
+        ),
     ] = None,
     config: Annotated[
         Path | None, typer.Option("--config", "-c", help="Take thresholds from this config.")
@@ -376,20 +441,24 @@ def plot_phase(
     results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
     out: Annotated[
         Path | None,
-        typer.Option("--output", "-o", "--out", help="Figure folder (default: RESULTS/figures)."),
+        typer.Option(
+            "--output", "-o", "--out", help="Figure folder.", show_default="RESULTS/figures"
+        ),
     ] = None,
     fmt: Annotated[Format, typer.Option("--format", help="Figure format.")] = "png",
     col: Annotated[
         str | None,
         typer.Option(
             "--col",
-            help="Panel columns by this column, e.g. a swept key fiber.effects.friction "
-            "(default: the first swept key that varies, else length).",
+            help="Panel columns by this column, e.g. a swept key fiber.effects.friction.",
+            show_default="the first swept key that varies, else length",
         ),
     ] = None,
     row: Annotated[
         str | None,
-        typer.Option("--row", help="Panel rows by this column (default: the next that varies)."),
+        typer.Option(
+            "--row", help="Panel rows by this column.", show_default="the next key that varies"
+        ),
     ] = None,
     verbose: Verbose = False,
 ) -> None:

@@ -17,6 +17,7 @@ import numba
 import numpy as np
 
 from fibersweep.errors import SolverError
+from fibersweep.flow import progress
 from fibersweep.flow.analytic import duct_center_velocity
 from fibersweep.flow.cuts import Cuts, pillar_cuts
 from fibersweep.flow.initial import duct_guess, hele_shaw_guess, velocity_gradient
@@ -255,6 +256,10 @@ def _run(settings, grid, stepper, fx, tau, omega_m, candidates, boundary) -> Lat
     residual = math.inf
     converged = False
     t0 = time.perf_counter()
+    progress.report(
+        progress.SolveProgress(settings.dx, 0, settings.max_steps, residual, settings.tolerance,
+                               grid.cells)
+    )  # fmt: skip
     while steps < settings.max_steps:
         n = max(mult, min(check, (settings.max_steps - steps) // mult * mult))
         if interval < len(candidates):
@@ -294,6 +299,11 @@ def _run(settings, grid, stepper, fx, tau, omega_m, candidates, boundary) -> Lat
         residual = change / max(float(np.linalg.norm(uxy)), 1e-300)
         u_prev = uxy
         log.debug("step %d residual %.3e", steps, residual)
+        progress.report(
+            progress.SolveProgress(
+                settings.dx, steps, settings.max_steps, residual, settings.tolerance, grid.cells
+            )
+        )
         if residual < settings.tolerance:
             converged = True
             break

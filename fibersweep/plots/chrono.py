@@ -11,7 +11,7 @@ from matplotlib.colors import Normalize  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
 from fibersweep.fiber.result import RunResult  # noqa: E402
-from fibersweep.plots.style import CLASS_STYLE, paper_style, save_figure, subplots  # noqa: E402
+from fibersweep.plots.style import paper_style, save_figure, subplots  # noqa: E402
 from fibersweep.units import Geometry  # noqa: E402
 
 __all__ = ["chronophotograph"]
@@ -76,7 +76,7 @@ def chronophotograph(
     cmap = matplotlib.colormaps["viridis"]
     norm = Normalize(t0, t1)
     with paper_style():
-        fig, ax = subplots(figsize=(6.0, 3.6))
+        fig, ax = subplots(figsize=(7.0, 3.0))
         ax.add_patch(
             Polygon((geometry.vertices - [xb, yb]) / h, closed=True, fc="0.8", ec="0.3", lw=1.0)
         )
@@ -87,7 +87,7 @@ def chronophotograph(
             else:
                 pts = np.vstack([tr.tail[k], tr.head[k]])
             segs.append((pts - [xb, yb]) / h)
-        lc = LineCollection(segs, cmap=cmap, norm=norm, lw=2.2, capstyle="round")
+        lc = LineCollection(segs, cmap=cmap, norm=norm, lw=2.0, capstyle="round")
         lc.set_array(tr.t[picks])
         ax.add_collection(lc)
         hx = (tr.head[picks, 0] - xb) / h
@@ -98,22 +98,24 @@ def chronophotograph(
                 label="centre of mass")  # fmt: skip
         if result.contact and np.isfinite(result.y_c):
             kc = int(np.argmax(tr.contact))
-            ax.plot((tr.x[kc] - xb) / h, (tr.y[kc] - yb) / h, "x", color="C3", ms=6,
+            ax.plot((tr.x[kc] - xb) / h, (tr.y[kc] - yb) / h, "x", color="#D55E00", ms=6,
                     label="centre of mass at first contact")  # fmt: skip
-        ax.set_xlim(-margin / h, (2 * (geometry.vertices[1, 0] - xb) + margin) / h)
+        # every drawn fiber and the pillar inside the axes, a little room around them
+        pts = np.vstack([*segs, (geometry.vertices - [xb, yb]) / h])
+        pad = 0.08
+        ax.set_xlim(pts[:, 0].min() - pad, pts[:, 0].max() + pad)
+        ax.set_ylim(min(pts[:, 1].min(), 0.0) - pad, pts[:, 1].max() + pad)
         ax.set_aspect("equal")
-        ax.autoscale_view(scalex=False)
-        ax.set_xlabel("x / h_obs (from the base centre)")
-        ax.set_ylabel("y / h_obs (from the base)")
+        ax.set_xlabel(r"$x/h_{obs}$ (from the base centre)")
+        ax.set_ylabel(r"$y/h_{obs}$ (from the base)")
         st = result.start
-        colour = CLASS_STYLE.get(result.cls, {}).get("color", "0.3")
         cls = result.cls or f"failed: {result.reason}"
         ax.set_title(
-            f"θ0 = {st.theta0:g}°, y0/h = {st.y0:g}, L/l_obs = {st.length:g}  →  {cls}"
-            + (f",  δ = {result.delta:.3f}" if np.isfinite(result.delta) else ""),
-            color=colour,
+            rf"$\theta_0$ = {st.theta0:g}°, $y_0/h_{{obs}}$ = {st.y0:g}, "
+            rf"$L/l_{{obs}}$ = {st.length:g}  →  {cls}"
+            + (rf",  $\delta$ = {result.delta:.3f}" if np.isfinite(result.delta) else "")
         )
-        cb = fig.colorbar(lc, ax=ax, shrink=0.8, pad=0.02)
-        cb.set_label("t [s]")
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.3), ncol=3, frameon=False)
+        cb = fig.colorbar(lc, ax=ax, shrink=0.75, pad=0.01, aspect=15)
+        cb.set_label(r"$t$ [s]")
+        ax.legend(loc="upper left", handlelength=1.5, borderaxespad=0.2)
         return save_figure(fig, path)

@@ -294,7 +294,7 @@ def phase_figure(
     boundaries = False
     for ax, cv, rv in cells:
         p = _select(_select(runs, col, cv), row, rv)
-        s = _marker_size(p) if len(p) else 10.0
+        s = min(_marker_size(p), _spacing_limit(p, runs, ax)) if len(p) else 10.0
         sep = _panel_separatrix(p, separatrix)
         if sep is not None:
             seps.add(round(sep, 6))
@@ -327,6 +327,12 @@ def phase_figure(
         title = [f"{_label(k)} = {_fmt(v)}" for k, v in ((col, cv), (row, rv)) if k is not None]
         if title and (len(cols) > 1 or len(rows) > 1):
             ax.set_title(", ".join(title), fontsize=7 if len(title) > 1 else None)
+        elif n_panels == 1:
+            ax.set_title(_single_length(runs))
+    thetas = np.unique(runs["theta0"].to_numpy(dtype=float))
+    if 1 < thetas.size <= 9:  # few start angles: a tick at each
+        for ax, _, _ in cells:
+            ax.set_xticks(thetas)
     if row is None:
         _label_axes(axes, n_panels)
     else:
@@ -342,7 +348,8 @@ def phase_figure(
             hs.append(Line2D([], [], label="located boundary", **BOUNDARY_STYLE))  # type: ignore[arg-type]
         if len(seps) > 1:
             hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label="separatrix (per field)"))
-        fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)
+        fig.legend(handles=hs, loc="outside upper center", ncol=_legend_columns(hs, n_panels),
+                   frameon=False)  # fmt: skip
     else:
         visible = [a for a in axes.flat if a.get_visible()]
         cb = fig.colorbar(sc, ax=visible, shrink=0.9, extend="both")
@@ -357,8 +364,40 @@ def phase_figure(
         if legend_sep is not None:
             hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label=_sep_label(legend_sep)))
         if hs:
-            fig.legend(handles=hs, loc="outside upper center", ncol=len(hs), frameon=False)
+            fig.legend(handles=hs, loc="outside upper center", ncol=_legend_columns(hs, n_panels),
+                   frameon=False)  # fmt: skip
     return fig
+
+
+def _single_length(runs: pd.DataFrame) -> str:
+    """The fiber length of a table with one length, as a title; '' otherwise."""
+    lengths = runs["length"].dropna().unique() if "length" in runs else []
+    return f"{_label('length')} = {_fmt(float(lengths[0]))}" if len(lengths) == 1 else ""
+
+
+def _legend_columns(handles: list, n_panels: int) -> int:
+    """One row above a wide figure; at most three columns above a single panel."""
+    return max(1, min(len(handles), 3 if n_panels == 1 else 6))
+
+
+def _spacing_limit(panel: pd.DataFrame, runs: pd.DataFrame, ax: Axes) -> float:
+    """Largest marker area [pt²] that does not overlap on the closest grid points.
+
+    The closest pair of distinct θ0 (and y0) values of ``panel``'s grid (refinement
+    points, ``round`` > 0, left out), over the range of ``runs``, at the size of
+    ``ax`` on its figure: a grid denser in one place than another keeps apart.
+    """
+    if "round" in panel:
+        panel = panel[panel["round"].fillna(0) == 0]
+    fig_w, fig_h = ax.figure.get_size_inches()
+    pos = ax.get_position()
+    diam = 14.0
+    for col, size_pt in (("theta0", pos.width * fig_w * 72), ("y0", pos.height * fig_h * 72)):
+        vals = np.unique(panel[col].to_numpy(dtype=float))
+        span = float(np.ptp(runs[col].to_numpy(dtype=float))) or 1.0
+        if vals.size > 1:
+            diam = min(diam, 0.85 * float(np.diff(vals).min()) / (1.1 * span) * size_pt)
+    return float(max(diam, 2.5) ** 2)
 
 
 def _panel_separatrix(
@@ -390,7 +429,7 @@ def contact_figure(runs: pd.DataFrame) -> Figure:
     ax.set_xlabel(r"$\theta_c$ at first contact [deg]")
     ax.set_ylabel(r"$y_c/h_{obs}$ at first contact")
     nl = runs["length"].nunique()
-    lens = "" if nl <= 1 else f", {nl} lengths"
+    lens = f", {_single_length(runs)}" if nl == 1 else f", {nl} lengths"
     ax.set_title(f"{len(c)} runs with contact{lens}")
     if len(c):
         ax.legend(frameon=False, loc="upper left", bbox_to_anchor=(1.0, 1.0))
@@ -419,16 +458,21 @@ def delta_hist_figure(runs: pd.DataFrame) -> Figure:
         x = d[fin & mask]
         if x.size:
             ax.hist(x, bins=bins, histtype="step", lw=1.5, color=color,
-                    label=f"{label}: n = {x.size}, sd = {np.std(x):.3g}")  # fmt: skip
+                    label=f"{label}: n = {x.size}, sd = {np.std(x):.4f}")  # fmt: skip
+    # log counts, from 0.5 so that a bin holding a single run stands clear of the axis
     ax.set_yscale("log")
+    ax.set_ylim(0.5, 4.0 * ax.get_ylim()[1])  # room above the bars for the legend
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel(r"$\delta = (y_f - y_0)/h_{obs}$")
     ax.set_ylabel("runs per bin")
     ax.legend(frameon=False, loc="upper right")
     n_trap = int((ok["class"] == "Trapping").sum())
+    notes = [t for t in (_single_length(runs),) if t]
     if n_trap:
-        ax.set_title(f"{n_trap} trapped runs have no δ", fontsize=8, color="0.3")
+        notes.append(f"{n_trap} trapped runs have no δ")
+    if notes:
+        ax.set_title(", ".join(notes))
     return fig
 
 

@@ -14,6 +14,7 @@ from fibersweep.atomic import atomic_path
 
 __all__ = [
     "CLASS_STYLE",
+    "STYLE_FILE",
     "FAILED_STYLE",
     "UNCLASSIFIED_STYLE",
     "new_figure",
@@ -33,28 +34,18 @@ FAILED_STYLE: dict[str, object] = {"marker": "x", "color": "0.45"}
 UNCLASSIFIED_STYLE: dict[str, object] = {"marker": "P", "color": "0.6"}
 
 
+#: The package's matplotlib style file, applied to every figure by :func:`paper_style`.
+STYLE_FILE = Path(__file__).with_name("fibersweep.mplstyle")
+
+
 @contextmanager
 def paper_style() -> Iterator[None]:
-    """Matplotlib settings for print-sized, readable figures."""
-    rc = {
-        "font.size": 9,
-        "axes.titlesize": 9,
-        "axes.labelsize": 9,
-        "legend.fontsize": 8,
-        "xtick.labelsize": 8,
-        "ytick.labelsize": 8,
-        "axes.linewidth": 0.8,
-        "lines.linewidth": 1.2,
-        "savefig.dpi": 200,
-        "savefig.bbox": "tight",
-        "figure.constrained_layout.use": True,
-        "axes.spines.top": False,
-        "axes.spines.right": False,
-        "mathtext.default": "regular",
-        "pdf.fonttype": 42,
-        "svg.fonttype": "none",
-    }
-    with mpl.rc_context(rc):
+    """Matplotlib settings of every fibersweep figure (``fibersweep.mplstyle``).
+
+    Print-sized text for a 7 in wide page, Okabe-Ito colours, mathtext labels,
+    constrained layout, 200 dpi PNG. Settings made inside the block win.
+    """
+    with mpl.rc_context(fname=str(STYLE_FILE)):
         yield
 
 

@@ -1,0 +1,5 @@
+"""``python -m fibersweep``: the same as the ``fibersweep`` console script."""
+
+from fibersweep.cli import app
+
+app(prog_name="fibersweep")

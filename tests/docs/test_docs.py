@@ -1,0 +1,255 @@
+"""Every command the documentation shows is run, so none goes stale.
+
+Each ```bash block of README.md and docs/*.md is split into commands (one per
+line; ``#`` comments allowed; a line ending in ``\\`` continues on the next).
+The commands of one file run in order, in one scratch folder that holds a copy of
+``configs/`` and a ``.fibersweep-cache`` linked to the shared test flow-field cache,
+so a file can build on its own earlier commands (``run`` then ``plot-phase``).
+``fibersweep`` is this checkout's command line (``python -m fibersweep`` with the
+repository first on PYTHONPATH), whatever is installed.
+
+Markers, written as a trailing comment on the command's line:
+
+* ``# doc-test: slow``: takes more than about 30 s; run only in the slow suite
+  (``pytest -m slow``), where every line of the file runs;
+* ``# doc-test: skip <why>``: never run here (an install, a cluster command);
+* ``# doc-test: exit N``: the command must exit with code N (the point of the example).
+
+One test per file, so a failure names the file and the line. Lines without a
+marker must not depend on a slow line before them.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+#: Seconds one command may take before the test fails (slow lines included).
+LINE_TIMEOUT_S = 600
+_MARK = re.compile(r"#\s*doc-test:\s*(slow|skip|exit)\b\s*(.*)$")
+_FENCE = re.compile(r"^\s*```(\w*)")
+
+
+@dataclass(frozen=True)
+class Command:
+    """One command of a ```bash block.
+
+    Attributes
+    ----------
+    file : str
+        Path relative to the repository root.
+    line : int
+        1-based line of the command in the file.
+    text : str
+        The shell command (comments kept: bash ignores them).
+    mode : str
+        ``run``, ``slow`` or ``skip``.
+    exit_code : int
+        Expected exit status.
+    """
+
+    file: str
+    line: int
+    text: str
+    mode: str = "run"
+    exit_code: int = 0
+
+
+def doc_files() -> list[Path]:
+    """README.md and every docs/*.md, in name order."""
+    return [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+
+
+def extract(path: Path) -> list[Command]:
+    """The commands of every ```bash block of ``path``, in order.
+
+    Raises
+    ------
+    ValueError
+        An unknown marker, an ``exit`` marker without a number, or an unclosed block.
+    """
+    rel = str(path.relative_to(REPO)) if REPO in path.resolve().parents else path.name
+    out: list[Command] = []
+    in_bash = in_block = False
+    pending: list[str] = []
+    start = 0
+    lines = path.read_text(encoding="utf-8").splitlines()
+    for no, raw in enumerate(lines, start=1):
+        fence = _FENCE.match(raw)
+        if fence:
+            if pending:
+                raise ValueError(f"{rel}:{start}: command continued with '\\' past its block")
+            if in_block:
+                in_block = in_bash = False
+            else:
+                in_block, in_bash = True, fence.group(1) == "bash"
+            continue
+        if not in_bash:
+            continue
+        stripped = raw.strip()
+        if not pending and (not stripped or stripped.startswith("#")):
+            continue
+        if not pending:
+            start = no
+        if stripped.endswith("\\"):
+            pending.append(stripped[:-1])
+            continue
+        text = " ".join([*pending, stripped])
+        pending = []
+        out.append(_command(rel, start, text))
+    if in_block:
+        raise ValueError(f"{rel}: a ``` block is not closed")
+    return out
+
+
+def _command(rel: str, line: int, text: str) -> Command:
+    m = _MARK.search(text)
+    if not m:
+        if "doc-test" in text:
+            raise ValueError(f"{rel}:{line}: unknown doc-test marker in {text!r}")
+        return Command(rel, line, text)
+    kind, arg = m.group(1), m.group(2).strip()
+    if kind == "exit":
+        if not re.fullmatch(r"\d+", arg.split(" ")[0] if arg else ""):
+            raise ValueError(f"{rel}:{line}: '# doc-test: exit' needs a number")
+        return Command(rel, line, text, exit_code=int(arg.split(" ")[0]))
+    if kind == "skip" and not arg:
+        raise ValueError(f"{rel}:{line}: '# doc-test: skip' needs a reason")
+    return Command(rel, line, text, mode=kind)
+
+
+def _scratch(tmp: Path, flow_cache: Path) -> tuple[Path, dict[str, str]]:
+    """A folder with a copy of configs/ and the shared cache; env with our ``fibersweep``."""
+    work = tmp / "work"
+    shutil.copytree(REPO / "configs", work / "configs", symlinks=False)
+    (work / ".fibersweep-cache").symlink_to(flow_cache, target_is_directory=True)
+    bin_dir = tmp / "bin"
+    bin_dir.mkdir()
+    shim = bin_dir / "fibersweep"
+    shim.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} -m fibersweep "$@"\n')
+    shim.chmod(0o755)
+    (bin_dir / "python").symlink_to(sys.executable)
+    (bin_dir / "python3").symlink_to(sys.executable)
+    env = dict(os.environ)
+    env["PATH"] = f"{bin_dir}{os.pathsep}{env.get('PATH', '')}"
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO), env.get("PYTHONPATH")]))
+    env["FIBERSWEEP_REPO"] = str(REPO)
+    env.pop("FORCE_COLOR", None)
+    env["NO_COLOR"] = "1"
+    return work, env
+
+
+def _run_file(rel: str, commands: list[Command], tmp: Path, flow_cache: Path, slow: bool):
+    work, env = _scratch(tmp, flow_cache)
+    ran = 0
+    for cmd in commands:
+        if cmd.mode == "skip" or (cmd.mode == "slow" and not slow):
+            continue
+        # the scripts of the repository are reachable as in a checkout
+        if "scripts/" in cmd.text and not (work / "scripts").exists():
+            (work / "scripts").symlink_to(REPO / "scripts", target_is_directory=True)
+        try:
+            proc = subprocess.run(
+                ["bash", "-o", "pipefail", "-c", cmd.text],
+                cwd=work, env=env, capture_output=True, text=True, timeout=LINE_TIMEOUT_S,
+            )  # fmt: skip
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"{cmd.file}:{cmd.line}: timed out after {LINE_TIMEOUT_S} s: {cmd.text}")
+        ran += 1
+        if proc.returncode != cmd.exit_code:
+            tail = (proc.stdout + proc.stderr)[-3000:]
+            pytest.fail(
+                f"{cmd.file}:{cmd.line}: exit {proc.returncode} (expected {cmd.exit_code}): "
+                f"{cmd.text}\n--- output (tail) ---\n{tail}",
+                pytrace=False,
+            )
+    return ran
+
+
+_FILES = [p for p in doc_files() if p.exists()]
+_IDS = [str(p.relative_to(REPO)) for p in _FILES]
+
+
+@pytest.mark.parametrize("path", _FILES, ids=_IDS)
+def test_doc_commands(path: Path, tmp_path: Path, flow_cache_dir: Path) -> None:
+    """The file's commands without a slow or skip marker all exit as documented."""
+    cmds = extract(path)
+    if not any(c.mode == "run" for c in cmds):
+        pytest.skip("no command to run outside the slow suite")
+    _run_file(str(path), cmds, tmp_path, flow_cache_dir, slow=False)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", _FILES, ids=_IDS)
+def test_doc_commands_slow(path: Path, tmp_path: Path, flow_cache_dir: Path) -> None:
+    """Every command of the file, slow ones included, in order."""
+    cmds = extract(path)
+    if not any(c.mode == "slow" for c in cmds):
+        pytest.skip("no slow command")
+    _run_file(str(path), cmds, tmp_path, flow_cache_dir, slow=True)
+
+
+def test_readme_test_command_is_what_ci_runs() -> None:
+    """The README's set-up command for the tests is the one .ci/run executes."""
+    readme = [c.text for c in extract(REPO / "README.md")]
+    ci = (REPO / ".ci" / "run").read_text(encoding="utf-8")
+    tests = [c for c in readme if "pytest" in c]
+    assert tests, "README.md shows no test command"
+    for cmd in tests:
+        for part in cmd.split("#")[0].split("&&"):
+            assert part.strip() in ci, f"README command part {part.strip()!r} is not in .ci/run"
+
+
+def test_extract_markers(tmp_path: Path) -> None:
+    """Blocks, continuation lines and markers are read as the convention says."""
+    doc = tmp_path / "selftest.md"
+    text = (
+        "text\n```bash\n# a comment\nfibersweep --version\n"
+        "fibersweep run a.yaml \\\n  --dry-run   # doc-test: slow\n"
+        "fibersweep run bad.yaml  # doc-test: exit 2\n"
+        "sbatch x.sh  # doc-test: skip cluster only\n```\n"
+        "```text\nnot a command\n```\n```yaml\nflow: {}\n```\n"
+    )
+    doc.write_text(text, encoding="utf-8")
+    cmds = extract(doc)
+    assert [(c.line, c.mode, c.exit_code) for c in cmds] == [
+        (4, "run", 0), (5, "slow", 0), (7, "run", 2), (8, "skip", 0),
+    ]  # fmt: skip
+    assert " ".join(cmds[1].text.split()).startswith("fibersweep run a.yaml --dry-run #")
+    with pytest.raises(ValueError, match="needs a reason"):
+        _command("x.md", 1, "sbatch x.sh  # doc-test: skip")
+    with pytest.raises(ValueError, match="unknown doc-test marker"):
+        _command("x.md", 1, "ls  # doc-test: sloww")
+
+
+def test_every_doc_figure_exists_and_is_small() -> None:
+    """Images linked from the docs exist in the repository and are under 300 KB."""
+    for path in _FILES:
+        text = path.read_text(encoding="utf-8")
+        for target in re.findall(r"!\[[^\]]*\]\(([^)\s]+)\)", text):
+            img = (path.parent / target).resolve()
+            assert img.is_file(), f"{path.name}: missing figure {target}"
+            assert REPO in img.parents, f"{path.name}: figure outside the repository: {target}"
+            assert img.stat().st_size < 300_000, f"{target}: {img.stat().st_size} B"
+
+
+def test_no_reference_outside_the_repository() -> None:
+    """Docs link only to files of the repository (no ../shared, no absolute paths)."""
+    for path in _FILES:
+        text = path.read_text(encoding="utf-8")
+        assert "SPEC.md" not in text, f"{path.name} points to SPEC.md"
+        for target in re.findall(r"\]\(([^)\s#]+)", text):
+            if re.match(r"[a-z]+://", target):
+                continue
+            resolved = (path.parent / target).resolve()
+            assert REPO in resolved.parents or resolved == REPO, f"{path.name}: {target}"
+            assert resolved.exists(), f"{path.name}: broken link {target}"
