@@ -141,6 +141,7 @@ def fit_effect(
     max_evals: int,
     side: float = 0.0,
     bounds: tuple[float, float] | None = None,
+    fixed: Mapping[str, float] | None = None,
 ) -> Fit:
     """Fit the value of one effect on the fit fibers.
 
@@ -157,6 +158,10 @@ def fit_effect(
         For a signed effect, the sign of the best-matching probe (0: search both).
     bounds : (lo, hi), optional
         Search interval instead of the candidate's (e.g. around earlier fits).
+    fixed : mapping name -> value, optional
+        Effects held at these values while ``cand`` is fitted (forward selection:
+        the effects already chosen). ``base_copies`` must then be copies made with
+        these effects on (the value 0 of ``cand``).
     """
     k_fit = len(base_copies)
     # The signature suggests the sign of a signed effect; one evaluation in the middle
@@ -176,7 +181,7 @@ def fit_effect(
             # Budget spent: this point is unknown; report the worst seen so Brent moves away.
             return max(seen.values())
         copies = [
-            maker.copy(k, {cand.name: v}, rows, desc=f"fit {cand.name}={v:.4g}")
+            maker.copy(k, {**(fixed or {}), cand.name: v}, rows, desc=f"fit {cand.name}={v:.4g}")
             for k in range(k_fit)
         ]
         seen[v] = combined_loss(value_matrices(observed, copies, observables), weights)
