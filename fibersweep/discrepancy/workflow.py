@@ -31,6 +31,7 @@ from fibersweep.discrepancy.decide import (
     evaluate_heldout,
 )
 from fibersweep.discrepancy.fit import Fit, Signature, fit_effect, rank_effects
+from fibersweep.discrepancy.followup import followup
 from fibersweep.discrepancy.gap import (
     GapResult,
     assess_gap,
@@ -77,6 +78,13 @@ class DiscrepancySettings:
         Significant candidates refitted on all fibers for the adequacy check.
     pairs : int
         Second effects tried with the best single one (forward selection; 0: none).
+    power_fibers : int
+        Fibers simulated by the power analysis when the verdict is "no significant
+        gap" or "unexplained" (:mod:`.power`; 0: none).
+    next_copies : int
+        Copies per hypothesis and start of what-to-measure-next
+        (:mod:`.nextmeasure`; 0: none), run when the verdict is ambiguous or a
+        fit is weakly identified.
     alpha : float
         Family-wise error rate of every test.
     budget : int or None
@@ -100,6 +108,8 @@ class DiscrepancySettings:
     fit_evals: int = 5
     refits: int = 2
     pairs: int = 2
+    power_fibers: int = 40
+    next_copies: int = 2
     alpha: float = 0.05
     budget: int | None = None
     seed: int = 0
@@ -118,6 +128,8 @@ class DiscrepancySettings:
             "fit_evals": self.fit_evals >= 1,
             "refits": self.refits >= 1,
             "pairs": self.pairs >= 0,
+            "power_fibers": self.power_fibers == 0 or self.power_fibers >= 8,
+            "next_copies": self.next_copies in (0,) or self.next_copies >= 2,
             "alpha": 0.0 < self.alpha < 0.5,
             "workers": self.workers >= 1,
         }
@@ -438,6 +450,8 @@ def run_discrepancy(
                 sets, set_copies = forward_pairs(best.name, others, inp, maker, rng, fits.append)
                 effect_copies.update(set_copies)
         verdict = decide(gap, heldout, region_text, rng, s.alpha, sets)
+        extra = followup(verdict, heldout, extra_values, candidates, maker, sim, plan, s,
+                            obs_names, rng)  # fmt: skip
         used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
 
     return DiscrepancyResult(
@@ -463,5 +477,6 @@ def run_discrepancy(
         weights=weights,
         settings=s,
         observables=obs_names,
-        extra={"fold_values": extra_values},
+        extra={"fold_values": extra_values, **extra},
     )
+
