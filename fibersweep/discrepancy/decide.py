@@ -262,9 +262,7 @@ def decide(
             "improves the held-out fibers significantly.",
         )
     best = max(sig, key=lambda h: h.improvement[0])
-    good_sets = sorted(
-        (st for st in sets if st.explains(alpha)), key=lambda st: -st.improvement[0]
-    )
+    good_sets = sorted((st for st in sets if st.explains(alpha)), key=lambda st: -st.improvement[0])
     if not best.explains and good_sets:
         return _set_verdict(good_sets, top_obs, region)
     if not best.explains:

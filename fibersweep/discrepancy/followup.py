@@ -50,8 +50,10 @@ def next_hypotheses(
         return dict(a), dict(b), "the verdict is ambiguous"
     sig = sorted((h for h in heldout if h.significant), key=lambda h: -h.improvement[0])
     if verdict.kind == "unexplained" and len(sig) >= 2:
-        return {sig[0].name: sig[0].value}, {sig[1].name: sig[1].value}, (
-            "two candidates each improve the fit significantly"
+        return (
+            {sig[0].name: sig[0].value},
+            {sig[1].name: sig[1].value},
+            ("two candidates each improve the fit significantly"),
         )
     name = next(iter(verdict.effects), None) if verdict.kind == "named" else None
     if name is None and heldout:

@@ -197,8 +197,13 @@ def discriminate(
         j = int(np.argmax(d2[i]))
         best.append(
             Suggestion(
-                float(g[i, 0]), float(g[i, 1]), float(g[i, 2]), float(d[i]), names[j],
-                float(np.nanmean(xa[:, i, j])), float(np.nanmean(xb[:, i, j])),
+                float(g[i, 0]),
+                float(g[i, 1]),
+                float(g[i, 2]),
+                float(d[i]),
+                names[j],
+                float(np.nanmean(xa[:, i, j])),
+                float(np.nanmean(xb[:, i, j])),
             )  # fmt: skip
         )
     d_top = float(np.sqrt(np.mean(d[order] ** 2))) if len(order) else 0.0

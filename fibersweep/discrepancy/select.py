@@ -220,9 +220,7 @@ def forward_pairs(
         )
         out_copies[st.name] = t["copies"]
         if st.significant(inp.alpha):
-            final = [
-                maker.copy(k, st.values, desc=f"final {st.name}") for k in range(inp.copies)
-            ]
+            final = [maker.copy(k, st.values, desc=f"final {st.name}") for k in range(inp.copies)]
             v_final = value_matrices(obs, final, inp.observables)
             gap: GapResult = assess_gap(v_final, rng, alpha=inp.alpha, n_perm=inp.n_perm)
             st = replace(st, final=gap)

@@ -479,4 +479,3 @@ def run_discrepancy(
         observables=obs_names,
         extra={"fold_values": extra_values, **extra},
     )
-
