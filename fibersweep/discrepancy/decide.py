@@ -17,9 +17,10 @@ sample, it beats the baseline by more than the noise floor allows. Then:
   -> "ambiguous between A and B" (both are consistent with the data);
 - otherwise the best candidate is named.
 
-More than one effect (forward selection, :mod:`.select`): when the best single
-effect improves significantly but leaves a gap, each other fitted candidate is
-added to it (joint fit on the same folds) and scored out of sample. A set
+More than one effect (forward selection, :mod:`.select`): when no single
+effect explains the gap, each other fitted candidate is added to the one that
+improved the held-out fibers most (joint fit on the same folds) and scored out
+of sample. A set
 ``{A, B}`` is named when each member's contribution is significant (the pair
 beats A alone and beats B alone on the held-out fibers, one Holm family over
 all these tests) and the pair leaves no significant gap. Two such sets make
@@ -252,6 +253,9 @@ def decide(
         )
     top_obs = gap.flagged[0]
     sig = [h for h in heldout if h.significant]
+    good_sets = sorted((st for st in sets if st.explains(alpha)), key=lambda st: -st.improvement[0])
+    if not any(h.explains for h in sig) and good_sets:
+        return _set_verdict(good_sets, top_obs, region)
     if not sig:
         return Verdict(
             "unexplained",
@@ -262,9 +266,6 @@ def decide(
             "improves the held-out fibers significantly.",
         )
     best = max(sig, key=lambda h: h.improvement[0])
-    good_sets = sorted((st for st in sets if st.explains(alpha)), key=lambda st: -st.improvement[0])
-    if not best.explains and good_sets:
-        return _set_verdict(good_sets, top_obs, region)
     if not best.explains:
         left = best.final or best.residual
         rest = left.flagged

@@ -183,8 +183,10 @@ def discriminate(
     # noise of that mean (its variance), is an unbiased estimate of the squared shift
     with np.errstate(invalid="ignore", divide="ignore"):
         delta = (xa - xb) / s
-        mean = np.nanmean(delta, axis=0)
-        var = np.nanvar(delta, axis=0, ddof=1) / copies
+        cnt = np.isfinite(delta).sum(axis=0)
+        mean = np.where(cnt > 0, np.nansum(delta, axis=0) / np.maximum(cnt, 1), np.nan)
+        ss = np.nansum((delta - mean) ** 2, axis=0)
+        var = np.where(cnt > 1, ss / np.maximum(cnt - 1, 1) / np.maximum(cnt, 1), 0.0)
     diff = np.where(np.isfinite(mean), mean, 0.0)
     d2 = np.clip(diff**2 - np.where(np.isfinite(var), var, 0.0), 0.0, None)
     d_all = np.sqrt(d2.sum(axis=1))

@@ -1,7 +1,9 @@
 """Forward selection: add a second effect to the best single one, out of sample.
 
-When the best single effect improves the held-out fibers significantly but
-leaves a gap, every other fitted candidate B is added to it:
+When no single effect explains the gap, every other fitted candidate B is
+added to the effect A that improved the held-out fibers most (A need not be
+significant alone: with B's part of the gap left in, A's own improvement can be
+too noisy to be; the set needs each member's own contribution significant):
 
 1. joint fit, on the same two folds as the single fits: with the first effect
    A held at the value fitted on the training fold, B's value is fitted there
@@ -134,7 +136,7 @@ def forward_pairs(
     Parameters
     ----------
     first : str
-        The best single effect (significant on its own).
+        The single effect that improved the held-out fibers most.
     others : sequence of Candidate
         Effects to add (``first`` excluded).
     on_fit : callable, optional

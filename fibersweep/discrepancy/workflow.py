@@ -6,8 +6,8 @@ It simulates (1) ``copies`` jittered baseline copies of every measured fiber,
 and ranks the library's effects on one half of the fibers, (5) fits the best
 few on each half and scores each half with the value fitted on the other
 (two-fold cross-fitting: every fiber is held out once), compares with the
-baseline and decides; (6) when the best single effect helps but leaves a gap,
-it tries adding each other candidate (:mod:`.select`, forward selection). The
+baseline and decides; (6) when no single effect explains the gap, it tries adding
+each other candidate to the one that helped most (:mod:`.select`, forward selection). The
 simulation count is planned up front and never exceeds ``budget``.
 """
 
@@ -426,7 +426,11 @@ def run_discrepancy(
                 for h in heldout
             ]
             # (7) forward selection: the best single effect helps but leaves a gap
-            best = max(sig, key=lambda h: h.improvement[0]) if sig else None
+            # (the first effect need not be significant alone: with a second effect's
+            # gap left in, its own improvement can be too noisy; each member of a set
+            # must then show a significant contribution of its own)
+            helped = [h for h in heldout if h.improvement[0] > 0]
+            best = max(helped, key=lambda h: h.improvement[0]) if helped else None
             if best is not None and not best.explains and plan.pairs > 0:
                 others = [
                     next(c for c in candidates if c.name == sg.name)

@@ -97,3 +97,14 @@ def test_bootstrap_p_is_calibrated_under_no_improvement():
     ps = np.array([boot_p(rng.standard_normal(60), rng, n_boot=500) for _ in range(400)])
     assert 0.01 <= np.mean(ps <= 0.05) <= 0.10
     assert boot_p(rng.normal(1.0, 0.3, 60), rng) < 0.01
+
+
+def test_pair_can_be_named_when_neither_effect_is_significant_alone():
+    # each effect alone improves too little to pass Holm; together each member's own
+    # contribution is significant and nothing is left: the set is named
+    rng = np.random.default_rng(6)
+    ho = _single(rng, 0.02, 1.5)
+    assert not any(h.significant for h in ho)
+    pair = _set(("friction", "inlet_speed"), (0.001, 0.002), 0.0, 15)
+    v = decide(_gap(2.0, 16), ho, "R", rng, 0.05, [pair])
+    assert v.kind == "named" and set(v.effects) == {"friction", "inlet_speed"}
