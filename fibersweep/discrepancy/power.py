@@ -265,9 +265,9 @@ def analyse_power(
             e = EffectPower(cand.name, float(mp), tuple(float(x) for x in z_full), gamma, None)
             lim = _limit(e, cand, n, n_sim, z_crit, power)
             effects.append(EffectPower(e.name, e.probe, e.z, e.gamma, lim))
-            d = np.nanmean(
-                np.stack(standardised_values(eff, observables)) - np.stack(base_std), axis=0
-            )
+            diff = np.stack(standardised_values(eff, observables)) - np.stack(base_std)
+            cnt = np.isfinite(diff).sum(axis=0)
+            d = np.where(cnt > 0, np.nansum(diff, axis=0) / np.maximum(cnt, 1), np.nan)
             shifts[f"{cand.name}@{mp:g}"] = (d / spread).ravel()
     keys = list(shifts)
     cos = {}

@@ -98,6 +98,23 @@ def _removed(before: dict[str, Any], after: dict[str, Any]) -> dict[str, float |
     return out
 
 
+def fibers_to_name(per_fiber: np.ndarray, k: int, alpha: float, power: float = 0.8) -> int | None:
+    """Fibers whose held-out improvement would be significant with the target power.
+
+    From the measured per-fiber improvement (mean mu, sd sigma): the one-sided test
+    at alpha / k (Holm's first step over k candidates) reaches the power when
+    ``sqrt(n) mu / sigma >= z_{1-alpha/k} + z_power``. None when mu <= 0.
+    """
+    from scipy.stats import norm
+
+    d = np.asarray(per_fiber, dtype=np.float64)
+    d = d[np.isfinite(d)]
+    if len(d) < 2 or d.mean() <= 0:
+        return None
+    z = norm.ppf(1 - alpha / max(k, 1)) + norm.ppf(power)
+    return int(math.ceil((z * d.std(ddof=1) / d.mean()) ** 2))
+
+
 def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
     pw = res.extra.get("power")
     if pw is None:
@@ -124,11 +141,8 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
                 "effect": h.name,
                 "value": h.value,
                 "fibers_to_detect": pw.fibers_needed(h.name, h.value),
-                # naming needs a held-out half as large again as the fit half: twice
-                "fibers_to_name": (
-                    2 * pw.fibers_needed(h.name, h.value)
-                    if pw.fibers_needed(h.name, h.value)
-                    else None
+                "fibers_to_name": fibers_to_name(
+                    h.per_fiber, len(res.heldout), res.settings.alpha, pw.power
                 ),
             }
     return {

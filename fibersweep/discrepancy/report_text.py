@@ -247,8 +247,9 @@ def _power(s: dict[str, Any]) -> list[str]:
         lines += [
             "",
             f"Leading candidate {lead['effect']} = {lead['value']:.3g}: about "
-            f"{_f(lead['fibers_to_detect'], 'd')} fibers would detect it and about "
-            f"{_f(lead['fibers_to_name'], 'd')} name it (twice: a fit half and a test half).",
+            f"{_f(lead['fibers_to_detect'], 'd')} fibers would detect a gap of this size; "
+            f"about {_f(lead['fibers_to_name'], 'd')} would make its held-out improvement "
+            "significant (from the spread of the per-fiber improvement measured here).",
         ]
     return lines
 
