@@ -108,3 +108,21 @@ def test_pair_can_be_named_when_neither_effect_is_significant_alone():
     pair = _set(("friction", "inlet_speed"), (0.001, 0.002), 0.0, 15)
     v = decide(_gap(2.0, 16), ho, "R", rng, 0.05, [pair])
     assert v.kind == "named" and set(v.effects) == {"friction", "inlet_speed"}
+
+
+def test_what_to_separate_next():
+    from fibersweep.discrepancy.decide import Verdict
+    from fibersweep.discrepancy.followup import next_hypotheses
+
+    amb = Verdict("ambiguous", {"a": 1.0, "b": 2.0}, alternatives=({"a": 1.0}, {"b": 2.0}))
+    assert next_hypotheses(amb, [], {})[:2] == ({"a": 1.0}, {"b": 2.0})
+    rng = np.random.default_rng(7)
+    ho = _single(rng, 0.6, 1.5)  # both significant, neither explains
+    un = Verdict("unexplained", {})
+    a, b, why = next_hypotheses(un, ho, {})
+    assert {next(iter(a)), next(iter(b))} == {"friction", "inlet_speed"} and "two" in why
+    # a named effect whose halves disagree by a factor 5 (the 0.53 vs 0.09)
+    named = Verdict("named", {"friction": 0.3}, alternatives=({"friction": 0.3},))
+    a, b, why = next_hypotheses(named, ho, {"friction": [0.53, 0.09]})
+    assert a == {"friction": 0.53} and b == {"friction": 0.09}
+    assert next_hypotheses(named, ho, {"friction": [0.5, 0.4]}) is None
