@@ -182,3 +182,17 @@ def test_look_alike_effects_are_never_one_wrong_name(coarse_field):
     else:
         assert "off_midplane" in v.effects
     assert np.isfinite(list(v.effects.values())).all()
+
+
+@pytest.mark.slow
+def test_two_hidden_effects_are_never_a_wrong_name(coarse_field, tmp_path):
+    # friction (the class gap) and a faster inlet (the t_pass gap) together: the
+    # verdict names the pair, or one of its members (incomplete), never another effect;
+    # a named pair goes into the updated config whole
+    res = _run(coarse_field, {"friction": 0.5, "inlet_speed": 0.05}, 60, seed=71)
+    v = res.verdict
+    assert set(v.effects) <= {"friction", "inlet_speed"}, v.text
+    if v.kind == "named" and len(v.effects) == 2:
+        write_report(res, tmp_path, Config().model_dump(mode="json"))
+        cfg = load_config(tmp_path / "updated_config.yaml")
+        assert set(cfg.fiber.effects) == {"friction", "inlet_speed"}
