@@ -179,6 +179,12 @@ def run_scenario(name: str, field, n: int, seed: int, workers: int, kw: dict) ->
             for h in res.heldout
         ],
     }
+    row["sets"] = [
+        {"set": st.name, "values": st.values, "p_holm": st.p_holm,
+         "explains": st.explains(res.settings.alpha),
+         "left": (st.final or st.residual).flagged}
+        for st in res.sets
+    ]  # fmt: skip
     named = res.verdict.alternatives[0] if res.verdict.alternatives else {}
     resid = None
     if len(named) == 1:
