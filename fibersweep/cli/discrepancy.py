@@ -130,6 +130,12 @@ def discrepancy(
         bool,
         typer.Option(help="Power analysis when the verdict is no gap or unexplained."),
     ] = True,
+    next_: Annotated[
+        bool,
+        typer.Option(
+            "--next/--no-next", help="Propose starts that separate two candidates when undecided."
+        ),
+    ] = True,
     trajectories: Annotated[
         Path | None, typer.Option(help="Optional measured trajectories table.")
     ] = None,
@@ -152,7 +158,7 @@ def discrepancy(
         data = load_measured(measured, trajectories, ignore_extra=ignore_extra_columns)
         settings = DiscrepancySettings(
             copies=copies, budget=budget, seed=seed, alpha=alpha, pairs=pairs,
-            power_fibers=40 if power else 0,
+            power_fibers=40 if power else 0, next_copies=2 if next_ else 0,
             workers=workers or cfg.run.workers,
             executor=cfg.run.executor, scheduler=cfg.run.scheduler,
             effects=names,

@@ -96,7 +96,7 @@ def test_misspelled_column_exits_2_unless_ignored(tmp_path, config):
     r = runner.invoke(
         app,
         ["discrepancy", str(bad), str(config), "-o", str(out), "--copies", "2",
-         "--ignore-extra-columns"],
+         "--ignore-extra-columns", "--no-power", "--no-next", "--pairs", "0"],
     )  # fmt: skip
     assert r.exit_code == 0, r.output
     s = json.loads((out / "summary.json").read_text())
@@ -118,7 +118,7 @@ def test_effect_options_one_convention(tmp_path, config):
     r = runner.invoke(
         app,
         ["discrepancy", str(measured), str(config), "-o", str(out), "--copies", "2",
-         "--no-power", "--effects", "friction,inlet_speed"],
+         "--no-power", "--no-next", "--pairs", "0", "--effects", "friction,inlet_speed"],
     )  # fmt: skip
     assert r.exit_code == 0, r.output
     assert "deprecated" in r.output and "--effect a --effect b" in r.output
