@@ -25,6 +25,7 @@ spread includes that start noise, so s accounts for it.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -175,7 +176,9 @@ def discriminate(
     ))  # fmt: skip
     both = np.concatenate([xa, xb], axis=0)  # (2 copies, points, components)
     # per-component noise of one fiber: spread of the copies around their hypothesis' mean
-    resid = np.concatenate([xa - np.nanmean(xa, 0), xb - np.nanmean(xb, 0)], axis=0)
+    with warnings.catch_warnings():  # a component undefined at a start: NaN, as meant
+        warnings.simplefilter("ignore", RuntimeWarning)
+        resid = np.concatenate([xa - np.nanmean(xa, 0), xb - np.nanmean(xb, 0)], axis=0)
     s = np.sqrt(np.nanmean(resid**2, axis=(0, 1)) * copies / (copies - 1))
     floor = np.nanstd(both, axis=(0, 1)) * 0.05  # no component counts as noiseless
     s = np.maximum(np.where(np.isfinite(s), s, 0.0), floor)

@@ -20,11 +20,12 @@ import numpy as np
 
 from fibersweep.discrepancy.gap import GapResult, combined_excess
 from fibersweep.discrepancy.localise import binned_map
+from fibersweep.discrepancy.nextmeasure import Discrimination
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.workflow import DiscrepancyResult
 from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, paper_style, save_figure, subplots
 
-__all__ = ["figures", "fitted_label"]
+__all__ = ["figures", "fitted_label", "next_figure"]
 
 UNIT = "copy-spread units"
 AXES = {"theta0": "θ0 [deg]", "y0": "y0 / h_obs", "length": "L / l_obs"}
@@ -164,6 +165,21 @@ def _next(res: DiscrepancyResult, out: Path) -> str | None:
     nx = res.extra.get("next")
     if nx is None:
         return None
+    next_figure(nx, res.observed[["theta0", "y0"]].to_numpy(), out / "next_measure.png")
+    return "next_measure.png"
+
+
+def next_figure(nx: Discrimination, measured: np.ndarray, path: Path) -> Path:
+    """Map of the separation per fiber over (θ0, y0), best over L, best starts circled.
+
+    Parameters
+    ----------
+    nx : Discrimination
+    measured : ndarray, shape (n, 2)
+        Measured θ0 [deg], y0 [/h_obs] (small dots).
+    path : Path
+        PNG written.
+    """
     g, d = nx.grid, nx.d
     th, ys = np.unique(g[:, 0]), np.unique(g[:, 1])
     D = np.full((len(th), len(ys)), np.nan)
@@ -179,17 +195,15 @@ def _next(res: DiscrepancyResult, out: Path) -> str | None:
         return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
 
     im = ax.pcolormesh(edges(th), edges(ys), D.T, cmap="viridis", vmin=0)
-    obs = res.observed
-    ax.scatter(obs["theta0"], obs["y0"], s=4, color="w", alpha=0.6, label="measured starts")
+    ax.scatter(measured[:, 0], measured[:, 1], s=4, color="w", alpha=0.7, label="measured starts")
     bt = np.array([[b.theta0, b.y0] for b in nx.best])
     ax.scatter(bt[:, 0], bt[:, 1], s=40, facecolors="none", edgecolors="r", label="best starts")
     ax.set_xlabel(AXES["theta0"])
     ax.set_ylabel(AXES["y0"])
     ax.set_title(f"{nx.labels[0]}  vs  {nx.labels[1]}", fontsize=8)
-    ax.legend(frameon=False, fontsize=7, loc="upper right")
+    ax.legend(frameon=False, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=2)
     fig.colorbar(im, ax=ax, label="separation per fiber (best over L) [noise sd]")
-    save_figure(fig, out / "next_measure.png", dpi=110)
-    return "next_measure.png"
+    return save_figure(fig, path, dpi=110)
 
 
 def figures(res: DiscrepancyResult, out: Path) -> list[str]:

@@ -11,8 +11,10 @@ from fibersweep.discrepancy.nextmeasure import discriminate
 from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.power import analyse_power
+from fibersweep.discrepancy.report_figures import next_figure
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.fiber.settings import FiberSettings
+from fibersweep.plots.style import paper_style
 
 BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
 
@@ -22,7 +24,7 @@ def _starts(n: int, seed: int) -> np.ndarray:
     return np.column_stack([rng.uniform(*BOX[c], n) for c in ("theta0", "y0", "length")])
 
 
-def test_identical_hypotheses_cannot_be_separated_and_a_speed_change_can(coarse_field):
+def test_identical_hypotheses_cannot_be_separated_and_a_speed_change_can(coarse_field, tmp_path):
     grid = _starts(6, 1)
     measured = _starts(4, 2)
     with Simulator(coarse_field, FiberSettings(), workers=1, progress=False) as sim:
@@ -36,6 +38,9 @@ def test_identical_hypotheses_cannot_be_separated_and_a_speed_change_can(coarse_
     # observable separates them, and a handful of fibers (<= 5) settle it
     assert fast.best[0].observable in ("t_pass", "dwell")
     assert fast.fibers_needed is not None and fast.fibers_needed <= 5
+    with paper_style():
+        png = next_figure(fast, measured[:, :2], tmp_path / "next.png")
+    assert png.stat().st_size > 0
 
 
 @pytest.mark.slow
