@@ -97,6 +97,12 @@ SCENARIOS = {
         None,
         {"named:friction+inlet_speed"},
     ),
+    # the same pair, stronger: is the pair named when each member is clearly visible?
+    "friction=0.8+inlet_speed=0.1": (
+        {"friction": 0.8, "inlet_speed": 0.1},
+        None,
+        {"named:friction+inlet_speed"},
+    ),
     "inlet_speed=-0.06+off_midplane=0.1": (
         {"inlet_speed": -0.06, "off_midplane": 0.1},
         None,
