@@ -185,6 +185,7 @@ def run_scenario(name: str, field, n: int, seed: int, workers: int, kw: dict) ->
             for h in res.heldout
         ],
     }
+    row["signatures"] = [(sg.name, sg.probe, round(sg.cosine, 2)) for sg in res.signatures]
     row["sets"] = [
         {"set": st.name, "values": st.values, "p_holm": st.p_holm,
          "explains": st.explains(res.settings.alpha),
