@@ -5,7 +5,8 @@ config errors) exits 2, a failed computation (:class:`FibersweepError`) exits 1.
 
 Layout: :mod:`._app` holds the ``app`` and the shared helpers; one module per
 concept adds its commands to it: :mod:`.flow` (flow), :mod:`.fiber` (simulate),
-:mod:`.sweep` (run, classify, plot-phase), :mod:`.discrepancy` (synth, discrepancy).
+:mod:`.sweep` (run, classify, plot-phase), :mod:`.discrepancy` (synth,
+discrepancy, power).
 """
 
 from fibersweep.cli._app import (

@@ -1,4 +1,8 @@
-"""The discrepancy commands (issue 6): ``synth`` and ``discrepancy``."""
+"""The discrepancy commands: ``synth``, ``discrepancy`` and ``power``.
+
+Effects are given the same way everywhere: ``--effect NAME[=VALUE]``, repeatable
+(``synth`` needs the value; ``discrepancy`` takes names only, it fits the values).
+"""
 
 from __future__ import annotations
 
@@ -80,6 +84,28 @@ def synth(
                     fg=typer.colors.YELLOW)  # fmt: skip
 
 
+def _effect_names(effect: list[str] | None, effects: str | None) -> tuple[str, ...] | None:
+    """Library subset from repeatable --effect NAME (and the deprecated --effects a,b)."""
+    from fibersweep.errors import InputError
+
+    names = []
+    for item in effect or []:
+        name, sep, _ = item.partition("=")
+        if sep:
+            raise InputError(
+                f"--effect {item}: discrepancy fits the value; give the name only ({name})"
+            )
+        names.append(name.strip())
+    if effects:
+        typer.secho(
+            "--effects a,b is deprecated: use --effect a --effect b",
+            fg=typer.colors.YELLOW,
+            err=True,
+        )
+        names += [e.strip() for e in effects.split(",") if e.strip()]
+    return tuple(names) or None
+
+
 @app.command()
 def discrepancy(
     measured: Annotated[Path, typer.Argument(help="Measured fibers (.parquet or .csv).")],
@@ -89,10 +115,27 @@ def discrepancy(
     budget: Annotated[int | None, typer.Option(help="Most simulations in total.")] = None,
     seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
     copies: Annotated[int, typer.Option(help="Jittered baseline copies per fiber.")] = 8,
+    effect: Annotated[
+        list[str] | None,
+        typer.Option("--effect", help="Library effect to consider, repeatable (default: all)."),
+    ] = None,
     effects: Annotated[
-        str | None, typer.Option(help="Comma-separated effects to consider (default: all).")
+        str | None, typer.Option(help="Deprecated: comma-separated effects (use --effect).")
     ] = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
+    pairs: Annotated[
+        int, typer.Option(help="Second effects tried with the best one (0: single effects).")
+    ] = 2,
+    power: Annotated[
+        bool,
+        typer.Option(help="Power analysis when the verdict is no gap or unexplained."),
+    ] = True,
+    next_: Annotated[
+        bool,
+        typer.Option(
+            "--next/--no-next", help="Propose starts that separate two candidates when undecided."
+        ),
+    ] = True,
     trajectories: Annotated[
         Path | None, typer.Option(help="Optional measured trajectories table.")
     ] = None,
@@ -102,7 +145,7 @@ def discrepancy(
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
-    """Where the model disagrees with MEASURED, which effect explains it, and the gap left."""
+    """Where the model disagrees with MEASURED, which effect(s) explain it, and the gap left."""
     _setup_logging(verbose)
     with _errors():
         cfg = _load(config, overrides)
@@ -111,12 +154,14 @@ def discrepancy(
         from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
         from fibersweep.flow.cache import get_flow_field
 
+        names = _effect_names(effect, effects)
         data = load_measured(measured, trajectories, ignore_extra=ignore_extra_columns)
         settings = DiscrepancySettings(
-            copies=copies, budget=budget, seed=seed, alpha=alpha,
+            copies=copies, budget=budget, seed=seed, alpha=alpha, pairs=pairs,
+            power_fibers=40 if power else 0, next_copies=2 if next_ else 0,
             workers=workers or cfg.run.workers,
             executor=cfg.run.executor, scheduler=cfg.run.scheduler,
-            effects=tuple(e.strip() for e in effects.split(",")) if effects else None,
+            effects=names,
         )  # fmt: skip
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
         res = run_discrepancy(data, field, cfg.fiber, settings)
@@ -126,3 +171,100 @@ def discrepancy(
     typer.echo(f"wrote {output / 'report.md'} and {output / 'summary.json'}")
     for c in s["updated_configs"]:
         typer.echo(f"wrote {output / c}")
+
+
+@app.command("power")
+def power_cmd(
+    config: ConfigArg,
+    overrides: Overrides = None,
+    n: Annotated[int, typer.Option("--n", help="Fibers the detection limits are for.")] = 100,
+    measured: Annotated[
+        Path | None,
+        typer.Option(help="Use these measured starts (default: uniform in the sweep box)."),
+    ] = None,
+    simulate: Annotated[
+        int, typer.Option(help="Fibers simulated (limits are scaled from them to N).")
+    ] = 40,
+    effect: Annotated[
+        list[str] | None,
+        typer.Option("--effect", help="Library effect to analyse, repeatable (default: all)."),
+    ] = None,
+    alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
+    seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
+    output: Annotated[Path, typer.Option("--output", "-o", help="Where power.json goes.")] = Path(
+        "power"
+    ),
+    workers: Workers = None,
+    verbose: Verbose = False,
+) -> None:
+    """Smallest magnitude of each library effect the discrepancy workflow would detect.
+
+    By simulation at CONFIG's model, for N fibers with starts uniform in the sweep
+    box (or MEASURED's starts), with the look-alike effects these observables
+    cannot separate.
+    """
+    import json
+
+    import numpy as np
+
+    _setup_logging(verbose)
+    with _errors():
+        cfg = _load(config, overrides)
+        from fibersweep.atomic import atomic_write
+        from fibersweep.discrepancy.copies import CopyMaker
+        from fibersweep.discrepancy.library import LIBRARY, get_candidates
+        from fibersweep.discrepancy.noise import NoiseModel
+        from fibersweep.discrepancy.observables import scored
+        from fibersweep.discrepancy.power import analyse_power
+        from fibersweep.discrepancy.schema import load_measured
+        from fibersweep.discrepancy.simulate import Simulator
+        from fibersweep.errors import InputError
+        from fibersweep.flow.cache import get_flow_field
+
+        if n < 8 or simulate < 8:
+            raise InputError(f"--n and --simulate must be >= 8, got {n} and {simulate}")
+        cands = get_candidates(_effect_names(effect, None))
+        rng = np.random.default_rng([seed, 17])
+        if measured is not None:
+            starts = load_measured(measured).starts
+            obs = tuple(load_measured(measured).observed)
+        else:
+            box = _sweep_box(cfg)
+            k = min(n, simulate)
+            starts = np.column_stack([rng.uniform(*box[c], k) for c in ("theta0", "y0", "length")])
+            obs = scored()
+        field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
+        with Simulator(
+            field, cfg.fiber, workers=workers or cfg.run.workers, executor=cfg.run.executor,
+            scheduler=cfg.run.scheduler, planned=3 * min(simulate, len(starts)) * (
+                1 + 2 * sum(len(c.probes) for c in cands)),
+        ) as sim:  # fmt: skip
+            maker = CopyMaker(starts, NoiseModel(), seed, sim)
+            pw = analyse_power(maker, cands, n, obs, rng, n_sim=simulate, alpha=alpha)
+        rows = []
+        for e in pw.effects:
+            real = float(np.copysign(LIBRARY[e.name].realistic, e.probe))
+            rows.append(
+                {
+                    "effect": e.name, "probe": e.probe, "limit": e.limit, "gamma": e.gamma,
+                    "realistic": real, "fibers_for_realistic": pw.fibers_needed(e.name, real),
+                }
+            )  # fmt: skip
+        out = {
+            "n": n, "n_simulated": pw.n_sim, "alpha": alpha, "power": pw.power,
+            "effects": rows, "simulations": pw.simulations,
+            "lookalikes": [{"a": a, "b": b, "cosine": c} for a, b, c in pw.lookalikes],
+        }  # fmt: skip
+        output.mkdir(parents=True, exist_ok=True)
+        atomic_write(output / "power.json", json.dumps(out, indent=2))
+    typer.echo(f"detection limits at N = {n} (power {pw.power:g}, alpha {alpha:g}):")
+    for r in rows:
+        lim = f"{r['limit']:.3g}" if r["limit"] is not None else "not within its range"
+        need = r["fibers_for_realistic"]
+        typer.echo(
+            f"  {r['effect']:>13} {'+' if r['probe'] > 0 else '-'}  from {lim:>22}"
+            f"   (realistic {r['realistic']:g}: {need if need else '> 100000'} fibers)"
+        )
+    for a, b, c in pw.lookalikes:
+        typer.echo(f"  look-alikes: {a} ~ {b} (|cos| {c:.2f})")
+    typer.echo(f"wrote {output / 'power.json'} ({pw.simulations} simulations)")

@@ -17,6 +17,15 @@ sample, it beats the baseline by more than the noise floor allows. Then:
   -> "ambiguous between A and B" (both are consistent with the data);
 - otherwise the best candidate is named.
 
+More than one effect (forward selection, :mod:`.select`): when no single
+effect explains the gap, each other fitted candidate is added to the one that
+improved the held-out fibers most (joint fit on the same folds) and scored out
+of sample. A set
+``{A, B}`` is named when each member's contribution is significant (the pair
+beats A alone and beats B alone on the held-out fibers, one Holm family over
+all these tests) and the pair leaves no significant gap. Two such sets make
+the verdict "ambiguous" between them; none leaves the verdict "unexplained".
+
 Adequacy ("no significant gap left") is checked with the effect at the value
 fitted on all fibers (:func:`workflow.run_discrepancy` refits the significant
 candidates), so that a poor fit on one half does not hide a right effect; the
@@ -36,7 +45,7 @@ import numpy as np
 from fibersweep.discrepancy.gap import GapResult, paired_improvement
 from fibersweep.discrepancy.stats import bootstrap_mean_ci, holm
 
-__all__ = ["HeldOut", "Verdict", "adequate", "evaluate_heldout", "decide"]
+__all__ = ["HeldOut", "SetHeldOut", "Verdict", "adequate", "evaluate_heldout", "decide"]
 
 
 @dataclass(frozen=True)
@@ -75,6 +84,53 @@ class HeldOut:
 
 
 @dataclass(frozen=True)
+class SetHeldOut:
+    """A set of effects (forward selection) on the held-out fibers.
+
+    Attributes
+    ----------
+    values : dict name -> float
+        Pooled value of each member (mean of the two folds' fits).
+    fold_values : dict name -> (float, float)
+        The value used to score each fold (fitted on the other one).
+    gains : dict name -> (mean, lo, hi)
+        Per-fiber improvement of the set over the set without that member
+        (held out, bootstrap 95 %): the member's own contribution.
+    p_values, p_holm : dict name -> float
+        One-sided bootstrap p of "no contribution", raw and Holm-adjusted over
+        every member test of every set tried.
+    improvement : (mean, lo, hi)
+        Per-fiber improvement of the set over the baseline.
+    residual : GapResult
+        Cross-fitted gap with the set on.
+    final : GapResult or None
+        Gap on all fibers with the set at ``values`` (None when not checked).
+    """
+
+    values: dict[str, float]
+    fold_values: dict[str, tuple[float, float]]
+    gains: dict[str, tuple[float, float, float]]
+    p_values: dict[str, float]
+    p_holm: dict[str, float]
+    improvement: tuple[float, float, float]
+    residual: GapResult
+    final: GapResult | None = None
+
+    @property
+    def name(self) -> str:
+        """Members joined by ' + ' (e.g. 'friction + inlet_speed')."""
+        return " + ".join(self.values)
+
+    def significant(self, alpha: float) -> bool:
+        """Every member's contribution significant (Holm-adjusted) and positive."""
+        return all(self.p_holm[n] <= alpha and self.gains[n][0] > 0 for n in self.values)
+
+    def explains(self, alpha: float) -> bool:
+        """Significant and no significant gap left at the pooled values."""
+        return self.significant(alpha) and adequate(self.final or self.residual)
+
+
+@dataclass(frozen=True)
 class Verdict:
     """The workflow's conclusion.
 
@@ -82,13 +138,17 @@ class Verdict:
     ----------
     kind : {'no significant gap', 'named', 'ambiguous', 'unexplained'}
     effects : dict name -> fitted value
-        The named effect, or the ambiguous pair; empty otherwise.
+        The named effect or set of effects, or the members of every ambiguous
+        alternative; empty otherwise.
     observable : str
         The observable with the strongest remaining gap ('' if none).
     region : str
         Where that gap lives ('' if none).
     text : str
         One sentence for the report.
+    alternatives : tuple of dict
+        For 'ambiguous': each set of effects consistent with the data
+        (one updated config each); for 'named': the named set; else empty.
     """
 
     kind: str
@@ -96,6 +156,7 @@ class Verdict:
     observable: str = ""
     region: str = ""
     text: str = ""
+    alternatives: tuple[dict[str, float], ...] = ()
 
 
 def adequate(gap: GapResult) -> bool:
@@ -167,6 +228,7 @@ def decide(
     region: str,
     rng: np.random.Generator,
     alpha: float,
+    sets: Sequence[SetHeldOut] = (),
 ) -> Verdict:
     """Apply the decision rule of the module docstring.
 
@@ -178,6 +240,9 @@ def decide(
         Fitted candidates on the held-out fibers.
     region : str
         Description of where the baseline gap lives.
+    sets : sequence of SetHeldOut
+        Sets of effects tried by forward selection (only used when no single
+        effect explains the gap).
     """
     if not gap.any:
         return Verdict(
@@ -188,6 +253,9 @@ def decide(
         )
     top_obs = gap.flagged[0]
     sig = [h for h in heldout if h.significant]
+    good_sets = sorted((st for st in sets if st.explains(alpha)), key=lambda st: -st.improvement[0])
+    if not any(h.explains for h in sig) and good_sets:
+        return _set_verdict(good_sets, top_obs, region)
     if not sig:
         return Verdict(
             "unexplained",
@@ -228,15 +296,51 @@ def decide(
             {best.name: best.value, other.name: other.value},
             top_obs,
             region,
-            f"Ambiguous between {best.name} = {best.value:.4g} and {other.name} = "
-            f"{other.value:.4g}: with either, no significant gap is left.",
+            f"Ambiguous between {best.name} = {best.value:.3g} and {other.name} = "
+            f"{other.value:.3g}: with either, no significant gap is left.",
+            ({best.name: best.value}, {other.name: other.value}),
         )
     return Verdict(
         "named",
         {best.name: best.value},
         top_obs,
         region,
-        f"{best.name} = {best.value:.4g} explains the gap (held-out improvement "
-        f"{best.improvement[0]:.3g} [{best.improvement[1]:.3g}, {best.improvement[2]:.3g}], "
+        f"{best.name} = {best.value:.3g} explains the gap (held-out improvement "
+        f"{best.improvement[0]:.2g} [{best.improvement[1]:.2g}, {best.improvement[2]:.2g}], "
         "no significant gap left).",
+        ({best.name: best.value},),
+    )
+
+
+def _values_text(values: Mapping[str, float]) -> str:
+    return " + ".join(f"{n} = {v:.3g}" for n, v in values.items())
+
+
+def _set_verdict(good: Sequence[SetHeldOut], top_obs: str, region: str) -> Verdict:
+    """Named set, or ambiguous between sets that each explain the gap."""
+    best = good[0]
+    if len(good) > 1:
+        alts = tuple(dict(st.values) for st in good)
+        union: dict[str, float] = {}
+        for a in alts:
+            union.update(a)
+        return Verdict(
+            "ambiguous",
+            union,
+            top_obs,
+            region,
+            "Ambiguous between "
+            + " and ".join(f"({_values_text(a)})" for a in alts)
+            + ": with either set, no significant gap is left.",
+            alts,
+        )
+    gains = ", ".join(f"{n} {best.gains[n][0]:.2g}" for n in best.values)
+    return Verdict(
+        "named",
+        dict(best.values),
+        top_obs,
+        region,
+        f"{_values_text(best.values)} together explain the gap: each member's own held-out "
+        f"contribution is significant ({gains}) and no significant gap is left.",
+        (dict(best.values),),
     )

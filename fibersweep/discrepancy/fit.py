@@ -12,7 +12,7 @@ observations against ``fit_copies`` copies made with the effect on (common
 random numbers, so the baseline value 0 is one more point of the same
 curve): bounded Brent minimisation (:func:`scipy.optimize.minimize_scalar`)
 over the effect's interval (for a signed effect the half its signature
-points to, unless one evaluation in the middle of the other half beats the
+points to, unless one evaluation at a fifth of the other half beats the
 baseline there) within a fixed number of simulated evaluations; the baseline
 value 0 is always a candidate, so a fit never does worse than no effect.
 """
@@ -141,6 +141,7 @@ def fit_effect(
     max_evals: int,
     side: float = 0.0,
     bounds: tuple[float, float] | None = None,
+    fixed: Mapping[str, float] | None = None,
 ) -> Fit:
     """Fit the value of one effect on the fit fibers.
 
@@ -157,9 +158,13 @@ def fit_effect(
         For a signed effect, the sign of the best-matching probe (0: search both).
     bounds : (lo, hi), optional
         Search interval instead of the candidate's (e.g. around earlier fits).
+    fixed : mapping name -> value, optional
+        Effects held at these values while ``cand`` is fitted (forward selection:
+        the effects already chosen). ``base_copies`` must then be copies made with
+        these effects on (the value 0 of ``cand``).
     """
     k_fit = len(base_copies)
-    # The signature suggests the sign of a signed effect; one evaluation in the middle
+    # The signature suggests the sign of a signed effect; one evaluation at a fifth
     # of the other half checks it (a weak signature can point the wrong way).
     check_side = bounds is None and cand.signed and side != 0.0
     limit = max_evals + int(check_side)
@@ -176,7 +181,7 @@ def fit_effect(
             # Budget spent: this point is unknown; report the worst seen so Brent moves away.
             return max(seen.values())
         copies = [
-            maker.copy(k, {cand.name: v}, rows, desc=f"fit {cand.name}={v:.4g}")
+            maker.copy(k, {**(fixed or {}), cand.name: v}, rows, desc=f"fit {cand.name}={v:.4g}")
             for k in range(k_fit)
         ]
         seen[v] = combined_loss(value_matrices(observed, copies, observables), weights)
@@ -185,7 +190,10 @@ def fit_effect(
     lo, hi = bounds if bounds is not None else (cand.lo, cand.hi)
     if check_side:
         # Brent then searches the better half with the evaluations it was given.
-        if loss(0.5 * (cand.lo if side > 0 else cand.hi)) < seen[0.0]:
+        # at a fifth of the other half: for a loss convex in the value with its minimum
+        # at v*, loss(c) < loss(0) roughly when c < 2 v*, so a check close to 0 still
+        # sees a small effect on that side (0.5 of the range missed inlet_speed = 0.05)
+        if loss(0.2 * (cand.lo if side > 0 else cand.hi)) < seen[0.0]:
             side = -side
         lo, hi = (0.0, cand.hi) if side > 0 else (cand.lo, 0.0)
     minimize_scalar(

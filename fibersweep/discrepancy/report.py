@@ -1,15 +1,20 @@
-"""Write the discrepancy report: Markdown, figures, JSON summary and the updated config.
+"""Write the discrepancy report: Markdown, figures, JSON summary and the updated config(s).
 
 Files written into the output directory (each atomically):
 
-- ``summary.json``: verdict, gaps, ranking, fits, held-out before/after; for scripts;
-- ``report.md``: the same for people, with the figures;
-- ``phase_before_after.png``: (θ0, y0) phase diagrams of the held-out fibers:
-  measured, baseline model, model with the chosen effect;
-- ``residual_map.png``: binned per-fiber excess score in (θ0, y0) and (L, y0);
-- ``gap_before_after.png``: held-out excess per observable, before and after;
-- ``updated_config.yaml`` (named effect) or ``updated_config.<effect>.yaml``
-  (each effect of an ambiguous pair): the input config with the effect set.
+- ``summary.json``: verdict, gaps, ranking, fits (per half), held-out before/after,
+  sets of effects tried, power analysis, what to measure next; for scripts;
+- ``report.md``: the same for people, with the figures (:mod:`.report_text`);
+- figures (:mod:`.report_figures`): ``phase_before_after.png``,
+  ``residual_map.png``, ``gap_before_after.png``, ``next_measure.png``;
+- ``updated_config.yaml`` (named effect or set) or ``updated_config.<set>.yaml``
+  (each alternative of an ambiguous verdict): the input config with every
+  effect of the set added to ``fiber.effects``.
+
+One scale for the gap everywhere: the *excess score* of an observable (how
+much worse the measurement scores than a model copy) divided by the spread of
+the copies' own scores, "copy-spread units" (0: as good as the model's own
+copies; 1: one spread worse per fiber).
 """
 
 from __future__ import annotations
@@ -23,13 +28,19 @@ import numpy as np
 import yaml
 
 from fibersweep.atomic import atomic_write
-from fibersweep.discrepancy.gap import GapResult, combined_excess
-from fibersweep.discrepancy.localise import binned_map
-from fibersweep.discrepancy.observables import OBSERVABLES, log_scale, scored
+from fibersweep.discrepancy.gap import GapResult
+from fibersweep.discrepancy.library import LIBRARY
+from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.workflow import DiscrepancyResult
-from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, save_figure, subplots
 
-__all__ = ["summary", "write_report"]
+__all__ = ["summary", "write_report", "GAP_UNIT"]
+
+#: Unit of the gap in every table and figure.
+GAP_UNIT = "copy-spread units"
+
+#: Stages whose failed runs are failures of the analysis itself (the baseline model);
+#: runs under a probed or fitted effect that fail are outcomes of that effect.
+ANALYSIS_STAGES = ("baseline",)
 
 
 def _clean(x: Any) -> Any:
@@ -47,12 +58,14 @@ def _clean(x: Any) -> Any:
     return x
 
 
-def _gap_dict(g: GapResult | None) -> dict[str, Any]:
+def _gap_dict(g: GapResult | None, weights: dict[str, float]) -> dict[str, Any]:
     if g is None:
         return {}
     biased = set(g.biased)
-    return {
-        name: {
+    out = {}
+    for name, o in g.gaps.items():
+        w = weights.get(name, 0.0)
+        out[name] = {
             "statistic": o.test.statistic,
             "noise_floor": o.test.null_mean,
             "noise_sd": o.test.null_sd,
@@ -61,46 +74,196 @@ def _gap_dict(g: GapResult | None) -> dict[str, Any]:
             "p_holm": o.p_holm,
             "significant": o.significant,
             "excess": {"mean": o.excess[0], "lo95": o.excess[1], "hi95": o.excess[2]},
+            # the same in copy-spread units (the one scale of tables and figures)
+            "gap": {"mean": o.excess[0] * w, "lo95": o.excess[1] * w, "hi95": o.excess[2] * w},
             "n": o.test.n,
             "bias_z": list(o.bias_z),
             "bias_p": list(o.bias_p),
             "bias_p_holm": list(o.bias_p_holm),
+            "signed_p_holm": min(o.bias_p_holm) if o.bias_p_holm else None,
             "systematic": name in biased,
         }
-        for name, o in g.gaps.items()
+    return out
+
+
+def _removed(before: dict[str, Any], after: dict[str, Any]) -> dict[str, float | None]:
+    """Share of each observable's gap an effect removed (1 - after/before), None if no gap."""
+    out: dict[str, float | None] = {}
+    for name, b in before.items():
+        a = after.get(name)
+        bm = b["gap"]["mean"]
+        am = a["gap"]["mean"] if a else None
+        ok = am is not None and bm is not None and bm > 0
+        out[name] = (1.0 - am / bm) if ok else None
+    return out
+
+
+def fibers_to_name(per_fiber: np.ndarray, k: int, alpha: float, power: float = 0.8) -> int | None:
+    """Fibers whose held-out improvement would be significant with the target power.
+
+    From the measured per-fiber improvement (mean mu, sd sigma): the one-sided test
+    at alpha / k (Holm's first step over k candidates) reaches the power when
+    ``sqrt(n) mu / sigma >= z_{1-alpha/k} + z_power``. None when mu <= 0.
+    """
+    from scipy.stats import norm
+
+    d = np.asarray(per_fiber, dtype=np.float64)
+    d = d[np.isfinite(d)]
+    if len(d) < 2 or d.mean() <= 0:
+        return None
+    z = norm.ppf(1 - alpha / max(k, 1)) + norm.ppf(power)
+    return int(math.ceil((z * d.std(ddof=1) / d.mean()) ** 2))
+
+
+def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
+    pw = res.extra.get("power")
+    if pw is None:
+        return None
+    effects = []
+    for e in pw.effects:
+        real = math.copysign(LIBRARY[e.name].realistic, e.probe) if e.name in LIBRARY else None
+        effects.append(
+            {
+                "effect": e.name,
+                "direction": "+" if e.probe > 0 else "-",
+                "probe": e.probe,
+                "gamma": e.gamma,
+                "limit": e.limit,
+                "realistic": real,
+                "fibers_for_realistic": pw.fibers_needed(e.name, real) if real else None,
+            }
+        )
+    lead = None
+    if res.heldout:
+        h = max(res.heldout, key=lambda h: h.improvement[0])
+        if h.value != 0.0:
+            lead = {
+                "effect": h.name,
+                "value": h.value,
+                "fibers_to_detect": pw.fibers_needed(h.name, h.value),
+                "fibers_to_name": fibers_to_name(
+                    h.per_fiber, len(res.heldout), res.settings.alpha, pw.power
+                ),
+            }
+    return {
+        "n": pw.n,
+        "n_simulated": pw.n_sim,
+        "alpha": pw.alpha,
+        "power": pw.power,
+        "effects": effects,
+        "lookalikes": [{"a": a, "b": b, "cosine": c} for a, b, c in pw.lookalikes],
+        "leading": lead,
+        "simulations": pw.simulations,
     }
+
+
+def _next_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
+    nx = res.extra.get("next")
+    if nx is None:
+        return None
+    return {
+        "reason": res.extra.get("next_reason", ""),
+        "hypotheses": list(nx.labels),
+        "best": [b.__dict__ for b in nx.best],
+        "fibers_needed": nx.fibers_needed,
+        "fibers_needed_at_measured_starts": nx.fibers_needed_measured,
+        "simulations": nx.simulations,
+    }
+
+
+def _advice(s: dict[str, Any]) -> list[str]:
+    """What to try when the gap is unexplained (or not seen)."""
+    v = s["verdict"]
+    out = []
+    if v["kind"] == "unexplained":
+        helped = [h for h in s["heldout"] if h["significant"]]
+        for h in helped:
+            parts = [
+                f"{o} {100 * r:.0f} %"
+                for o, r in h["gap_removed"].items()
+                if r is not None and r > 0.1
+            ]
+            out.append(
+                f"{h['effect']} = {h['value']:.3g} helped out of sample (improvement "
+                f"{h['improvement']['mean']:.2g} {GAP_UNIT} per fiber, p Holm "
+                f"{h['p_holm']:.2g}) and removed "
+                + (", ".join(parts) if parts else "no observable's gap by more than 10 %")
+                + " of the gap, but leaves a significant gap."
+            )
+        for st in s["sets"]:
+            out.append(
+                f"{st['set']} was tried together: contributions "
+                + ", ".join(
+                    f"{m} {st['gains'][m]['mean']:.2g} (p Holm {st['p_holm'][m]:.2g})"
+                    for m in st["values"]
+                )
+                + ("; it still leaves a significant gap." if st["significant"] else ".")
+            )
+        if not helped:
+            out.append("No library effect improved the held-out fibers significantly.")
+        out.append(
+            "Try: an effect outside the library (the region and observable above say where "
+            "to look), a check of the measurement-noise model (a wrong noise level shows as "
+            "a gap everywhere), or more fibers (see the power analysis)."
+        )
+    return out
 
 
 def summary(res: DiscrepancyResult) -> dict[str, Any]:
     """JSON-ready summary of a workflow result."""
     v = res.verdict
+    w = res.weights
+    before = _gap_dict(res.heldout_before, w)
     ho = []
-    before = _gap_dict(res.heldout_before)
+    fold = res.extra.get("fold_values", {})
     for h in res.heldout:
-        after = _gap_dict(h.residual)
-        shrink = {}
-        for name, b in before.items():
-            a = after.get(name)
-            bm, am = b["excess"]["mean"], a["excess"]["mean"] if a else None
-            shrink[name] = (am / bm) if (am is not None and bm is not None and bm > 0) else None
+        after = _gap_dict(h.residual, w)
         ho.append(
             {
                 "effect": h.name,
                 "value": h.value,
+                "halves": fold.get(h.name),
                 "improvement": dict(zip(("mean", "lo95", "hi95"), h.improvement, strict=True)),
                 "p": h.p_value,
                 "p_holm": h.p_holm,
                 "significant": h.significant,
                 "explains": h.explains,
                 "gap_after": after,
-                "gap_final": _gap_dict(h.final),
-                "gap_ratio_after_before": shrink,
+                "gap_final": _gap_dict(h.final, w),
+                "gap_removed": _removed(before, after),
             }
         )
+    sets = []
+    for st in res.sets:
+        after = _gap_dict(st.residual, w)
+        sets.append(
+            {
+                "set": st.name,
+                "values": st.values,
+                "halves": {k: list(v) for k, v in st.fold_values.items()},
+                "gains": {
+                    k: dict(zip(("mean", "lo95", "hi95"), g, strict=True))
+                    for k, g in st.gains.items()
+                },
+                "p": st.p_values,
+                "p_holm": st.p_holm,
+                "improvement": dict(zip(("mean", "lo95", "hi95"), st.improvement, strict=True)),
+                "significant": st.significant(res.settings.alpha),
+                "explains": st.explains(res.settings.alpha),
+                "gap_after": after,
+                "gap_removed": _removed(before, after),
+                "gap_final": _gap_dict(st.final, w),
+            }
+        )
+    by_stage = dict(res.failed_by_stage)
+    analysis_failed = sum(by_stage.get(k, 0) for k in ANALYSIS_STAGES)
+    X = res.observed
+    varying = [c for c in ("theta0", "y0", "length") if float(np.ptp(X[c])) > 1e-9]
     out = {
         "verdict": {
             "kind": v.kind,
             "effects": v.effects,
+            "alternatives": list(v.alternatives),
             "observable": v.observable,
             "region": v.region,
             "text": v.text,
@@ -109,8 +272,10 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "n_heldout": len(res.heldout_rows),
         "observables": list(res.observables),
         "observables_absent": [o for o in scored() if o not in res.observables],
+        "start_axes_varying": varying,
         "alpha": res.settings.alpha,
-        "gap": _gap_dict(res.gap),
+        "gap_unit": GAP_UNIT,
+        "gap": _gap_dict(res.gap, w),
         "descriptive": res.descriptive,
         "region": {
             "where": res.region.describe(),
@@ -135,251 +300,29 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         ],
         "heldout_gap_before": before,
         "heldout": ho,
+        "sets": sets,
+        "power": _power_dict(res),
+        "power_skipped": res.extra.get("power_skipped"),
+        "next": _next_dict(res),
+        "next_skipped": res.extra.get("next_skipped"),
         "simulations": res.simulations,
         "simulations_planned": res.plan.cost(len(res.observed)),
-        "failed_runs": res.failed_runs,
+        "failed_runs": analysis_failed,
+        "failed_runs_by_stage": by_stage,
         "seconds": res.seconds,
         "settings": {
             "copies": res.plan.copies,
             "fit_copies": res.plan.fit_copies,
             "candidates": res.plan.candidates,
             "fit_evals": res.plan.fit_evals,
+            "pairs": res.plan.pairs,
             "seed": res.settings.seed,
             "budget": res.settings.budget,
             "noise": res.settings.noise.as_dict(),
         },
     }
+    out["advice"] = _advice(_clean(out))
     return _clean(out)
-
-
-def _fmt(x: Any, spec: str = ".3g") -> str:
-    return "–" if x is None else format(x, spec)
-
-
-def _class_groups(codes: np.ndarray) -> list[tuple[str, dict[str, object], np.ndarray]]:
-    """(label, marker style, row mask) per class present, failed runs last (plots/style)."""
-    out = []
-    for k, name in enumerate(OBSERVABLES["class"].categories):
-        mask = codes == k
-        if mask.any():
-            out.append((name, CLASS_STYLE[name], mask))
-    bad = ~np.isfinite(codes)
-    if bad.any():
-        out.append(("failed", FAILED_STYLE, bad))
-    return out
-
-
-def _figures(res: DiscrepancyResult, out: Path, effect: str | None) -> list[str]:
-    import matplotlib
-    from matplotlib.lines import Line2D
-
-    made = []
-    obs = res.observed
-    held = res.heldout_rows
-    o_ho = obs.iloc[held].reset_index(drop=True)
-    codes = OBSERVABLES["class"].values  # category index, NaN for a failed run
-    panels = [
-        ("measured", codes(o_ho["class"])),
-        ("baseline model", codes(res.baseline_copies[0]["class"])[held]),
-    ]
-    if effect and effect in res.effect_copies:
-        panels.append((f"with {effect}", codes(res.effect_copies[effect][0]["class"])))
-    fig, axes = subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), sharey=True)
-    size = (12 + 30 * (o_ho["length"] - 0.4)).to_numpy()
-    seen: dict[str, dict[str, object]] = {}
-    for ax, (title, codes) in zip(np.atleast_1d(axes), panels, strict=True):
-        codes = np.asarray(codes, dtype=np.float64)
-        for name, style, mask in _class_groups(codes):
-            ax.scatter(
-                o_ho["theta0"][mask],
-                o_ho["y0"][mask],
-                s=size[mask],
-                marker=style["marker"],
-                color=style["color"],
-                edgecolors="0.2" if name != "failed" else None,
-                linewidths=0.3,
-            )
-            seen[name] = style
-        ax.set_title(f"{title} (held-out)")
-        ax.set_xlabel("θ0 [deg]")
-    np.atleast_1d(axes)[0].set_ylabel("y0 / h_obs")
-    handles = [
-        Line2D([], [], ls="", markersize=6, label=k, **st)  # type: ignore[arg-type]
-        for k, st in seen.items()
-    ]
-    fig.legend(handles=handles, loc="lower center", ncol=len(handles), frameon=False)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
-    save_figure(fig, out / "phase_before_after.png", dpi=110)
-    made.append("phase_before_after.png")
-
-    exc = combined_excess(res.gap, res.weights)
-    th, y0, L = (obs[c].to_numpy(dtype=np.float64) for c in ("theta0", "y0", "length"))
-    fig, axes = subplots(1, 2, figsize=(9, 3.8))
-    for ax, (x, xl) in zip(axes, ((th, "θ0 [deg]"), (L, "L / l_obs")), strict=True):
-        xe = np.linspace(np.nanmin(x), np.nanmax(x) + 1e-9, 6)
-        ye = np.linspace(np.nanmin(y0), np.nanmax(y0) + 1e-9, 8)
-        m, c = binned_map(x, y0, exc, xe, ye)
-        lim = np.nanmax(np.abs(m)) if np.isfinite(m).any() else 1.0
-        # bins without fibers: grey, not the white of "no excess"
-        cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
-        im = ax.pcolormesh(xe, ye, np.ma.masked_invalid(m.T), cmap=cmap, vmin=-lim, vmax=lim)
-        ax.set_xlabel(xl)
-        ax.set_ylabel("y0 / h_obs")
-        fig.colorbar(im, ax=ax, label="mean excess score (weighted)")
-    fig.suptitle("Where the measurement sits worse than the model's own copies (grey: no fibers)")
-    fig.tight_layout()
-    save_figure(fig, out / "residual_map.png", dpi=110)
-    made.append("residual_map.png")
-
-    if res.heldout_before is not None and effect:
-        h = next((h for h in res.heldout if h.name == effect), None)
-        if h is not None:
-            names = list(res.heldout_before.gaps)
-            # in units of the per-fiber spread of the copies' scores (comparable bars)
-            w = [res.weights.get(n, 0.0) for n in names]
-            b = [
-                np.multiply(res.heldout_before.gaps[n].excess, wn)
-                for n, wn in zip(names, w, strict=True)
-            ]
-            a = [np.multiply(h.residual.gaps[n].excess, wn) for n, wn in zip(names, w, strict=True)]
-            x = np.arange(len(names))
-            fig, ax = subplots(figsize=(6.5, 3.5))
-            for off, vals, lab in ((-0.18, b, "baseline"), (0.18, a, f"with {effect}")):
-                mean = np.array([v[0] for v in vals])
-                err = np.array([[v[0] - v[1], v[2] - v[0]] for v in vals]).T
-                ax.bar(x + off, mean, 0.36, yerr=err, capsize=3, label=lab)
-            ax.axhline(0, color="k", lw=0.8)
-            ax.set_xticks(x, names)
-            ax.set_ylabel("out-of-sample excess score\n/ spread of the copies (95 % CI)")
-            ax.legend(frameon=False)
-            fig.tight_layout()
-            save_figure(fig, out / "gap_before_after.png", dpi=110)
-            made.append("gap_before_after.png")
-    return made
-
-
-def _score_text() -> str:
-    """How each observable is scored, from the registry."""
-    cat = [n for n in scored() if OBSERVABLES[n].categorical]
-    logs = [n for n in scored() if OBSERVABLES[n].transform is log_scale]
-    on_log = f"; {', '.join(logs)} on a log scale" if logs else ""
-    return (
-        f"Score: log-loss ({', '.join(cat)}) or fair CRPS (continuous{on_log}) of "
-        "each observation against the model's jittered copies. Noise floor: the same score of "
-        "the model's own copies (permutation test, Holm-corrected)."
-    )
-
-
-def _markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
-    v = s["verdict"]
-    lines = [
-        "# Discrepancy report",
-        "",
-        f"**Verdict: {v['kind']}.** {v['text']}",
-        "",
-        f"{s['n_fibers']} measured fibers ({s['n_heldout']} scored out of sample: each half "
-        "with the effect value fitted on the other half); "
-        f"{s['simulations']} simulations ({s['failed_runs']} failed, kept as failures) "
-        f"in {s['seconds']:.0f} s; family-wise alpha = {s['alpha']}.",
-        "",
-        f"Observables used: {', '.join(s['observables'])}. "
-        + (
-            f"Absent from the measured data, so not tested: {', '.join(s['observables_absent'])}."
-            if s["observables_absent"]
-            else "Every observable the workflow knows was measured."
-        ),
-        "",
-        "## Gap per observable (all fibers, baseline model)",
-        "",
-        _score_text(),
-        "",
-        "| observable | n | score | noise floor | z | p (Holm) | significant | excess [95 % CI] "
-        "| signed residual z |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    for name, g in s["gap"].items():
-        e = g["excess"]
-        lines.append(
-            f"| {name} | {g['n']} | {_fmt(g['statistic'], '.4g')} "
-            f"| {_fmt(g['noise_floor'], '.4g')} | {_fmt(g['z'], '.2f')} "
-            f"| {_fmt(g['p_holm'], '.3g')} | "
-            f"{'**yes**' if g['significant'] else 'no'} | {_fmt(e['mean'], '.3g')} "
-            f"[{_fmt(e['lo95'], '.3g')}, {_fmt(e['hi95'], '.3g')}] "
-            f"| {', '.join(_fmt(z, '.1f') for z in g['bias_z'])}"
-            f"{' (**systematic**)' if g['systematic'] else ''} |"
-        )
-    d = s["descriptive"]
-    lines += ["", "Descriptive measures (observed vs the model's copies):", ""]
-    if "confusion" in d:
-        labels = d["confusion"]["labels"]
-        lines += [
-            "| observed \\ model | " + " | ".join(labels) + " |",
-            "|---" * (len(labels) + 1) + "|",
-        ]
-        for lab, row in zip(labels, d["confusion"]["counts"], strict=True):
-            lines.append(f"| {lab} | " + " | ".join(str(c) for c in row) + " |")
-        lines.append("")
-    for k, val in d.items():
-        if k != "confusion":
-            lines.append(f"- {k}: {json.dumps(val)}")
-    lines += [
-        "",
-        "## Where the gap lives",
-        "",
-        f"Shallow regression tree on the per-fiber excess: largest mean excess in "
-        f"**{s['region']['where']}** ({s['region']['n']} fibers, "
-        f"{_fmt(100 * (s['region']['share'] or 0), '.0f')} % of the positive excess).",
-    ]
-    for obs, where in s["region_by_observable"].items():
-        lines.append(f"- {obs}: {where}")
-    if s["signatures"]:
-        lines += [
-            "",
-            "## Effects ranked by signature",
-            "",
-            "| effect | probe | cosine with the gap | signature strength |",
-            "|---|---|---|---|",
-        ]
-        for r in s["signatures"]:
-            lines.append(
-                f"| {r['effect']} | {r['probe']:g} | {r['cosine']:.2f} | {r['strength']:.1f} |"
-            )
-        lines += [
-            "",
-            "## Fits (per half) and out-of-sample decision",
-            "",
-            "| effect | fitted value | held-out improvement [95 % CI] | p (Holm) | explains |",
-            "|---|---|---|---|---|",
-        ]
-        for h in s["heldout"]:
-            im = h["improvement"]
-            lines.append(
-                f"| {h['effect']} | {h['value']:.4g} | {_fmt(im['mean'])} [{_fmt(im['lo95'])}, "
-                f"{_fmt(im['hi95'])}] | {_fmt(h['p_holm'])} | {'yes' if h['explains'] else 'no'} |"
-            )
-        for h in s["heldout"]:
-            if h["effect"] not in v["effects"]:
-                continue
-            lines += [
-                "",
-                f"### Held-out gap before / after {h['effect']}",
-                "",
-                "| observable | before [95 % CI] | after [95 % CI] | after/before |",
-                "|---|---|---|---|",
-            ]
-            for name, b in s["heldout_gap_before"].items():
-                a = h["gap_after"].get(name, {}).get("excess", {})
-                be = b["excess"]
-                lines.append(
-                    f"| {name} | {_fmt(be['mean'])} [{_fmt(be['lo95'])}, {_fmt(be['hi95'])}] | "
-                    f"{_fmt(a.get('mean'))} [{_fmt(a.get('lo95'))}, {_fmt(a.get('hi95'))}] | "
-                    f"{_fmt(h['gap_ratio_after_before'].get(name))} |"
-                )
-    if figures:
-        lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
-    if configs:
-        lines += ["", "## Updated model", ""] + [f"- `{c}`" for c in configs]
-    return "\n".join(lines) + "\n"
 
 
 def write_report(
@@ -393,24 +336,29 @@ def write_report(
         The input config as a plain mapping (``Config.model_dump(mode='json')``);
         the updated config(s) are this with ``fiber.effects`` set.
     """
+    from fibersweep.discrepancy.report_figures import figures
+    from fibersweep.discrepancy.report_text import markdown
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     s = summary(res)
     v = res.verdict
-    effect = next(iter(v.effects), None) if v.effects else None
-    if effect is None and res.heldout:
-        effect = max(res.heldout, key=lambda h: h.improvement[0]).name
-    figures = _figures(res, out, effect)
+    made = figures(res, out)
     configs = []
     if config_data is not None and v.kind in ("named", "ambiguous"):
-        for name, value in v.effects.items():
+        for alt in v.alternatives or ({k: val} for k, val in v.effects.items()):
             data = json.loads(json.dumps(config_data))
             fiber = data.setdefault("fiber", {})
-            fiber["effects"] = {**(fiber.get("effects") or {}), name: float(value)}
-            fname = "updated_config.yaml" if v.kind == "named" else f"updated_config.{name}.yaml"
+            fiber["effects"] = {
+                **(fiber.get("effects") or {}),
+                **{k: float(val) for k, val in alt.items()},
+            }
+            tag = "+".join(alt)
+            fname = "updated_config.yaml" if v.kind == "named" else f"updated_config.{tag}.yaml"
             atomic_write(out / fname, yaml.safe_dump(data, sort_keys=False))
             configs.append(fname)
     s["updated_configs"] = configs
+    s["figures"] = made
     atomic_write(out / "summary.json", json.dumps(s, indent=2))
-    atomic_write(out / "report.md", _markdown(s, figures, configs))
+    atomic_write(out / "report.md", markdown(s, made, configs))
     return s

@@ -113,7 +113,10 @@ class Simulator:
     budget : int or None
         Most runs allowed in total (None: unlimited).
     progress : bool
-        Show tqdm progress bars.
+        Show one tqdm progress bar over all batches (the stage in its label,
+        the ETA against ``planned``).
+    planned : int or None
+        Runs the caller plans in total (the bar's length; default ``budget``).
     executor : str
         Executor name from :data:`fibersweep.sweep.executors.EXECUTORS`
         ('local' or 'dask').
@@ -132,6 +135,7 @@ class Simulator:
         progress: bool = True,
         executor: str = "local",
         scheduler: str | None = None,
+        planned: int | None = None,
     ) -> None:
         from fibersweep.sweep.executors import make_executor
 
@@ -144,7 +148,10 @@ class Simulator:
         self.progress = progress
         self.used = 0
         self.failed = 0
+        self.failed_by_stage: dict[str, int] = {}
         self._batches = 0
+        self._planned = planned if planned is not None else budget
+        self._bar: Any = None
         # retries=0: a run that kills its worker is a failed run here, not re-run
         self._executor = (
             None
@@ -159,7 +166,10 @@ class Simulator:
         self.close()
 
     def close(self) -> None:
-        """Stop the workers."""
+        """Stop the workers (and close the progress bar)."""
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
         if self._executor is not None:
             self._executor.close()
 
@@ -186,7 +196,8 @@ class Simulator:
         seeds : ndarray, shape (n,), int
             Seed of each run.
         desc : str
-            Progress-bar label.
+            Progress-bar label; its first word is the stage failures are counted
+            under (``failed_by_stage``).
 
         Returns
         -------
@@ -224,35 +235,44 @@ class Simulator:
             )
             for k, c in enumerate(chunks)
         }
-        bar = tqdm(total=n, desc=desc, disable=not self.progress, leave=False)
-        try:
-            if self._executor is None:
-                _init(self.field, self.settings)
-                outcomes = ((t.key, _run_chunk(t), "") for t in tasks.values())
-            else:
-                outcomes = (
-                    (o.key, o.value, o.error)
-                    for o in self._executor.run(
-                        _run_chunk,
-                        list(tasks.values()),
-                        initializer=_init,
-                        initargs=(self.field, self.settings),
-                    )
+        if self._bar is None and self.progress:
+            self._bar = tqdm(total=self._planned, unit="run", dynamic_ncols=True)
+        bar = self._bar
+        if bar is not None:
+            if bar.total is not None and bar.n + n > bar.total:
+                bar.total = bar.n + n  # more than planned: grow (the ETA stays honest)
+            bar.set_description_str(desc[:40])
+        if self._executor is None:
+            _init(self.field, self.settings)
+            outcomes = ((t.key, _run_chunk(t), "") for t in tasks.values())
+        else:
+            outcomes = (
+                (o.key, o.value, o.error)
+                for o in self._executor.run(
+                    _run_chunk,
+                    list(tasks.values()),
+                    initializer=_init,
+                    initargs=(self.field, self.settings),
                 )
-            for key, chunk, error in outcomes:
-                if error:  # the worker died (or the task could not run): failed runs
-                    chunk = [(int(i), _failed(f"worker: {error}")) for i in tasks[key].idx]
-                for i, row in chunk:
-                    rows[i] = row
+            )
+        for key, chunk, error in outcomes:
+            if error:  # the worker died (or the task could not run): failed runs
+                chunk = [(int(i), _failed(f"worker: {error}")) for i in tasks[key].idx]
+            for i, row in chunk:
+                rows[i] = row
+            if bar is not None:
                 bar.update(len(chunk))
-        finally:
-            bar.close()
         self.used += n
         df = pd.DataFrame(rows)
         nf = int((df["status"] != "ok").sum())
         if nf:
             self.failed += nf
-            log.warning(
+            stage = desc.split(" ")[0]
+            self.failed_by_stage[stage] = self.failed_by_stage.get(stage, 0) + nf
+            # under a probed or fitted effect (e.g. strong Brownian motion hitting the
+            # time limit) a failure is an outcome of that effect, not of the analysis
+            log.log(
+                logging.INFO if effects else logging.WARNING,
                 "%s: %d of %d runs failed (%s)",
                 desc,
                 nf,

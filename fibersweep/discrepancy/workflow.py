@@ -6,8 +6,9 @@ It simulates (1) ``copies`` jittered baseline copies of every measured fiber,
 and ranks the library's effects on one half of the fibers, (5) fits the best
 few on each half and scores each half with the value fitted on the other
 (two-fold cross-fitting: every fiber is held out once), compares with the
-baseline and decides. The simulation count is planned up front and never
-exceeds ``budget``.
+baseline and decides; (6) when no single effect explains the gap, it tries adding
+each other candidate to the one that helped most (:mod:`.select`, forward selection). The
+simulation count is planned up front and never exceeds ``budget``.
 """
 
 from __future__ import annotations
@@ -21,8 +22,16 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.decide import HeldOut, Verdict, adequate, decide, evaluate_heldout
+from fibersweep.discrepancy.decide import (
+    HeldOut,
+    SetHeldOut,
+    Verdict,
+    adequate,
+    decide,
+    evaluate_heldout,
+)
 from fibersweep.discrepancy.fit import Fit, Signature, fit_effect, rank_effects
+from fibersweep.discrepancy.followup import followup
 from fibersweep.discrepancy.gap import (
     GapResult,
     assess_gap,
@@ -37,6 +46,7 @@ from fibersweep.discrepancy.library import Candidate, get_candidates
 from fibersweep.discrepancy.localise import FEATURES, Region, find_region
 from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.schema import MeasuredData
+from fibersweep.discrepancy.select import SelectionInput, crossfit_copies, forward_pairs
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
 from fibersweep.fiber.settings import FiberSettings
@@ -66,6 +76,15 @@ class DiscrepancySettings:
         Simulated evaluations per 1D fit.
     refits : int
         Significant candidates refitted on all fibers for the adequacy check.
+    pairs : int
+        Second effects tried with the best single one (forward selection; 0: none).
+    power_fibers : int
+        Fibers simulated by the power analysis when the verdict is "no significant
+        gap" or "unexplained" (:mod:`.power`; 0: none).
+    next_copies : int
+        Copies per hypothesis and start of what-to-measure-next
+        (:mod:`.nextmeasure`; 0: none), run when the verdict is ambiguous or a
+        fit is weakly identified.
     alpha : float
         Family-wise error rate of every test.
     budget : int or None
@@ -88,6 +107,9 @@ class DiscrepancySettings:
     candidates: int = 3
     fit_evals: int = 5
     refits: int = 2
+    pairs: int = 2
+    power_fibers: int = 40
+    next_copies: int = 2
     alpha: float = 0.05
     budget: int | None = None
     seed: int = 0
@@ -105,6 +127,9 @@ class DiscrepancySettings:
             "candidates": self.candidates >= 1,
             "fit_evals": self.fit_evals >= 1,
             "refits": self.refits >= 1,
+            "pairs": self.pairs >= 0,
+            "power_fibers": self.power_fibers == 0 or self.power_fibers >= 8,
+            "next_copies": self.next_copies in (0,) or self.next_copies >= 2,
             "alpha": 0.0 < self.alpha < 0.5,
             "workers": self.workers >= 1,
         }
@@ -125,6 +150,7 @@ class Plan:
     fit_evals: int
     probes: int
     refits: int = 2
+    pairs: int = 0
 
     def cost(self, n: int) -> dict[str, int]:
         """Most runs per step for n fibers (two folds of n/2 for the fits)."""
@@ -136,6 +162,10 @@ class Plan:
             "fits": 2 * self.candidates * (self.fit_evals + 1) * self.fit_copies * half,
             "heldout": self.candidates * self.copies * n,
             "refits": self.refits * (self.fit_evals * self.fit_copies + self.copies) * n,
+            # per pair: joint fits on both folds (+1: side check; + the fixed-first
+            # baseline), cross-fitted copies, the final adequacy copies
+            "pairs": self.pairs
+            * (2 * (self.fit_evals + 2) * self.fit_copies * half + 2 * self.copies * n),
         }
 
     def total(self, n: int) -> int:
@@ -151,13 +181,17 @@ def plan_budget(n: int, s: DiscrepancySettings, candidates: list[Candidate]) -> 
         If even the smallest plan (2 copies, one candidate, one evaluation) does not fit.
     """
     probes = sum(len(c.probes) for c in candidates)
+    n_cand = min(s.candidates, len(candidates))
     plan = Plan(
-        s.copies, s.fit_copies, min(s.candidates, len(candidates)), s.fit_evals, probes, s.refits
-    )
+        s.copies, s.fit_copies, n_cand, s.fit_evals, probes, s.refits,
+        min(s.pairs, max(n_cand - 1, 0)),
+    )  # fmt: skip
     if s.budget is None:
         return plan
     shrink = [
+        ("pairs", 1),
         ("refits", 1),
+        ("pairs", 0),
         ("fit_evals", 3),
         ("copies", 6),
         ("candidates", 2),
@@ -193,10 +227,12 @@ class DiscrepancyResult:
     signatures: list[Signature]
     fits: list[Fit]
     heldout: list[HeldOut]
+    sets: list[SetHeldOut]
     heldout_before: GapResult | None
     plan: Plan
     simulations: int
     failed_runs: int
+    failed_by_stage: dict[str, int]
     seconds: float
     observed: pd.DataFrame
     baseline_copies: list[pd.DataFrame]
@@ -264,7 +300,7 @@ def run_discrepancy(
 
     with Simulator(
         field_, fiber, workers=s.workers, budget=s.budget, progress=progress,
-        executor=s.executor, scheduler=s.scheduler,
+        executor=s.executor, scheduler=s.scheduler, planned=plan.total(n),
     ) as sim:  # fmt: skip
         maker = CopyMaker(measured.starts, s.noise, s.seed, sim)
         # (1) noise floor: jittered baseline copies
@@ -289,6 +325,7 @@ def run_discrepancy(
         signatures: list[Signature] = []
         fits: list[Fit] = []
         heldout: list[HeldOut] = []
+        sets: list[SetHeldOut] = []
         before_ho: GapResult | None = None
         effect_copies: dict[str, list[pd.DataFrame]] = {}
         if gap.any:
@@ -333,17 +370,9 @@ def run_discrepancy(
             for name, vals in fold_values.items():
                 if all(v == 0.0 for v in vals):
                     continue  # both folds kept the baseline: nothing to add
-                parts = [[None] * len(folds) for _ in range(plan.copies)]
-                for f_idx, held in enumerate(folds):
-                    for k in range(plan.copies):
-                        parts[k][f_idx] = maker.copy(
-                            k, {name: vals[f_idx]}, held, desc=f"held-out {name}"
-                        )
-                cps = []
-                for k in range(plan.copies):
-                    df = pd.concat(parts[k], ignore_index=True)
-                    order = np.argsort(np.concatenate(folds))
-                    cps.append(df.iloc[order].reset_index(drop=True))
+                cps = crossfit_copies(
+                    maker, folds, [{name: v} for v in vals], plan.copies, f"held-out {name}"
+                )
                 effect_copies[name] = cps
                 v_after = value_matrices(observed, cps, obs_names)
                 eff_scores[name] = weighted_loss(v_after, w_gap)
@@ -396,8 +425,38 @@ def run_discrepancy(
                 else replace(h, explains=False)
                 for h in heldout
             ]
-        verdict = decide(gap, heldout, region_text, rng, s.alpha)
-        used, failed = sim.used, sim.failed
+            # (7) forward selection: the best single effect helps but leaves a gap
+            # (the first effect need not be significant alone: with a second effect's
+            # gap left in, its own improvement can be too noisy; each member of a set
+            # must then show a significant contribution of its own)
+            helped = [h for h in heldout if h.improvement[0] > 0]
+            best = max(helped, key=lambda h: h.improvement[0]) if helped else None
+            if best is not None and not best.explains and plan.pairs > 0:
+                others = [
+                    next(c for c in candidates if c.name == sg.name)
+                    for sg in chosen
+                    if sg.name != best.name
+                ][: plan.pairs]
+                inp = SelectionInput(
+                    observed=observed,
+                    folds=folds,
+                    fold_values=extra_values,
+                    base_scores=base_scores,
+                    single_scores=eff_scores,
+                    weights=w_gap,
+                    observables=obs_names,
+                    copies=plan.copies,
+                    fit_copies=plan.fit_copies,
+                    fit_evals=plan.fit_evals,
+                    alpha=s.alpha,
+                    n_perm=s.n_perm,
+                )
+                sets, set_copies = forward_pairs(best.name, others, inp, maker, rng, fits.append)
+                effect_copies.update(set_copies)
+        verdict = decide(gap, heldout, region_text, rng, s.alpha, sets)
+        extra = followup(verdict, heldout, extra_values, candidates, maker, sim, plan, s,
+                            obs_names, rng)  # fmt: skip
+        used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
 
     return DiscrepancyResult(
         verdict=verdict,
@@ -408,10 +467,12 @@ def run_discrepancy(
         signatures=signatures,
         fits=fits,
         heldout=heldout,
+        sets=sets,
         heldout_before=before_ho,
         plan=plan,
         simulations=used,
         failed_runs=failed,
+        failed_by_stage=by_stage,
         seconds=time.perf_counter() - t0,
         observed=observed,
         baseline_copies=base,
@@ -420,5 +481,5 @@ def run_discrepancy(
         weights=weights,
         settings=s,
         observables=obs_names,
-        extra={"fold_values": extra_values},
+        extra={"fold_values": extra_values, **extra},
     )

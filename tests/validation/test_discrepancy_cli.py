@@ -38,12 +38,14 @@ def test_synth_then_discrepancy_writes_the_report(tmp_path, config):
     assert table["y0"].between(0.1, 0.7).all()  # the sweep box plus noise
     out = tmp_path / "report"
     r = runner.invoke(
-        app, ["discrepancy", str(measured), str(config), "-o", str(out), "--copies", "2"]
-    )
+        app,
+        ["discrepancy", str(measured), str(config), "-o", str(out), "--copies", "2",
+         "--no-power"],
+    )  # fmt: skip
     assert r.exit_code == 0, r.output
     s = json.loads((out / "summary.json").read_text())
     assert s["verdict"]["kind"] == "no significant gap"
-    assert s["simulations"] == 2 * len(table)
+    assert s["simulations"] == 2 * len(table) and s["power"] is None
     md = (out / "report.md").read_text()
     assert md.startswith("# Discrepancy report")
     # synth writes every observable, so the report says none was left untested
@@ -94,10 +96,46 @@ def test_misspelled_column_exits_2_unless_ignored(tmp_path, config):
     r = runner.invoke(
         app,
         ["discrepancy", str(bad), str(config), "-o", str(out), "--copies", "2",
-         "--ignore-extra-columns"],
+         "--ignore-extra-columns", "--no-power", "--no-next", "--pairs", "0"],
     )  # fmt: skip
     assert r.exit_code == 0, r.output
     s = json.loads((out / "summary.json").read_text())
     assert s["observables"] == ["class"]
     assert "delta" in s["observables_absent"] and "theta_c" in s["observables_absent"]
     assert "Absent from the measured data, so not tested: " in (out / "report.md").read_text()
+
+
+def test_effect_options_one_convention(tmp_path, config):
+    runner = CliRunner()
+    measured = tmp_path / "m.parquet"
+    r = runner.invoke(app, ["synth", str(config), "--n", "10", "--seed", "4", "-o", str(measured)])
+    assert r.exit_code == 0, r.output
+    # discrepancy fits the values: a value given to --effect is a named input error
+    r = runner.invoke(app, ["discrepancy", str(measured), str(config), "--effect", "friction=0.3"])
+    assert r.exit_code == 2 and "give the name only" in r.output
+    # the old comma list still works, with a deprecation message
+    out = tmp_path / "r"
+    r = runner.invoke(
+        app,
+        ["discrepancy", str(measured), str(config), "-o", str(out), "--copies", "2",
+         "--no-power", "--no-next", "--pairs", "0", "--effects", "friction,inlet_speed"],
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    assert "deprecated" in r.output and "--effect a --effect b" in r.output
+
+
+def test_power_command_writes_limits(tmp_path, config):
+    runner = CliRunner()
+    out = tmp_path / "pw"
+    r = runner.invoke(
+        app,
+        ["power", str(config), "--n", "100", "--simulate", "8", "--effect", "inlet_speed",
+         "-o", str(out)],
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    p = json.loads((out / "power.json").read_text())
+    assert p["n"] == 100 and p["n_simulated"] == 8
+    assert {e["effect"] for e in p["effects"]} == {"inlet_speed"} and len(p["effects"]) == 2
+    # 3 copies of the baseline and of each of 2 probes at 2 magnitudes, 8 fibers each
+    assert p["simulations"] == 3 * 8 * (1 + 2 * 2)
+    assert "detection limits at N = 100" in r.output

@@ -1,0 +1,308 @@
+"""What the workflow cannot see: detection limits by simulation, and look-alike effects.
+
+For a set of starts (the measured ones, or drawn from a config's sweep box) and
+the measurement model, every library effect is switched on at its probe value
+``m_p`` and at ``m_p / 2``. Copy k of the fibers with the effect on plays the
+measurement; the baseline copies j != k (common random numbers) are the model.
+The gap tests of :func:`gap.assess_gap` give a z-score per test of the family
+(score per observable, signed residual per component); averaged over the
+copies k, this is the expected z-vector at that magnitude and number of fibers.
+
+Scaling (the approximation this rests on, checked by the study): the z of a
+test grows as ``sqrt(N)`` with the number of fibers, and as ``m ** gamma`` with
+the magnitude, gamma read off the two probes (1 for a shift, 2 for a spread
+whose variance grows as m², clipped to [0.5, 3]). The family detects when
+any test passes its Bonferroni threshold (Holm is at least as powerful):
+``P(detect) = 1 - prod_j (1 - Phi(|z_j| - z_crit))``. The smallest magnitude
+with ``P(detect) >= power`` is the detection limit; the fibers needed for a
+magnitude m follow from the same formula. Detection is the first gate only:
+naming needs the held-out improvement too (half of the fibers fit, the other
+half test), so the limit to *name* an effect is higher; the study measures by
+how much.
+
+Look-alikes: the per-fiber effect of a magnitude (copy with the effect minus
+the same copy without, averaged over copies, each observable component
+divided by its spread among the baseline copies) is a vector over fibers and
+observables. Two effects whose vectors are nearly parallel (|cosine| >= 0.9)
+move every fiber alike, up to a factor: these observables cannot separate them.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from scipy.stats import norm
+
+from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.gap import assess_gap, feature_vector, value_matrices
+from fibersweep.discrepancy.library import Candidate
+from fibersweep.discrepancy.observables import OBSERVABLES
+from fibersweep.discrepancy.scores import transform
+
+__all__ = [
+    "EffectPower",
+    "PowerResult",
+    "analyse_power",
+    "standardised_values",
+    "detect_probability",
+]
+
+log = logging.getLogger(__name__)
+
+#: Parallel per-fiber effects beyond this |cosine| make two effects look-alikes.
+LOOKALIKE_COSINE = 0.9
+
+
+@dataclass(frozen=True)
+class EffectPower:
+    """Detection limit of one effect in one direction.
+
+    Attributes
+    ----------
+    name : str
+    probe : float
+        Probe magnitude m_p (signed).
+    z : tuple of float
+        Expected z-vector (family of gap tests) at m_p with ``n_sim`` fibers.
+    gamma : float
+        Growth exponent of z with the magnitude.
+    limit : float or None
+        Smallest magnitude (same sign as the probe) detected with the target
+        power at ``n`` fibers; None when not within the effect's range.
+    """
+
+    name: str
+    probe: float
+    z: tuple[float, ...]
+    gamma: float
+    limit: float | None
+
+    def detect(self, m: float, n_fibers: int, n_sim: int, z_crit: float) -> float:
+        """Detection probability at magnitude m (same sign as the probe) and N fibers."""
+        if m == 0.0 or np.sign(m) != np.sign(self.probe):
+            return 0.0
+        scale = math.sqrt(n_fibers / n_sim) * (abs(m) / abs(self.probe)) ** self.gamma
+        return detect_probability(np.asarray(self.z) * scale, z_crit)
+
+    def fibers_needed(
+        self, m: float, n_sim: int, z_crit: float, power: float, most: int = 100_000
+    ) -> int | None:
+        """Fewest fibers detecting magnitude m with the target power (None: > most)."""
+        if self.detect(m, most, n_sim, z_crit) < power:
+            return None
+        lo, hi = 1, most
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if self.detect(m, mid, n_sim, z_crit) >= power:
+                hi = mid
+            else:
+                lo = mid + 1
+        return lo
+
+
+@dataclass(frozen=True)
+class PowerResult:
+    """Power analysis of the library at N fibers.
+
+    Attributes
+    ----------
+    n : int
+        Fibers the limits are for.
+    n_sim : int
+        Fibers simulated (limits are scaled from them).
+    alpha, power : float
+        Family-wise level and target detection probability.
+    z_crit : float
+        Bonferroni threshold of one test of the family.
+    effects : list of EffectPower
+    lookalikes : list of (str, str, float)
+        Effect pairs (name@probe) and the |cosine| of their per-fiber effects, >= 0.9.
+    cosines : dict (str, str) -> float
+        |cosine| of every pair (for the report).
+    simulations : int
+    """
+
+    n: int
+    n_sim: int
+    alpha: float
+    power: float
+    z_crit: float
+    effects: list[EffectPower]
+    lookalikes: list[tuple[str, str, float]]
+    cosines: dict[tuple[str, str], float]
+    simulations: int
+
+    def get(self, name: str, sign: float = 1.0) -> EffectPower | None:
+        """The entry of ``name`` in the direction of ``sign`` (None if absent)."""
+        for e in self.effects:
+            if e.name == name and (np.sign(e.probe) == np.sign(sign) or sign == 0):
+                return e
+        return None
+
+    def fibers_needed(self, name: str, m: float) -> int | None:
+        """Fibers that detect ``name`` at magnitude m with the target power."""
+        e = self.get(name, m)
+        return None if e is None else e.fibers_needed(m, self.n_sim, self.z_crit, self.power)
+
+
+def detect_probability(z: np.ndarray, z_crit: float) -> float:
+    """P(at least one test of the family rejects) for expected z-scores ``z``.
+
+    Each test rejects with probability Phi(|z| - z_crit) (normal approximation,
+    the far tail ignored); tests treated as independent.
+    """
+    z = np.abs(np.asarray(z, dtype=np.float64))
+    z = z[np.isfinite(z)]
+    miss = np.prod(1.0 - norm.cdf(z - z_crit)) if len(z) else 1.0
+    return float(1.0 - miss)
+
+
+def standardised_values(
+    copies: Sequence[pd.DataFrame], observables: Sequence[str]
+) -> list[np.ndarray]:
+    """Each copy as an (n, c) matrix of observable components on their scoring scale.
+
+    Continuous observables: ``transform`` (e.g. log t_pass); categorical: one-hot
+    per category. NaN where undefined. Columns in registry order.
+    """
+    out = []
+    for df in copies:
+        cols = []
+        for name in (o for o in OBSERVABLES if o in observables and OBSERVABLES[o].scored):
+            o = OBSERVABLES[name]
+            v = o.values(df[name])
+            if o.categorical:
+                for c in range(o.width):
+                    cols.append(np.where(np.isfinite(v), (v == c).astype(float), np.nan))
+            else:
+                cols.append(transform(name, v))
+        out.append(np.column_stack(cols))
+    return out
+
+
+def _cosine(a: np.ndarray, b: np.ndarray) -> float:
+    ok = np.isfinite(a) & np.isfinite(b)
+    na, nb = np.linalg.norm(a[ok]), np.linalg.norm(b[ok])
+    return float(abs(a[ok] @ b[ok]) / (na * nb)) if na > 0 and nb > 0 else 0.0
+
+
+def _z_vector(
+    maker: CopyMaker,
+    base: list[pd.DataFrame],
+    effect: dict[str, float],
+    rows: np.ndarray,
+    observables: Sequence[str],
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, list[pd.DataFrame]]:
+    """Mean feature vector of copy k with the effect vs the baseline copies j != k."""
+    K = len(base)
+    eff = [maker.copy(k, effect, rows, desc=f"power {next(iter(effect))}") for k in range(K)]
+    zs = []
+    for k in range(K):
+        others = [base[j] for j in range(K) if j != k]
+        vals = value_matrices(eff[k], others, observables)
+        zs.append(feature_vector(assess_gap(vals, rng, n_perm=499, n_boot=50)))
+    return np.mean(zs, axis=0), eff
+
+
+def analyse_power(
+    maker: CopyMaker,
+    candidates: Sequence[Candidate],
+    n: int,
+    observables: Sequence[str],
+    rng: np.random.Generator,
+    n_sim: int | None = None,
+    copies: int = 3,
+    workflow_copies: int = 8,
+    alpha: float = 0.05,
+    power: float = 0.8,
+) -> PowerResult:
+    """Detection limits and look-alikes of ``candidates`` (see the module docstring).
+
+    Parameters
+    ----------
+    maker : CopyMaker
+        Over the starts the analysis is for (its first ``n_sim`` fibers are simulated).
+    n : int
+        Fibers the limits are stated for.
+    n_sim : int, optional
+        Fibers simulated (default all of the maker's, at most 60).
+    copies : int
+        Copies per magnitude (>= 3: each plays the measurement against the others).
+    workflow_copies : int
+        Copies the workflow scores against: the z of a test with ``copies - 1``
+        ensemble members is scaled by sqrt((1 + 1/(copies-1)) / (1 + 1/workflow_copies)).
+    alpha, power : float
+    """
+    if copies < 3:
+        raise ValueError(f"copies must be >= 3, got {copies}")
+    n_sim = min(maker.n, n_sim or 60)
+    rows = np.arange(n_sim)
+    used0 = maker.sim.used
+    base = [maker.copy(k, None, rows, desc="power baseline") for k in range(copies)]
+    ens = math.sqrt((1 + 1 / (copies - 1)) / (1 + 1 / workflow_copies))
+    m_tests = len(feature_vector(assess_gap(value_matrices(base[0], base[1:], observables), rng,
+                                            n_perm=99, n_boot=10)))  # fmt: skip
+    z_crit = float(norm.ppf(1 - alpha / (2 * m_tests)))
+    base_std = standardised_values(base, observables)
+    spread = np.nanstd(np.stack(base_std), axis=(0, 1))
+    spread = np.where(spread > 0, spread, np.nan)
+    effects: list[EffectPower] = []
+    shifts: dict[str, np.ndarray] = {}
+    for cand in candidates:
+        for mp in cand.probes:
+            z_full, eff = _z_vector(maker, base, {cand.name: mp}, rows, observables, rng)
+            z_half, _ = _z_vector(maker, base, {cand.name: mp / 2}, rows, observables, rng)
+            z_full, z_half = z_full * ens, z_half * ens
+            j = int(np.argmax(np.abs(z_full)))
+            a, b = abs(z_full[j]), abs(z_half[j])
+            gamma = float(np.clip(math.log2(a / b), 0.5, 3.0)) if a > 3 and b > 0.5 else 1.0
+            e = EffectPower(cand.name, float(mp), tuple(float(x) for x in z_full), gamma, None)
+            lim = _limit(e, cand, n, n_sim, z_crit, power)
+            effects.append(EffectPower(e.name, e.probe, e.z, e.gamma, lim))
+            diff = np.stack(standardised_values(eff, observables)) - np.stack(base_std)
+            cnt = np.isfinite(diff).sum(axis=0)
+            d = np.where(cnt > 0, np.nansum(diff, axis=0) / np.maximum(cnt, 1), np.nan)
+            shifts[f"{cand.name}@{mp:g}"] = (d / spread).ravel()
+    keys = list(shifts)
+    cos = {}
+    for i, a in enumerate(keys):
+        for b in keys[i + 1 :]:
+            if a.split("@")[0] != b.split("@")[0]:
+                cos[(a, b)] = _cosine(shifts[a], shifts[b])
+    look = sorted(
+        ((a, b, c) for (a, b), c in cos.items() if c >= LOOKALIKE_COSINE), key=lambda t: -t[2]
+    )
+    return PowerResult(
+        n=n,
+        n_sim=n_sim,
+        alpha=alpha,
+        power=power,
+        z_crit=z_crit,
+        effects=effects,
+        lookalikes=look,
+        cosines=cos,
+        simulations=maker.sim.used - used0,
+    )
+
+
+def _limit(
+    e: EffectPower, cand: Candidate, n: int, n_sim: int, z_crit: float, power: float
+) -> float | None:
+    """Smallest |m| in the probe's direction within the range with P(detect) >= power."""
+    edge = cand.hi if e.probe > 0 else cand.lo
+    if e.detect(edge, n, n_sim, z_crit) < power:
+        return None
+    lo, hi = 0.0, abs(edge)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        if e.detect(math.copysign(mid, e.probe), n, n_sim, z_crit) >= power:
+            hi = mid
+        else:
+            lo = mid
+    return math.copysign(hi, e.probe)

@@ -1,0 +1,217 @@
+"""Figures of the discrepancy report, in the shared style (:mod:`fibersweep.plots.style`).
+
+- ``phase_before_after.png``: (θ0, y0) classes of every fiber: measured, the
+  baseline model, and the model with what was fitted (the named effect or set,
+  else the best candidate, labelled as not named; no third panel when nothing
+  was fitted);
+- ``residual_map.png``: binned per-fiber gap over the start axes that vary in
+  the data, one colour range for all panels, in copy-spread units;
+- ``gap_before_after.png``: out-of-sample gap per observable, baseline and with
+  what was fitted, in copy-spread units;
+- ``next_measure.png``: how well one fiber at each start separates the two
+  hypotheses of what-to-measure-next, with the best starts marked.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from fibersweep.discrepancy.gap import GapResult, combined_excess
+from fibersweep.discrepancy.localise import binned_map
+from fibersweep.discrepancy.nextmeasure import Discrimination
+from fibersweep.discrepancy.observables import OBSERVABLES
+from fibersweep.discrepancy.workflow import DiscrepancyResult
+from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, paper_style, save_figure, subplots
+
+__all__ = ["figures", "fitted_label", "next_figure"]
+
+UNIT = "copy-spread units"
+AXES = {"theta0": "θ0 [deg]", "y0": "y0 / h_obs", "length": "L / l_obs"}
+
+
+def fitted_label(res: DiscrepancyResult) -> tuple[str | None, str, GapResult | None]:
+    """(copies key, label, cross-fitted residual gap) of what the figures show as fitted.
+
+    The named effect or set; for an ambiguous verdict its first alternative; else
+    the best held-out candidate (labelled "not named"); (None, 'no effect fitted',
+    None) when nothing was fitted.
+    """
+    v = res.verdict
+    if v.kind in ("named", "ambiguous") and v.alternatives:
+        alt = v.alternatives[0]
+        key = " + ".join(alt)
+        text = " + ".join(f"{k} = {x:.3g}" for k, x in alt.items())
+        gap = None
+        if len(alt) == 1:
+            gap = next((h.residual for h in res.heldout if h.name == key), None)
+        else:
+            gap = next((s.residual for s in res.sets if s.name == key), None)
+        tag = "named" if v.kind == "named" else "one of the alternatives"
+        return key, f"{text} ({tag})", gap
+    if res.heldout:
+        h = max(res.heldout, key=lambda h: h.improvement[0])
+        return h.name, f"{h.name} = {h.value:.3g} (best candidate, not named)", h.residual
+    return None, "no effect fitted", None
+
+
+def _class_groups(codes: np.ndarray) -> list[tuple[str, dict[str, object], np.ndarray]]:
+    out = []
+    for k, name in enumerate(OBSERVABLES["class"].categories):
+        mask = codes == k
+        if mask.any():
+            out.append((name, CLASS_STYLE[name], mask))
+    bad = ~np.isfinite(codes)
+    if bad.any():
+        out.append(("failed", FAILED_STYLE, bad))
+    return out
+
+
+def _phase(res: DiscrepancyResult, out: Path) -> str:
+    from matplotlib.lines import Line2D
+
+    obs = res.observed
+    codes = OBSERVABLES["class"].values
+    key, label, _ = fitted_label(res)
+    panels = [
+        ("measured", codes(obs["class"])),
+        ("baseline model (copy 1)", codes(res.baseline_copies[0]["class"])),
+    ]
+    if key is not None and key in res.effect_copies:
+        panels.append((f"with {label}", codes(res.effect_copies[key][0]["class"])))
+    fig, axes = subplots(1, len(panels), figsize=(3.3 * len(panels), 3.3), sharey=True)
+    size = (8 + 20 * (obs["length"] - 0.4)).to_numpy()
+    seen: dict[str, dict[str, object]] = {}
+    for ax, (title, c) in zip(np.atleast_1d(axes), panels, strict=True):
+        c = np.asarray(c, dtype=np.float64)
+        for name, style, mask in _class_groups(c):
+            ax.scatter(
+                obs["theta0"][mask], obs["y0"][mask], s=size[mask], marker=style["marker"],
+                color=style["color"], edgecolors="0.2" if name != "failed" else None,
+                linewidths=0.3,
+            )  # fmt: skip
+            seen[name] = style
+        ax.set_title(title, fontsize=8)
+        ax.set_xlabel(AXES["theta0"])
+    np.atleast_1d(axes)[0].set_ylabel(AXES["y0"])
+    handles = [
+        Line2D([], [], ls="", markersize=5, label=k, **st)  # type: ignore[arg-type]
+        for k, st in seen.items()
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), frameon=False)
+    if key is None:
+        fig.suptitle("No effect was fitted (no significant gap)")
+    save_figure(fig, out / "phase_before_after.png", dpi=110)
+    return "phase_before_after.png"
+
+
+def _residual_map(res: DiscrepancyResult, out: Path) -> str | None:
+    import matplotlib
+
+    obs = res.observed
+    exc = combined_excess(res.gap, res.weights)
+    y0 = obs["y0"].to_numpy(dtype=np.float64)
+    xs = [c for c in ("theta0", "length") if float(np.ptp(obs[c])) > 1e-9]
+    if float(np.ptp(y0)) <= 1e-9 or not xs:
+        return None  # nothing varies: a map would only split axes the data do not vary
+    maps = []
+    for c in xs:
+        x = obs[c].to_numpy(dtype=np.float64)
+        xe = np.linspace(np.nanmin(x), np.nanmax(x) + 1e-9, 6)
+        ye = np.linspace(np.nanmin(y0), np.nanmax(y0) + 1e-9, 8)
+        m, _ = binned_map(x, y0, exc, xe, ye)
+        maps.append((c, xe, ye, m))
+    finite = [np.abs(m[np.isfinite(m)]) for *_, m in maps]
+    lim = max((float(f.max()) for f in finite if len(f)), default=1.0) or 1.0
+    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
+    fig, axes = subplots(1, len(maps), figsize=(3.6 * len(maps) + 0.8, 3.2), layout="constrained")
+    im = None
+    for ax, (c, xe, ye, m) in zip(np.atleast_1d(axes), maps, strict=True):
+        im = ax.pcolormesh(xe, ye, np.ma.masked_invalid(m.T), cmap=cmap, vmin=-lim, vmax=lim)
+        ax.set_xlabel(AXES[c])
+        ax.set_ylabel(AXES["y0"])
+    fig.colorbar(im, ax=np.atleast_1d(axes).tolist(), label=f"mean gap per fiber [{UNIT}]")
+    fig.suptitle("Where the measurement sits worse than the model's copies (grey: no fibers)")
+    save_figure(fig, out / "residual_map.png", dpi=110)
+    return "residual_map.png"
+
+
+def _gap_bars(res: DiscrepancyResult, out: Path) -> str | None:
+    key, label, after = fitted_label(res)
+    if res.heldout_before is None or after is None:
+        return None
+    names = list(res.heldout_before.gaps)
+    w = [res.weights.get(n, 0.0) for n in names]
+    before = [
+        np.multiply(res.heldout_before.gaps[n].excess, x) for n, x in zip(names, w, strict=True)
+    ]
+    aft = [np.multiply(after.gaps[n].excess, x) for n, x in zip(names, w, strict=True)]
+    x = np.arange(len(names))
+    fig, ax = subplots(figsize=(6.0, 3.2), layout="constrained")
+    for off, vals, lab in ((-0.18, before, "baseline"), (0.18, aft, f"with {label}")):
+        mean = np.array([v[0] for v in vals])
+        err = np.abs(np.array([[v[0] - v[1], v[2] - v[0]] for v in vals]).T)
+        ax.bar(x + off, mean, 0.36, yerr=err, capsize=3, label=lab)
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_xticks(x, names)
+    ax.set_ylabel(f"out-of-sample gap\n[{UNIT}, 95 % CI]")
+    ax.legend(frameon=False, fontsize=7)
+    save_figure(fig, out / "gap_before_after.png", dpi=110)
+    return "gap_before_after.png"
+
+
+def _next(res: DiscrepancyResult, out: Path) -> str | None:
+    nx = res.extra.get("next")
+    if nx is None:
+        return None
+    next_figure(nx, res.observed[["theta0", "y0"]].to_numpy(), out / "next_measure.png")
+    return "next_measure.png"
+
+
+def next_figure(nx: Discrimination, measured: np.ndarray, path: Path) -> Path:
+    """Map of the separation per fiber over (θ0, y0), best over L, best starts circled.
+
+    Parameters
+    ----------
+    nx : Discrimination
+    measured : ndarray, shape (n, 2)
+        Measured θ0 [deg], y0 [/h_obs] (small dots).
+    path : Path
+        PNG written.
+    """
+    g, d = nx.grid, nx.d
+    th, ys = np.unique(g[:, 0]), np.unique(g[:, 1])
+    D = np.full((len(th), len(ys)), np.nan)
+    for (t, y, _), v in zip(g, d, strict=True):  # best over L at each (θ0, y0)
+        i, j = np.searchsorted(th, t), np.searchsorted(ys, y)
+        D[i, j] = v if not np.isfinite(D[i, j]) else max(D[i, j], v)
+    fig, ax = subplots(figsize=(4.8, 3.6), layout="constrained")
+
+    def edges(v: np.ndarray) -> np.ndarray:
+        if len(v) == 1:
+            return np.array([v[0] - 0.5, v[0] + 0.5])
+        mid = 0.5 * (v[1:] + v[:-1])
+        return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
+
+    im = ax.pcolormesh(edges(th), edges(ys), D.T, cmap="viridis", vmin=0)
+    ax.scatter(measured[:, 0], measured[:, 1], s=4, color="w", alpha=0.7, label="measured starts")
+    bt = np.array([[b.theta0, b.y0] for b in nx.best])
+    ax.scatter(bt[:, 0], bt[:, 1], s=40, facecolors="none", edgecolors="r", label="best starts")
+    ax.set_xlabel(AXES["theta0"])
+    ax.set_ylabel(AXES["y0"])
+    ax.set_title(f"{nx.labels[0]}  vs  {nx.labels[1]}", fontsize=8)
+    ax.legend(frameon=False, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=2)
+    fig.colorbar(im, ax=ax, label="separation per fiber (best over L) [noise sd]")
+    return save_figure(fig, path, dpi=110)
+
+
+def figures(res: DiscrepancyResult, out: Path) -> list[str]:
+    """Write every figure that applies into ``out``; their file names."""
+    made = []
+    with paper_style():
+        for make in (_phase, _residual_map, _gap_bars, _next):
+            name = make(res, out)
+            if name:
+                made.append(name)
+    return made

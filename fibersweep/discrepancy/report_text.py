@@ -1,0 +1,301 @@
+"""The Markdown of the discrepancy report, from the JSON summary (:func:`report.summary`).
+
+Numbers are rounded to what they can tell (3 significant digits for values, 2
+for p-values and gaps); the gap is in one unit everywhere (copy-spread units).
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from fibersweep.discrepancy.observables import OBSERVABLES, log_scale, scored
+
+__all__ = ["markdown"]
+
+
+def _f(x: Any, spec: str = ".3g") -> str:
+    return "–" if x is None else format(x, spec)
+
+
+def _ci(d: dict[str, Any] | None, spec: str = ".2g") -> str:
+    if not d:
+        return "–"
+    return f"{_f(d.get('mean'), spec)} [{_f(d.get('lo95'), spec)}, {_f(d.get('hi95'), spec)}]"
+
+
+def _score_text() -> str:
+    cat = [n for n in scored() if OBSERVABLES[n].categorical]
+    logs = [n for n in scored() if OBSERVABLES[n].transform is log_scale]
+    on_log = f"; {', '.join(logs)} on a log scale" if logs else ""
+    return (
+        f"Score: log-loss ({', '.join(cat)}) or fair CRPS (continuous{on_log}) of each "
+        "observation against the model's jittered copies. Two tests per observable, one Holm "
+        "family: the score (does the measurement sit worse than a copy?) and the signed "
+        "residual (is it shifted?). Gap: the excess score over the copies' own, divided by the "
+        "spread of the copies' scores (copy-spread units; 0 = as good as the model's copies)."
+    )
+
+
+def _header(s: dict[str, Any]) -> list[str]:
+    v = s["verdict"]
+    fails = s["failed_runs"]
+    under = {k: n for k, n in s["failed_runs_by_stage"].items() if k != "baseline" and n}
+    under_txt = (
+        "; runs under a probed or fitted effect that failed (e.g. the time limit with strong "
+        "Brownian motion) count as that effect's outcomes, not as failures of the analysis: "
+        + ", ".join(f"{k} {n}" for k, n in under.items())
+        if under
+        else ""
+    )
+    return [
+        "# Discrepancy report",
+        "",
+        f"**Verdict: {v['kind']}.** {v['text']}",
+        "",
+        f"{s['n_fibers']} measured fibers, every one scored out of sample (each half with the "
+        f"value fitted on the other half); {s['simulations']} simulations, {fails} failed runs "
+        f"of the baseline model (kept as failures){under_txt}; {s['seconds']:.0f} s; "
+        f"family-wise alpha = {s['alpha']}.",
+        "",
+        f"Observables used: {', '.join(s['observables'])}. "
+        + (
+            f"Absent from the measured data, so not tested: {', '.join(s['observables_absent'])}."
+            if s["observables_absent"]
+            else "Every observable the workflow knows was measured."
+        ),
+    ]
+
+
+def _gap_table(s: dict[str, Any]) -> list[str]:
+    lines = [
+        "",
+        "## Gap per observable (all fibers, baseline model)",
+        "",
+        _score_text(),
+        "",
+        "| observable | n | gap [copy-spread units, 95 % CI] | p score (Holm) | p signed (Holm) "
+        "| signed residual z | significant |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, g in s["gap"].items():
+        sig = "**score**" if g["significant"] else ""
+        if g["systematic"]:
+            sig = (sig + " **shift**").strip()
+        lines.append(
+            f"| {name} | {g['n']} | {_ci(g['gap'])} | {_f(g['p_holm'], '.2g')} "
+            f"| {_f(g['signed_p_holm'], '.2g')} "
+            f"| {', '.join(_f(z, '.1f') for z in g['bias_z'])} | {sig or 'no'} |"
+        )
+    d = s["descriptive"]
+    lines += ["", "Descriptive measures (observed vs the model's copies):", ""]
+    if "confusion" in d:
+        labels = d["confusion"]["labels"]
+        lines += [
+            "| observed \\ model | " + " | ".join(labels) + " |",
+            "|---" * (len(labels) + 1) + "|",
+        ]
+        for lab, row in zip(labels, d["confusion"]["counts"], strict=True):
+            lines.append(f"| {lab} | " + " | ".join(str(c) for c in row) + " |")
+        lines.append("")
+
+    def rnd(x: Any) -> Any:
+        if isinstance(x, float):
+            return float(f"{x:.3g}")
+        if isinstance(x, dict):
+            return {k: rnd(v) for k, v in x.items()}
+        return x
+
+    for k, val in d.items():
+        if k != "confusion":
+            lines.append(f"- {k}: {json.dumps(rnd(val))}")
+    varying = s["start_axes_varying"]
+    lines += [
+        "",
+        "## Where the gap lives",
+        "",
+        f"Shallow regression tree on the per-fiber gap over the start axes that vary "
+        f"({', '.join(varying) or 'none'}) and the observed contact: largest mean gap in "
+        f"**{s['region']['where']}** ({s['region']['n']} fibers, "
+        f"{_f(100 * (s['region']['share'] or 0), '.0f')} % of the positive gap).",
+    ]
+    for obs, where in s["region_by_observable"].items():
+        lines.append(f"- {obs}: {where}")
+    return lines
+
+
+def _fits(s: dict[str, Any]) -> list[str]:
+    if not s["signatures"]:
+        return []
+    lines = [
+        "",
+        "## Effects ranked by signature",
+        "",
+        "| effect | probe | cosine with the gap | signature strength |",
+        "|---|---|---|---|",
+    ]
+    for r in s["signatures"]:
+        lines.append(
+            f"| {r['effect']} | {r['probe']:g} | {r['cosine']:.2f} | {r['strength']:.2g} |"
+        )
+    lines += [
+        "",
+        "## Fits per half and the out-of-sample decision",
+        "",
+        "Each half is scored with the value fitted on the other half. Final: the value "
+        "refitted on all fibers (significant candidates). Candidates whose fit kept the "
+        "baseline (0) on both halves are left out.",
+        "",
+        "| effect | half A | half B | spread | final | held-out improvement "
+        "[copy-spread units, 95 % CI] | p | p (Holm) | explains |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for h in s["heldout"]:
+        a, b = (h["halves"] or [None, None])[:2]
+        spread = abs(a - b) if a is not None and b is not None else None
+        lines.append(
+            f"| {h['effect']} | {_f(a)} | {_f(b)} | {_f(spread, '.2g')} | {_f(h['value'])} "
+            f"| {_ci(h['improvement'])} | {_f(h['p'], '.2g')} | {_f(h['p_holm'], '.2g')} "
+            f"| {'yes' if h['explains'] else 'no'} |"
+        )
+    if s["sets"]:
+        lines += [
+            "",
+            "### Two effects together (forward selection)",
+            "",
+            "Contribution of a member: held-out improvement of the set over the set without "
+            "it; p-values Holm-adjusted over every member of every set.",
+            "",
+            "| set | values (half A, half B) | contributions [copy-spread units] | p (Holm) "
+            "| explains |",
+            "|---|---|---|---|---|",
+        ]
+        for st in s["sets"]:
+            vals = "; ".join(
+                f"{k} = {_f(v)} ({_f(st['halves'][k][0])}, {_f(st['halves'][k][1])})"
+                for k, v in st["values"].items()
+            )
+            gains = "; ".join(f"{k} {_ci(g)}" for k, g in st["gains"].items())
+            ps = "; ".join(f"{k} {_f(p, '.2g')}" for k, p in st["p_holm"].items())
+            lines.append(
+                f"| {st['set']} | {vals} | {gains} | {ps} | {'yes' if st['explains'] else 'no'} |"
+            )
+    return lines
+
+
+def _before_after(s: dict[str, Any]) -> list[str]:
+    named = s["verdict"]["effects"]
+    rows = [h for h in s["heldout"] if h["effect"] in named and len(named) == 1]
+    rows += [st for st in s["sets"] if set(st["values"]) == set(named)]
+    lines = []
+    for h in rows:
+        label = h.get("effect") or h.get("set")
+        lines += [
+            "",
+            f"### Held-out gap before / after {label} [copy-spread units]",
+            "",
+            "| observable | before [95 % CI] | after [95 % CI] | share removed |",
+            "|---|---|---|---|",
+        ]
+        for name, b in s["heldout_gap_before"].items():
+            a = h["gap_after"].get(name, {}).get("gap")
+            r = h["gap_removed"].get(name)
+            lines.append(
+                f"| {name} | {_ci(b['gap'])} | {_ci(a)} | "
+                f"{_f(None if r is None else 100 * r, '.0f')}{' %' if r is not None else ''} |"
+            )
+    return lines
+
+
+def _power(s: dict[str, Any]) -> list[str]:
+    pw = s["power"]
+    if pw is None:
+        return (
+            ["", "## What it cannot see", "", f"Not run: {s['power_skipped']}."]
+            if s.get("power_skipped")
+            else []
+        )
+    lines = [
+        "",
+        "## What it cannot see (power analysis)",
+        "",
+        f"By simulation on {pw['n_simulated']} of the measured starts, scaled to "
+        f"{pw['n']} fibers: the smallest magnitude of each effect that the gap tests would "
+        f"detect with probability {pw['power']:g} (alpha = {pw['alpha']:g}); an effect "
+        "below it may be present without being seen. To *name* an effect takes more: "
+        "half of the fibers fit it, the other half must confirm it.",
+        "",
+        "| effect | direction | detected from | realistic magnitude | fibers to detect it |",
+        "|---|---|---|---|---|",
+    ]
+    for e in pw["effects"]:
+        lim = _f(e["limit"]) if e["limit"] is not None else "not within its range"
+        lines.append(
+            f"| {e['effect']} | {e['direction']} | {lim} | {_f(e['realistic'])} "
+            f"| {_f(e['fibers_for_realistic'], 'd') if e['fibers_for_realistic'] else '> 100000'} |"
+        )
+    if pw["lookalikes"]:
+        lines += [
+            "",
+            "Look-alikes (per-fiber effects nearly parallel, |cosine| >= 0.9: these "
+            "observables cannot tell them apart): "
+            + ", ".join(f"{x['a']} ~ {x['b']} ({x['cosine']:.2f})" for x in pw["lookalikes"])
+            + ".",
+        ]
+    lead = pw.get("leading")
+    if lead:
+        lines += [
+            "",
+            f"Leading candidate {lead['effect']} = {lead['value']:.3g}: about "
+            f"{_f(lead['fibers_to_detect'], 'd')} fibers would detect a gap of this size; "
+            f"about {_f(lead['fibers_to_name'], 'd')} would make its held-out improvement "
+            "significant (from the spread of the per-fiber improvement measured here).",
+        ]
+    return lines
+
+
+def _next(s: dict[str, Any]) -> list[str]:
+    nx = s["next"]
+    if nx is None:
+        return (
+            ["", "## What to measure next", "", f"Not run: {s['next_skipped']}."]
+            if s.get("next_skipped")
+            else []
+        )
+    a, b = nx["hypotheses"]
+    lines = [
+        "",
+        "## What to measure next",
+        "",
+        f"Why: {nx['reason']}. To separate **{a}** from **{b}**, measure fibers at these "
+        "starts (separation per fiber: the two predictions' difference over the noise of one "
+        "measured fiber, summed over the observables):",
+        "",
+        "| θ0 [deg] | y0 [h_obs] | L [l_obs] | separation per fiber | observable | "
+        "prediction A | prediction B |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in nx["best"]:
+        lines.append(
+            f"| {r['theta0']:.1f} | {r['y0']:.2f} | {r['length']:.2f} | {r['d']:.2g} "
+            f"| {r['observable']} | {r['a']:.3g} | {r['b']:.3g} |"
+        )
+    lines += [
+        "",
+        f"About {_f(nx['fibers_needed'], 'd')} fibers at these starts would settle it "
+        f"(at the measured starts: {_f(nx['fibers_needed_at_measured_starts'], 'd')}).",
+    ]
+    return lines
+
+
+def markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
+    """The report for people (see the module docstring)."""
+    lines = _header(s) + _gap_table(s) + _fits(s) + _before_after(s)
+    if s["advice"]:
+        lines += ["", "## Advice", ""] + [f"- {a}" for a in s["advice"]]
+    lines += _power(s) + _next(s)
+    if figures:
+        lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
+    if configs:
+        lines += ["", "## Updated model", ""] + [f"- `{c}`" for c in configs]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,54 @@
+"""Power arithmetic and the start grid of what-to-measure-next (no simulations)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.stats import norm
+
+from fibersweep.discrepancy.nextmeasure import _needed, component_names, start_grid
+from fibersweep.discrepancy.power import EffectPower, detect_probability
+
+
+def test_detect_probability_of_one_test_is_the_normal_tail():
+    zc = 2.5
+    assert detect_probability(np.array([zc]), zc) == pytest.approx(0.5)
+    assert detect_probability(np.array([zc + 1.0]), zc) == pytest.approx(norm.cdf(1.0))
+    # two independent tests: 1 - (1 - p)^2
+    p = norm.cdf(-0.3)
+    assert detect_probability(np.array([2.2, -2.2]), zc) == pytest.approx(1 - (1 - p) ** 2)
+
+
+def test_fibers_needed_follows_the_square_root_law():
+    # one test, z = 2 at 50 fibers: N solves 2 sqrt(N/50) = zc + z_0.8 (analytic)
+    zc = 2.8
+    e = EffectPower("x", 0.1, (2.0,), 1.0, None)
+    exact = 50 * ((zc + norm.ppf(0.8)) / 2.0) ** 2
+    assert e.fibers_needed(0.1, 50, zc, 0.8) == math.ceil(exact)
+    # half the magnitude with gamma = 1: four times the fibers (to rounding)
+    assert e.fibers_needed(0.05, 50, zc, 0.8) == pytest.approx(4 * exact, abs=4)
+    # gamma = 2 (a spread): half the magnitude costs 16 times the fibers
+    e2 = EffectPower("x", 0.1, (2.0,), 2.0, None)
+    assert e2.fibers_needed(0.05, 50, zc, 0.8) == pytest.approx(16 * exact, abs=16)
+    # the other direction of a signed effect is not described by this entry
+    assert e.detect(-0.1, 1000, 50, zc) == 0.0
+
+
+def test_fibers_to_settle_two_hypotheses():
+    # D = 0.5 per fiber, alpha 0.05 two-sided, power 0.8: ((1.96 + 0.84) / 0.5)^2 = 31.4
+    assert _needed(0.5, 0.05, 0.8) == 32
+    assert _needed(0.0, 0.05, 0.8) is None
+
+
+def test_start_grid_does_not_vary_an_axis_the_data_do_not_vary():
+    starts = np.array([[-5.0, 0.2, 1.0], [5.0, 0.6, 1.0], [0.0, 0.4, 1.0]])
+    g = start_grid(starts, n_theta=3, n_y=4, n_len=3)
+    assert g.shape == (12, 3) and np.all(g[:, 2] == 1.0)
+    assert g[:, 0].min() == -5.0 and g[:, 1].max() == 0.6
+
+
+def test_component_names_follow_the_registry():
+    names = component_names(("class", "delta", "t_pass"))
+    assert names[0].startswith("class=") and names[-2:] == ["delta", "t_pass"]
