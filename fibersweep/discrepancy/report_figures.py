@@ -28,7 +28,7 @@ from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, paper_style, save_
 __all__ = ["figures", "fitted_label", "next_figure"]
 
 UNIT = "copy-spread units"
-AXES = {"theta0": "θ0 [deg]", "y0": "y0 / h_obs", "length": "L / l_obs"}
+AXES = {"theta0": r"$\theta_0$ [deg]", "y0": r"$y_0/h_{obs}$", "length": r"$L/l_{obs}$"}
 
 
 def fitted_label(res: DiscrepancyResult) -> tuple[str | None, str, GapResult | None]:
