@@ -31,8 +31,8 @@ from pathlib import Path
 
 from fibersweep.config import load_config
 from fibersweep.sweep.executors import make_executor
+from fibersweep.sweep.fields import flow_field_for
 from fibersweep.sweep.plan import make_tasks
-from fibersweep.sweep.runner import flow_field_for
 from fibersweep.sweep.worker import WorkerSpec, init_worker, run_task
 
 log = logging.getLogger("bench_sweep")

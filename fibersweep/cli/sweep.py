@@ -136,7 +136,7 @@ def _print_plan(plan, workers: int) -> None:
 
 def _fields_line(cfg) -> tuple[str, bool]:
     """One line on the sweep's flow fields, and whether all are cached."""
-    from fibersweep.sweep.runner import flow_keys_for
+    from fibersweep.sweep.fields import flow_keys_for
 
     fields = flow_keys_for(cfg)
     missing = [k for k, (_, cached) in fields.items() if not cached]
@@ -155,8 +155,8 @@ def _fields_line(cfg) -> tuple[str, bool]:
 def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     from dataclasses import replace
 
+    from fibersweep.sweep.fields import estimate_run_s, flow_keys_for
     from fibersweep.sweep.plan import plan_sweep
-    from fibersweep.sweep.runner import estimate_run_s, flow_keys_for
 
     plan = plan_sweep(cfg, None, resume=resume, retry_failed=retry_failed)
     extra, rnd, info = [], 0, None
