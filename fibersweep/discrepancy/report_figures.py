@@ -195,7 +195,10 @@ def next_figure(nx: Discrimination, measured: np.ndarray, path: Path) -> Path:
         return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
 
     im = ax.pcolormesh(edges(th), edges(ys), D.T, cmap="viridis", vmin=0)
-    ax.scatter(measured[:, 0], measured[:, 1], s=4, color="w", alpha=0.7, label="measured starts")
+    ax.scatter(
+        measured[:, 0], measured[:, 1], s=8, color="w", edgecolors="0.2", linewidths=0.4,
+        label="measured starts",
+    )  # dark edge: visible on the map and in the legend
     bt = np.array([[b.theta0, b.y0] for b in nx.best])
     ax.scatter(bt[:, 0], bt[:, 1], s=40, facecolors="none", edgecolors="r", label="best starts")
     ax.set_xlabel(AXES["theta0"])
