@@ -23,14 +23,13 @@ Usage: python scripts/classify_sensitivity.py RESULTS [--other RESULTS2] [--list
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from fibersweep.analysis.classify import RULES, classify
-from fibersweep.analysis.observables import thin_indices
+from fibersweep.analysis.observables import take, thin_indices
 from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.sweep.manifest import read_manifest
@@ -39,24 +38,6 @@ from fibersweep.sweep.store import read_runs, read_trajectories
 
 THRESHOLDS = (0.005, 0.01, 0.02, 0.03, 0.05)
 SAMPLES = (100, 50)
-
-
-def thin(tr, idx: np.ndarray):
-    """The trajectory at sample indices ``idx``."""
-    beads = None if tr.beads is None else tr.beads[idx]
-    return replace(
-        tr,
-        t=tr.t[idx],
-        x=tr.x[idx],
-        y=tr.y[idx],
-        theta=tr.theta[idx],
-        head=tr.head[idx],
-        tail=tr.tail[idx],
-        head_speed=tr.head_speed[idx],
-        com_speed=tr.com_speed[idx],
-        contact=tr.contact[idx],
-        beads=beads,
-    )
 
 
 def labels(out: Path) -> pd.DataFrame:
@@ -84,9 +65,9 @@ def labels(out: Path) -> pd.DataFrame:
                 row[name] = classify(tr, geometry, u_center, ref, name)
         for n in SAMPLES:
             idx = thin_indices(tr, n, u_center, ref)
-            row[f"{n} samples"] = classify(thin(tr, idx), geometry, u_center, ref)
+            row[f"{n} samples"] = classify(take(tr, idx), geometry, u_center, ref)
         every2 = np.unique(np.r_[np.arange(0, len(tr.t), 2), len(tr.t) - 1])
-        row["every 2nd"] = classify(thin(tr, every2), geometry, u_center, ref)
+        row["every 2nd"] = classify(take(tr, every2), geometry, u_center, ref)
         rows.append(row)
     return pd.DataFrame(rows)
 
