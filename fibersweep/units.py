@@ -4,7 +4,7 @@ Unit system used everywhere below the CLI
 -----------------------------------------
 length: micrometre (µm); time: second (s); force: piconewton (pN).
 In this system a viscosity in Pa·s has the same numerical value in
-pN·s/µm² (1 Pa·s = 1 N·s/m² = 1e12 pN·s / 1e12 µm²), so the SPEC's numbers
+pN·s/µm² (1 Pa·s = 1 N·s/m² = 1e12 pN·s / 1e12 µm²), so the model's numbers
 are used as they stand: μ = 0.340, U_center = 600 µm/s, a = 2 µm,
 E = 26e6 Pa = 26 pN/µm².
 """
@@ -59,7 +59,7 @@ class Geometry:
     pillar_x : float or None
         x of the base centre [µm]; None means L_ch / 2.
     pillar_y_base : float or None
-        y of the base line [µm]; None means the SPEC's decision: centroid on the
+        y of the base line [µm]; None means the model's decision: centroid on the
         centreline, y_base = W_ch/2 − h_obs/3.
     """
 

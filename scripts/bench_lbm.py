@@ -5,7 +5,7 @@ noisy machine:
 
 - the memory bandwidth of a large stream copy (numpy, and a Numba prange copy
   with 1 and N threads), counted as bytes read + bytes written;
-- the MLUPS of the LBM steps (kernel + pillar fix-ups) on the SPEC channel at
+- the MLUPS of the LBM steps (kernel + pillar fix-ups) on the full channel at
   dx = 4 µm (half depth: 600 x 200 x 5 = 600 k cells), with 1 and N threads,
   for the in-place AA kernel (default) and the two-array pull kernel;
 - the fraction of the roofline reached: bandwidth / bytes per cell update;

@@ -50,7 +50,7 @@ DEFAULT_CACHE = Path(".fibersweep-cache/convergence")
 LEVELS = (4.0, 2.0, 1.0)
 
 
-#: Channels: the SPEC one, and a shorter, narrower one (same pillar and depth) whose
+#: Channels: the full one, and a shorter, narrower one (same pillar and depth) whose
 #: dx = 1 µm grid (6.4 M cells) is affordable on a shared 2-core machine.
 DOMAINS = {
     "spec": GeometrySettings(),

@@ -1,6 +1,6 @@
 """Placement invariance of the pillar flow: shift the pillar by fractions of a cell.
 
-Solves the SPEC channel with the pillar base at y_base + s·Δx for s in
+Solves the full channel with the pillar base at y_base + s·Δx for s in
 --shifts (default 0, 1/4, 1/2, 3/4) and for each pillar boundary kind, and
 prints per run the far-upstream separatrix (traced, in h_obs from the base
 line, :func:`fibersweep.flow.streamlines.separatrix_y`), the flux separatrix,

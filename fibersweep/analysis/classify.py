@@ -1,6 +1,6 @@
 """Classification of a fiber run as a pure function of its recorded trajectory.
 
-Rules (SPEC section 4; thresholds in :class:`ClassifySettings`):
+Rules (docs/model.md; thresholds in :class:`ClassifySettings`):
 
 1. **Trapping**: the fiber is in contact and its centre of mass moves slower
    than ``trap_speed``·|U_center| for at least ``trap_time`` (consecutive

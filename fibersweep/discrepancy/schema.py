@@ -34,7 +34,7 @@ Validation never drops a row or a column: every problem raises
 ``Delta`` or ``thetac``) is an error with a did-you-mean, unless the caller
 asks to ignore extra columns (``discrepancy --ignore-extra-columns``).
 Without an ``angle_unit`` column, every angle column is checked for radians:
-theta0 when every |theta0| is below 0.2 with a non-zero spread (the SPEC's
+theta0 when every |theta0| is below 0.2 with a non-zero spread (the source study's
 ±10° is ±0.17 rad); an angle observable (theta_c) when at least three values
 are given and every one is at most π in size (contact angles in degrees spread
 over tens of degrees); the trajectories' theta when their first samples match theta0
@@ -78,7 +78,7 @@ TRAJECTORY_COLUMNS = ("fiber_id", "t", "x", "y", "theta")
 # The observed columns' ranges and hints are in the observable registry.
 _START_RANGES = {
     "theta0": ((-90.0, 90.0), "theta0 must be in degrees"),
-    # the SPEC channel spans about -5 .. 5.7 h_obs from the base
+    # the full channel spans about -5 .. 5.7 h_obs from the base
     "y0": ((-6.0, 7.0), "y0 must be in units of h_obs (divide µm by the pillar height)"),
     "length": (
         (0.05, 5.0),

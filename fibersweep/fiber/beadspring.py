@@ -1,6 +1,6 @@
 """The source's bead-spring fiber: stretching + bending springs, RPY mobility, BDF2 stepping.
 
-Energy (SPEC section 3), t_i = r_i − r_{i−1}:
+Energy (docs/model.md), t_i = r_i − r_{i−1}:
     H = Σ_i (S/4a)(|t_i| − 2a)² + Σ_i (B/2a)(1 − t̂_{i+1}·t̂_i),
 S = E π a², B = E π a⁴/4. Bead velocities U = u(r) + M(r) F(r).
 

@@ -1,6 +1,6 @@
 """Fiber-pillar repulsion: the rough pillar (small beads) and the smooth pillar (Bézier outline).
 
-Rough (SPEC section 3): pillar beads of radius a_obs centred on the outline,
+Rough (docs/model.md): pillar beads of radius a_obs centred on the outline,
 2 a_obs apart (a bead on each vertex); a fiber bead at centre distance r < R_ref
 from a pillar bead is pushed away with
 F = (F_ref / (a + a_obs)) · w⁴ · r,  w = (R_ref² − r²) / (R_ref² − (a + a_obs)²).

@@ -1,4 +1,4 @@
-"""Elastic energy and forces of the bead-spring fiber (SPEC section 3).
+"""Elastic energy and forces of the bead-spring fiber (docs/model.md).
 
 H = Σ_i (S/4a)(|t_i| − 2a)² + Σ_i (B/2a)(1 − t̂_{i+1}·t̂_i), t_i = r_i − r_{i−1},
 S = E π a² [pN], B = E π a⁴/4 [pN·µm²]; F = −∇H.

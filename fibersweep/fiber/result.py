@@ -20,7 +20,7 @@ STATUSES = ("ok", "failed")
 
 @dataclass(frozen=True)
 class FiberStart:
-    """Initial condition of a run, in the SPEC's normalised units.
+    """Initial condition of a run, in the model's normalised units.
 
     Attributes
     ----------

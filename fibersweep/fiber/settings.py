@@ -22,7 +22,7 @@ class _Strict(BaseModel):
 
 
 class ContactSettings(_Strict):
-    """Fiber-pillar repulsion (SPEC section 3, 'Contact with the pillar')."""
+    """Fiber-pillar repulsion (docs/model.md)."""
 
     pillar: Literal["rough", "smooth"] = Field("rough", description="pillar surface model")
     obstacle_bead_radius: float = Field(0.6, gt=0, description="a_obs of the rough pillar [µm]")

@@ -44,7 +44,7 @@ class GeometrySettings(_Strict):
 
 
 class FluidSettings(_Strict):
-    """Fluid properties (SPEC section 1)."""
+    """Fluid properties (docs/model.md)."""
 
     viscosity: float = Field(0.340, gt=0, description="dynamic viscosity [Pa s]")
     density: float = Field(1190.0, gt=0, description="density [kg/m^3]")

@@ -1,6 +1,6 @@
 """Figures of a sweep: phase diagram, δ map, contact map, δ distribution.
 
-All in the SPEC's normalised units: θ0 and θ_c in degrees, y0 and y_c as
+All in the model's normalised units: θ0 and θ_c in degrees, y0 and y_c as
 y/h_obs from the pillar base, lengths as L/l_obs. Every figure is written to a
 temporary file and renamed, like the tables.
 """
