@@ -155,7 +155,8 @@ def _fields_line(cfg) -> tuple[str, bool]:
 def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     from dataclasses import replace
 
-    from fibersweep.sweep.fields import estimate_run_s, flow_keys_for
+    from fibersweep.sweep.estimate import estimate_run_s
+    from fibersweep.sweep.fields import flow_keys_for
     from fibersweep.sweep.plan import plan_sweep
 
     plan = plan_sweep(cfg, None, resume=resume, retry_failed=retry_failed)

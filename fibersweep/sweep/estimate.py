@@ -1,6 +1,7 @@
-"""Time estimate of a sweep whose flow field is not cached yet (``run --dry-run``).
+"""Time estimates of a sweep (``run --dry-run``).
 
-Nothing is stored. The flow solve is estimated from a short timing of the LBM on
+With the field cached, one run of the sweep is timed (:func:`estimate_run_s`).
+Without it (nothing is stored), the flow solve is estimated from a short timing of the LBM on
 the coarsest grid of the nested solve (:data:`PROBE_STEPS` steps) and the typical
 step counts of the solve (:data:`TYPICAL_STEPS`); one fiber run is timed on the
 field those probe steps give, which is unconverged but has the right geometry and
@@ -13,12 +14,21 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
+from typing import Any
 
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.settings import FlowSettings
+from fibersweep.sweep.worker import SweepTask
 
-__all__ = ["PROBE_STEPS", "TYPICAL_STEPS", "UncachedEstimate", "estimate_uncached"]
+__all__ = [
+    "PROBE_STEPS",
+    "TYPICAL_STEPS",
+    "UncachedEstimate",
+    "estimate_run_s",
+    "estimate_uncached",
+    "time_run",
+]
 
 #: LBM steps timed on the coarsest grid.
 PROBE_STEPS = 200
@@ -74,7 +84,6 @@ def estimate_uncached(
     start : FiberStart
         Start of the run to time (a point of the sweep).
     """
-    from fibersweep.fiber.run import simulate
     from fibersweep.flow.lbm import coarser_settings, lattice_of, solve_lattice
     from fibersweep.flow.solver import field_from_solution
 
@@ -103,11 +112,7 @@ def estimate_uncached(
         cells * (TYPICAL_STEPS[0] if i == 0 else TYPICAL_STEPS[1])
         for i, (_, cells) in enumerate(grids)
     )
-    field = field_from_solution(probe, sol)
-    simulate(field, fiber, start)  # compiles (or loads) the kernels
-    t0 = time.perf_counter()
-    simulate(field, fiber, start)
-    run_s = time.perf_counter() - t0
+    run_s = time_run(field_from_solution(probe, sol), fiber, start)
     return UncachedEstimate(
         flow_s=updates / (mlups * 1e6),
         run_s=run_s,
@@ -115,3 +120,27 @@ def estimate_uncached(
         grids=grids,
         probe_s=time.perf_counter() - t_start,
     )
+
+
+def time_run(field: Any, fiber: FiberSettings, start: FiberStart) -> float:
+    """Seconds of one fiber run on ``field``, timed after a warm-up run (kernels compiled)."""
+    from fibersweep.fiber.run import simulate
+
+    simulate(field, fiber, start)  # compiles (or loads) the kernels
+    t0 = time.perf_counter()
+    simulate(field, fiber, start)
+    return time.perf_counter() - t0
+
+
+def estimate_run_s(cfg: Any, todo: list[SweepTask]) -> float:
+    """Seconds per run of a sweep, timed on its middle to-do point (see :func:`time_run`).
+
+    The run is made with its own setting combination (its field must be cached).
+    """
+    from fibersweep.sweep.fields import flow_field_for
+    from fibersweep.sweep.plan import sweep_settings
+
+    t = todo[len(todo) // 2]
+    sub = next((s.config for s in sweep_settings(cfg) if s.id == t.settings), cfg)
+    fieldobj, _ = flow_field_for(sub)
+    return time_run(fieldobj, sub.fiber, FiberStart(theta0=t.theta0, y0=t.y0, length=t.length))

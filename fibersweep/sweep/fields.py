@@ -1,24 +1,21 @@
 """The flow fields of a sweep: one per distinct flow setting, found or computed once.
 
 Also what the manifest records per setting combination (its field, the
-U_center its runs move in, the separatrix) and a one-run timing for estimates.
+U_center its runs move in, the separatrix).
 """
 
 from __future__ import annotations
 
 import logging
-import time
 from pathlib import Path
 from typing import Any
 
 from fibersweep.config import Config
 from fibersweep.sweep.plan import SweepPlan, plan_sweep, sweep_settings
-from fibersweep.sweep.worker import SweepTask
 
 __all__ = [
     "combinations_entry",
     "effective_u_center",
-    "estimate_run_s",
     "flow_field_for",
     "flow_key_for",
     "flow_keys_for",
@@ -54,24 +51,6 @@ def flow_keys_for(cfg: Config) -> dict[str, tuple[Any, bool]]:
         if st.flow_key not in out:
             out[st.flow_key] = (st.config.flow, flow_key_for(st.config)[1])
     return out
-
-
-def estimate_run_s(cfg: Config, todo: list[SweepTask]) -> float | None:
-    """Seconds per run, timed here on the middle to-do point after one warm-up run.
-
-    The run is made with its own setting combination (its field must be cached).
-    """
-    from fibersweep.fiber.result import FiberStart
-    from fibersweep.fiber.run import simulate
-
-    t = todo[len(todo) // 2]
-    sub = next((s.config for s in sweep_settings(cfg) if s.id == t.settings), cfg)
-    fieldobj, _ = flow_field_for(sub)
-    start = FiberStart(theta0=t.theta0, y0=t.y0, length=t.length)
-    simulate(fieldobj, sub.fiber, start)  # compiles
-    t0 = time.perf_counter()
-    simulate(fieldobj, sub.fiber, start)
-    return time.perf_counter() - t0
 
 
 def prepare(
