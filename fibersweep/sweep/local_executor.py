@@ -160,7 +160,9 @@ class LocalExecutor:
                             while fresh and len(inflight) < self.cap:
                                 inflight[pool.submit(guarded_call, fn, fresh[0])] = fresh[0]
                                 fresh.popleft()
-                    except BrokenProcessPool:
+                    except (BrokenProcessPool, BrokenPipeError, ConnectionResetError):
+                        # BrokenPipeError: submit() also starts workers, and one killed
+                        # while it was being started breaks the pipe that feeds it.
                         broken = True
                     if not inflight:
                         break

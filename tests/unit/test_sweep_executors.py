@@ -54,18 +54,28 @@ def test_local_worker_crash_once_is_retried(tmp_path):
     assert ex.pools_started == 2
 
 
-def test_local_pool_broken_at_submit_requeues_the_task(monkeypatch):
-    """A worker that dies between two submissions makes submit() raise: nothing lost, no strike."""
+@pytest.mark.parametrize(
+    "error",
+    [
+        # a worker died since the last wait
+        "BrokenProcessPool",
+        # submit() starts workers on demand: one killed while it starts breaks its pipe
+        "BrokenPipeError",
+    ],
+)
+def test_local_pool_broken_at_submit_requeues_the_task(monkeypatch, error):
+    """A pool that breaks inside submit() (either way): nothing lost, no strike."""
     from concurrent.futures import ProcessPoolExecutor
     from concurrent.futures.process import BrokenProcessPool
 
+    exc = {"BrokenProcessPool": BrokenProcessPool, "BrokenPipeError": BrokenPipeError}[error]
     real_submit = ProcessPoolExecutor.submit
     calls = {"n": 0}
 
     def submit(self, *args, **kwargs):
         calls["n"] += 1
         if calls["n"] == 3:
-            raise BrokenProcessPool("simulated: a worker died since the last wait")
+            raise exc("simulated")
         return real_submit(self, *args, **kwargs)
 
     monkeypatch.setattr(ProcessPoolExecutor, "submit", submit)
