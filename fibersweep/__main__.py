@@ -1,5 +1,5 @@
 """``python -m fibersweep``: the same as the ``fibersweep`` console script."""
 
-from fibersweep.cli import app
+from fibersweep.cli import entry
 
-app(prog_name="fibersweep")
+entry()

@@ -16,6 +16,7 @@ from fibersweep.cli._app import (
     _load,
     _setup_logging,
     app,
+    entry,
     main,
 )
 
@@ -39,6 +40,7 @@ __all__ = [
     "_setup_logging",
     "app",
     "discrepancy",
+    "entry",
     "fiber",
     "flow",
     "init",

@@ -1,5 +1,5 @@
 """``python -m fibersweep.cli``: run the command line."""
 
-from fibersweep.cli import app
+from fibersweep.cli import entry
 
-app()
+entry()

@@ -213,3 +213,52 @@ def main(
     ] = False,
 ) -> None:
     """fibersweep: LBM flow once, many fiber runs, phase diagrams."""
+
+
+#: Seconds the interpreter may take to shut down after a command has finished.
+EXIT_GRACE_S = 30.0
+
+
+def _leave_anyway(code: object, grace: float = EXIT_GRACE_S) -> None:
+    """End the process with ``code`` if its shutdown stalls for ``grace`` seconds.
+
+    By the time a command returns its work is saved and reported. Interpreter
+    shutdown then joins every non-daemon thread, including the manager threads
+    of process pools; one stuck there (e.g. on a worker killed mid-start) would
+    keep a finished sweep from ever exiting. A daemon thread still runs while
+    the main thread waits in that join, so it can end the process instead.
+
+    Parameters
+    ----------
+    code : object
+        The command's exit code as in ``SystemExit.code`` (None means 0).
+    grace : float
+        Seconds to wait [s].
+    """
+    import os
+    import sys
+    import threading
+    import time
+
+    status = 0 if code is None else code if isinstance(code, int) else 1
+
+    def guard() -> None:
+        time.sleep(grace)
+        sys.stderr.write(
+            f"fibersweep: shutdown stalled for {grace:.0f} s after the work was saved; "
+            "leaving anyway\n"
+        )
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+
+    threading.Thread(target=guard, name="exit-guard", daemon=True).start()
+
+
+def entry() -> None:
+    """The console script and ``python -m``: run the app, then make sure the process ends."""
+    try:
+        app(prog_name="fibersweep")
+    except SystemExit as exc:
+        _leave_anyway(exc.code)
+        raise

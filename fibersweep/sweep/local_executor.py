@@ -33,6 +33,9 @@ __all__ = ["LocalExecutor"]
 
 log = logging.getLogger(__name__)
 
+#: Seconds to wait for a stopped pool's worker (after SIGTERM, then SIGKILL) and thread.
+_STOP_S = 5.0
+
 
 def _pool_init(parent_pid: int, initializer: Callable[..., None] | None, initargs: tuple) -> None:
     """Worker start: end with the parent (even on SIGKILL), then the guarded set-up."""
@@ -114,14 +117,31 @@ class LocalExecutor:
 
     @staticmethod
     def _stop(pool: ProcessPoolExecutor) -> None:
+        """Stop ``pool`` now: cancel what waits, end its workers, let its manager thread finish.
+
+        Its workers are ended, not asked: a worker left blocked (for instance on the
+        task queue's lock, held by a worker that was killed) would keep the pool's
+        manager thread, and so interpreter shutdown, waiting for ever.
+        """
+        manager = getattr(pool, "_executor_manager_thread", None)  # shutdown() forgets it
         pool.shutdown(wait=False, cancel_futures=True)
+        procs = list((getattr(pool, "_processes", None) or {}).values())
         terminate = getattr(pool, "terminate_workers", None)  # Python >= 3.14
         if terminate is not None:
             terminate()
-            return
-        for proc in list((getattr(pool, "_processes", None) or {}).values()):
-            if proc.is_alive():
-                proc.terminate()
+        else:
+            for proc in procs:
+                if proc.is_alive():
+                    proc.terminate()
+        for proc in procs:
+            proc.join(timeout=_STOP_S)
+            if proc.is_alive():  # SIGTERM did not do it
+                proc.kill()
+                proc.join(timeout=_STOP_S)
+        if manager is not None:
+            manager.join(timeout=_STOP_S)
+            if manager.is_alive():
+                log.warning("a stopped worker pool's manager thread is still running")
 
     def run(
         self,
