@@ -26,6 +26,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.ndimage import binary_dilation
 
+from fibersweep.geometry import as_shape
+
 __all__ = ["GHOST_METHOD", "GHOST_REACH", "nearest_on_polygon", "ghost_stencil", "extend_into_wall"]
 
 GHOST_METHOD = "mirror-1"  # recorded in FlowField.meta['wall_ghosts']
@@ -72,8 +74,9 @@ def ghost_stencil(
     ----------
     solid : ndarray, shape (nx, ny), bool
         Pillar nodes (x periodic; y = 0 and ny are walls).
-    vertices : ndarray, shape (n_v, 2)
-        Pillar outline [µm], node (i, j) at ((i + ½) Δx, (j + ½) Δx).
+    vertices : shape or ndarray, shape (n_v, 2)
+        Pillar outline [µm]: a :mod:`fibersweep.geometry` shape (any pillar,
+        circles included) or convex polygon corners; node (i, j) at ((i + ½) Δx, (j + ½) Δx).
     dx : float
         Node spacing [µm].
 
@@ -91,7 +94,7 @@ def ghost_stencil(
     gi, gj = np.nonzero(near)
     ghosts = gi * ny + gj
     gx, gy = (gi + 0.5) * dx, (gj + 0.5) * dx
-    w = nearest_on_polygon(np.asarray(vertices, float), gx, gy)
+    w = as_shape(vertices).nearest(gx, gy)[0]
     mx = (2.0 * w[:, 0] - gx) / dx - 0.5  # mirror point in node coordinates
     my = (2.0 * w[:, 1] - gy) / dx - 0.5
     i0 = np.floor(mx).astype(np.int64)
