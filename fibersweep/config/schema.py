@@ -562,7 +562,8 @@ class Config(_Strict):
         yc = np.array([geo.y_from_base(v) for v in (0.0, 1.0)])
         y_abs = yc[0] + y * (yc[1] - yc[0])  # y_from_base is affine in y0
         reach = L * geo.pillar_base_length / 2.0 + 2.0 * a + self.flow.dx
-        lo, hi = geo.vertices.min(axis=0), geo.vertices.max(axis=0)
+        x_lo, y_lo, x_hi, y_hi = geo.shape.bounds
+        lo, hi = (x_lo, y_lo), (x_hi, y_hi)
         gap_x = np.maximum(np.maximum(lo[0] - x0, x0 - hi[0]), 0.0)
         gap_y = np.maximum(np.maximum(lo[1] - y_abs, y_abs - hi[1]), 0.0)
         clear = (

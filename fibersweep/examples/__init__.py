@@ -4,7 +4,8 @@
 * ``quick.yaml``: a coarse grid and a small sweep across the separatrix;
 * ``paper.yaml``: the source's 1323-run study at its resolution;
 * ``friction_axis.yaml``: settings as sweep axes (friction x pillar surface);
-* ``refine.yaml``: adaptive refinement of the class boundaries.
+* ``refine.yaml``: adaptive refinement of the class boundaries;
+* ``shapes.yaml``: the pillar shape as a sweep axis (triangle vs circle).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ EXAMPLES = {
     "paper.yaml": "paper.yaml",
     "friction_axis.yaml": "friction_axis.yaml",
     "refine.yaml": "refine.yaml",
+    "shapes.yaml": "shapes.yaml",
 }
 
 

@@ -118,20 +118,43 @@ def bezier_nearest(px: float, py: float, ctrl: np.ndarray, roots: np.ndarray):
 
 
 def smooth_curves(vertices: np.ndarray, corner_radius: float) -> np.ndarray:
-    """Six quadratic Bézier curves (3, 2) each: corner k then side k→k+1, shape (6, 3, 2).
+    """Quadratic Bézier curves (3, 2) each, corner k then side k→k+1, shape (2n, 3, 2).
 
-    A corner of radius r of a 60° wedge is tangent to the sides at r·√3 from the vertex.
+    A corner of radius r with interior angle θ is tangent to its sides at
+    r·cot(θ/2) from the vertex (r·√3 for the triangle's 60°, taken exactly).
+
+    Raises
+    ------
+    ValueError
+        If two corners' tangent points overlap on a side (r too large for it).
     """
-    t = corner_radius * math.sqrt(3.0)
-    out = np.empty((6, 3, 2))
-    for k in range(3):
+    nv = len(vertices)
+    out = np.empty((2 * nv, 3, 2))
+    reach = np.empty(nv)
+    for k in range(nv):
         v = vertices[k]
-        vp = vertices[(k - 1) % 3]
-        vn = vertices[(k + 1) % 3]
+        up = (vertices[(k - 1) % nv] - v) / np.hypot(*(vertices[(k - 1) % nv] - v))
+        un = (vertices[(k + 1) % nv] - v) / np.hypot(*(vertices[(k + 1) % nv] - v))
+        cos_t = float(np.clip(up @ un, -1.0, 1.0))
+        if abs(cos_t - 0.5) < 1e-12:
+            reach[k] = corner_radius * math.sqrt(3.0)
+        else:
+            reach[k] = corner_radius * math.sqrt((1.0 + cos_t) / (1.0 - cos_t))
+    for k in range(nv):
+        v = vertices[k]
+        vp = vertices[(k - 1) % nv]
+        vn = vertices[(k + 1) % nv]
         up = (vp - v) / np.hypot(*(vp - v))
         un = (vn - v) / np.hypot(*(vn - v))
+        side = float(np.hypot(*(vn - v)))
+        if reach[k] + reach[(k + 1) % nv] > side * (1.0 + 1e-12):
+            raise ValueError(
+                f"corner_radius {corner_radius} µm is too large for the pillar's side of "
+                f"{side:.3g} µm (its rounded corners overlap)"
+            )
+        t = reach[k]
         out[2 * k] = [v + t * up, v, v + t * un]
         start = v + t * un
-        end = vn - t * un
+        end = vn - reach[(k + 1) % nv] * un
         out[2 * k + 1] = [start, 0.5 * (start + end), end]
     return out

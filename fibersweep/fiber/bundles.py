@@ -202,7 +202,7 @@ def build_kernel(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> Kerne
     mu = float(field.fluid.viscosity)
     bead_spring = st.model == "bead-spring"
     dt = st.step.dt if st.step.dt is not None else (DEFAULT_DT if bead_spring else math.nan)
-    x_pass = float(setup.pillar.vertices[:, 0].max())
+    x_pass = setup.pillar.x_max
     params = Params(
         a=a,
         mu=mu,

@@ -1,22 +1,24 @@
 """Fiber-pillar repulsion: the rough pillar (small beads) and the smooth pillar (Bézier outline).
 
 Rough (docs/model.md): pillar beads of radius a_obs centred on the outline,
-2 a_obs apart (a bead on each vertex); a fiber bead at centre distance r < R_ref
-from a pillar bead is pushed away with
+2 a_obs apart (a bead on each vertex of a polygon); a fiber bead at centre
+distance r < R_ref from a pillar bead is pushed away with
 F = (F_ref / (a + a_obs)) · w⁴ · r,  w = (R_ref² − r²) / (R_ref² − (a + a_obs)²).
-Smooth: three sides and three corners rounded with radius r_c, each a quadratic
-Bézier curve; the nearest point on a curve is a root of a cubic in the curve
-parameter; the force is normal, F = (F_ref / a) · w⁴ · R with
-w = (R_ref² − R²) / (R_ref² − a²) and R the bead-centre-to-curve distance.
+Smooth: the polygon's sides and its corners rounded with radius r_c, each a
+quadratic Bézier curve; the nearest point on a curve is a root of a cubic in
+the curve parameter; the force is normal, F = (F_ref / a) · w⁴ · R with
+w = (R_ref² − R²) / (R_ref² − a²) and R the bead-centre-to-curve distance. A
+circular pillar is smooth already: its nearest point and normal are exact.
 
-Only beads whose centre is closer than R_ref to the triangle's outline are
-checked (a cheap bound: both pillars lie on or inside the triangle).
+Any pillar shape of :mod:`fibersweep.geometry` (triangle, square, convex
+polygon, circle). Only beads whose centre is closer than R_ref to the exact
+outline are checked (a cheap bound: both pillars lie on or inside it).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numba as nb
@@ -24,6 +26,7 @@ import numpy as np
 
 from fibersweep.fiber.bezier import bezier_nearest, smooth_curves
 from fibersweep.fiber.settings import ContactSettings
+from fibersweep.geometry import Circle
 from fibersweep.units import Geometry
 
 __all__ = [
@@ -36,10 +39,13 @@ __all__ = [
     "outline_distance",
     "pillar_forces",
     "rough_beads",
+    "rough_circle_beads",
+    "shape_distance",
 ]
 
 ROUGH = 0
 SMOOTH = 1
+_NO_CIRCLE = np.zeros(3)  # radius 0: the pillar is a polygon
 
 
 class PillarArrays(NamedTuple):
@@ -49,16 +55,18 @@ class PillarArrays(NamedTuple):
     ----------
     kind : int
         ROUGH (0) or SMOOTH (1).
-    verts : ndarray, shape (3, 2)
-        Triangle vertices (CCW) [µm].
+    verts : ndarray, shape (n, 2)
+        Polygon vertices (CCW) [µm]; shape (0, 2) for a circle.
     pbx, pby : ndarray, shape (m,)
         Rough pillar bead centres [µm] (empty for smooth).
-    curves : ndarray, shape (6, 3, 2)
-        Smooth outline's Bézier control points [µm].
+    curves : ndarray, shape (2n, 3, 2)
+        Smooth polygon's Bézier control points [µm] (empty for a circle).
     r_cut, r_eq : float
         Cutoff R_ref and the distance where |F| = F_ref (a + a_obs, or a) [µm].
     f_ref : float
         Force scale [pN].
+    circle : ndarray, shape (3,)
+        (x, y, radius) of a circular pillar [µm]; radius 0 for a polygon.
     """
 
     kind: int
@@ -69,18 +77,20 @@ class PillarArrays(NamedTuple):
     r_cut: float
     r_eq: float
     f_ref: float
+    circle: np.ndarray = _NO_CIRCLE
 
 
 @nb.njit(cache=True)
 def outline_distance(px: float, py: float, verts: np.ndarray) -> float:
-    """Signed distance [µm] from a point to a CCW triangle's outline (negative inside)."""
+    """Signed distance [µm] from a point to a CCW convex polygon's outline (negative inside)."""
     best = 1e300
     inside = True
-    for k in range(3):
+    nv = verts.shape[0]
+    for k in range(nv):
         ax = verts[k, 0]
         ay = verts[k, 1]
-        bx = verts[(k + 1) % 3, 0]
-        by = verts[(k + 1) % 3, 1]
+        bx = verts[(k + 1) % nv, 0]
+        by = verts[(k + 1) % nv, 1]
         ex = bx - ax
         ey = by - ay
         if ex * (py - ay) - ey * (px - ax) <= 0.0:
@@ -93,6 +103,14 @@ def outline_distance(px: float, py: float, verts: np.ndarray) -> float:
         if d < best:
             best = d
     return -best if inside else best
+
+
+@nb.njit(cache=True)
+def shape_distance(px: float, py: float, verts: np.ndarray, circle: np.ndarray) -> float:
+    """Signed distance [µm] to the pillar outline: the circle if circle[2] > 0, else the polygon."""
+    if circle[2] > 0.0:
+        return math.sqrt((px - circle[0]) ** 2 + (py - circle[1]) ** 2) - circle[2]
+    return outline_distance(px, py, verts)
 
 
 @nb.njit(cache=True)
@@ -110,9 +128,9 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
     stiff : ndarray, shape (n,)
         Sum over contact pairs of |d|F|/dr| [pN/µm] (time-step bound).
     dist : ndarray, shape (n,)
-        Signed bead-centre distance to the contact surface [µm]: the triangle
-        outline (rough, and any bead farther than R_ref), or the rounded Bézier
-        outline (smooth, beads closer than R_ref to the triangle).
+        Signed bead-centre distance to the contact surface [µm]: the exact
+        outline (rough, a circle, and any bead farther than R_ref), or the
+        rounded Bézier outline (smooth polygon, beads closer than R_ref to it).
 
     Returns
     -------
@@ -122,6 +140,7 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
     """
     kind = pil.kind
     verts = pil.verts
+    circle = pil.circle
     pbx = pil.pbx
     pby = pil.pby
     curves = pil.curves
@@ -141,7 +160,7 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
         fx[i] = 0.0
         fy[i] = 0.0
         stiff[i] = 0.0
-        d_out = outline_distance(bx[i], by[i], verts)
+        d_out = shape_distance(bx[i], by[i], verts, circle)
         dist[i] = d_out
         if d_out >= r_cut:
             continue
@@ -165,12 +184,35 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
                     fmax = fm
                     cx = pbx[j]
                     cy = pby[j]
+        elif circle[2] > 0.0:
+            # smooth circle: exact nearest point, force along the outward radius
+            rx = bx[i] - circle[0]
+            ry = by[i] - circle[1]
+            rr = math.sqrt(rx * rx + ry * ry)
+            r = abs(d_out)
+            w = (r2c - r * r) / den
+            w3 = w * w * w
+            fm = amp * w3 * w * r
+            if rr > 0.0:
+                fx[i] += fm * rx / rr
+                fy[i] += fm * ry / rr
+                cx_i = circle[0] + circle[2] * rx / rr
+                cy_i = circle[1] + circle[2] * ry / rr
+            else:
+                cx_i = circle[0] + circle[2]
+                cy_i = circle[1]
+            stiff[i] += abs(amp * (w3 * w - 8.0 * w3 * r * r / den))
+            any_c = True
+            if fm > fmax:
+                fmax = fm
+                cx = cx_i
+                cy = cy_i
         else:
             d_curve = 1e300
             s_curve = 1.0
             for k in range(curves.shape[0]):
                 qx, qy, r, side = bezier_nearest(bx[i], by[i], curves[k], roots)
-                if side == 0.0:  # degenerate (sharp) corner: the triangle decides
+                if side == 0.0:  # degenerate (sharp) corner: the polygon decides
                     side = -1.0 if d_out < 0.0 else 1.0
                 if r < d_curve:
                     d_curve = r
@@ -192,7 +234,7 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
                     fmax = fm
                     cx = qx
                     cy = qy
-            # distance to the rounded outline itself (the triangle's is only a bound)
+            # distance to the rounded outline itself (the polygon's is only a bound)
             dist[i] = s_curve * d_curve
     return any_c, cx, cy
 
@@ -205,13 +247,16 @@ class Pillar:
     ----------
     kind : int
         ROUGH or SMOOTH.
-    vertices : ndarray, shape (3, 2)
+    vertices : ndarray, shape (n, 2)
+        Polygon vertices, CCW [µm]; shape (0, 2) for a circle.
     beads : ndarray, shape (m, 2)
         Rough pillar bead centres [µm] (empty for smooth).
-    curves : ndarray, shape (6, 3, 2)
-        Smooth outline control points [µm].
+    curves : ndarray, shape (2n, 3, 2)
+        Smooth polygon outline control points [µm] (empty for a circle).
     r_cut, r_eq, f_ref : float
         R_ref [µm], the distance where |F| = F_ref [µm], F_ref [pN].
+    circle : ndarray, shape (3,)
+        (x, y, radius) of a circle [µm]; zeros for a polygon.
     """
 
     kind: int
@@ -221,6 +266,7 @@ class Pillar:
     r_cut: float
     r_eq: float
     f_ref: float
+    circle: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def arrays(self) -> PillarArrays:
         """The kernel bundle of this pillar."""
@@ -233,7 +279,19 @@ class Pillar:
             float(self.r_cut),
             float(self.r_eq),
             float(self.f_ref),
+            np.ascontiguousarray(self.circle, dtype=np.float64),
         )
+
+    def distance(self, x: float, y: float) -> float:
+        """Signed distance [µm] of a point to the pillar's exact outline (negative inside)."""
+        return shape_distance(float(x), float(y), self.vertices, self.circle)
+
+    @property
+    def x_max(self) -> float:
+        """Largest x of the pillar [µm] (where a fiber has passed it)."""
+        if self.circle[2] > 0.0:
+            return float(self.circle[0] + self.circle[2])
+        return float(self.vertices[:, 0].max())
 
     @property
     def layer(self) -> float:
@@ -242,11 +300,12 @@ class Pillar:
 
 
 def rough_beads(vertices: np.ndarray, a_obs: float) -> np.ndarray:
-    """Pillar bead centres on the outline, about 2 a_obs apart, one on each vertex, (m, 2)."""
+    """Pillar bead centres on a polygon outline, about 2 a_obs apart, one on each vertex, (m, 2)."""
     pts = []
-    for k in range(3):
+    nv = len(vertices)
+    for k in range(nv):
         p0 = vertices[k]
-        p1 = vertices[(k + 1) % 3]
+        p1 = vertices[(k + 1) % nv]
         side = float(np.hypot(*(p1 - p0)))
         m = max(1, int(round(side / (2.0 * a_obs))))
         t = np.arange(m) / m
@@ -254,19 +313,38 @@ def rough_beads(vertices: np.ndarray, a_obs: float) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate(pts))
 
 
+def rough_circle_beads(circle: Circle, a_obs: float) -> np.ndarray:
+    """Pillar bead centres on a circle, about 2 a_obs apart (at least 3), shape (m, 2)."""
+    m = max(3, int(round(2.0 * math.pi * circle.radius / (2.0 * a_obs))))
+    return np.ascontiguousarray(circle.outline(m))
+
+
 def make_pillar(
     geometry: Geometry, contact: ContactSettings, bead_radius: float, f_ref: float
 ) -> Pillar:
-    """Build the pillar's contact arrays from the geometry and contact settings."""
-    v = np.ascontiguousarray(geometry.vertices)
+    """Build the pillar's contact arrays from the geometry and contact settings.
+
+    Raises
+    ------
+    ValueError
+        If the smooth corner radius does not fit on the polygon's sides.
+    """
+    shape = geometry.shape
+    if isinstance(shape, Circle):
+        v = np.zeros((0, 2))
+        circ = np.array([shape.cx, shape.cy, shape.radius], dtype=np.float64)
+    else:
+        v = np.ascontiguousarray(shape.vertices)
+        circ = np.zeros(3)
+    no_curves = np.zeros((0, 3, 2))
     if contact.pillar == "rough":
         a_obs = contact.obstacle_bead_radius
         r_eq = bead_radius + a_obs
-        beads = rough_beads(v, a_obs)
-        return Pillar(ROUGH, v, beads, np.zeros((6, 3, 2)), contact.chi * r_eq, r_eq, f_ref)
+        beads = rough_circle_beads(shape, a_obs) if circ[2] > 0 else rough_beads(v, a_obs)
+        return Pillar(ROUGH, v, beads, no_curves, contact.chi * r_eq, r_eq, f_ref, circ)
     r_eq = bead_radius
-    curves = smooth_curves(v, contact.corner_radius)
-    return Pillar(SMOOTH, v, np.zeros((0, 2)), curves, contact.chi * r_eq, r_eq, f_ref)
+    curves = no_curves if circ[2] > 0 else smooth_curves(v, contact.corner_radius)
+    return Pillar(SMOOTH, v, np.zeros((0, 2)), curves, contact.chi * r_eq, r_eq, f_ref, circ)
 
 
 def contact_forces(pillar: Pillar, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -276,7 +354,7 @@ def contact_forces(pillar: Pillar, positions: np.ndarray) -> tuple[np.ndarray, n
     -------
     forces : ndarray, shape (n, 2)
     distance : ndarray, shape (n,)
-        Signed centre distance to the triangle outline [µm] (negative inside).
+        Signed centre distance to the contact surface [µm] (negative inside).
     """
     p = np.ascontiguousarray(positions, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 2:

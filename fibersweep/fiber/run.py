@@ -81,7 +81,7 @@ def _result(
             y_c=float(geo.y_over_h(rec[k, R.CY])),
             t_contact=float(traj.t[k]),
         )
-    common["t_pass"] = pass_time(traj, float(setup.pillar.vertices[:, 0].max()), setup.u_center)
+    common["t_pass"] = pass_time(traj, setup.pillar.x_max, setup.u_center)
     if st.record.trajectories:
         idx = thin_indices(traj, st.record.samples, setup.u_center, st.classify)
         kept = take(traj, idx)

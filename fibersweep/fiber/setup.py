@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fibersweep.errors import InputError
-from fibersweep.fiber.contact import Pillar, make_pillar, outline_distance
+from fibersweep.fiber.contact import Pillar, make_pillar
 from fibersweep.fiber.effects import DynamicsContext, EffectSet, build_effects
 from fibersweep.fiber.mobility import fiber_offsets
 from fibersweep.fiber.result import FiberStart
@@ -146,7 +146,7 @@ def check_start(
     if pillar is None:
         pillar = make_pillar(geo, settings.contact, a, 1.0)  # force scale unused here
     for xb, yb in zip(bx, by, strict=True):
-        d = outline_distance(float(xb), float(yb), pillar.vertices)
+        d = pillar.distance(xb, yb)
         if d < pillar.r_cut:
             raise InputError(
                 f"y0: the start (theta0 = {start.theta0}°, y0/h = {start.y0}, x0 = {x0} µm) "

@@ -34,12 +34,12 @@ def stream_function(field: FlowField) -> np.ndarray:
 
 
 def flux_below_pillar(field: FlowField) -> np.ndarray:
-    """Flux between the wall y = 0 and the pillar base, per column through the pillar.
+    """Flux between the wall y = 0 and the pillar's underside, per column through the pillar.
 
     The wall under the pillar lies half a cell above the last fluid node for
-    the staircase pillar (half-way bounce-back), on the exact base line for a
-    sub-grid wall (:func:`subgrid_wall`); the velocity is taken to fall
-    linearly to zero there.
+    the staircase pillar (half-way bounce-back), on the exact outline (the
+    triangle's base line, a circle's lower arc) for a sub-grid wall
+    (:func:`subgrid_wall`); the velocity is taken to fall linearly to zero there.
 
     Returns
     -------
@@ -49,12 +49,13 @@ def flux_below_pillar(field: FlowField) -> np.ndarray:
     psi = stream_function(field)
     cols = np.flatnonzero(field.solid.any(axis=1))
     out = np.empty(cols.size)
-    y_base = field.geometry.base_center[1]
+    # the pillar's underside in each column (the base line of the triangle)
+    y_wall, _ = field.geometry.shape.span_at(field.x_nodes[cols])
     exact = subgrid_wall(field)
     for n, i in enumerate(cols):
         j_solid = int(np.flatnonzero(field.solid[i])[0])
         j_last = j_solid - 1
-        gap = y_base - field.y_nodes[j_last] if exact else 0.5 * field.dx
+        gap = y_wall[n] - field.y_nodes[j_last] if exact else 0.5 * field.dx
         out[n] = psi[i, j_last] + 0.5 * field.ux[i, j_last] * gap
     return out
 
@@ -127,15 +128,15 @@ def fore_aft_asymmetry(field: FlowField) -> float:
 
 
 def peak_speeds(field: FlowField) -> tuple[float, float]:
-    """Largest |u| / U_center in the gap above the apex and in the gap below the base.
+    """Largest |u| / U_center in the gap above the pillar's top and below its base line.
 
-    Taken over the node columns through the pillar.
+    Taken over the node columns through the pillar (the apex and the base of the triangle).
     """
     speed = np.hypot(field.ux, field.uy) / field.fluid.u_center
     cols = field.solid.any(axis=1)
     yb = field.geometry.base_center[1]
     y = field.y_nodes
-    apex = field.geometry.vertices[2, 1]
+    apex = field.geometry.top
     above = speed[np.ix_(cols, y > apex)].max()
     below = speed[np.ix_(cols, y < yb)].max()
     return float(above), float(below)

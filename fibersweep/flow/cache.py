@@ -75,9 +75,20 @@ class CacheInfo:
     coarse_steps: int = 0
 
 
+SHAPE_KEYS = ("pillar_shape", "pillar_rotation", "pillar_vertices")
+
+
 def cache_key(settings: FlowSettings) -> str:
-    """sha256 (hex, 24 chars) of every setting plus the solver version."""
-    payload = {"settings": settings.model_dump(mode="json"), "solver": SOLVER_VERSION}
+    """sha256 (hex, 24 chars) of every setting plus the solver version.
+
+    The pillar-shape settings enter only when they differ from the model's
+    unrotated triangle, so that fields solved before shapes existed keep their key.
+    """
+    dumped = settings.model_dump(mode="json")
+    if settings.geometry.shape_is_default():
+        for name in SHAPE_KEYS:
+            dumped["geometry"].pop(name)
+    payload = {"settings": dumped, "solver": SOLVER_VERSION}
     blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
     return hashlib.sha256(blob).hexdigest()[:24]
 
@@ -139,7 +150,7 @@ def load_entry(
     geometry = settings.geometry.to_geometry()
     if settings.pillar_boundary != "staircase" and meta.get("wall_ghosts") != GHOST_METHOD:
         # entry written before ghost values were stored: derive them (in memory)
-        ux, uy = extend_into_wall(ux, uy, solid, geometry.vertices, float(settings.dx))
+        ux, uy = extend_into_wall(ux, uy, solid, geometry.shape, float(settings.dx))
         meta = {**meta, "wall_ghosts": GHOST_METHOD}
     return FlowField(
         ux=ux,

@@ -6,14 +6,15 @@ fluid node (i, j, k) along e = (e_x, e_y, e_z) meets the wall where the 2D ray
 from the node centre along (e_x, e_y) does, at the same fraction q of the link
 (0 < q ≤ 1, in units of the link length). :class:`Cuts` stores these fractions
 for every link that enters the wall: links into a solid node, and links
-between two fluid nodes that cut through a corner of the pillar (near its
-sharp 60° vertices no node may lie inside for a cell or more; ignoring such
+between two fluid nodes that cut through a corner of the pillar (near sharp
+corners such as the triangle's 60° vertices no node may lie inside for a cell or more; ignoring such
 links would blunt the corners by an amount that depends on where they sit on
 the lattice).
 
-Two geometries are provided: a convex polygon (the triangular pillar,
-:func:`polygon_cuts`) and two plane walls normal to y (validation,
-:func:`slab_cuts`). Lattice coordinates: node (i, j) sits at ((i + ½) Δx, (j + ½) Δx).
+Two geometries are provided: any pillar shape of :mod:`fibersweep.geometry`
+(the triangle, a circle, a square, a convex polygon: :func:`shape_cuts`) and
+two plane walls normal to y (validation, :func:`slab_cuts`). Lattice
+coordinates: node (i, j) sits at ((i + ½) Δx, (j + ½) Δx).
 """
 
 from __future__ import annotations
@@ -24,8 +25,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from fibersweep.flow.lattice import Grid
+from fibersweep.geometry import ConvexPolygon, as_shape
 
-__all__ = ["Cuts", "cuts_from_distance", "polygon_cuts", "slab_cuts", "pillar_cuts"]
+__all__ = [
+    "Cuts",
+    "cuts_from_distance",
+    "polygon_cuts",
+    "shape_cuts",
+    "slab_cuts",
+    "pillar_cuts",
+]
 
 # The 8 in-plane directions (e_x, e_y) ≠ (0, 0) index q2[e_x + 1, e_y + 1].
 _DIRS = [(ex, ey) for ex in (-1, 0, 1) for ey in (-1, 0, 1) if (ex, ey) != (0, 0)]
@@ -131,65 +140,39 @@ def cuts_from_distance(
     return Cuts(i=i.astype(np.int64), j=j.astype(np.int64), q=q, scheme=scheme)
 
 
-ENTRY_MIN = 1e-9  # a segment must run this far (in link lengths) inside to cut the wall
+def shape_cuts(grid: Grid, shape, scheme: str = "trt") -> Cuts:
+    """Cuts of the links into a pillar shape given in µm (:mod:`fibersweep.geometry`).
 
-
-def _polygon_entry(vertices: np.ndarray) -> Callable:
-    """Entry fraction of the segment (x, y) → (x + e_x, y + e_y) into a convex CCW polygon.
-
-    Cyrus–Beck clipping of the segment against the open half-planes of the
-    edges; NaN if the clipped part is shorter than ``ENTRY_MIN`` (the segment
-    misses the polygon, touches a vertex, or runs along an edge). ``closed``:
-    against the closed polygon (a touching segment counts).
+    A segment enters a convex shape at most once; q is where it does
+    (:meth:`link_entry`: Cyrus–Beck clipping for a polygon, the quadratic's
+    root for a circle), exact up to rounding. ``grid.solid`` should be the
+    closed shape (``make_grid(..., closed=True)``) so that no fluid node lies
+    on the outline (q = 0).
     """
-
-    def distance(
-        x: np.ndarray, y: np.ndarray, ex: int, ey: int, closed: bool = False
-    ) -> np.ndarray:
-        t_in = np.zeros_like(x)
-        t_out = np.ones_like(x)
-        for k in range(len(vertices)):
-            ax, ay = vertices[k]
-            bx, by = vertices[(k + 1) % len(vertices)]
-            # inside ⇔ cross > 0 for every edge; along the segment cross = c + t s
-            c = (bx - ax) * (y - ay) - (by - ay) * (x - ax)
-            s = (bx - ax) * ey - (by - ay) * ex
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t = -c / s
-            t_in = np.where(s > 0.0, np.maximum(t_in, t), t_in)
-            t_out = np.where(s < 0.0, np.minimum(t_out, t), t_out)
-            edge = -1e-12 if closed else 0.0
-            t_out = np.where((s == 0.0) & (c <= edge), -1.0, t_out)  # parallel, outside
-        length = t_out - t_in
-        return np.where(length >= -1e-12 if closed else length > ENTRY_MIN, t_in, np.nan)
-
-    return distance
+    lattice_shape = as_shape(shape).in_units(grid.dx)  # lattice units, node i at i + ½
+    return cuts_from_distance(grid.solid, lattice_shape.link_entry, scheme)
 
 
 def polygon_cuts(grid: Grid, vertices: np.ndarray, scheme: str = "trt") -> Cuts:
-    """Cuts of the links into a convex polygon given in µm (counter-clockwise vertices).
-
-    A segment enters a convex polygon at most once: q is the largest entry
-    parameter over the edges (Cyrus–Beck clipping), exact up to rounding.
-    ``grid.solid`` should be the closed polygon (``make_grid(..., closed=True)``)
-    so that no fluid node lies on the outline (q = 0).
-    """
-    verts = np.asarray(vertices, dtype=np.float64) / grid.dx  # lattice units, node i at i + ½
-    return cuts_from_distance(grid.solid, _polygon_entry(verts), scheme)
+    """Cuts of the links into a convex polygon given in µm (counter-clockwise vertices)."""
+    return shape_cuts(grid, ConvexPolygon(np.asarray(vertices, dtype=np.float64)), scheme)
 
 
 PILLAR_SCHEMES = {"interpolated": "trt", "bfl": "bfl"}
 
 
-def pillar_cuts(grid: Grid, vertices: np.ndarray, kind: str) -> Cuts | None:
-    """Cuts of the pillar for ``kind`` "interpolated" or "bfl"; None for "staircase"."""
+def pillar_cuts(grid: Grid, shape, kind: str) -> Cuts | None:
+    """Cuts of the pillar for ``kind`` "interpolated" or "bfl"; None for "staircase".
+
+    ``shape``: a :mod:`fibersweep.geometry` shape or convex polygon vertices (n, 2) [µm].
+    """
     if kind == "staircase":
         return None
     if kind not in PILLAR_SCHEMES:
         raise ValueError(
             f"unknown pillar boundary {kind!r}; valid: {[*PILLAR_SCHEMES, 'staircase']}"
         )
-    return polygon_cuts(grid, vertices, PILLAR_SCHEMES[kind])
+    return shape_cuts(grid, shape, PILLAR_SCHEMES[kind])
 
 
 def slab_cuts(grid: Grid, y_low: float, y_high: float, scheme: str = "trt") -> Cuts:

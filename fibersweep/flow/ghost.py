@@ -26,41 +26,12 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.ndimage import binary_dilation
 
-__all__ = ["GHOST_METHOD", "GHOST_REACH", "nearest_on_polygon", "ghost_stencil", "extend_into_wall"]
+from fibersweep.geometry import as_shape
+
+__all__ = ["GHOST_METHOD", "GHOST_REACH", "ghost_stencil", "extend_into_wall"]
 
 GHOST_METHOD = "mirror-1"  # recorded in FlowField.meta['wall_ghosts']
 GHOST_REACH = 3  # solid nodes within this many nodes (Chebyshev) of the fluid get a ghost value
-
-
-def nearest_on_polygon(vertices: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Nearest point on the outline of a polygon to each point.
-
-    Parameters
-    ----------
-    vertices : ndarray, shape (n_v, 2)
-        Polygon corners (any consistent units).
-    x, y : ndarray, shape (m,)
-        Points.
-
-    Returns
-    -------
-    ndarray, shape (m, 2)
-        Nearest outline points (same units).
-    """
-    best = np.full(x.shape, np.inf)
-    out = np.zeros((x.size, 2))
-    for k in range(len(vertices)):
-        a = vertices[k]
-        b = vertices[(k + 1) % len(vertices)]
-        d = b - a
-        t = np.clip(((x - a[0]) * d[0] + (y - a[1]) * d[1]) / (d @ d), 0.0, 1.0)
-        px, py = a[0] + t * d[0], a[1] + t * d[1]
-        dist = np.hypot(x - px, y - py)
-        better = dist < best
-        best = np.where(better, dist, best)
-        out[better, 0] = px[better]
-        out[better, 1] = py[better]
-    return out
 
 
 def ghost_stencil(
@@ -72,8 +43,9 @@ def ghost_stencil(
     ----------
     solid : ndarray, shape (nx, ny), bool
         Pillar nodes (x periodic; y = 0 and ny are walls).
-    vertices : ndarray, shape (n_v, 2)
-        Pillar outline [µm], node (i, j) at ((i + ½) Δx, (j + ½) Δx).
+    vertices : shape or ndarray, shape (n_v, 2)
+        Pillar outline [µm]: a :mod:`fibersweep.geometry` shape (any pillar,
+        circles included) or convex polygon corners; node (i, j) at ((i + ½) Δx, (j + ½) Δx).
     dx : float
         Node spacing [µm].
 
@@ -91,7 +63,7 @@ def ghost_stencil(
     gi, gj = np.nonzero(near)
     ghosts = gi * ny + gj
     gx, gy = (gi + 0.5) * dx, (gj + 0.5) * dx
-    w = nearest_on_polygon(np.asarray(vertices, float), gx, gy)
+    w = as_shape(vertices).nearest(gx, gy)[0]
     mx = (2.0 * w[:, 0] - gx) / dx - 0.5  # mirror point in node coordinates
     my = (2.0 * w[:, 1] - gy) / dx - 0.5
     i0 = np.floor(mx).astype(np.int64)

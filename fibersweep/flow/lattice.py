@@ -91,7 +91,7 @@ class Grid:
     dx : float
         Node spacing [µm].
     solid : ndarray, shape (nx, ny), bool
-        Pillar nodes (node centres strictly inside the triangle); full depth.
+        Pillar nodes (node centres strictly inside the pillar); full depth.
     """
 
     nx: int
@@ -132,21 +132,10 @@ def make_grid(
     if not pillar:
         solid = np.zeros((nx, ny), dtype=bool)
     elif closed:
-        solid = _signed_inside(geometry.vertices, X, Y) > -1e-9 * dx
+        solid = geometry.shape.inside(X, Y, margin=1e-9 * dx)
     else:
         solid = geometry.inside_pillar(X, Y)
     return Grid(nx, ny, nz, nz_full, symmetry, float(dx), solid)
-
-
-def _signed_inside(vertices: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Smallest distance [µm] of (x, y) to the edge lines of a convex CCW polygon, > 0 inside."""
-    out = np.full(np.broadcast(x, y).shape, np.inf)
-    for k in range(len(vertices)):
-        ax, ay = vertices[k]
-        bx, by = vertices[(k + 1) % len(vertices)]
-        cross = (bx - ax) * (y - ay) - (by - ay) * (x - ax)
-        out = np.minimum(out, cross / np.hypot(bx - ax, by - ay))
-    return out
 
 
 def boundary_links(grid: Grid) -> tuple[np.ndarray, np.ndarray]:

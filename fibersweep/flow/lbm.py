@@ -196,7 +196,7 @@ def solve_lattice(
     if grid is None:
         grid = lattice_of(settings, pillar=pillar)
         if pillar:
-            cuts = pillar_cuts(grid, geom.vertices, settings.pillar_boundary)
+            cuts = pillar_cuts(grid, geom.shape, settings.pillar_boundary)
     boundary = "none" if not grid.solid.any() else ("staircase" if cuts is None else "interpolated")
     tau, omega_p, omega_m, fx = _rates(settings, grid)
     nu = (tau - 0.5) / 3.0

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
+from fibersweep.geometry import PILLAR_SHAPES, ConvexPolygon, check_shape_name
 from fibersweep.units import Fluid, Geometry
 
 __all__ = ["GeometrySettings", "FluidSettings", "FlowSettings", "MIN_DEPTH_NODES"]
@@ -23,24 +25,84 @@ class GeometrySettings(_Strict):
     width: float = Field(800.0, gt=0, description="channel width W_ch (y) [µm]")
     depth: float = Field(40.0, gt=0, description="channel depth H_ch (z) [µm]")
     length: float = Field(2400.0, gt=0, description="periodic channel length L_ch (x) [µm]")
-    pillar_height: float = Field(75.0, gt=0, description="triangle height h_obs [µm]")
-    pillar_x: float | None = Field(None, description="x of the base centre [µm]; default L_ch/2")
-    pillar_y_base: float | None = Field(
-        None, description="y of the base line [µm]; default W_ch/2 - h_obs/3 (centroid centred)"
+    pillar_height: float = Field(
+        75.0,
+        gt=0,
+        description=(
+            "pillar size h_obs [µm]: triangle height, circle diameter, square side, "
+            "unit of polygon vertices"
+        ),
     )
+    pillar_x: float | None = Field(
+        None, description="x of the pillar centroid (triangle: base centre) [µm]; default L_ch/2"
+    )
+    pillar_y_base: float | None = Field(
+        None,
+        description=(
+            "y of the pillar's lowest point, the base line [µm]; default: centroid on the "
+            "centreline (W_ch/2 - h_obs/3 for the triangle)"
+        ),
+    )
+    pillar_shape: str = Field(
+        "triangle",
+        description=f"pillar outline: {', '.join(PILLAR_SHAPES)} (docs/shapes.md)",
+    )
+    pillar_rotation: float = Field(
+        0.0, description="counter-clockwise rotation of the pillar about its centroid [deg]"
+    )
+    pillar_vertices: tuple[tuple[float, float], ...] | None = Field(
+        None,
+        description="corners of a convex 'polygon' pillar, [x, y] in units of h_obs (any origin)",
+    )
+
+    @field_validator("pillar_shape")
+    @classmethod
+    def _known_shape(cls, name: str) -> str:
+        return check_shape_name(name)
+
+    @field_validator("pillar_rotation")
+    @classmethod
+    def _finite_rotation(cls, deg: float) -> float:
+        if not math.isfinite(deg):
+            raise ValueError("pillar_rotation must be a finite angle in degrees")
+        return deg
+
+    @field_validator("pillar_vertices")
+    @classmethod
+    def _convex(cls, verts: tuple | None) -> tuple | None:
+        if verts is not None:
+            ConvexPolygon.from_vertices(verts)  # ValueError says what is wrong
+        return verts
 
     @model_validator(mode="after")
     def _pillar_fits(self) -> GeometrySettings:
-        if not self.to_geometry().fits():
+        if self.pillar_shape == "polygon" and self.pillar_vertices is None:
+            raise ValueError("pillar_vertices: pillar_shape 'polygon' needs its vertices")
+        if self.pillar_shape != "polygon" and self.pillar_vertices is not None:
             raise ValueError(
-                "pillar does not fit in the channel: its vertices "
-                f"{self.to_geometry().vertices.round(2).tolist()} must lie inside "
+                f"pillar_vertices: only used with pillar_shape 'polygon' (here "
+                f"{self.pillar_shape!r}); remove it"
+            )
+        geo = self.to_geometry()
+        if not geo.fits():
+            x0, y0, x1, y1 = geo.shape.bounds
+            raise ValueError(
+                f"pillar does not fit in the channel: its {self.pillar_shape} spans "
+                f"x in [{x0:.2f}, {x1:.2f}], y in [{y0:.2f}, {y1:.2f}] and must lie inside "
                 f"x in (0, {self.length}), y in (0, {self.width})"
             )
         return self
 
     def to_geometry(self) -> Geometry:
         return Geometry(**self.model_dump())
+
+    def shape_is_default(self) -> bool:
+        """True for the model's unrotated triangle (the shape keys then stay out of cache keys)."""
+        return (
+            self.pillar_shape == "triangle"
+            and self.pillar_rotation == 0.0
+            and self.pillar_vertices is None
+        )
 
 
 class FluidSettings(_Strict):

@@ -89,7 +89,7 @@ def field_from_solution(settings: FlowSettings, sol: LatticeSolution) -> FlowFie
     ux, uy = midplane_average(sol.u, grid) * scale
     ghosts = settings.pillar_boundary != "staircase"
     if ghosts:  # sub-grid wall: solid nodes near it get mirrored values (ghost.py)
-        ux, uy = extend_into_wall(ux, uy, grid.solid, geom.vertices, grid.dx)
+        ux, uy = extend_into_wall(ux, uy, grid.solid, geom.shape, grid.dx)
     meta = {
         "solver_version": SOLVER_VERSION,
         "package_version": __version__,

@@ -1,7 +1,7 @@
 """The separatrix by streamline tracing (canonical): far-upstream y/h_obs of its streamline.
 
-Streamlines of the midplane field below the separatrix pass under the pillar's
-base, those above it pass over the apex; the one in between ends at the
+Streamlines of the midplane field below the separatrix pass under the pillar
+(the triangle's base), those above it pass over it (the apex); the one in between ends at the
 stagnation point on the upstream face. We trace a row of streamlines from the
 fibers' start line (x = L_ch/4 by default) with RK4, note on which side of the
 pillar each one crosses the pillar's centre line x = x_c, and bisect the
@@ -49,8 +49,9 @@ def trace_sides(
         −1 below the pillar, +1 above, 0 stalled (still upstream of x_c).
     """
     g = field.geometry
-    xc, yb = g.base_center
-    ymid = yb + 0.5 * g.pillar_height
+    xc, _ = g.base_center
+    low, high = g.shape.span_at(xc)  # the pillar on its centre line x = x_c
+    ymid = 0.5 * float(low[0] + high[0])
     x0 = g.length / 4.0 if x_start is None else x_start
     if x0 >= xc:
         raise ValueError(f"x_start = {x0} µm must be upstream of the pillar centre x = {xc} µm")

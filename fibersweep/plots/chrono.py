@@ -19,8 +19,8 @@ __all__ = ["chronophotograph"]
 
 def _window(traj, geometry: Geometry, margin: float) -> np.ndarray:
     """Samples whose fiber overlaps the x-window around the pillar."""
-    v = geometry.vertices
-    lo, hi = v[:, 0].min() - margin, v[:, 0].max() + margin
+    x_lo, _, x_hi, _ = geometry.shape.bounds
+    lo, hi = x_lo - margin, x_hi + margin
     xs = np.column_stack([traj.head[:, 0], traj.tail[:, 0]])
     return (xs.max(axis=1) > lo) & (xs.min(axis=1) < hi)
 
@@ -73,13 +73,12 @@ def chronophotograph(
     picks = np.unique(np.clip(np.searchsorted(tr.t, times), 0, len(tr.t) - 1))
     xb, yb = geometry.base_center
     h = geometry.pillar_height
+    outline = geometry.shape.outline()
     cmap = matplotlib.colormaps["viridis"]
     norm = Normalize(t0, t1)
     with paper_style():
         fig, ax = subplots(figsize=(7.0, 3.0))
-        ax.add_patch(
-            Polygon((geometry.vertices - [xb, yb]) / h, closed=True, fc="0.8", ec="0.3", lw=1.0)
-        )
+        ax.add_patch(Polygon((outline - [xb, yb]) / h, closed=True, fc="0.8", ec="0.3", lw=1.0))
         segs = []
         for k in picks:
             if tr.beads is not None:
@@ -101,12 +100,12 @@ def chronophotograph(
             ax.plot((tr.x[kc] - xb) / h, (tr.y[kc] - yb) / h, "x", color="#D55E00", ms=6,
                     label="centre of mass at first contact")  # fmt: skip
         # every drawn fiber and the pillar inside the axes, a little room around them
-        pts = np.vstack([*segs, (geometry.vertices - [xb, yb]) / h])
+        pts = np.vstack([*segs, (outline - [xb, yb]) / h])
         pad = 0.08
         ax.set_xlim(pts[:, 0].min() - pad, pts[:, 0].max() + pad)
         ax.set_ylim(min(pts[:, 1].min(), 0.0) - pad, pts[:, 1].max() + pad)
         ax.set_aspect("equal")
-        ax.set_xlabel(r"$x/h_{obs}$ (from the base centre)")
+        ax.set_xlabel(r"$x/h_{obs}$ (from the pillar centroid)")
         ax.set_ylabel(r"$y/h_{obs}$ (from the base)")
         st = result.start
         cls = result.cls or f"failed: {result.reason}"
