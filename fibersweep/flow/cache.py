@@ -75,9 +75,21 @@ class CacheInfo:
     coarse_steps: int = 0
 
 
+# settings added after entries were cached: left out of the key at their default,
+# so the fields computed before they existed keep their keys
+_KEY_OMITS_DEFAULT = ("precision",)
+
+
 def cache_key(settings: FlowSettings) -> str:
-    """sha256 (hex, 24 chars) of every setting plus the solver version."""
-    payload = {"settings": settings.model_dump(mode="json"), "solver": SOLVER_VERSION}
+    """sha256 (hex, 24 chars) of every setting plus the solver version.
+
+    Settings in ``_KEY_OMITS_DEFAULT`` enter only when they differ from their default.
+    """
+    dump = settings.model_dump(mode="json")
+    for name in _KEY_OMITS_DEFAULT:
+        if dump[name] == FlowSettings.model_fields[name].default:
+            del dump[name]
+    payload = {"settings": dump, "solver": SOLVER_VERSION}
     blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
     return hashlib.sha256(blob).hexdigest()[:24]
 

@@ -80,6 +80,14 @@ class FlowSettings(_Strict):
     )
     symmetry: bool = Field(True, description="solve half the depth with a free-slip midplane")
     keep_3d: bool = Field(False, description="keep the full 3D field in the cache")
+    precision: Literal["float32", "float64"] = Field(
+        "float32",
+        description=(
+            "storage and collision precision of the populations: float32 (default, "
+            "stored as the deviation f - w from rest, 76 B per cell) or float64 (the "
+            "reference, twice the memory and memory traffic: docs/precision.md)"
+        ),
+    )
 
     @field_validator("dx")
     @classmethod
