@@ -21,7 +21,7 @@ COARSE_SETTINGS = FlowSettings(dx=4.0)  # the tests' coarse field (conftest.coar
 
 
 def _duct(precision: str) -> tuple[float, np.ndarray, float]:
-    """(relative L2 error of ux against the series, ux, mass change) of a 2:1 duct, 20 nodes deep."""
+    """(relative L2 error of ux against the series, ux, mass change): 2:1 duct, 20 nodes deep."""
     depth, width = 20, 40
     settings = FlowSettings(
         geometry=GeometrySettings(width=width, depth=depth, length=2, pillar_height=0.5),
@@ -47,8 +47,9 @@ def test_float32_duct_as_accurate_as_float64():
     # Duct Poiseuille flow (TRT, 20 nodes across the depth) against the series:
     # the float32 error must equal the float64 one to 1 % of it (the
     # discretisation error dominates; rounding is 1e-7 relative), and the two
-    # fields agree to 1e-5 relative L2. Measured: both errors 2.3e-4 (float64
-    # 2.3046e-4, float32 2.3046e-4), fields differ by 2e-7.
+    # fields agree to 1e-5 relative L2. Measured: float64 2.3925e-4, float32
+    # 2.3805e-4 (0.5 % apart: each stops at the tolerance 1e-7 at a slightly
+    # different point), fields 1.3e-6 apart.
     e32, u32, m32 = _duct("float32")
     e64, u64, m64 = _duct("float64")
     assert e64 < 1e-2 and e32 < 1e-2, (e32, e64)
@@ -56,7 +57,7 @@ def test_float32_duct_as_accurate_as_float64():
     diff = np.linalg.norm(u32 - u64) / np.linalg.norm(u64)
     assert diff < 1e-5, diff
     # mass: half-way bounce-back walls conserve it link by link; tolerance 1e-9
-    # relative over the whole solve (measured below 1e-12 in both)
+    # relative over the whole solve (measured 7e-12 float32, 0 float64)
     assert abs(m32) < 1e-9 and abs(m64) < 1e-9, (m32, m64)
 
 
@@ -77,8 +78,8 @@ def test_float32_pillar_field_matches_float64(pillar_pair):
     # separatrix of the two precisions agrees to 0.001 h_obs, the midplane
     # velocity to 1e-4 relative L2 and the peak speeds to 1e-4 U. Both stop at
     # the same tolerance, so the difference is mostly where each stopped, not
-    # rounding. Measured: separatrix 0.0000 h_obs apart (see docs/precision.md),
-    # field 4e-7 relative L2.
+    # rounding. Measured: separatrix 2e-7 h_obs apart (0.342225), field 1.1e-6
+    # relative L2, peaks 3e-6 U apart.
     f32, f64 = pillar_pair
     # entries cached before the key existed carry no "precision": they are float32
     assert f32.meta["settings"].get("precision", "float32") == "float32"
@@ -97,7 +98,8 @@ def test_mass_conserved_in_both_precisions(pillar_pair):
     # Total fluid mass Σ ρ over the whole time loop of the pillar channel:
     # relative change below 1e-8 in either precision (the staircase wall
     # conserves it exactly, interpolated bounce-back leaks a little; measured
-    # |Δm/m| below 1e-10 for both walls and both precisions).
+    # 7.5e-12 float32 and 0 float64 with the staircase wall, 4e-11 and 4e-12
+    # with the interpolated one on a smaller channel).
     for field in pillar_pair:
         change = field.meta["report"]["mass_change"]
         assert abs(change) < 1e-8, (field.meta["settings"].get("precision"), change)
