@@ -3,11 +3,12 @@
 Kernel rate: one AA stepper per precision on the same channel, the two timed in
 alternating rounds (the machine may be shared: alternating spreads the load
 over both), best and median round reported with their ratio. Memory: for each
-precision a child process runs the solver (start-up and two convergence
-checks) on the same channel and reports its peak resident memory above the
-state after a warm-up solve (Linux: the peak is reset through
-/proc/self/clear_refs). Then the full channel at dx = 1 µm is extrapolated from
-the measured rates and bytes per cell: an extrapolation, not a measurement.
+precision a child process runs the fine level of a nested solve (started as the
+solver starts it, from the prolonged coarse level, then two convergence checks)
+and reports its peak resident memory above the state before that level (Linux:
+the peak is reset through /proc/self/clear_refs). Then the full channel at
+dx = 1 µm is extrapolated from the measured rates and bytes per cell: an
+extrapolation, not a measurement.
 
 Usage: python scripts/bench_precision.py [--dx 2] [--steps 200] [--threads 2]
 """
@@ -28,7 +29,8 @@ import numpy as np
 
 from fibersweep.flow.cuts import pillar_cuts
 from fibersweep.flow.initial import duct_guess, velocity_gradient
-from fibersweep.flow.lbm import _rates, lattice_of, solve_lattice
+from fibersweep.flow.lbm import _rates, coarser_settings, lattice_of, solve_lattice
+from fibersweep.flow.prolong import prolong
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.steppers import make_stepper
 
@@ -82,17 +84,27 @@ def _vm_kb(field: str) -> int:
 
 
 def child_memory(dx: float, boundary: str, precision: str, threads: int) -> None:
-    """(Child process) peak RSS of a solver start-up plus two checks, printed as JSON."""
+    """(Child process) peak RSS of the fine level of a nested solve, printed as JSON.
+
+    The fine level starts as in :func:`fibersweep.flow.lbm.solve_nested` (from the
+    prolonged coarse solution, here an unconverged one: same arrays, no wait) and
+    runs two convergence checks. The peak is counted from after the coarse level,
+    whose solve also compiles every kernel of this precision.
+    """
     numba.set_num_threads(threads)
-    # warm-up solve on the coarsest valid grid: compiles every kernel of this precision
-    solve_lattice(_settings(5.0, boundary, precision, max_steps=2, check_every=2))
+    s = _settings(dx, boundary, precision, max_steps=200, check_every=100)
+    cs = coarser_settings(s)
+    if cs is None:
+        raise SystemExit(f"dx = {dx:g} µm has no valid coarser grid: choose dx <= 2")
+    coarse = solve_lattice(cs.model_copy(update={"max_steps": 2, "check_every": 2}))
     Path("/proc/self/clear_refs").write_text("5")  # reset the peak (VmHWM) to now
     base = _vm_kb("VmRSS")
-    s = _settings(dx, boundary, precision, max_steps=200, check_every=100)
-    sol = solve_lattice(s)
+    fine_grid = lattice_of(s)
+    scale = _rates(s, fine_grid)[3] / coarse.report.force * (coarse.grid.dx / fine_grid.dx)
+    start = list(prolong(coarse.u, coarse.rho, coarse.grid, fine_grid, scale))
+    sol = solve_lattice(s, initial=start.pop(0), initial_rho=start.pop(0))
     peak = _vm_kb("VmHWM")
-    cells = sol.grid.cells
-    print(json.dumps({"base_kb": base, "peak_kb": peak, "cells": cells}))
+    print(json.dumps({"base_kb": base, "peak_kb": peak, "cells": sol.grid.cells}))
 
 
 def memory(dx: float, boundary: str, threads: int) -> dict:
@@ -145,7 +157,7 @@ def main() -> None:
         d = m[p]
         print(
             f"  {p}: peak memory {d['bytes_per_cell']:.0f} B per cell above the warmed-up "
-            f"interpreter ({(d['peak_kb'] - d['base_kb']) / 2**20:.2f} GB; interpreter "
+            f"state ({(d['peak_kb'] - d['base_kb']) / 2**20:.2f} GB; before it "
             f"{d['base_kb'] / 2**20:.2f} GB)"
         )
     print(f"load average after: {load1[0]:.2f} {load1[1]:.2f} {load1[2]:.2f}")
