@@ -75,20 +75,28 @@ class CacheInfo:
     coarse_steps: int = 0
 
 
+# settings added after entries were cached: left out of the key at their default,
+# so the fields computed before they existed keep their keys
 SHAPE_KEYS = ("pillar_shape", "pillar_rotation", "pillar_vertices")
+_KEY_OMITS_DEFAULT = ("precision",)
 
 
 def cache_key(settings: FlowSettings) -> str:
     """sha256 (hex, 24 chars) of every setting plus the solver version.
 
     The pillar-shape settings enter only when they differ from the model's
-    unrotated triangle, so that fields solved before shapes existed keep their key.
+    unrotated triangle, and those in ``_KEY_OMITS_DEFAULT`` only when they differ
+    from their default, so that fields solved before these settings existed keep
+    their key.
     """
-    dumped = settings.model_dump(mode="json")
+    dump = settings.model_dump(mode="json")
     if settings.geometry.shape_is_default():
         for name in SHAPE_KEYS:
-            dumped["geometry"].pop(name)
-    payload = {"settings": dumped, "solver": SOLVER_VERSION}
+            dump["geometry"].pop(name)
+    for name in _KEY_OMITS_DEFAULT:
+        if dump[name] == FlowSettings.model_fields[name].default:
+            del dump[name]
+    payload = {"settings": dump, "solver": SOLVER_VERSION}
     blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
     return hashlib.sha256(blob).hexdigest()[:24]
 

@@ -1,8 +1,11 @@
 """Numba kernels of the D3Q19 solver: fused pull-stream-collide and boundary fills.
 
 All kernels work on the padded, shifted population array ``g[q, z, y, x]``
-(float32, ``g = f - w``) described in :mod:`fibersweep.flow.lattice`, take
-arrays and floats only, and are wrapped by :mod:`fibersweep.flow.solver`.
+(``g = f - w``, float32 by default, float64 with ``flow.precision: float64``)
+described in :mod:`fibersweep.flow.lattice`, take arrays and floats only, and
+are wrapped by :mod:`fibersweep.flow.solver`. The collision computes in the
+storage precision (Numba compiles one specialisation per dtype); the moments
+used for convergence checks and results are summed in float64.
 
 Collision (TRT; BGK is ω+ = ω-), second-order equilibrium, Guo forcing with a
 body force density ``fx`` along x and the half-force velocity shift:
@@ -17,6 +20,8 @@ from __future__ import annotations
 
 import numba as nb
 import numpy as np
+from numba.extending import overload
+from numba.np.numpy_support import as_dtype
 
 __all__ = [
     "stream_collide",
@@ -27,14 +32,66 @@ __all__ = [
     "init_populations",
 ]
 
-_W0 = np.float32(1.0 / 3.0)
-_W1 = np.float32(1.0 / 18.0)
-_W2 = np.float32(1.0 / 36.0)
+
+def as_dtype_of(x, arr):  # pragma: no cover - replaced by the overload in jitted code
+    """``x`` cast to the element type of ``arr`` (usable inside Numba kernels only)."""
+    raise NotImplementedError("as_dtype_of is only callable from Numba-compiled code")
+
+
+@overload(as_dtype_of, inline="always")
+def _as_dtype_of(x, arr):
+    cast = arr.dtype
+
+    def impl(x, arr):
+        return cast(x)
+
+    return impl
+
+
+def lattice_weights(arr):  # pragma: no cover - replaced by the overload in jitted code
+    """(w0, w1, w2) as compile-time constants of the element type of ``arr`` (jitted code only)."""
+    raise NotImplementedError("lattice_weights is only callable from Numba-compiled code")
+
+
+@overload(lattice_weights, inline="always")
+def _lattice_weights(arr):
+    kind = as_dtype(arr.dtype).type
+    w0, w1, w2 = kind(1.0 / 3.0), kind(1.0 / 18.0), kind(1.0 / 36.0)  # frozen into the code
+
+    def impl(arr):
+        return w0, w1, w2
+
+    return impl
+
+
+@nb.njit(inline="always")
+def block_constants(g, fx, omega_p, omega_m):
+    """Collision constants in the element type of ``g`` (float32 or float64).
+
+    Returns (F, F/2, ω+, ω−, 1 − ω+/2, 1 − ω−/2, w0, w1, w2): the kernels then
+    compute entirely in the storage precision and specialise on it.
+    """
+    w0, w1, w2 = lattice_weights(g)
+    return (
+        as_dtype_of(fx, g),
+        as_dtype_of(0.5 * fx, g),
+        as_dtype_of(omega_p, g),
+        as_dtype_of(omega_m, g),
+        as_dtype_of(1.0 - 0.5 * omega_p, g),
+        as_dtype_of(1.0 - 0.5 * omega_m, g),
+        w0,
+        w1,
+        w2,
+    )
 
 
 @nb.njit(inline="always", fastmath=True)
 def _pair(gi, gj, w, eu, ef, d, rho, usq15, uf3, wp, wm, sp, sm):
-    """TRT update of one opposite pair (q, opp q); eu = e_q·u, ef = e_q·F."""
+    """TRT update of one opposite pair (q, opp q); eu = e_q·u, ef = e_q·F.
+
+    The float32 literals are exact (0.5, 3, 4.5, 9), so they promote without
+    rounding when the populations are float64.
+    """
     gp = np.float32(0.5) * (gi + gj)
     gm = np.float32(0.5) * (gi - gj)
     ep = w * (d + rho * (np.float32(4.5) * eu * eu - usq15))
@@ -46,18 +103,20 @@ def _pair(gi, gj, w, eu, ef, d, rho, usq15, uf3, wp, wm, sp, sm):
     return gi - a - b, gj - a + b
 
 
-CHUNK = 128  # x-cells per block: 19 x 128 float32 = 9.7 kB stays in L1
+CHUNK = 128  # x-cells per block: 19 x 128 float32 = 9.7 kB stays in L1 (float64: 19.5 kB)
 
 
 @nb.njit(inline="always", fastmath=True)
-def _collide_block(b, n, F, half_f, wp, wm, sp, sm):
-    """Collide the first ``n`` cells of a (19, CHUNK) float32 block in place.
+def _collide_block(b, n, F, half_f, wp, wm, sp, sm, w0, w1, w2):
+    """Collide the first ``n`` cells of a (19, CHUNK) block in place.
 
     TRT (BGK if wp == wm), second-order equilibrium, Guo forcing ``F`` along x;
-    ``half_f`` = F/2 is the half-force velocity shift, ``sp``/``sm`` = 1 − ω±/2.
+    ``half_f`` = F/2 is the half-force velocity shift, ``sp``/``sm`` = 1 − ω±/2,
+    ``w0``/``w1``/``w2`` the lattice weights; all scalars in the block's dtype
+    (:func:`block_constants`).
     """
-    one = np.float32(1.0)
-    zero = np.float32(0.0)
+    one = as_dtype_of(1.0, b)
+    zero = as_dtype_of(0.0, b)
     for i in range(n):
         f0 = b[0, i]
         f1 = b[1, i]
@@ -92,17 +151,17 @@ def _collide_block(b, n, F, half_f, wp, wm, sp, sm):
         uz = jz * inv
         usq15 = np.float32(1.5) * (ux * ux + uy * uy + uz * uz)
         uf3 = np.float32(3.0) * ux * F
-        e0 = _W0 * (d - rho * usq15)  # rest population: even part only
-        b[0, i] = f0 - wp * (f0 - e0) - sp * _W0 * uf3  # S_0 = -w_0 3 u.F
-        b[1, i], b[2, i] = _pair(f1, f2, _W1, ux, F, d, rho, usq15, uf3, wp, wm, sp, sm)
-        b[3, i], b[4, i] = _pair(f3, f4, _W1, uy, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
-        b[5, i], b[6, i] = _pair(f5, f6, _W1, uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
-        b[7, i], b[8, i] = _pair(f7, f8, _W2, ux + uy, F, d, rho, usq15, uf3, wp, wm, sp, sm)
-        b[9, i], b[10, i] = _pair(f9, f10, _W2, ux - uy, F, d, rho, usq15, uf3, wp, wm, sp, sm)
-        b[11, i], b[12, i] = _pair(f11, f12, _W2, ux + uz, F, d, rho, usq15, uf3, wp, wm, sp, sm)
-        b[13, i], b[14, i] = _pair(f13, f14, _W2, ux - uz, F, d, rho, usq15, uf3, wp, wm, sp, sm)
-        b[15, i], b[16, i] = _pair(f15, f16, _W2, uy + uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
-        b[17, i], b[18, i] = _pair(f17, f18, _W2, uy - uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
+        e0 = w0 * (d - rho * usq15)  # rest population: even part only
+        b[0, i] = f0 - wp * (f0 - e0) - sp * w0 * uf3  # S_0 = -w_0 3 u.F
+        b[1, i], b[2, i] = _pair(f1, f2, w1, ux, F, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[3, i], b[4, i] = _pair(f3, f4, w1, uy, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[5, i], b[6, i] = _pair(f5, f6, w1, uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[7, i], b[8, i] = _pair(f7, f8, w2, ux + uy, F, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[9, i], b[10, i] = _pair(f9, f10, w2, ux - uy, F, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[11, i], b[12, i] = _pair(f11, f12, w2, ux + uz, F, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[13, i], b[14, i] = _pair(f13, f14, w2, ux - uz, F, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[15, i], b[16, i] = _pair(f15, f16, w2, uy + uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
+        b[17, i], b[18, i] = _pair(f17, f18, w2, uy - uz, zero, d, rho, usq15, uf3, wp, wm, sp, sm)
 
 
 @nb.njit(cache=True, parallel=True, fastmath=True)
@@ -126,7 +185,7 @@ def stream_collide(
 
     Parameters
     ----------
-    g, gn : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
+    g, gn : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32 or float64
         Post-collision populations of the last step and the output.
     sources : ndarray, shape (nz * ny, 19, 4), int64
         Per row r = z * ny + y and population q: (q_src, z_src, y_src, x_off) in
@@ -140,16 +199,11 @@ def stream_collide(
     nx = g.shape[3] - 2
     ny = g.shape[2] - 2
     nrows = sources.shape[0]
-    wp = np.float32(omega_p)
-    wm = np.float32(omega_m)
-    sp = np.float32(1.0 - 0.5 * omega_p)
-    sm = np.float32(1.0 - 0.5 * omega_m)
-    F = np.float32(fx)
-    half_f = np.float32(0.5 * fx)
+    F, half_f, wp, wm, sp, sm, w0, w1, w2 = block_constants(g, fx, omega_p, omega_m)
     for r in nb.prange(nrows):
         z = r // ny + 1
         y = r - (z - 1) * ny + 1
-        b = np.empty((19, CHUNK), dtype=np.float32)
+        b = np.empty((19, CHUNK), dtype=g.dtype)
         for c0 in range(0, nx, CHUNK):
             # unsigned indices: numba then emits no negative-index wraparound
             # test, which would otherwise block vectorisation
@@ -160,7 +214,7 @@ def stream_collide(
                 bq = b[q]
                 for i in range(n):
                     bq[i] = src[off + i]
-            _collide_block(b, n, F, half_f, wp, wm, sp, sm)
+            _collide_block(b, n, F, half_f, wp, wm, sp, sm, w0, w1, w2)
             o = np.uint64(1 + c0)
             for q in range(19):
                 dst = gn[q, z, y]
@@ -178,7 +232,7 @@ def fill_pillar(g: np.ndarray, solid_cells: np.ndarray, links: np.ndarray) -> No
 
     Parameters
     ----------
-    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
+    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32 or float64
         Populations just written by :func:`stream_collide`.
     solid_cells : ndarray, shape (m,), int64
         Flat indices (in one padded plane) of pillar cells.
@@ -211,7 +265,7 @@ def apply_interpolated(
 
     Parameters
     ----------
-    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
+    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32 or float64
     dst : ndarray, shape (n,), int64
         Flat indices into the whole of ``g`` (slot × plane + cell).
     src : ndarray, shape (n, k), int64
@@ -260,7 +314,7 @@ def moments(
 
     Parameters
     ----------
-    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
+    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32 or float64
     sources : ndarray, shape (nz * ny, 19, 4), int64
         Pull table of :func:`stream_collide`.
     ex, ey, ez : ndarray, shape (19,), int64
@@ -314,7 +368,7 @@ def init_populations(
 
     Parameters
     ----------
-    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
+    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32 or float64
     u : ndarray, shape (3, nz, ny, nx), float64
         Lattice velocity.
     drho : ndarray, shape (nz, ny, nx), float64

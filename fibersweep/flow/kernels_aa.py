@@ -28,7 +28,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from fibersweep.flow.kernels import CHUNK, _collide_block
+from fibersweep.flow.kernels import CHUNK, _collide_block, block_constants
 
 __all__ = ["aa_even", "aa_odd", "apply_links"]
 
@@ -39,7 +39,7 @@ def aa_even(g: np.ndarray, opp: np.ndarray, fx: float, omega_p: float, omega_m: 
 
     Parameters
     ----------
-    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
+    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32 or float64
         Shifted populations (g = f − w); ghost layers are not used.
     opp : ndarray, shape (19,), int64
         Opposite directions.
@@ -49,16 +49,11 @@ def aa_even(g: np.ndarray, opp: np.ndarray, fx: float, omega_p: float, omega_m: 
         Relaxation rates of the even and odd moments.
     """
     nz, ny, nx = g.shape[1] - 2, g.shape[2] - 2, g.shape[3] - 2
-    wp = np.float32(omega_p)
-    wm = np.float32(omega_m)
-    sp = np.float32(1.0 - 0.5 * omega_p)
-    sm = np.float32(1.0 - 0.5 * omega_m)
-    F = np.float32(fx)
-    half_f = np.float32(0.5 * fx)
+    F, half_f, wp, wm, sp, sm, w0, w1, w2 = block_constants(g, fx, omega_p, omega_m)
     for r in nb.prange(nz * ny):
         z = r // ny + 1
         y = r - (z - 1) * ny + 1
-        b = np.empty((19, CHUNK), dtype=np.float32)
+        b = np.empty((19, CHUNK), dtype=g.dtype)
         for c0 in range(0, nx, CHUNK):
             n = np.uint64(min(CHUNK, nx - c0))  # unsigned: no wraparound test
             o = np.uint64(1 + c0)
@@ -67,7 +62,7 @@ def aa_even(g: np.ndarray, opp: np.ndarray, fx: float, omega_p: float, omega_m: 
                 bq = b[q]
                 for i in range(n):
                     bq[i] = src[o + i]
-            _collide_block(b, n, F, half_f, wp, wm, sp, sm)
+            _collide_block(b, n, F, half_f, wp, wm, sp, sm, w0, w1, w2)
             for q in range(19):
                 dst = g[opp[q], z, y]
                 bq = b[q]
@@ -88,7 +83,7 @@ def aa_odd(
 
     Parameters
     ----------
-    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
+    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32 or float64
     gather, scatter : ndarray, shape (nz * ny, 19, 4), int64
         Per row and population: (slot, z, y, x_off) in padded coordinates; cell i
         of the row reads ``g[slot, z, y, x_off + i]`` and writes its f*_q to
@@ -98,15 +93,10 @@ def aa_odd(
         As in :func:`aa_even`.
     """
     nx = g.shape[3] - 2
-    wp = np.float32(omega_p)
-    wm = np.float32(omega_m)
-    sp = np.float32(1.0 - 0.5 * omega_p)
-    sm = np.float32(1.0 - 0.5 * omega_m)
-    F = np.float32(fx)
-    half_f = np.float32(0.5 * fx)
+    F, half_f, wp, wm, sp, sm, w0, w1, w2 = block_constants(g, fx, omega_p, omega_m)
     last = np.uint64(nx)
     for r in nb.prange(gather.shape[0]):
-        b = np.empty((19, CHUNK), dtype=np.float32)
+        b = np.empty((19, CHUNK), dtype=g.dtype)
         for c0 in range(0, nx, CHUNK):
             n = np.uint64(min(CHUNK, nx - c0))
             ends_row = c0 + CHUNK >= nx
@@ -121,7 +111,7 @@ def aa_odd(
                     bq[0] = src[last]
                 if ends_row and xo == 2:  # last cell reads x = nx: cell 0
                     bq[n - np.uint64(1)] = src[1]
-            _collide_block(b, n, F, half_f, wp, wm, sp, sm)
+            _collide_block(b, n, F, half_f, wp, wm, sp, sm, w0, w1, w2)
             for q in range(19):
                 dst = g[scatter[r, q, 0], scatter[r, q, 1], scatter[r, q, 2]]
                 xo = scatter[r, q, 3]
@@ -141,7 +131,7 @@ def apply_links(g: np.ndarray, links: np.ndarray, reset_cells: np.ndarray) -> No
 
     Parameters
     ----------
-    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32
+    g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32 or float64
     links : ndarray, shape (n, 4), int64
         From :func:`fibersweep.flow.lattice.aa_links`.
     reset_cells : ndarray, shape (m,), int64

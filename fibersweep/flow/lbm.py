@@ -216,8 +216,9 @@ def solve_lattice(
     if rho0.shape != shape3:
         raise ValueError(f"initial_rho must have shape {shape3}, got {rho0.shape}")
     stepper = make_stepper(
-        kernel, grid, u0, rho0, velocity_gradient(u0, grid), fx, omega_p, omega_m, cuts=cuts
-    )
+        kernel, grid, u0, rho0, velocity_gradient(u0, grid), fx, omega_p, omega_m, cuts=cuts,
+        dtype=np.dtype(settings.precision),
+    )  # fmt: skip
     # the populations now hold the start: drop the float64 copies before the time
     # loop (1.2 GB at dx = 1 µm; solve_nested hands them over without keeping them)
     del u0, rho0, initial, initial_rho

@@ -10,9 +10,19 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validat
 from fibersweep.geometry import PILLAR_SHAPES, ConvexPolygon, check_shape_name
 from fibersweep.units import Fluid, Geometry
 
-__all__ = ["GeometrySettings", "FluidSettings", "FlowSettings", "MIN_DEPTH_NODES"]
+__all__ = [
+    "GeometrySettings",
+    "FluidSettings",
+    "FlowSettings",
+    "MIN_DEPTH_NODES",
+    "FLOAT32_MIN_TOLERANCE",
+]
 
 MIN_DEPTH_NODES = 8
+# float32 populations carry rounding noise of about one float32 epsilon (6e-8) of the
+# field: the relative change per check levels off there (measured 7e-8 past the pillar,
+# docs/precision.md), so a smaller tolerance may never be met
+FLOAT32_MIN_TOLERANCE = 1e-7
 
 
 class _Strict(BaseModel):
@@ -142,6 +152,14 @@ class FlowSettings(_Strict):
     )
     symmetry: bool = Field(True, description="solve half the depth with a free-slip midplane")
     keep_3d: bool = Field(False, description="keep the full 3D field in the cache")
+    precision: Literal["float32", "float64"] = Field(
+        "float32",
+        description=(
+            "storage and collision precision of the populations: float32 (default, "
+            "stored as the deviation f - w from rest, 76 B per cell) or float64 (the "
+            "reference, twice the memory and memory traffic: docs/precision.md)"
+        ),
+    )
 
     @field_validator("dx")
     @classmethod
@@ -174,3 +192,13 @@ class FlowSettings(_Strict):
                 f"(depth/dx = {geom.depth / dx:g}); use symmetry: false or another dx"
             )
         return symmetry
+
+    @model_validator(mode="after")
+    def _reachable_tolerance(self) -> FlowSettings:
+        if self.precision == "float32" and self.tolerance < FLOAT32_MIN_TOLERANCE:
+            raise ValueError(
+                f"tolerance = {self.tolerance:g} is below what float32 populations can "
+                f"resolve (the relative change per check levels off near 7e-8); use a "
+                f"tolerance >= {FLOAT32_MIN_TOLERANCE:g} or precision: float64"
+            )
+        return self

@@ -19,7 +19,18 @@ from fibersweep.flow.lattice import (
     pull_sources,
 )
 
-__all__ = ["STEPPERS", "PullStepper", "AAStepper", "make_stepper"]
+__all__ = ["STEPPERS", "PRECISIONS", "PullStepper", "AAStepper", "make_stepper"]
+
+
+PRECISIONS = ("float32", "float64")
+
+
+def _storage(dtype: np.dtype | type) -> np.dtype:
+    """``dtype`` checked to be one of ``PRECISIONS``."""
+    dt = np.dtype(dtype)
+    if dt.name not in PRECISIONS:
+        raise ValueError(f"unknown population precision {dt.name!r}; valid: {list(PRECISIONS)}")
+    return dt
 
 
 def _apply(g: np.ndarray, table: LinkTable, buf: np.ndarray, reset: np.ndarray) -> None:
@@ -31,13 +42,14 @@ class PullStepper:
 
     ``cuts`` None: the pillar is a staircase of cells bounced back half-way;
     otherwise interpolated bounce-back at the wall fractions ``cuts``.
+    ``dtype``: storage (and collision) precision of the populations, float32 or float64.
     """
 
     step_multiple = 1
 
     def __init__(
         self, grid: Grid, u0, rho0, grad, fx: float, omega_p: float, omega_m: float,
-        cuts: Cuts | None = None,
+        cuts: Cuts | None = None, dtype: np.dtype | type = np.float32,
     ):  # fmt: skip
         self.fx, self.omega_p, self.omega_m = fx, omega_p, omega_m
         self.links, self.solid_cells = boundary_links(grid)
@@ -47,7 +59,7 @@ class PullStepper:
         )
         self.buf = np.zeros(0 if cuts is None else self.table.dst.size)
         self.e = tuple(np.ascontiguousarray(E[:, k]) for k in range(3))
-        self.g = np.zeros(grid.padded_shape, dtype=np.float32)
+        self.g = np.zeros(grid.padded_shape, dtype=_storage(dtype))
         self.gn = np.zeros_like(self.g)
         kernels.init_populations(self.g, u0, rho0, grad, omega_p, True, W, *self.e)
         kernels.fill_periodic(self.g)
@@ -76,14 +88,14 @@ class PullStepper:
 class AAStepper:
     """In-place AA pattern on one array (152 B per cell update); steps come in pairs.
 
-    ``cuts`` as for :class:`PullStepper`.
+    ``cuts`` and ``dtype`` as for :class:`PullStepper`.
     """
 
     step_multiple = 2
 
     def __init__(
         self, grid: Grid, u0, rho0, grad, fx: float, omega_p: float, omega_m: float,
-        cuts: Cuts | None = None,
+        cuts: Cuts | None = None, dtype: np.dtype | type = np.float32,
     ):  # fmt: skip
         self.fx, self.omega_p, self.omega_m = fx, omega_p, omega_m
         self.gather, self.scatter = aa_tables(grid)
@@ -104,7 +116,7 @@ class AAStepper:
         ident[:, :, 2] = (j + 1)[:, None]
         ident[:, :, 3] = 1
         self.local = ident
-        self.g = np.zeros(grid.padded_shape, dtype=np.float32)
+        self.g = np.zeros(grid.padded_shape, dtype=_storage(dtype))
         kernels.init_populations(self.g, u0, rho0, grad, omega_p, False, W, *self.e)
 
     def advance(self, n: int) -> None:
@@ -133,13 +145,16 @@ class AAStepper:
 STEPPERS = {"pull": PullStepper, "aa": AAStepper}
 
 
-def make_stepper(name: str, *args, cuts: Cuts | None = None) -> PullStepper | AAStepper:
+def make_stepper(
+    name: str, *args, cuts: Cuts | None = None, dtype: np.dtype | type = np.float32
+) -> PullStepper | AAStepper:
     """The stepper called ``name`` ("aa" or "pull"); unknown names fail listing the valid ones.
 
     ``cuts``: wall fractions for interpolated bounce-back (None: staircase pillar).
+    ``dtype``: population precision, float32 (default) or float64.
     """
     try:
         cls = STEPPERS[name]
     except KeyError:
         raise ValueError(f"unknown LBM kernel {name!r}; valid: {sorted(STEPPERS)}") from None
-    return cls(*args, cuts=cuts)
+    return cls(*args, cuts=cuts, dtype=dtype)
