@@ -22,9 +22,11 @@ TINY = FlowSettings(
 
 
 def _key_without_precision(settings: FlowSettings) -> str:
-    """The key as computed before ``precision`` existed (every other setting + solver)."""
+    """The key as computed before ``precision`` (and the pillar shapes) existed."""
     dump = settings.model_dump(mode="json")
     dump.pop("precision")
+    for name in ("pillar_shape", "pillar_rotation", "pillar_vertices"):  # default triangle
+        dump["geometry"].pop(name)
     blob = json.dumps({"settings": dump, "solver": SOLVER_VERSION}, sort_keys=True,
                       separators=(",", ":")).encode()  # fmt: skip
     return hashlib.sha256(blob).hexdigest()[:24]
