@@ -11,6 +11,7 @@ arrays are opened memory-mapped, read-only.
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import logging
@@ -20,6 +21,7 @@ import tempfile
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -75,28 +77,41 @@ class CacheInfo:
     coarse_steps: int = 0
 
 
-# settings added after entries were cached: left out of the key at their default,
-# so the fields computed before they existed keep their keys
-SHAPE_KEYS = ("pillar_shape", "pillar_rotation", "pillar_vertices")
-_KEY_OMITS_DEFAULT = ("precision",)
+# Settings added after fields were cached, with the value that reproduces what was
+# computed before they existed: at that value they stay out of the key, so those
+# fields keep their keys (and stored sweeps compare equal, see key_settings).
+GEOMETRY_ADDED = {"pillar_shape": "triangle", "pillar_rotation": 0.0, "pillar_vertices": None}
+FLOW_ADDED = {"precision": "float32"}
+
+
+def key_settings(flow: dict[str, Any]) -> dict[str, Any]:
+    """Flow settings as JSON (``FlowSettings.model_dump(mode="json")``, or a stored
+    manifest's, which may predate some keys) as they enter the cache key.
+
+    Keys added later are dropped at the value that reproduces older fields (the
+    pillar-shape keys only together, for the unrotated triangle), so a settings
+    dump from before they existed and one from now compare equal.
+    """
+    out = copy.deepcopy(flow)
+    geometry = out.get("geometry")
+    if isinstance(geometry, dict) and all(
+        geometry.get(k, v) == v for k, v in GEOMETRY_ADDED.items()
+    ):
+        for k in GEOMETRY_ADDED:
+            geometry.pop(k, None)
+    for k, v in FLOW_ADDED.items():
+        if out.get(k, v) == v:
+            out.pop(k, None)
+    return out
 
 
 def cache_key(settings: FlowSettings) -> str:
     """sha256 (hex, 24 chars) of every setting plus the solver version.
 
-    The pillar-shape settings enter only when they differ from the model's
-    unrotated triangle, and those in ``_KEY_OMITS_DEFAULT`` only when they differ
-    from their default, so that fields solved before these settings existed keep
-    their key.
+    Settings added after fields were first cached enter only away from the value
+    that reproduces those fields (:func:`key_settings`), so they keep their keys.
     """
-    dump = settings.model_dump(mode="json")
-    if settings.geometry.shape_is_default():
-        for name in SHAPE_KEYS:
-            dump["geometry"].pop(name)
-    for name in _KEY_OMITS_DEFAULT:
-        if dump[name] == FlowSettings.model_fields[name].default:
-            del dump[name]
-    payload = {"settings": dump, "solver": SOLVER_VERSION}
+    payload = {"settings": key_settings(settings.model_dump(mode="json")), "solver": SOLVER_VERSION}
     blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
     return hashlib.sha256(blob).hexdigest()[:24]
 

@@ -106,14 +106,6 @@ class GeometrySettings(_Strict):
     def to_geometry(self) -> Geometry:
         return Geometry(**self.model_dump())
 
-    def shape_is_default(self) -> bool:
-        """True for the model's unrotated triangle (the shape keys then stay out of cache keys)."""
-        return (
-            self.pillar_shape == "triangle"
-            and self.pillar_rotation == 0.0
-            and self.pillar_vertices is None
-        )
-
 
 class FluidSettings(_Strict):
     """Fluid properties (docs/model.md)."""

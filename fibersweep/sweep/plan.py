@@ -75,12 +75,14 @@ def base_settings(
         the flow settings themselves when a flow setting is swept (its key differs
         per run then).
     """
+    from fibersweep.flow.cache import key_settings
+
     fiber = copy.deepcopy(config_json.get("fiber", {}))
     fiber.pop("classify", None)
     out: dict[str, Any] = {"fiber": fiber}
     flow_swept = any(k.startswith("flow.") for k in swept)
-    if flow_swept:
-        out["flow"] = copy.deepcopy(config_json.get("flow", {}))
+    if flow_swept:  # as in the cache key: a manifest from before a key was added matches
+        out["flow"] = key_settings(config_json.get("flow", {}))
     else:
         out["flow_key"] = flow_key
     for key in swept:

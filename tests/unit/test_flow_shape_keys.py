@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from pydantic import ValidationError
 
-from fibersweep.flow.cache import SHAPE_KEYS, cache_key
+from fibersweep.flow.cache import GEOMETRY_ADDED, cache_key
 from fibersweep.flow.settings import FlowSettings
 
 
@@ -30,7 +30,7 @@ def test_default_triangle_keeps_the_key_of_fields_solved_before_shapes():
         )
     }
     assert len(keys) == 6
-    assert all(name in default.geometry.model_dump() for name in SHAPE_KEYS)
+    assert all(name in default.geometry.model_dump() for name in GEOMETRY_ADDED)
 
 
 @pytest.mark.parametrize(

@@ -125,6 +125,30 @@ def test_flow_axes_compare_the_unswept_flow_settings(tmp_path):
         plan_sweep(other, keys)
 
 
+def test_flow_axes_accept_a_manifest_from_before_keys_were_added(tmp_path):
+    """Keys added since (pillar shape, precision) at their old-behaviour values are no change."""
+    import json
+
+    from fibersweep.sweep.manifest import MANIFEST
+
+    cfg = _cfg(tmp_path, {"flow.geometry.pillar_height": [75, 60]})
+    keys = ["K75", "K60"]
+    _store(cfg, keys)
+    path = tmp_path / "out" / MANIFEST
+    man = json.loads(path.read_text())
+    del man["config"]["flow"]["precision"]
+    for name in ("pillar_shape", "pillar_rotation", "pillar_vertices"):
+        del man["config"]["flow"]["geometry"][name]
+    path.write_text(json.dumps(man))
+    assert plan_sweep(cfg, keys).todo == []
+    # away from the old behaviour the same keys are a change, named
+    circle = parse_config(
+        {**cfg.model_dump(mode="json"), "flow": {"geometry": {"pillar_shape": "circle"}}}
+    )
+    with pytest.raises(InputError, match=r"pillar_shape: \(absent\) -> 'circle'"):
+        plan_sweep(circle, keys)
+
+
 def test_runs_table_columns_of_swept_keys_are_typed_with_units(tmp_path):
     cfg = _cfg(tmp_path, {FRICTION: [0, 0.3], "fiber.contact.pillar": ["rough", "smooth"]})
     _store(cfg)
