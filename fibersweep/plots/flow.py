@@ -90,9 +90,12 @@ def _draw(field, x, y, ux, uy, speed, sel, sely, sep, y_traced, psi, hw):
         rf"$U_{{center}}$ = {u0:g} µm/s"
     )
 
+    # Profiles stop at the wall: a sub-grid pillar's solid nodes hold ghost values (the
+    # mirror of the flow outside, for interpolation), which are not a velocity.
+    ux_fluid = np.where(np.asarray(field.solid), np.nan, ux)
     ax1 = fig.add_subplot(gs[1, 0])
     j = int(np.argmin(np.abs(y - yc)))
-    ax1.plot(x, ux[:, j])
+    ax1.plot(x, ux_fluid[:, j])
     ax1.axvspan(*geom.vertices[:2, 0], color="0.85", label="pillar")
     ax1.set_xlabel(r"$x$ [µm]")
     ax1.set_ylabel(r"$u_x/U_{center}$")
@@ -103,7 +106,7 @@ def _draw(field, x, y, ux, uy, speed, sel, sely, sep, y_traced, psi, hw):
 
     ax2 = fig.add_subplot(gs[1, 1])
     i = int(np.argmin(np.abs(x - xc)))
-    ax2.plot(y, ux[i], label="through the apex")
+    ax2.plot(y, ux_fluid[i], label="through the apex")
     i_far = int(np.argmin(np.abs(x - geom.x_far)))
     ax2.plot(y, ux[i_far], ls="--", label="far from the pillar")
     yb = geom.base_center[1]
