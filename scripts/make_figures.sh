@@ -15,8 +15,8 @@ cd "$work"
 fs() { PYTHONPATH="$repo${PYTHONPATH:+:$PYTHONPATH}" python3 -m fibersweep "$@"; }
 
 fs flow configs/quick.yaml --plot "$out/flow.png"
-fs simulate configs/quick.yaml --theta0 -8 --y0 0.41 --length 1 --plot "$out/vault.png"
-fs simulate configs/quick.yaml --theta0 8 --y0 0.33 --length 1 --plot "$out/trap.png"
+fs simulate configs/quick.yaml --theta0 -8 --y0 0.39 --length 1 --plot "$out/vault.png"
+fs simulate configs/quick.yaml --theta0 8 --y0 0.30 --length 1 --plot "$out/trap.png"
 fs run configs/quick.yaml
 fs plot-phase results/quick -o "$out"
 fs run configs/friction_axis.yaml

@@ -133,12 +133,12 @@ class FlowSettings(_Strict):
     check_every: int = Field(100, ge=1, description="steps between convergence checks")
     max_steps: int = Field(200_000, ge=1, description="hard limit on LBM steps")
     pillar_boundary: Literal["staircase", "interpolated", "bfl"] = Field(
-        "staircase",
+        "interpolated",
         description=(
-            "pillar wall: the staircase of lattice cells bounced back half-way (default; "
-            "first order, its separatrix depends on where the pillar sits on the grid), "
-            "interpolated bounce-back at the exact sub-grid wall (second order, 2.5x less "
-            "placement-sensitive: docs/fidelity.md), or plain linear "
+            "pillar wall: interpolated bounce-back at the exact sub-grid wall (default; "
+            "second order, 2.5x less sensitive to where the pillar sits on the grid: "
+            "docs/fidelity.md), the staircase of lattice cells bounced back half-way "
+            "(first order, kept for comparison), or plain linear "
             "Bouzidi-Firdaouss-Lallemand ('bfl')"
         ),
     )

@@ -25,12 +25,13 @@ from typer.testing import CliRunner
 from fibersweep.cli import app
 from fibersweep.sweep.store import RUNS_DIR, list_parts, read_runs, read_trajectories
 
-# Points around the separatrix (y/h ~ 0.35 on this grid) plus far ones: all four classes
-# appear on this grid (trapping at theta0 = 8, y0 = 0.33; pole-vaulting at -8, 0.42).
+# Points around the separatrix (y/h ~ 0.32 on this grid, sub-grid pillar) plus far ones: all
+# four classes appear on this grid (trapping at theta0 = 8, y0 = 0.30 and -8, 0.33;
+# pole-vaulting at -8, 0.39).
 SWEEP = """
 sweep:
   theta0: [-8.0, 0.0, 8.0]
-  y0: [0.2, 0.33, 0.36, 0.42, 0.6, 0.9]
+  y0: [0.2, 0.30, 0.33, 0.39, 0.6, 0.9]
   length: [1.0]
 """
 # Columns that depend on when/where a run happened, not on its physics.
@@ -82,7 +83,7 @@ def test_run_writes_complete_table_and_provenance(reference):
     assert prov["flow_key"] and prov["fibersweep"] and "numpy" in prov["libraries"]
     assert "git" in prov
     assert 0.25 < man["separatrix"] < 0.45, man["separatrix"]  # SPEC: ~1/3, 0.36 coarse BGK
-    assert man["config"]["sweep"]["y0"] == [0.2, 0.33, 0.36, 0.42, 0.6, 0.9]
+    assert man["config"]["sweep"]["y0"] == [0.2, 0.30, 0.33, 0.39, 0.6, 0.9]
     meta = json.loads(pq.read_schema(list_parts(out / RUNS_DIR)[0]).metadata[b"fibersweep"])
     assert meta["flow_key"] == prov["flow_key"]
     traj = read_trajectories(out)

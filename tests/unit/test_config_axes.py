@@ -157,4 +157,4 @@ def test_shipped_axis_example_is_valid():
 
     cfg = load_config(Path(__file__).parents[2] / "configs" / "friction_axis.yaml")
     assert cfg.sweep.setting_keys == ["fiber.effects.friction", "fiber.contact.pillar"]
-    assert len(cfg.combinations()) == 6 and cfg.sweep.size == 15
+    assert len(cfg.combinations()) == 6 and cfg.sweep.size == 18

@@ -1,7 +1,9 @@
 """Fibers meeting the pillar in the LBM field (SPEC sections 3-5).
 
-Non-slow tests use ``coarse_field`` (dx = 4 µm); the SPEC's source resolution
-(dx = 2 µm) runs under ``-m slow``.
+Non-slow tests use ``coarse_field`` (dx = 4 µm, default sub-grid pillar); the SPEC's
+source resolution (dx = 2 µm) runs under ``-m slow``. Tests at the source's quoted starts
+are pinned to the staircase pillar (their docstrings say why); the physics of the worked
+examples is tested at starts relative to the field's separatrix.
 """
 
 from __future__ import annotations
@@ -65,15 +67,29 @@ def test_no_bead_enters_the_pillar(coarse_field, pillar):
         assert r.min_clearance > bound, r
 
 
-def test_worked_example_pole_vault_motion(coarse_field):
+@pytest.fixture(scope="module")
+def staircase_field(flow_cache_dir):
+    """The SPEC geometry at dx = 4 µm with the staircase pillar (the pre-sub-grid default)."""
+    from fibersweep.flow.cache import get_flow_field
+
+    field, _ = get_flow_field(FlowSettings(dx=4.0, pillar_boundary="staircase"), flow_cache_dir)
+    return field
+
+
+def test_worked_example_pole_vault_motion_on_the_staircase(staircase_field):
     """θ0 = −3.7°, y0/h = 0.373, L/l_obs = 0.82 (source: Pole-vaulting with a clear shift).
 
-    Baseline model (rough pillar, χ = 1.1, no extra friction): the fiber touches the
-    upstream face low down, swings round its head and leaves with head and tail swapped,
-    shifted up. Its head slides up the face at ≈ 0.09 U_center, above the SPEC's
-    'blocked' threshold of 0.01 U_center, so the rule calls it Above (reported to the lead).
+    Pinned to the staircase pillar on purpose: this documents what the quoted start does on
+    a field whose separatrix (0.351 h at dx = 4 µm) is close to the source's. Baseline model
+    (rough pillar, χ = 1.1, no extra friction): the fiber touches the upstream face low
+    down, swings round its head and leaves with head and tail swapped, shifted up. Its head
+    slides up the face at ≈ 0.09 U_center, above the SPEC's 'blocked' threshold of
+    0.01 U_center, so the rule calls it Above. On the default sub-grid field (separatrix
+    0.322) the same start is 0.05 h above the separatrix and passes over without turning
+    round (docs/fidelity.md, re-check section); the physics of the example is tested
+    relative to the separatrix below.
     """
-    r = simulate(coarse_field, BASE, EX_VAULT)
+    r = simulate(staircase_field, BASE, EX_VAULT)
     assert r.status == "ok" and r.contact
     assert 0.05 < r.y_c < 0.3  # contact low on the upstream face
     assert abs(r.theta_f - EX_VAULT.theta0) > 150.0  # head and tail swapped
@@ -81,11 +97,17 @@ def test_worked_example_pole_vault_motion(coarse_field):
     assert r.cls == "Above"
 
 
-def test_worked_examples_with_pillar_friction(coarse_field):
+def test_worked_examples_with_pillar_friction_on_the_staircase(staircase_field):
     """With Coulomb friction μ_f = 0.3 on the pillar (roughness), both of the source's
-    worked examples get the source's class."""
-    assert simulate(coarse_field, FRICTION, EX_VAULT).cls == "Pole-vaulting"
-    r = simulate(coarse_field, FRICTION, EX_TRAP)
+    worked examples get the source's class at their quoted starts.
+
+    Pinned to the staircase pillar: at the quoted starts this holds only on a field whose
+    separatrix (0.351 h) is close to the source's. On the default sub-grid field (0.322 h)
+    the trapping start lies 0.03 h above the separatrix and passes over the apex (Above,
+    with or without friction); relative to the separatrix, friction keeps both classes
+    (next test)."""
+    assert simulate(staircase_field, FRICTION, EX_VAULT).cls == "Pole-vaulting"
+    r = simulate(staircase_field, FRICTION, EX_TRAP)
     assert r.cls == "Trapping"
     assert r.y_c == pytest.approx(0.0, abs=0.02)  # on the upstream corner
     assert r.theta_c > 30.0  # tilted toward the top
@@ -200,26 +222,32 @@ def _classes_around_the_separatrix(field) -> None:
 SOURCE_SEPARATRIX = 0.36  # SPEC section 2: the independent coarse check's separatrix
 
 
-def _worked_examples_relative_to_separatrix(field) -> None:
+def _worked_examples_relative_to_separatrix(field, settings: FiberSettings = BASE) -> None:
     """The worked examples placed at the same distance from *this* field's separatrix
     as from the source's (0.36 h, the SPEC's independent check): y0' = y0 − (0.36 − y_s).
-    Baseline model, no friction: θ0 = −3.7° pole-vaults after touching the upstream face
-    low down with θ_c < 0 (SPEC contact map: 0.1 ≤ y_c ≤ 0.4); θ0 = 8° is trapped on the
-    upstream corner (y_c ≈ 0), tilted toward the top (θ_c > 30°)."""
+    Baseline model unless ``settings`` says otherwise: θ0 = −3.7° pole-vaults after
+    touching the upstream face low down with θ_c < 0 (SPEC contact map: 0.1 ≤ y_c ≤ 0.4);
+    θ0 = 8° is trapped on the upstream corner (y_c ≈ 0), tilted toward the top (θ_c > 30°)."""
     from fibersweep.flow.streamlines import separatrix_y
 
     shift = SOURCE_SEPARATRIX - separatrix_y(field)
-    r = simulate(field, BASE, FiberStart(-3.7, 0.373 - shift, 0.82))
+    r = simulate(field, settings, FiberStart(-3.7, 0.373 - shift, 0.82))
     assert r.cls == "Pole-vaulting", r
     assert r.theta_c < 0 and 0.05 <= r.y_c <= 0.4
     assert r.delta > 0.1  # a clear lateral shift
-    r = simulate(field, BASE, FiberStart(8.0, 0.351 - shift, 0.75))
+    r = simulate(field, settings, FiberStart(8.0, 0.351 - shift, 0.75))
     assert r.cls == "Trapping", r
     assert r.y_c == pytest.approx(0.0, abs=0.02) and r.theta_c > 30.0
 
 
 def test_worked_examples_relative_to_separatrix(coarse_field):
     _worked_examples_relative_to_separatrix(coarse_field)
+
+
+def test_worked_examples_relative_to_separatrix_with_pillar_friction(coarse_field):
+    """Friction (μ_f = 0.3) does not remove pole-vaulting or trapping (SPEC section 5: it
+    is not needed for them, it widens their range): same statements as without it."""
+    _worked_examples_relative_to_separatrix(coarse_field, FRICTION)
 
 
 @pytest.mark.slow
