@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -32,7 +32,15 @@ from fibersweep.discrepancy.gap import assess_gap, feature_vector, value_matrice
 from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.scores import score_matrix
 
-__all__ = ["Signature", "Fit", "rank_effects", "fit_effect", "combined_loss"]
+__all__ = [
+    "Signature",
+    "Fit",
+    "rank_effects",
+    "fit_effect",
+    "combined_loss",
+    "per_fiber_loss",
+    "bootstrap_interval",
+]
 
 log = logging.getLogger(__name__)
 
@@ -69,6 +77,9 @@ class Fit:
     loss, loss0 : float
         Combined score at the fitted value and at the baseline (same copies).
     evaluations : tuple of (value, loss)
+    profile : tuple of (value, ndarray (n_fit,))
+        Per-fiber loss at every evaluated value (:func:`per_fiber_loss`; its
+        mean is the loss), for :func:`bootstrap_interval`.
     """
 
     name: str
@@ -76,6 +87,7 @@ class Fit:
     loss: float
     loss0: float
     evaluations: tuple[tuple[float, float], ...]
+    profile: tuple[tuple[float, np.ndarray], ...] = field(default=(), repr=False, compare=False)
 
 
 def combined_loss(values: Mapping[str, np.ndarray], weights: Mapping[str, float]) -> float:
@@ -86,6 +98,67 @@ def combined_loss(values: Mapping[str, np.ndarray], weights: Mapping[str, float]
         if np.isfinite(s).any():
             total += weights.get(name, 0.0) * float(np.nanmean(s))
     return total
+
+
+def per_fiber_loss(values: Mapping[str, np.ndarray], weights: Mapping[str, float]) -> np.ndarray:
+    """Per-fiber combined score, shape (n,): its mean is :func:`combined_loss`.
+
+    A fiber whose score of an observable is undefined (NaN) gets that
+    observable's mean score, so that the mean over fibers is unchanged.
+    """
+    tot: np.ndarray | None = None
+    for name, V in values.items():
+        s = score_matrix(name, V)[:, 0]
+        tot = np.zeros(len(s)) if tot is None else tot
+        w = weights.get(name, 0.0)
+        if w == 0.0 or not np.isfinite(s).any():
+            continue
+        tot = tot + w * np.where(np.isfinite(s), s, np.nanmean(s))
+    return tot if tot is not None else np.zeros(0)
+
+
+def bootstrap_interval(
+    fit: Fit, rng: np.random.Generator, n_boot: int = 2000, level: float = 0.95
+) -> tuple[float, float]:
+    """Percentile bootstrap interval of a fitted value, resampling the fibers.
+
+    Every bootstrap sample of the fit fibers sums their per-fiber losses at the
+    evaluated values (the fit's ``profile``, no new simulation) and takes the
+    minimiser: the best evaluated value, refined by the vertex of the parabola
+    through it and its two neighbours when it is interior (clipped to them).
+    The copies are held fixed (common random numbers), so the interval is the
+    uncertainty from which fibers were measured, not from the copies' Monte
+    Carlo noise; its resolution is that of the evaluated values.
+
+    Returns
+    -------
+    (lo, hi) : tuple of float
+        ``(value, value)`` when fewer than two values were evaluated.
+    """
+    if len(fit.profile) < 2:
+        return (fit.value, fit.value)
+    pts = sorted(fit.profile, key=lambda p: p[0])
+    x = np.array([p[0] for p in pts])
+    L = np.stack([p[1] for p in pts])  # (k, n)
+    n = L.shape[1]
+    idx = rng.integers(0, n, size=(n_boot, n))
+    means = L[:, idx].mean(axis=2)  # (k, n_boot)
+    j = np.argmin(means, axis=0)
+    est = x[j].astype(np.float64)
+    inner = (j > 0) & (j < len(x) - 1)
+    if inner.any():
+        b = np.arange(n_boot)[inner]
+        jj = j[inner]
+        x0, x1, x2 = x[jj - 1], x[jj], x[jj + 1]
+        y0, y1, y2 = means[jj - 1, b], means[jj, b], means[jj + 1, b]
+        num = (x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)
+        den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vert = x1 - 0.5 * num / den
+        vert = np.where(np.isfinite(vert), np.clip(vert, x0, x2), x1)
+        est[inner] = vert
+    a = (1.0 - level) / 2.0
+    return float(np.quantile(est, a)), float(np.quantile(est, 1.0 - a))
 
 
 def rank_effects(
@@ -168,9 +241,10 @@ def fit_effect(
     # of the other half checks it (a weak signature can point the wrong way).
     check_side = bounds is None and cand.signed and side != 0.0
     limit = max_evals + int(check_side)
-    seen: dict[float, float] = {
-        0.0: combined_loss(value_matrices(observed, base_copies, observables), weights)
+    per: dict[float, np.ndarray] = {
+        0.0: per_fiber_loss(value_matrices(observed, base_copies, observables), weights)
     }
+    seen: dict[float, float] = {0.0: float(np.mean(per[0.0]))}
 
     def loss(v: float) -> float:
         v = float(v)
@@ -184,7 +258,8 @@ def fit_effect(
             maker.copy(k, {**(fixed or {}), cand.name: v}, rows, desc=f"fit {cand.name}={v:.4g}")
             for k in range(k_fit)
         ]
-        seen[v] = combined_loss(value_matrices(observed, copies, observables), weights)
+        per[v] = per_fiber_loss(value_matrices(observed, copies, observables), weights)
+        seen[v] = float(np.mean(per[v]))
         return seen[v]
 
     lo, hi = bounds if bounds is not None else (cand.lo, cand.hi)
@@ -205,4 +280,5 @@ def fit_effect(
     best = min(seen, key=lambda p: (seen[p], abs(p)))
     evals = tuple(sorted(seen.items()))
     log.info("fit %s: %.4g (loss %.4g vs baseline %.4g)", cand.name, best, seen[best], seen[0.0])
-    return Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]), evals)
+    profile = tuple((float(u), per[u]) for u in sorted(per))
+    return Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]), evals, profile)

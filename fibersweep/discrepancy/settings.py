@@ -101,7 +101,11 @@ class DiscrepancySettings:
 
 @dataclass(frozen=True)
 class Plan:
-    """How many simulations each step may use."""
+    """How many simulations each step may use.
+
+    ``pair_rounds``: coordinate-descent rounds of a pair's joint fit
+    (:func:`select.joint_fit`).
+    """
 
     copies: int
     fit_copies: int
@@ -110,6 +114,7 @@ class Plan:
     probes: int
     refits: int = 2
     pairs: int = 0
+    pair_rounds: int = 2
 
     def cost(self, n: int) -> dict[str, int]:
         """Most runs per step for n fibers (two folds of n/2 for the fits)."""
@@ -121,10 +126,13 @@ class Plan:
             "fits": 2 * self.candidates * (self.fit_evals + 1) * self.fit_copies * half,
             "heldout": self.candidates * self.copies * n,
             "refits": self.refits * (self.fit_evals * self.fit_copies + self.copies) * n,
-            # per pair: joint fits on both folds (+1: side check; + the fixed-first
-            # baseline), cross-fitted copies, the final adequacy copies
+            # per pair: joint fits on both folds, pair_rounds 1D fits each (+1: side
+            # check; + the other member alone), cross-fitted copies, final copies
             "pairs": self.pairs
-            * (2 * (self.fit_evals + 2) * self.fit_copies * half + 2 * self.copies * n),
+            * (
+                2 * self.pair_rounds * (self.fit_evals + 2) * self.fit_copies * half
+                + 2 * self.copies * n
+            ),
         }
 
     def total(self, n: int) -> int:
