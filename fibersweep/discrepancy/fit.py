@@ -215,6 +215,7 @@ def fit_effect(
     side: float = 0.0,
     bounds: tuple[float, float] | None = None,
     fixed: Mapping[str, float] | None = None,
+    stage: str = "fit",
 ) -> Fit:
     """Fit the value of one effect on the fit fibers.
 
@@ -235,6 +236,8 @@ def fit_effect(
         Effects held at these values while ``cand`` is fitted (forward selection:
         the effects already chosen). ``base_copies`` must then be copies made with
         these effects on (the value 0 of ``cand``).
+    stage : str
+        Label the simulations are counted under (``Simulator.used_by_stage``).
     """
     k_fit = len(base_copies)
     # The signature suggests the sign of a signed effect; one evaluation at a fifth
@@ -255,7 +258,9 @@ def fit_effect(
             # Budget spent: this point is unknown; report the worst seen so Brent moves away.
             return max(seen.values())
         copies = [
-            maker.copy(k, {**(fixed or {}), cand.name: v}, rows, desc=f"fit {cand.name}={v:.4g}")
+            maker.copy(
+                k, {**(fixed or {}), cand.name: v}, rows, desc=f"{stage} {cand.name}={v:.4g}"
+            )
             for k in range(k_fit)
         ]
         per[v] = per_fiber_loss(value_matrices(observed, copies, observables), weights)

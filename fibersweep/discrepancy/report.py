@@ -309,6 +309,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "next_skipped": res.extra.get("next_skipped"),
         "simulations": res.simulations,
         "simulations_planned": res.plan.cost(len(res.observed)),
+        "simulations_by_stage": res.extra.get("runs_by_stage", {}),
         "failed_runs": analysis_failed,
         "failed_runs_by_stage": by_stage,
         "seconds": res.seconds,

@@ -197,7 +197,7 @@ def joint_fit(
         other = order[(r + 1) % 2]
         fixed = {other.name: cur[other.name]}
         base_tr = [
-            maker.copy(k, fixed, train, desc=f"fit {other.name} (+{cand.name})")
+            maker.copy(k, fixed, train, desc=f"pair-fit {other.name} (+{cand.name})")
             for k in range(inp.fit_copies)
         ]
         fit = fit_effect(
@@ -211,6 +211,7 @@ def joint_fit(
             inp.fit_evals,
             side=float(np.sign(cur[cand.name])),
             fixed=fixed,
+            stage="pair-fit",
         )
         if on_fit is not None:
             on_fit(fit)
@@ -272,7 +273,7 @@ def forward_pairs(
             continue
         names = (first.name, cand.name)
         cps = crossfit_copies(
-            maker, folds, per_fold, inp.copies, f"held-out {first.name}+{cand.name}"
+            maker, folds, per_fold, inp.copies, f"pair-held-out {first.name}+{cand.name}"
         )
         v_after = value_matrices(obs, cps, inp.observables)
         scores = weighted_loss(v_after, w)
@@ -313,7 +314,9 @@ def forward_pairs(
         )
         out_copies[st.name] = t["copies"]
         if st.significant(inp.alpha):
-            final = [maker.copy(k, st.values, desc=f"final {st.name}") for k in range(inp.copies)]
+            final = [
+                maker.copy(k, st.values, desc=f"pair-final {st.name}") for k in range(inp.copies)
+            ]
             v_final = value_matrices(obs, final, inp.observables)
             gap: GapResult = assess_gap(v_final, rng, alpha=inp.alpha, n_perm=inp.n_perm)
             st = replace(st, final=gap)

@@ -254,6 +254,7 @@ def run_discrepancy(
                     w_gap,
                     plan.fit_evals,
                     bounds=bounds,
+                    stage="refit",
                 )
                 fits.append(fit)
                 intervals[h.name] = bootstrap_interval(fit, rng)
@@ -315,6 +316,7 @@ def run_discrepancy(
         extra = followup(verdict, heldout, extra_values, candidates, maker, sim, plan, s,
                             obs_names, rng)  # fmt: skip
         used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
+        extra["runs_by_stage"] = dict(sim.used_by_stage)
 
     return DiscrepancyResult(
         verdict=verdict,
