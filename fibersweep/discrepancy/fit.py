@@ -216,6 +216,7 @@ def fit_effect(
     bounds: tuple[float, float] | None = None,
     fixed: Mapping[str, float] | None = None,
     stage: str = "fit",
+    known: Sequence[float] = (),
 ) -> Fit:
     """Fit the value of one effect on the fit fibers.
 
@@ -238,12 +239,17 @@ def fit_effect(
         these effects on (the value 0 of ``cand``).
     stage : str
         Label the simulations are counted under (``Simulator.used_by_stage``).
+    known : sequence of float
+        Values evaluated before the search and not counted in ``max_evals``:
+        values whose runs the copy maker already holds (the pooled refit passes
+        the two halves' values: each half was simulated there, one by its fit,
+        the other by its cross-fitted copies), so they cost no simulation.
     """
     k_fit = len(base_copies)
     # The signature suggests the sign of a signed effect; one evaluation at a fifth
     # of the other half checks it (a weak signature can point the wrong way).
     check_side = bounds is None and cand.signed and side != 0.0
-    limit = max_evals + int(check_side)
+    limit = max_evals + int(check_side) + len(set(known) - {0.0})
     per: dict[float, np.ndarray] = {
         0.0: per_fiber_loss(value_matrices(observed, base_copies, observables), weights)
     }
@@ -267,6 +273,8 @@ def fit_effect(
         seen[v] = float(np.mean(per[v]))
         return seen[v]
 
+    for v in known:
+        loss(v)
     lo, hi = bounds if bounds is not None else (cand.lo, cand.hi)
     if check_side:
         # Brent then searches the better half with the evaluations it was given.

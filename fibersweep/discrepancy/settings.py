@@ -116,6 +116,17 @@ class Plan:
     pairs: int = 0
     pair_rounds: int = 2
 
+    @property
+    def refit_evals(self) -> int:
+        """Brent steps of a pooled refit: two fewer than a half's fit.
+
+        The refit starts from the two halves' values, whose runs are already held
+        (one half by its fit, the other by its cross-fitted copies), and searches a
+        narrowed interval around them: the same number of evaluated values as a
+        half's fit, two of them without new runs.
+        """
+        return max(1, self.fit_evals - 2)
+
     def cost(self, n: int) -> dict[str, int]:
         """Most runs per step for n fibers (two folds of n/2 for the fits)."""
         half = (n + 1) // 2
@@ -125,7 +136,7 @@ class Plan:
             # + 1: the side check of a signed effect (fit.fit_effect)
             "fits": 2 * self.candidates * (self.fit_evals + 1) * self.fit_copies * half,
             "heldout": self.candidates * self.copies * n,
-            "refits": self.refits * (self.fit_evals * self.fit_copies + self.copies) * n,
+            "refits": self.refits * (self.refit_evals * self.fit_copies + self.copies) * n,
             # per pair: joint fits on both folds, pair_rounds 1D fits each (+1: side
             # check; + the other member alone), cross-fitted copies, final copies
             "pairs": self.pairs

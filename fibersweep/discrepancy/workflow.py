@@ -252,9 +252,10 @@ def run_discrepancy(
                     np.arange(n),
                     obs_names,
                     w_gap,
-                    plan.fit_evals,
+                    plan.refit_evals,
                     bounds=bounds,
                     stage="refit",
+                    known=vals,  # both halves' values: their runs are held (no cost)
                 )
                 fits.append(fit)
                 intervals[h.name] = bootstrap_interval(fit, rng)
