@@ -172,6 +172,7 @@ def run_scenario(name: str, field, n: int, seed: int, workers: int, kw: dict) ->
         "significant": res.gap.flagged,
         "simulations": res.simulations,
         "runs_by_stage": res.extra.get("runs_by_stage", {}),
+        "runs_without_reuse": res.extra.get("runs_without_reuse"),
         "intervals": res.extra.get("intervals", {}),
         "seconds": time.perf_counter() - t0,
         "workflow_seconds": res.seconds,
@@ -289,6 +290,13 @@ def targets(rows: list[dict], predicted: dict[int, dict]) -> str:
                     stages[k] = stages.get(k, 0) + v
         tot = sum(stages.values()) or 1
         top = sorted(stages.items(), key=lambda x: -x[1])
+        # runs of the workflow's copy maker (what-to-measure-next has its own grid)
+        used = sum(v for r in rows if r["n"] == n
+                   for k, v in r["runs_by_stage"].items() if not k.startswith("next"))
+        old = sum(r.get("runs_without_reuse") or 0 for r in rows if r["n"] == n)
+        if old:
+            lines.append(f"- per-fiber reuse of runs at N = {n}: {used} runs where a cache by "
+                         f"exact row set needed {old} (ratio {used / old:.2f})")  # fmt: skip
         lines.append(f"- runs by stage at N = {n}: "
                      + ", ".join(f"{k} {v} ({100 * v / tot:.0f} %)" for k, v in top))  # fmt: skip
         t = [r["workflow_seconds"] for r in rows if r["n"] == n]

@@ -52,6 +52,10 @@ class CopyMaker:
         self._draws: dict[int, tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]] = {}
         # (k, effects) -> observed-like outcomes of the fibers simulated so far (index: fiber)
         self._cache: dict[tuple, pd.DataFrame] = {}
+        # what a cache keyed by the exact set of rows would have simulated (the design
+        # before per-fiber reuse), for the benchmark ratio in scripts/study_discrepancy.py
+        self._whole: set[tuple] = set()
+        self.runs_without_reuse = 0
 
     @property
     def n(self) -> int:
@@ -83,6 +87,10 @@ class CopyMaker:
         eff = tuple(sorted((n, float(v)) for n, v in (effects or {}).items() if float(v) != 0.0))
         idx = np.arange(self.n) if rows is None else np.asarray(rows, dtype=np.int64)
         key = (k, eff)
+        whole = (k, eff, idx.tobytes())
+        if (k, eff, None) not in self._whole and whole not in self._whole:
+            self.runs_without_reuse += len(idx)
+            self._whole.add((k, eff, None) if rows is None else whole)
         have = self._cache.get(key)
         missing = np.unique(idx) if have is None else np.setdiff1d(idx, have.index.to_numpy())
         if len(missing):

@@ -318,6 +318,7 @@ def run_discrepancy(
                             obs_names, rng)  # fmt: skip
         used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
         extra["runs_by_stage"] = dict(sim.used_by_stage)
+        extra["runs_without_reuse"] = maker.runs_without_reuse
 
     return DiscrepancyResult(
         verdict=verdict,

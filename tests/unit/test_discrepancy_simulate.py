@@ -68,6 +68,8 @@ def test_copies_reuse_the_runs_of_a_subset_and_equal_a_fresh_full_copy(uniform_f
         full = maker.copy(1, eff)
         again = maker.copy(1, eff, np.array([4, 0]))
         assert sim.used == 5
+        # keyed by the exact row set, the first two copies were 2 + 5 runs, the third free
+        assert maker.runs_without_reuse == 7
     with Simulator(uniform_field, FiberSettings(), workers=1, progress=False) as sim:
         want = CopyMaker(starts, NoiseModel(), 3, sim).copy(1, eff)
     assert full.equals(want)
