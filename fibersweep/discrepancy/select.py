@@ -212,6 +212,9 @@ def joint_fit(
             side=float(np.sign(cur[cand.name])),
             fixed=fixed,
             stage="pair-fit",
+            # from round 2 on, the current pair was the previous step's best point:
+            # its runs are held, so it is a free starting value
+            known=[cur[cand.name]] if r > 0 else [],
         )
         if on_fit is not None:
             on_fit(fit)
