@@ -126,6 +126,8 @@ def bootstrap_interval(
     evaluated values (the fit's ``profile``, no new simulation) and takes the
     minimiser: the best evaluated value, refined by the vertex of the parabola
     through it and its two neighbours when it is interior (clipped to them).
+    The interval is the spread of these minimisers around the full sample's
+    (same estimator), put around the fitted value (basic bootstrap shifts).
     The copies are held fixed (common random numbers), so the interval is the
     uncertainty from which fibers were measured, not from the copies' Monte
     Carlo noise; its resolution is that of the evaluated values.
@@ -157,8 +159,26 @@ def bootstrap_interval(
             vert = x1 - 0.5 * num / den
         vert = np.where(np.isfinite(vert), np.clip(vert, x0, x2), x1)
         est[inner] = vert
+    # the same estimator on the full sample; the interval is centred on the fitted value
+    # (basic bootstrap shifts), so it contains it even where the refined minimiser and
+    # the best evaluated value differ
+    full = _refined_argmin(x, L.mean(axis=1))
     a = (1.0 - level) / 2.0
-    return float(np.quantile(est, a)), float(np.quantile(est, 1.0 - a))
+    d = est - full
+    return fit.value + float(np.quantile(d, a)), fit.value + float(np.quantile(d, 1.0 - a))
+
+
+def _refined_argmin(x: np.ndarray, y: np.ndarray) -> float:
+    """Best of the values x by loss y, refined by the parabola through its neighbours."""
+    j = int(np.argmin(y))
+    if 0 < j < len(x) - 1:
+        x0, x1, x2 = x[j - 1], x[j], x[j + 1]
+        y0, y1, y2 = y[j - 1], y[j], y[j + 1]
+        den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0)
+        if den != 0.0:
+            num = (x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)
+            return float(np.clip(x1 - 0.5 * num / den, x0, x2))
+    return float(x[j])
 
 
 def rank_effects(

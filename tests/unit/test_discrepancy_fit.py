@@ -73,6 +73,12 @@ def test_bootstrap_interval_of_a_quadratic_profile_matches_the_analytic_one():
     assert lo < mu.mean() < hi
     assert hi - lo == pytest.approx(2 * 1.96 * se, rel=0.10)
     assert (lo + hi) / 2 == pytest.approx(mu.mean(), abs=0.3 * se)
+    # a fit that reports its best evaluated value (0.3) gets an interval around that value
+    from dataclasses import replace
+
+    lo2, hi2 = bootstrap_interval(replace(_quadratic_fit(mu, np.linspace(0.0, 0.6, 5)),
+                                          value=0.3), rng)  # fmt: skip
+    assert lo2 < 0.3 < hi2 and hi2 - lo2 == pytest.approx(hi - lo, rel=0.10)
 
 
 def test_bootstrap_interval_covers_the_truth_at_its_level():
