@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -58,12 +58,16 @@ class Signature:
         Cosine similarity of the signature and the gap's feature vector.
     strength : float
         Norm of the signature (how visible the effect is at the probe).
+    vectors : tuple of (probe, ndarray)
+        The signature at every probe (forward selection matches them with the
+        gap the first effect leaves).
     """
 
     name: str
     probe: float
     cosine: float
     strength: float
+    vectors: tuple[tuple[float, np.ndarray], ...] = field(default=(), repr=False, compare=False)
 
 
 @dataclass(frozen=True)
@@ -209,17 +213,19 @@ def rank_effects(
     out = []
     for cand in candidates:
         best: Signature | None = None
+        vecs = []
         for v in cand.probes:
             probe = maker.copy(probe_copy, {cand.name: v}, rows, desc=f"probe {cand.name}={v:g}")
             vals = value_matrices(probe, base_copies, observables)
             sig = feature_vector(assess_gap(vals, rng, n_perm=999, n_boot=200))
             norm = float(np.linalg.norm(sig))
             cos = float(sig @ g / (norm * gn)) if norm > 0 else 0.0
+            vecs.append((float(v), sig))
             s = Signature(cand.name, v, cos, norm)
             if best is None or s.cosine > best.cosine:
                 best = s
         log.info("signature %s: cos %.2f at %g", best.name, best.cosine, best.probe)
-        out.append(best)
+        out.append(replace(best, vectors=tuple(vecs)))
     return sorted(out, key=lambda s: -s.cosine)
 
 

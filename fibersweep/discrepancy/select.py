@@ -36,10 +36,11 @@ import pandas as pd
 
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.decide import SetHeldOut
-from fibersweep.discrepancy.fit import Fit, fit_effect
+from fibersweep.discrepancy.fit import Fit, Signature, fit_effect
 from fibersweep.discrepancy.gap import (
     GapResult,
     assess_gap,
+    feature_vector,
     paired_improvement,
     value_matrices,
     weighted_loss,
@@ -47,7 +48,15 @@ from fibersweep.discrepancy.gap import (
 from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.stats import bootstrap_mean_ci, holm
 
-__all__ = ["crossfit_copies", "boot_p", "SelectionInput", "forward_pairs"]
+__all__ = [
+    "crossfit_copies",
+    "boot_p",
+    "pair_weights",
+    "rank_partners",
+    "SelectionInput",
+    "joint_fit",
+    "forward_pairs",
+]
 
 log = logging.getLogger(__name__)
 
@@ -114,6 +123,34 @@ def pair_weights(
         if g.test.p_value <= alpha or any(q <= alpha for q in g.bias_p):
             keep.add(g.name)
     return {o: (w if o in keep else 0.0) for o, w in weights.items()}
+
+
+def rank_partners(
+    first: str, signatures: Sequence[Signature], left: GapResult, k: int
+) -> list[str]:
+    """The ``k`` effects whose signature best matches the gap the first effect leaves.
+
+    The single-effect ranking matches signatures with the whole gap, which the
+    first effect dominates; its partner's part shows in what is left
+    (:func:`gap.feature_vector` of ``left``). Cosine over every probe of an
+    effect; only effects with a positive match are returned, best first.
+    """
+    g = feature_vector(left)
+    gn = float(np.linalg.norm(g))
+    if gn == 0.0:
+        return []
+    cos = {}
+    for sg in signatures:
+        if sg.name == first or not sg.vectors:
+            continue
+        c = [
+            float(v @ g / (np.linalg.norm(v) * gn)) for _, v in sg.vectors if np.linalg.norm(v) > 0
+        ]
+        if c and max(c) > 0:
+            cos[sg.name] = max(c)
+    order = sorted(cos, key=lambda n: -cos[n])
+    log.info("partners of %s by the gap it leaves: %s", first, {n: round(cos[n], 2) for n in order})
+    return order[:k]
 
 
 @dataclass(frozen=True)
@@ -280,9 +317,21 @@ def forward_pairs(
         )
         v_after = value_matrices(obs, cps, inp.observables)
         scores = weighted_loss(v_after, w)
-        # A's contribution: the pair against B alone; B's: the pair against A alone
+        # A's contribution: the pair against B alone; B's: the pair against A alone.
+        # A partner never fitted alone (ranked only by the gap A leaves) is taken
+        # alone at its pair values, cross-fitted like the pair.
+        b_alone = single_scores.get(cand.name)
+        if b_alone is None:
+            cps_b = crossfit_copies(
+                maker,
+                folds,
+                [{cand.name: pf[cand.name]} for pf in per_fold],
+                inp.copies,
+                f"pair-held-out {cand.name} alone",
+            )
+            b_alone = weighted_loss(value_matrices(obs, cps_b, inp.observables), w)
         without = {
-            first.name: single_scores.get(cand.name, base_scores),
+            first.name: b_alone,
             cand.name: single_scores.get(first.name, base_scores),
         }
         gains = {m: paired_improvement(without[m], scores) for m in names}

@@ -142,7 +142,7 @@ class Plan:
             "pairs": self.pairs
             * (
                 2 * self.pair_rounds * (self.fit_evals + 2) * self.fit_copies * half
-                + 2 * self.copies * n
+                + 3 * self.copies * n  # + the partner alone when it had no single fit
             ),
         }
 

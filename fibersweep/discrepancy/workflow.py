@@ -56,6 +56,7 @@ from fibersweep.discrepancy.select import (
     crossfit_copies,
     forward_pairs,
     pair_weights,
+    rank_partners,
 )
 from fibersweep.discrepancy.settings import DiscrepancySettings, Plan, plan_budget
 from fibersweep.discrepancy.simulate import Simulator
@@ -291,18 +292,20 @@ def run_discrepancy(
             best = max(helped, key=lambda h: h.improvement[0]) if helped else None
             if best is not None and not best.explains and plan.pairs > 0:
                 first = next(c for c in candidates if c.name == best.name)
+                # partners ranked by how well their signature matches the gap the
+                # best single effect leaves (not the whole gap, which it dominates)
+                left = best.final or best.residual
                 others = [
-                    next(c for c in candidates if c.name == sg.name)
-                    for sg in chosen
-                    if sg.name != best.name
-                ][: plan.pairs]
+                    next(c for c in candidates if c.name == name)
+                    for name in rank_partners(best.name, signatures, left, plan.pairs)
+                ]
                 inp = SelectionInput(
                     observed=observed,
                     folds=folds,
                     fold_values=extra_values,
                     base_values=values,
                     single_values=eff_values,
-                    weights=pair_weights(weights, gap, best.final or best.residual, s.alpha),
+                    weights=pair_weights(weights, gap, left, s.alpha),
                     observables=obs_names,
                     copies=plan.copies,
                     fit_copies=plan.fit_copies,

@@ -214,3 +214,32 @@ def test_joint_fit_refits_the_first_member():
     assert joint["friction"] == pytest.approx(0.5, abs=0.05)
     assert joint["inlet_speed"] == pytest.approx(0.05, abs=0.006)
     assert [f.name for f in fits] == ["friction", "friction", "inlet_speed"]
+
+
+def test_partners_are_ranked_by_the_gap_the_first_effect_leaves():
+    # the gap left has a delta shift only: the effect whose signature shifts delta ranks
+    # first, the one that moves t_pass the other way has no positive match, the first
+    # effect itself is never its own partner
+    from fibersweep.discrepancy.fit import Signature
+    from fibersweep.discrepancy.gap import feature_vector
+    from fibersweep.discrepancy.select import rank_partners
+
+    rng = np.random.default_rng(9)
+    n, m = 60, 6
+    z = {"t_pass": rng.standard_normal((n, m)), "delta": rng.standard_normal((n, m))}
+
+    def gap(dt, dd):
+        V = {k: v.copy() for k, v in z.items()}
+        V["t_pass"][:, 0] += dt
+        V["delta"][:, 0] += dd
+        return assess_gap(V, np.random.default_rng(10), n_perm=999, n_boot=200)
+
+    left = gap(0.0, 1.5)
+    sig = [
+        Signature("inlet_speed", -0.15, 0.9, 1.0, ((-0.15, feature_vector(gap(-2.0, 0.0))),)),
+        Signature("friction", 0.5, 0.3, 1.0, ((0.5, feature_vector(gap(0.0, 1.5))),)),
+        Signature("pillar_scale", 0.1, 0.2, 1.0, ((0.1, feature_vector(gap(0.3, 0.8))),)),
+    ]
+    order = rank_partners("inlet_speed", sig, left, 2)
+    assert order[0] == "friction" and "inlet_speed" not in order
+    assert rank_partners("inlet_speed", sig, left, 1) == ["friction"]
