@@ -5,7 +5,9 @@ added to the effect A that improved the held-out fibers most (A need not be
 significant alone: with B's part of the gap left in, A's own improvement can be
 too noisy to be; the set needs each member's own contribution significant):
 
-0. the loss now also scores the observables A leaves with a gap
+0. partners are ranked by their signature against the gap A leaves
+   (:func:`rank_partners`), not against the whole gap, which A dominates; and
+   the loss also scores the observables A leaves with a gap
    (:func:`pair_weights`): B's part of the gap often shows only once A's is
    removed, and a loss blind to it can neither fit B nor see its contribution;
 1. joint fit, on the same two folds as the single fits, by coordinate descent
