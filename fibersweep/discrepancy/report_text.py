@@ -144,7 +144,8 @@ def _fits(s: dict[str, Any]) -> list[str]:
         "",
         "Each half is scored with the value fitted on the other half. Final: the value "
         "refitted on all fibers (significant candidates), with its 95 % interval from a "
-        "bootstrap over the fibers (the copies held fixed). Candidates whose fit kept the "
+        "bootstrap over the fibers (the copies held fixed, so it leaves out their Monte Carlo "
+        "noise: a lower bound on the uncertainty). Candidates whose fit kept the "
         "baseline (0) on both halves are left out.",
         "",
         "| effect | half A | half B | spread | final [95 % CI] | held-out improvement "
