@@ -171,6 +171,9 @@ def run_scenario(name: str, field, n: int, seed: int, workers: int, kw: dict) ->
         "fold_values": res.extra.get("fold_values", {}),
         "significant": res.gap.flagged,
         "simulations": res.simulations,
+        "runs_by_stage": res.extra.get("runs_by_stage", {}),
+        "runs_without_reuse": res.extra.get("runs_without_reuse"),
+        "intervals": res.extra.get("intervals", {}),
         "seconds": time.perf_counter() - t0,
         "workflow_seconds": res.seconds,
         "heldout": [
@@ -279,6 +282,23 @@ def targets(rows: list[dict], predicted: dict[int, dict]) -> str:
             lines.append(f"  - {name}: predicted {pred[name]:.2f}, observed {np.mean(obs):.2f} "
                          f"({sum(obs)} of {len(obs)})")  # fmt: skip
     for n in sorted({r["n"] for r in rows}):
+        # where the runs go (the profile that guides the speed work), summed over the rows
+        stages: dict[str, int] = {}
+        for r in rows:
+            if r["n"] == n:
+                for k, v in r.get("runs_by_stage", {}).items():
+                    stages[k] = stages.get(k, 0) + v
+        tot = sum(stages.values()) or 1
+        top = sorted(stages.items(), key=lambda x: -x[1])
+        # runs of the workflow's copy maker (what-to-measure-next has its own grid)
+        used = sum(v for r in rows if r["n"] == n
+                   for k, v in r["runs_by_stage"].items() if not k.startswith("next"))
+        old = sum(r.get("runs_without_reuse") or 0 for r in rows if r["n"] == n)
+        if old:
+            lines.append(f"- per-fiber reuse of runs at N = {n}: {used} runs where a cache by "
+                         f"exact row set needed {old} (ratio {used / old:.2f})")  # fmt: skip
+        lines.append(f"- runs by stage at N = {n}: "
+                     + ", ".join(f"{k} {v} ({100 * v / tot:.0f} %)" for k, v in top))  # fmt: skip
         t = [r["workflow_seconds"] for r in rows if r["n"] == n]
         lines.append(f"- wall time at N = {n}: mean {np.mean(t):.0f} s, max {np.max(t):.0f} s "
                      f"({len(t)} runs)")  # fmt: skip

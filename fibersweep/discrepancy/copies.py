@@ -4,6 +4,13 @@ Copy k of fiber i always uses the same jittered start, the same run seed and
 the same measurement-noise draws, whatever effect is switched on. Comparing
 effect values on the same draws removes most of the noise from a fit (common
 random numbers), and copies of different k are independent.
+
+Runs are kept per fiber: a copy asked for rows some of which were already
+simulated for the same (k, effects) simulates only the missing ones (a fiber's
+outcome depends only on its start, its seed and the effects, never on the
+batch). So a stage that revisits a value another stage evaluated on a subset
+of the fibers (the pooled refit at a fold's value, a pair fit at the first
+effect's fold value, the final copies) reuses those runs.
 """
 
 from __future__ import annotations
@@ -43,7 +50,12 @@ class CopyMaker:
         self.seed = int(seed)
         self.sim = simulator
         self._draws: dict[int, tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]] = {}
+        # (k, effects) -> observed-like outcomes of the fibers simulated so far (index: fiber)
         self._cache: dict[tuple, pd.DataFrame] = {}
+        # what a cache keyed by the exact set of rows would have simulated (the design
+        # before per-fiber reuse), for the benchmark ratio in scripts/study_discrepancy.py
+        self._whole: set[tuple] = set()
+        self.runs_without_reuse = 0
 
     @property
     def n(self) -> int:
@@ -74,15 +86,18 @@ class CopyMaker:
         """
         eff = tuple(sorted((n, float(v)) for n, v in (effects or {}).items() if float(v) != 0.0))
         idx = np.arange(self.n) if rows is None else np.asarray(rows, dtype=np.int64)
-        full_key = (k, eff, None)
-        if full_key in self._cache:
-            return self._cache[full_key].iloc[idx].reset_index(drop=True)
-        key = (k, eff, idx.tobytes())
-        if key not in self._cache:
+        key = (k, eff)
+        whole = (k, eff, idx.tobytes())
+        if (k, eff, None) not in self._whole and whole not in self._whole:
+            self.runs_without_reuse += len(idx)
+            self._whole.add((k, eff, None) if rows is None else whole)
+        have = self._cache.get(key)
+        missing = np.unique(idx) if have is None else np.setdiff1d(idx, have.index.to_numpy())
+        if len(missing):
             starts, seeds, z = self.draws(k)
-            raw = self.sim.run(starts[idx], dict(eff), seeds[idx], desc=desc)
-            out = self.noise.observe(raw, {name: zn[idx] for name, zn in z.items()})
-            self._cache[key] = out
-            if rows is None:
-                self._cache[full_key] = out
-        return self._cache[key].reset_index(drop=True)
+            raw = self.sim.run(starts[missing], dict(eff), seeds[missing], desc=desc)
+            out = self.noise.observe(raw, {name: zn[missing] for name, zn in z.items()})
+            out.index = missing
+            have = out if have is None else pd.concat([have, out])
+            self._cache[key] = have
+        return have.loc[idx].reset_index(drop=True)

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -32,7 +32,15 @@ from fibersweep.discrepancy.gap import assess_gap, feature_vector, value_matrice
 from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.scores import score_matrix
 
-__all__ = ["Signature", "Fit", "rank_effects", "fit_effect", "combined_loss"]
+__all__ = [
+    "Signature",
+    "Fit",
+    "rank_effects",
+    "fit_effect",
+    "combined_loss",
+    "per_fiber_loss",
+    "bootstrap_interval",
+]
 
 log = logging.getLogger(__name__)
 
@@ -50,12 +58,16 @@ class Signature:
         Cosine similarity of the signature and the gap's feature vector.
     strength : float
         Norm of the signature (how visible the effect is at the probe).
+    vectors : tuple of (probe, ndarray)
+        The signature at every probe (forward selection matches them with the
+        gap the first effect leaves).
     """
 
     name: str
     probe: float
     cosine: float
     strength: float
+    vectors: tuple[tuple[float, np.ndarray], ...] = field(default=(), repr=False, compare=False)
 
 
 @dataclass(frozen=True)
@@ -69,6 +81,9 @@ class Fit:
     loss, loss0 : float
         Combined score at the fitted value and at the baseline (same copies).
     evaluations : tuple of (value, loss)
+    profile : tuple of (value, ndarray (n_fit,))
+        Per-fiber loss at every evaluated value (:func:`per_fiber_loss`; its
+        mean is the loss), for :func:`bootstrap_interval`.
     """
 
     name: str
@@ -76,6 +91,7 @@ class Fit:
     loss: float
     loss0: float
     evaluations: tuple[tuple[float, float], ...]
+    profile: tuple[tuple[float, np.ndarray], ...] = field(default=(), repr=False, compare=False)
 
 
 def combined_loss(values: Mapping[str, np.ndarray], weights: Mapping[str, float]) -> float:
@@ -86,6 +102,87 @@ def combined_loss(values: Mapping[str, np.ndarray], weights: Mapping[str, float]
         if np.isfinite(s).any():
             total += weights.get(name, 0.0) * float(np.nanmean(s))
     return total
+
+
+def per_fiber_loss(values: Mapping[str, np.ndarray], weights: Mapping[str, float]) -> np.ndarray:
+    """Per-fiber combined score, shape (n,): its mean is :func:`combined_loss`.
+
+    A fiber whose score of an observable is undefined (NaN) gets that
+    observable's mean score, so that the mean over fibers is unchanged.
+    """
+    tot: np.ndarray | None = None
+    for name, V in values.items():
+        s = score_matrix(name, V)[:, 0]
+        tot = np.zeros(len(s)) if tot is None else tot
+        w = weights.get(name, 0.0)
+        if w == 0.0 or not np.isfinite(s).any():
+            continue
+        tot = tot + w * np.where(np.isfinite(s), s, np.nanmean(s))
+    return tot if tot is not None else np.zeros(0)
+
+
+def bootstrap_interval(
+    fit: Fit, rng: np.random.Generator, n_boot: int = 2000, level: float = 0.95
+) -> tuple[float, float]:
+    """Percentile bootstrap interval of a fitted value, resampling the fibers.
+
+    Every bootstrap sample of the fit fibers sums their per-fiber losses at the
+    evaluated values (the fit's ``profile``, no new simulation) and takes the
+    minimiser: the best evaluated value, refined by the vertex of the parabola
+    through it and its two neighbours when it is interior (clipped to them).
+    The interval is the spread of these minimisers around the full sample's
+    (same estimator), put around the fitted value (basic bootstrap shifts).
+    The copies are held fixed (common random numbers), so the interval is the
+    uncertainty from which fibers were measured, not from the copies' Monte
+    Carlo noise; its resolution is that of the evaluated values.
+
+    Returns
+    -------
+    (lo, hi) : tuple of float
+        ``(value, value)`` when fewer than two values were evaluated.
+    """
+    if len(fit.profile) < 2:
+        return (fit.value, fit.value)
+    pts = sorted(fit.profile, key=lambda p: p[0])
+    x = np.array([p[0] for p in pts])
+    L = np.stack([p[1] for p in pts])  # (k, n)
+    n = L.shape[1]
+    idx = rng.integers(0, n, size=(n_boot, n))
+    means = L[:, idx].mean(axis=2)  # (k, n_boot)
+    j = np.argmin(means, axis=0)
+    est = x[j].astype(np.float64)
+    inner = (j > 0) & (j < len(x) - 1)
+    if inner.any():
+        b = np.arange(n_boot)[inner]
+        jj = j[inner]
+        x0, x1, x2 = x[jj - 1], x[jj], x[jj + 1]
+        y0, y1, y2 = means[jj - 1, b], means[jj, b], means[jj + 1, b]
+        num = (x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)
+        den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vert = x1 - 0.5 * num / den
+        vert = np.where(np.isfinite(vert), np.clip(vert, x0, x2), x1)
+        est[inner] = vert
+    # the same estimator on the full sample; the interval is centred on the fitted value
+    # (basic bootstrap shifts), so it contains it even where the refined minimiser and
+    # the best evaluated value differ
+    full = _refined_argmin(x, L.mean(axis=1))
+    a = (1.0 - level) / 2.0
+    d = est - full
+    return fit.value + float(np.quantile(d, a)), fit.value + float(np.quantile(d, 1.0 - a))
+
+
+def _refined_argmin(x: np.ndarray, y: np.ndarray) -> float:
+    """Best of the values x by loss y, refined by the parabola through its neighbours."""
+    j = int(np.argmin(y))
+    if 0 < j < len(x) - 1:
+        x0, x1, x2 = x[j - 1], x[j], x[j + 1]
+        y0, y1, y2 = y[j - 1], y[j], y[j + 1]
+        den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0)
+        if den != 0.0:
+            num = (x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)
+            return float(np.clip(x1 - 0.5 * num / den, x0, x2))
+    return float(x[j])
 
 
 def rank_effects(
@@ -116,17 +213,19 @@ def rank_effects(
     out = []
     for cand in candidates:
         best: Signature | None = None
+        vecs = []
         for v in cand.probes:
             probe = maker.copy(probe_copy, {cand.name: v}, rows, desc=f"probe {cand.name}={v:g}")
             vals = value_matrices(probe, base_copies, observables)
             sig = feature_vector(assess_gap(vals, rng, n_perm=999, n_boot=200))
             norm = float(np.linalg.norm(sig))
             cos = float(sig @ g / (norm * gn)) if norm > 0 else 0.0
+            vecs.append((float(v), sig))
             s = Signature(cand.name, v, cos, norm)
             if best is None or s.cosine > best.cosine:
                 best = s
         log.info("signature %s: cos %.2f at %g", best.name, best.cosine, best.probe)
-        out.append(best)
+        out.append(replace(best, vectors=tuple(vecs)))
     return sorted(out, key=lambda s: -s.cosine)
 
 
@@ -142,6 +241,8 @@ def fit_effect(
     side: float = 0.0,
     bounds: tuple[float, float] | None = None,
     fixed: Mapping[str, float] | None = None,
+    stage: str = "fit",
+    known: Sequence[float] = (),
 ) -> Fit:
     """Fit the value of one effect on the fit fibers.
 
@@ -162,15 +263,23 @@ def fit_effect(
         Effects held at these values while ``cand`` is fitted (forward selection:
         the effects already chosen). ``base_copies`` must then be copies made with
         these effects on (the value 0 of ``cand``).
+    stage : str
+        Label the simulations are counted under (``Simulator.used_by_stage``).
+    known : sequence of float
+        Values evaluated before the search and not counted in ``max_evals``:
+        values whose runs the copy maker already holds (the pooled refit passes
+        the two halves' values: each half was simulated there, one by its fit,
+        the other by its cross-fitted copies), so they cost no simulation.
     """
     k_fit = len(base_copies)
     # The signature suggests the sign of a signed effect; one evaluation at a fifth
     # of the other half checks it (a weak signature can point the wrong way).
     check_side = bounds is None and cand.signed and side != 0.0
-    limit = max_evals + int(check_side)
-    seen: dict[float, float] = {
-        0.0: combined_loss(value_matrices(observed, base_copies, observables), weights)
+    limit = max_evals + int(check_side) + len(set(known) - {0.0})
+    per: dict[float, np.ndarray] = {
+        0.0: per_fiber_loss(value_matrices(observed, base_copies, observables), weights)
     }
+    seen: dict[float, float] = {0.0: float(np.mean(per[0.0]))}
 
     def loss(v: float) -> float:
         v = float(v)
@@ -181,12 +290,17 @@ def fit_effect(
             # Budget spent: this point is unknown; report the worst seen so Brent moves away.
             return max(seen.values())
         copies = [
-            maker.copy(k, {**(fixed or {}), cand.name: v}, rows, desc=f"fit {cand.name}={v:.4g}")
+            maker.copy(
+                k, {**(fixed or {}), cand.name: v}, rows, desc=f"{stage} {cand.name}={v:.4g}"
+            )
             for k in range(k_fit)
         ]
-        seen[v] = combined_loss(value_matrices(observed, copies, observables), weights)
+        per[v] = per_fiber_loss(value_matrices(observed, copies, observables), weights)
+        seen[v] = float(np.mean(per[v]))
         return seen[v]
 
+    for v in known:
+        loss(v)
     lo, hi = bounds if bounds is not None else (cand.lo, cand.hi)
     if check_side:
         # Brent then searches the better half with the evaluations it was given.
@@ -205,4 +319,5 @@ def fit_effect(
     best = min(seen, key=lambda p: (seen[p], abs(p)))
     evals = tuple(sorted(seen.items()))
     log.info("fit %s: %.4g (loss %.4g vs baseline %.4g)", cand.name, best, seen[best], seen[0.0])
-    return Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]), evals)
+    profile = tuple((float(u), per[u]) for u in sorted(per))
+    return Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]), evals, profile)

@@ -216,6 +216,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
     before = _gap_dict(res.heldout_before, w)
     ho = []
     fold = res.extra.get("fold_values", {})
+    intervals = res.extra.get("intervals", {})
     for h in res.heldout:
         after = _gap_dict(h.residual, w)
         ho.append(
@@ -223,6 +224,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
                 "effect": h.name,
                 "value": h.value,
                 "halves": fold.get(h.name),
+                "interval95": list(intervals[h.name]) if h.name in intervals else None,
                 "improvement": dict(zip(("mean", "lo95", "hi95"), h.improvement, strict=True)),
                 "p": h.p_value,
                 "p_holm": h.p_holm,
@@ -307,6 +309,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "next_skipped": res.extra.get("next_skipped"),
         "simulations": res.simulations,
         "simulations_planned": res.plan.cost(len(res.observed)),
+        "simulations_by_stage": res.extra.get("runs_by_stage", {}),
         "failed_runs": analysis_failed,
         "failed_runs_by_stage": by_stage,
         "seconds": res.seconds,

@@ -5,9 +5,14 @@ added to the effect A that improved the held-out fibers most (A need not be
 significant alone: with B's part of the gap left in, A's own improvement can be
 too noisy to be; the set needs each member's own contribution significant):
 
-1. joint fit, on the same two folds as the single fits: with the first effect
-   A held at the value fitted on the training fold, B's value is fitted there
-   (:func:`fit.fit_effect` with ``fixed``);
+0. partners are ranked by their signature against the gap A leaves
+   (:func:`rank_partners`), not against the whole gap, which A dominates; and
+   the loss also scores the observables A leaves with a gap
+   (:func:`pair_weights`): B's part of the gap often shows only once A's is
+   removed, and a loss blind to it can neither fit B nor see its contribution;
+1. joint fit, on the same two folds as the single fits, by coordinate descent
+   (:func:`joint_fit`): B is fitted with A at its single value, then A is
+   refitted with B at that value, both on the training fold only;
 2. cross-fitted copies with both effects on score the held-out fold;
 3. each member's own contribution is the per-fiber improvement of the pair
    over the pair without it (over B alone for A, over A alone for B), tested
@@ -33,10 +38,11 @@ import pandas as pd
 
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.decide import SetHeldOut
-from fibersweep.discrepancy.fit import Fit, fit_effect
+from fibersweep.discrepancy.fit import Fit, Signature, fit_effect
 from fibersweep.discrepancy.gap import (
     GapResult,
     assess_gap,
+    feature_vector,
     paired_improvement,
     value_matrices,
     weighted_loss,
@@ -44,7 +50,15 @@ from fibersweep.discrepancy.gap import (
 from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.stats import bootstrap_mean_ci, holm
 
-__all__ = ["crossfit_copies", "boot_p", "SelectionInput", "forward_pairs"]
+__all__ = [
+    "crossfit_copies",
+    "boot_p",
+    "pair_weights",
+    "rank_partners",
+    "SelectionInput",
+    "joint_fit",
+    "forward_pairs",
+]
 
 log = logging.getLogger(__name__)
 
@@ -84,6 +98,63 @@ def crossfit_copies(
     return out
 
 
+def pair_weights(
+    weights: Mapping[str, float], base_gap: GapResult, left: GapResult, alpha: float
+) -> dict[str, float]:
+    """Loss weights of the forward step.
+
+    The single-effect step scores only the observables with a significant gap at
+    baseline. A second effect often lives where the first one's gap hid it (a
+    friction class gap under an inlet-speed t_pass gap: Holm over the family
+    leaves it just above alpha), so the forward step also scores every observable
+    that the best single effect leaves with a gap, significant or only nominally
+    (raw p <= alpha, score or signed residual). The weights pick the loss; the
+    held-out tests stay what guards the names.
+
+    Parameters
+    ----------
+    weights : mapping observable -> float
+        :func:`gap.observable_weights` of the baseline copies (all observables).
+    base_gap : GapResult
+        Gap against the baseline (all fibers).
+    left : GapResult
+        Gap left by the best single effect (at its pooled value when checked).
+    """
+    keep = set(base_gap.flagged) | set(left.flagged)
+    for g in left.gaps.values():
+        if g.test.p_value <= alpha or any(q <= alpha for q in g.bias_p):
+            keep.add(g.name)
+    return {o: (w if o in keep else 0.0) for o, w in weights.items()}
+
+
+def rank_partners(
+    first: str, signatures: Sequence[Signature], left: GapResult, k: int
+) -> list[str]:
+    """The ``k`` effects whose signature best matches the gap the first effect leaves.
+
+    The single-effect ranking matches signatures with the whole gap, which the
+    first effect dominates; its partner's part shows in what is left
+    (:func:`gap.feature_vector` of ``left``). Cosine over every probe of an
+    effect; only effects with a positive match are returned, best first.
+    """
+    g = feature_vector(left)
+    gn = float(np.linalg.norm(g))
+    if gn == 0.0:
+        return []
+    cos = {}
+    for sg in signatures:
+        if sg.name == first or not sg.vectors:
+            continue
+        c = [
+            float(v @ g / (np.linalg.norm(v) * gn)) for _, v in sg.vectors if np.linalg.norm(v) > 0
+        ]
+        if c and max(c) > 0:
+            cos[sg.name] = max(c)
+    order = sorted(cos, key=lambda n: -cos[n])
+    log.info("partners of %s by the gap it leaves: %s", first, {n: round(cos[n], 2) for n in order})
+    return order[:k]
+
+
 @dataclass(frozen=True)
 class SelectionInput:
     """What the forward step needs from the single-effect step.
@@ -96,24 +167,27 @@ class SelectionInput:
         The two folds of the cross-fitting.
     fold_values : dict name -> [value scoring fold 0, value scoring fold 1]
         Single-effect fits.
-    base_scores : dict observable -> ndarray (n,)
-        Weighted held-out scores against the baseline copies.
-    single_scores : dict name -> (observable -> ndarray (n,))
+    base_values : dict observable -> ndarray (n, 1 + copies)
+        :func:`gap.value_matrices` of the baseline copies.
+    single_values : dict name -> (observable -> ndarray (n, 1 + copies))
         The same with each single effect on (cross-fitted).
     weights : dict observable -> float
-        Weights of the fit and decision loss (0 for observables without a gap).
+        Weights of the fit and decision loss of the pairs (:func:`pair_weights`).
     observables : tuple of str
     copies, fit_copies, fit_evals : int
         The plan's copies per evaluation, copies per fit evaluation, Brent steps.
     alpha : float
     n_perm : int
+    rounds : int
+        Coordinate-descent rounds of the joint fit (1: the added effect only,
+        the first held at its single value; 2: then the first refitted too).
     """
 
     observed: pd.DataFrame
     folds: Sequence[np.ndarray]
     fold_values: Mapping[str, Sequence[float]]
-    base_scores: Mapping[str, np.ndarray]
-    single_scores: Mapping[str, Mapping[str, np.ndarray]]
+    base_values: Mapping[str, np.ndarray]
+    single_values: Mapping[str, Mapping[str, np.ndarray]]
     weights: Mapping[str, float]
     observables: tuple[str, ...]
     copies: int
@@ -121,10 +195,74 @@ class SelectionInput:
     fit_evals: int
     alpha: float
     n_perm: int
+    rounds: int = 2
+
+
+def joint_fit(
+    first: Candidate,
+    second: Candidate,
+    start: Mapping[str, float],
+    train: np.ndarray,
+    inp: SelectionInput,
+    maker: CopyMaker,
+    on_fit: Callable[[Fit], None] | None = None,
+) -> dict[str, float]:
+    """Fit both values of a pair on the training fibers by coordinate descent.
+
+    Round 1 fits ``second`` with ``first`` held at ``start[first]`` (its single
+    fit); round 2 refits ``first`` with ``second`` held at the value just found,
+    and so on for ``inp.rounds`` rounds. Each step is :func:`fit.fit_effect` with
+    the other member fixed; its baseline point (the fitted member at 0) is the
+    other member alone, so a member that does not help goes back to 0 and the
+    pair's loss never increases from round to round (up to the copies' noise).
+
+    Parameters
+    ----------
+    start : mapping name -> float
+        Starting values; ``start[second]`` gives the sign a signed effect is
+        searched on first (0: both sides).
+    train : ndarray of int
+        Fibers of the training fold.
+
+    Returns
+    -------
+    dict name -> float : both fitted values.
+    """
+    obs = inp.observed.iloc[train].reset_index(drop=True)
+    cur = {c.name: float(start.get(c.name, 0.0)) for c in (first, second)}
+    order = [second, first]
+    for r in range(inp.rounds):
+        cand = order[r % 2]
+        other = order[(r + 1) % 2]
+        fixed = {other.name: cur[other.name]}
+        base_tr = [
+            maker.copy(k, fixed, train, desc=f"pair-fit {other.name} (+{cand.name})")
+            for k in range(inp.fit_copies)
+        ]
+        fit = fit_effect(
+            cand,
+            maker,
+            obs,
+            base_tr,
+            train,
+            inp.observables,
+            inp.weights,
+            inp.fit_evals,
+            side=float(np.sign(cur[cand.name])),
+            fixed=fixed,
+            stage="pair-fit",
+            # from round 2 on, the current pair was the previous step's best point:
+            # its runs are held, so it is a free starting value
+            known=[cur[cand.name]] if r > 0 else [],
+        )
+        if on_fit is not None:
+            on_fit(fit)
+        cur[cand.name] = float(fit.value)
+    return cur
 
 
 def forward_pairs(
-    first: str,
+    first: Candidate,
     others: Sequence[Candidate],
     inp: SelectionInput,
     maker: CopyMaker,
@@ -135,12 +273,12 @@ def forward_pairs(
 
     Parameters
     ----------
-    first : str
+    first : Candidate
         The single effect that improved the held-out fibers most.
     others : sequence of Candidate
         Effects to add (``first`` excluded).
     on_fit : callable, optional
-        Called with every joint fit (for the report's fit table).
+        Called with every fit of the joint fits (for the report's fit table).
 
     Returns
     -------
@@ -151,52 +289,60 @@ def forward_pairs(
     """
     folds = inp.folds
     obs = inp.observed
-    v1 = [float(v) for v in inp.fold_values[first]]
+    w = inp.weights
+    base_scores = weighted_loss(inp.base_values, w)
+    single_scores = {n: weighted_loss(v, w) for n, v in inp.single_values.items()}
+    v1 = [float(v) for v in inp.fold_values[first.name]]
     tried: list[dict] = []
     for cand in others:
-        vals = []
-        for f_idx in range(len(folds)):
-            train = folds[1 - f_idx]
-            fixed = {first: v1[f_idx]}
-            base_tr = [
-                maker.copy(k, fixed, train, desc=f"fit {first} (+{cand.name})")
-                for k in range(inp.fit_copies)
-            ]
-            single = inp.fold_values.get(cand.name, [0.0, 0.0])
-            fit = fit_effect(
+        single = inp.fold_values.get(cand.name, [0.0, 0.0])
+        per_fold = [
+            joint_fit(
+                first,
                 cand,
+                {first.name: v1[f_idx], cand.name: float(single[f_idx])},
+                folds[1 - f_idx],
+                inp,
                 maker,
-                obs.iloc[train].reset_index(drop=True),
-                base_tr,
-                train,
-                inp.observables,
-                inp.weights,
-                inp.fit_evals,
-                side=float(np.sign(single[f_idx])),
-                fixed=fixed,
+                on_fit,
             )
-            if on_fit is not None:
-                on_fit(fit)
-            vals.append(float(fit.value))
-        if all(v == 0.0 for v in vals):
-            log.info("pair %s + %s: the added effect stays at 0", first, cand.name)
+            for f_idx in range(len(folds))
+        ]
+        if all(pf[cand.name] == 0.0 for pf in per_fold) or all(
+            pf[first.name] == 0.0 for pf in per_fold
+        ):
+            log.info("pair %s + %s: a member stays at 0 on both folds", first.name, cand.name)
             continue
-        per_fold = [{first: v1[f], cand.name: vals[f]} for f in range(len(folds))]
-        cps = crossfit_copies(maker, folds, per_fold, inp.copies, f"held-out {first}+{cand.name}")
+        names = (first.name, cand.name)
+        cps = crossfit_copies(
+            maker, folds, per_fold, inp.copies, f"pair-held-out {first.name}+{cand.name}"
+        )
         v_after = value_matrices(obs, cps, inp.observables)
-        scores = weighted_loss(v_after, inp.weights)
-        # A's contribution: the pair against B alone; B's: the pair against A alone
+        scores = weighted_loss(v_after, w)
+        # A's contribution: the pair against B alone; B's: the pair against A alone.
+        # A partner never fitted alone (ranked only by the gap A leaves) is taken
+        # alone at its pair values, cross-fitted like the pair.
+        b_alone = single_scores.get(cand.name)
+        if b_alone is None:
+            cps_b = crossfit_copies(
+                maker,
+                folds,
+                [{cand.name: pf[cand.name]} for pf in per_fold],
+                inp.copies,
+                f"pair-held-out {cand.name} alone",
+            )
+            b_alone = weighted_loss(value_matrices(obs, cps_b, inp.observables), w)
         without = {
-            first: inp.single_scores.get(cand.name, inp.base_scores),
-            cand.name: inp.single_scores[first],
+            first.name: b_alone,
+            cand.name: single_scores.get(first.name, base_scores),
         }
-        gains = {m: paired_improvement(without[m], scores) for m in (first, cand.name)}
+        gains = {m: paired_improvement(without[m], scores) for m in names}
         tried.append(
             {
-                "values": {first: float(np.mean(v1)), cand.name: float(np.mean(vals))},
-                "fold": {first: (v1[0], v1[1]), cand.name: (vals[0], vals[1])},
+                "values": {m: float(np.mean([pf[m] for pf in per_fold])) for m in names},
+                "fold": {m: (per_fold[0][m], per_fold[1][m]) for m in names},
                 "gains": gains,
-                "improvement": paired_improvement(inp.base_scores, scores),
+                "improvement": paired_improvement(base_scores, scores),
                 "residual": assess_gap(v_after, rng, alpha=inp.alpha, n_perm=inp.n_perm),
                 "copies": cps,
             }
@@ -222,7 +368,9 @@ def forward_pairs(
         )
         out_copies[st.name] = t["copies"]
         if st.significant(inp.alpha):
-            final = [maker.copy(k, st.values, desc=f"final {st.name}") for k in range(inp.copies)]
+            final = [
+                maker.copy(k, st.values, desc=f"pair-final {st.name}") for k in range(inp.copies)
+            ]
             v_final = value_matrices(obs, final, inp.observables)
             gap: GapResult = assess_gap(v_final, rng, alpha=inp.alpha, n_perm=inp.n_perm)
             st = replace(st, final=gap)

@@ -101,7 +101,11 @@ class DiscrepancySettings:
 
 @dataclass(frozen=True)
 class Plan:
-    """How many simulations each step may use."""
+    """How many simulations each step may use.
+
+    ``pair_rounds``: coordinate-descent rounds of a pair's joint fit
+    (:func:`select.joint_fit`).
+    """
 
     copies: int
     fit_copies: int
@@ -110,6 +114,18 @@ class Plan:
     probes: int
     refits: int = 2
     pairs: int = 0
+    pair_rounds: int = 2
+
+    @property
+    def refit_evals(self) -> int:
+        """Brent steps of a pooled refit: two fewer than a half's fit.
+
+        The refit starts from the two halves' values, whose runs are already held
+        (one half by its fit, the other by its cross-fitted copies), and searches a
+        narrowed interval around them: the same number of evaluated values as a
+        half's fit, two of them without new runs.
+        """
+        return max(1, self.fit_evals - 2)
 
     def cost(self, n: int) -> dict[str, int]:
         """Most runs per step for n fibers (two folds of n/2 for the fits)."""
@@ -120,11 +136,14 @@ class Plan:
             # + 1: the side check of a signed effect (fit.fit_effect)
             "fits": 2 * self.candidates * (self.fit_evals + 1) * self.fit_copies * half,
             "heldout": self.candidates * self.copies * n,
-            "refits": self.refits * (self.fit_evals * self.fit_copies + self.copies) * n,
-            # per pair: joint fits on both folds (+1: side check; + the fixed-first
-            # baseline), cross-fitted copies, the final adequacy copies
+            "refits": self.refits * (self.refit_evals * self.fit_copies + self.copies) * n,
+            # per pair: joint fits on both folds, pair_rounds 1D fits each (+1: side
+            # check; + the other member alone), cross-fitted copies, final copies
             "pairs": self.pairs
-            * (2 * (self.fit_evals + 2) * self.fit_copies * half + 2 * self.copies * n),
+            * (
+                2 * self.pair_rounds * (self.fit_evals + 2) * self.fit_copies * half
+                + 3 * self.copies * n  # + the partner alone when it had no single fit
+            ),
         }
 
     def total(self, n: int) -> int:

@@ -149,6 +149,7 @@ class Simulator:
         self.used = 0
         self.failed = 0
         self.failed_by_stage: dict[str, int] = {}
+        self.used_by_stage: dict[str, int] = {}  # runs per stage (first word of desc)
         self._batches = 0
         self._planned = planned if planned is not None else budget
         self._bar: Any = None
@@ -263,11 +264,12 @@ class Simulator:
             if bar is not None:
                 bar.update(len(chunk))
         self.used += n
+        stage = desc.split(" ")[0]
+        self.used_by_stage[stage] = self.used_by_stage.get(stage, 0) + n
         df = pd.DataFrame(rows)
         nf = int((df["status"] != "ok").sum())
         if nf:
             self.failed += nf
-            stage = desc.split(" ")[0]
             self.failed_by_stage[stage] = self.failed_by_stage.get(stage, 0) + nf
             # under a probed or fitted effect (e.g. strong Brownian motion hitting the
             # time limit) a failure is an outcome of that effect, not of the analysis

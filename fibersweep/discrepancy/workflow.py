@@ -30,7 +30,13 @@ from fibersweep.discrepancy.decide import (
     decide,
     evaluate_heldout,
 )
-from fibersweep.discrepancy.fit import Fit, Signature, fit_effect, rank_effects
+from fibersweep.discrepancy.fit import (
+    Fit,
+    Signature,
+    bootstrap_interval,
+    fit_effect,
+    rank_effects,
+)
 from fibersweep.discrepancy.followup import followup
 from fibersweep.discrepancy.gap import (
     GapResult,
@@ -45,7 +51,13 @@ from fibersweep.discrepancy.gap import (
 from fibersweep.discrepancy.library import get_candidates
 from fibersweep.discrepancy.localise import FEATURES, Region, find_region
 from fibersweep.discrepancy.schema import MeasuredData
-from fibersweep.discrepancy.select import SelectionInput, crossfit_copies, forward_pairs
+from fibersweep.discrepancy.select import (
+    SelectionInput,
+    crossfit_copies,
+    forward_pairs,
+    pair_weights,
+    rank_partners,
+)
 from fibersweep.discrepancy.settings import DiscrepancySettings, Plan, plan_budget
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
@@ -139,6 +151,7 @@ def run_discrepancy(
     perm = rng.permutation(n)
     folds = [np.sort(perm[: n // 2]), np.sort(perm[n // 2 :])]
     extra_values: dict[str, list[float]] = {}
+    intervals: dict[str, tuple[float, float]] = {}  # bootstrap 95 % of the pooled refits
 
     with Simulator(
         field_, fiber, workers=s.workers, budget=s.budget, progress=progress,
@@ -208,7 +221,7 @@ def run_discrepancy(
                     fold_values.setdefault(sg.name, []).append(fit.value)
             before_ho = gap  # every fiber is held out once: the 'before' gap is the full gap
             base_scores = weighted_loss(values, w_gap)
-            eff_scores, residuals, fitted = {}, {}, {}
+            eff_scores, eff_values, residuals, fitted = {}, {}, {}, {}
             for name, vals in fold_values.items():
                 if all(v == 0.0 for v in vals):
                     continue  # both folds kept the baseline: nothing to add
@@ -217,6 +230,7 @@ def run_discrepancy(
                 )
                 effect_copies[name] = cps
                 v_after = value_matrices(observed, cps, obs_names)
+                eff_values[name] = v_after
                 eff_scores[name] = weighted_loss(v_after, w_gap)
                 residuals[name] = assess_gap(v_after, rng, alpha=s.alpha, n_perm=s.n_perm)
                 fitted[name] = float(np.mean(vals))
@@ -239,10 +253,13 @@ def run_discrepancy(
                     np.arange(n),
                     obs_names,
                     w_gap,
-                    plan.fit_evals,
+                    plan.refit_evals,
                     bounds=bounds,
+                    stage="refit",
+                    known=vals,  # both halves' values: their runs are held (no cost)
                 )
                 fits.append(fit)
+                intervals[h.name] = bootstrap_interval(fit, rng)
                 if fit.value == 0.0:
                     final[h.name] = (0.0, gap)
                     continue
@@ -274,31 +291,37 @@ def run_discrepancy(
             helped = [h for h in heldout if h.improvement[0] > 0]
             best = max(helped, key=lambda h: h.improvement[0]) if helped else None
             if best is not None and not best.explains and plan.pairs > 0:
+                first = next(c for c in candidates if c.name == best.name)
+                # partners ranked by how well their signature matches the gap the
+                # best single effect leaves (not the whole gap, which it dominates)
+                left = best.final or best.residual
                 others = [
-                    next(c for c in candidates if c.name == sg.name)
-                    for sg in chosen
-                    if sg.name != best.name
-                ][: plan.pairs]
+                    next(c for c in candidates if c.name == name)
+                    for name in rank_partners(best.name, signatures, left, plan.pairs)
+                ]
                 inp = SelectionInput(
                     observed=observed,
                     folds=folds,
                     fold_values=extra_values,
-                    base_scores=base_scores,
-                    single_scores=eff_scores,
-                    weights=w_gap,
+                    base_values=values,
+                    single_values=eff_values,
+                    weights=pair_weights(weights, gap, left, s.alpha),
                     observables=obs_names,
                     copies=plan.copies,
                     fit_copies=plan.fit_copies,
                     fit_evals=plan.fit_evals,
                     alpha=s.alpha,
                     n_perm=s.n_perm,
+                    rounds=plan.pair_rounds,
                 )
-                sets, set_copies = forward_pairs(best.name, others, inp, maker, rng, fits.append)
+                sets, set_copies = forward_pairs(first, others, inp, maker, rng, fits.append)
                 effect_copies.update(set_copies)
         verdict = decide(gap, heldout, region_text, rng, s.alpha, sets)
         extra = followup(verdict, heldout, extra_values, candidates, maker, sim, plan, s,
                             obs_names, rng)  # fmt: skip
         used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
+        extra["runs_by_stage"] = dict(sim.used_by_stage)
+        extra["runs_without_reuse"] = maker.runs_without_reuse
 
     return DiscrepancyResult(
         verdict=verdict,
@@ -323,5 +346,5 @@ def run_discrepancy(
         weights=weights,
         settings=s,
         observables=obs_names,
-        extra={"fold_values": extra_values, **extra},
+        extra={"fold_values": extra_values, "intervals": intervals, **extra},
     )

@@ -51,3 +51,27 @@ def test_batches_run_on_every_executor_with_the_same_results(uniform_field, exec
             got = sim.run(starts, {"friction": 0.2}, seeds)
             assert got.equals(want)
         assert sim.used == 8 and sim.failed == 2
+
+
+def test_copies_reuse_the_runs_of_a_subset_and_equal_a_fresh_full_copy(uniform_field):
+    # a copy of rows {1, 3} and then of all 5 fibers simulates 5 runs in all, and the full
+    # copy equals one made in one batch by a fresh maker (same draws: common random numbers)
+    from fibersweep.discrepancy.copies import CopyMaker
+    from fibersweep.discrepancy.noise import NoiseModel
+
+    starts = np.array([[0.0, -2.0, 1.0], [5.0, -1.5, 0.8], [0.0, 1.0, 1.0],
+                       [-5.0, 2.5, 1.2], [2.0, 0.5, 0.9]])  # fmt: skip
+    eff = {"friction": 0.2}
+    with Simulator(uniform_field, FiberSettings(), workers=1, progress=False) as sim:
+        maker = CopyMaker(starts, NoiseModel(), 3, sim)
+        part = maker.copy(1, eff, np.array([3, 1]))
+        full = maker.copy(1, eff)
+        again = maker.copy(1, eff, np.array([4, 0]))
+        assert sim.used == 5
+        # keyed by the exact row set, the first two copies were 2 + 5 runs, the third free
+        assert maker.runs_without_reuse == 7
+    with Simulator(uniform_field, FiberSettings(), workers=1, progress=False) as sim:
+        want = CopyMaker(starts, NoiseModel(), 3, sim).copy(1, eff)
+    assert full.equals(want)
+    assert part.equals(want.iloc[[3, 1]].reset_index(drop=True))
+    assert again.equals(want.iloc[[4, 0]].reset_index(drop=True))

@@ -196,3 +196,28 @@ def test_two_hidden_effects_are_never_a_wrong_name(coarse_field, tmp_path):
         write_report(res, tmp_path, Config().model_dump(mode="json"))
         cfg = load_config(tmp_path / "updated_config.yaml")
         assert set(cfg.fiber.effects) == {"friction", "inlet_speed"}
+
+
+@pytest.mark.slow
+def test_realistic_hidden_pair_is_named_as_a_pair(coarse_field, tmp_path):
+    # the realistic pair (friction 0.5 + inlet_speed 0.05) on 40 fibers, both
+    # effects and a third (pillar_scale) in the library, a reduced plan (4 copies).
+    # The faster inlet's t_pass gap hides friction's class gap at baseline (Holm); the
+    # forward step scores what inlet_speed leaves and fits the pair jointly, so the pair
+    # is named. Tolerances: friction within 0.25 and inlet_speed within 0.02 of the truth
+    # (a fit on 20 fibers x 2 copies with 4 Brent steps), and both go into the config.
+    res = _run(
+        coarse_field,
+        {"friction": 0.5, "inlet_speed": 0.05},
+        40,
+        seed=1,
+        effects=("friction", "inlet_speed", "pillar_scale"),
+        copies=4, fit_evals=4, refits=1, power_fibers=0, next_copies=0,
+    )  # fmt: skip
+    v = res.verdict
+    assert v.kind == "named" and set(v.effects) == {"friction", "inlet_speed"}, v.text
+    assert v.effects["friction"] == pytest.approx(0.5, abs=0.25)
+    assert v.effects["inlet_speed"] == pytest.approx(0.05, abs=0.02)
+    write_report(res, tmp_path, Config().model_dump(mode="json"))
+    cfg = load_config(tmp_path / "updated_config.yaml")
+    assert cfg.fiber.effects == pytest.approx(v.effects)
