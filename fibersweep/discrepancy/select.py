@@ -31,34 +31,26 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.decide import SetHeldOut
-from fibersweep.discrepancy.fit import Fit, Signature, fit_effect
+from fibersweep.discrepancy.fit import Fit
 from fibersweep.discrepancy.gap import (
     GapResult,
     assess_gap,
-    feature_vector,
     paired_improvement,
     value_matrices,
     weighted_loss,
 )
 from fibersweep.discrepancy.library import Candidate
+from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit
 from fibersweep.discrepancy.stats import bootstrap_mean_ci, holm
 
-__all__ = [
-    "crossfit_copies",
-    "boot_p",
-    "pair_weights",
-    "rank_partners",
-    "SelectionInput",
-    "joint_fit",
-    "forward_pairs",
-]
+__all__ = ["boot_p", "crossfit_copies", "forward_pairs"]
 
 log = logging.getLogger(__name__)
 
@@ -96,169 +88,6 @@ def crossfit_copies(
         df = pd.concat(parts, ignore_index=True)
         out.append(df.iloc[order].reset_index(drop=True))
     return out
-
-
-def pair_weights(
-    weights: Mapping[str, float], base_gap: GapResult, left: GapResult, alpha: float
-) -> dict[str, float]:
-    """Loss weights of the forward step.
-
-    The single-effect step scores only the observables with a significant gap at
-    baseline. A second effect often lives where the first one's gap hid it (a
-    friction class gap under an inlet-speed t_pass gap: Holm over the family
-    leaves it just above alpha), so the forward step also scores every observable
-    that the best single effect leaves with a gap, significant or only nominally
-    (raw p <= alpha, score or signed residual). The weights pick the loss; the
-    held-out tests stay what guards the names.
-
-    Parameters
-    ----------
-    weights : mapping observable -> float
-        :func:`gap.observable_weights` of the baseline copies (all observables).
-    base_gap : GapResult
-        Gap against the baseline (all fibers).
-    left : GapResult
-        Gap left by the best single effect (at its pooled value when checked).
-    """
-    keep = set(base_gap.flagged) | set(left.flagged)
-    for g in left.gaps.values():
-        if g.test.p_value <= alpha or any(q <= alpha for q in g.bias_p):
-            keep.add(g.name)
-    return {o: (w if o in keep else 0.0) for o, w in weights.items()}
-
-
-def rank_partners(
-    first: str, signatures: Sequence[Signature], left: GapResult, k: int
-) -> list[str]:
-    """The ``k`` effects whose signature best matches the gap the first effect leaves.
-
-    The single-effect ranking matches signatures with the whole gap, which the
-    first effect dominates; its partner's part shows in what is left
-    (:func:`gap.feature_vector` of ``left``). Cosine over every probe of an
-    effect; only effects with a positive match are returned, best first.
-    """
-    g = feature_vector(left)
-    gn = float(np.linalg.norm(g))
-    if gn == 0.0:
-        return []
-    cos = {}
-    for sg in signatures:
-        if sg.name == first or not sg.vectors:
-            continue
-        c = [
-            float(v @ g / (np.linalg.norm(v) * gn)) for _, v in sg.vectors if np.linalg.norm(v) > 0
-        ]
-        if c and max(c) > 0:
-            cos[sg.name] = max(c)
-    order = sorted(cos, key=lambda n: -cos[n])
-    log.info("partners of %s by the gap it leaves: %s", first, {n: round(cos[n], 2) for n in order})
-    return order[:k]
-
-
-@dataclass(frozen=True)
-class SelectionInput:
-    """What the forward step needs from the single-effect step.
-
-    Attributes
-    ----------
-    observed : DataFrame
-        Measured table (n rows).
-    folds : sequence of ndarray
-        The two folds of the cross-fitting.
-    fold_values : dict name -> [value scoring fold 0, value scoring fold 1]
-        Single-effect fits.
-    base_values : dict observable -> ndarray (n, 1 + copies)
-        :func:`gap.value_matrices` of the baseline copies.
-    single_values : dict name -> (observable -> ndarray (n, 1 + copies))
-        The same with each single effect on (cross-fitted).
-    weights : dict observable -> float
-        Weights of the fit and decision loss of the pairs (:func:`pair_weights`).
-    observables : tuple of str
-    copies, fit_copies, fit_evals : int
-        The plan's copies per evaluation, copies per fit evaluation, Brent steps.
-    alpha : float
-    n_perm : int
-    rounds : int
-        Coordinate-descent rounds of the joint fit (1: the added effect only,
-        the first held at its single value; 2: then the first refitted too).
-    """
-
-    observed: pd.DataFrame
-    folds: Sequence[np.ndarray]
-    fold_values: Mapping[str, Sequence[float]]
-    base_values: Mapping[str, np.ndarray]
-    single_values: Mapping[str, Mapping[str, np.ndarray]]
-    weights: Mapping[str, float]
-    observables: tuple[str, ...]
-    copies: int
-    fit_copies: int
-    fit_evals: int
-    alpha: float
-    n_perm: int
-    rounds: int = 2
-
-
-def joint_fit(
-    first: Candidate,
-    second: Candidate,
-    start: Mapping[str, float],
-    train: np.ndarray,
-    inp: SelectionInput,
-    maker: CopyMaker,
-    on_fit: Callable[[Fit], None] | None = None,
-) -> dict[str, float]:
-    """Fit both values of a pair on the training fibers by coordinate descent.
-
-    Round 1 fits ``second`` with ``first`` held at ``start[first]`` (its single
-    fit); round 2 refits ``first`` with ``second`` held at the value just found,
-    and so on for ``inp.rounds`` rounds. Each step is :func:`fit.fit_effect` with
-    the other member fixed; its baseline point (the fitted member at 0) is the
-    other member alone, so a member that does not help goes back to 0 and the
-    pair's loss never increases from round to round (up to the copies' noise).
-
-    Parameters
-    ----------
-    start : mapping name -> float
-        Starting values; ``start[second]`` gives the sign a signed effect is
-        searched on first (0: both sides).
-    train : ndarray of int
-        Fibers of the training fold.
-
-    Returns
-    -------
-    dict name -> float : both fitted values.
-    """
-    obs = inp.observed.iloc[train].reset_index(drop=True)
-    cur = {c.name: float(start.get(c.name, 0.0)) for c in (first, second)}
-    order = [second, first]
-    for r in range(inp.rounds):
-        cand = order[r % 2]
-        other = order[(r + 1) % 2]
-        fixed = {other.name: cur[other.name]}
-        base_tr = [
-            maker.copy(k, fixed, train, desc=f"pair-fit {other.name} (+{cand.name})")
-            for k in range(inp.fit_copies)
-        ]
-        fit = fit_effect(
-            cand,
-            maker,
-            obs,
-            base_tr,
-            train,
-            inp.observables,
-            inp.weights,
-            inp.fit_evals,
-            side=float(np.sign(cur[cand.name])),
-            fixed=fixed,
-            stage="pair-fit",
-            # from round 2 on, the current pair was the previous step's best point:
-            # its runs are held, so it is a free starting value
-            known=[cur[cand.name]] if r > 0 else [],
-        )
-        if on_fit is not None:
-            on_fit(fit)
-        cur[cand.name] = float(fit.value)
-    return cur
 
 
 def forward_pairs(

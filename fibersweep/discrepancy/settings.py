@@ -104,7 +104,7 @@ class Plan:
     """How many simulations each step may use.
 
     ``pair_rounds``: coordinate-descent rounds of a pair's joint fit
-    (:func:`select.joint_fit`).
+    (:func:`pairfit.joint_fit`).
     """
 
     copies: int

@@ -50,14 +50,9 @@ from fibersweep.discrepancy.gap import (
 )
 from fibersweep.discrepancy.library import get_candidates
 from fibersweep.discrepancy.localise import FEATURES, Region, find_region
+from fibersweep.discrepancy.pairfit import SelectionInput, pair_weights, rank_partners
 from fibersweep.discrepancy.schema import MeasuredData
-from fibersweep.discrepancy.select import (
-    SelectionInput,
-    crossfit_copies,
-    forward_pairs,
-    pair_weights,
-    rank_partners,
-)
+from fibersweep.discrepancy.select import crossfit_copies, forward_pairs
 from fibersweep.discrepancy.settings import DiscrepancySettings, Plan, plan_budget
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError

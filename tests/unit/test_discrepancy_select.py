@@ -134,7 +134,7 @@ def test_pair_weights_add_what_the_first_effect_leaves():
     # baseline: a strong t_pass shift (Holm-significant) and a class-like moderate shift in
     # "delta" that Holm over the family may leave out; after the first effect the t_pass
     # gap is gone and "delta" is still shifted: the forward step must score "delta".
-    from fibersweep.discrepancy.select import pair_weights
+    from fibersweep.discrepancy.pairfit import pair_weights
 
     rng = np.random.default_rng(8)
     n, m = 60, 6
@@ -180,7 +180,7 @@ class _PairModel:
 
 
 def _pair_input(model, n, rounds):
-    from fibersweep.discrepancy.select import SelectionInput
+    from fibersweep.discrepancy.pairfit import SelectionInput
 
     observed = pd.DataFrame(
         {"delta": model.x + 0.05, "t_pass": model.t * 1.02 / 1.05}
@@ -199,7 +199,7 @@ def test_joint_fit_refits_the_first_member():
     # tolerances of the truth (friction 0.5 +- 0.05, inlet_speed 0.05 +- 0.006:
     # 8 Brent steps on [0, 1] and [0, 0.3], 2 copies with 1 % noise, 40 fibers).
     from fibersweep.discrepancy.library import LIBRARY
-    from fibersweep.discrepancy.select import joint_fit
+    from fibersweep.discrepancy.pairfit import joint_fit
 
     n = 40
     model = _PairModel(n)
@@ -222,7 +222,7 @@ def test_partners_are_ranked_by_the_gap_the_first_effect_leaves():
     # effect itself is never its own partner
     from fibersweep.discrepancy.fit import Signature
     from fibersweep.discrepancy.gap import feature_vector
-    from fibersweep.discrepancy.select import rank_partners
+    from fibersweep.discrepancy.pairfit import rank_partners
 
     rng = np.random.default_rng(9)
     n, m = 60, 6
