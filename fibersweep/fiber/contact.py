@@ -113,6 +113,14 @@ def shape_distance(px: float, py: float, verts: np.ndarray, circle: np.ndarray) 
     return outline_distance(px, py, verts)
 
 
+@nb.njit(cache=True, inline="always")
+def _smooth_pair(r: float, r2c: float, den: float, amp: float) -> tuple[float, float]:
+    """Force magnitude [pN] and |dF/dr| [pN/µm] of the contact potential at distance r [µm]."""
+    w = (r2c - r * r) / den
+    w3 = w * w * w
+    return amp * w3 * w * r, abs(amp * (w3 * w - 8.0 * w3 * r * r / den))
+
+
 @nb.njit(cache=True)
 def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
     """Contact forces on fiber beads (overwrites fx, fy, stiff, dist).
@@ -190,9 +198,7 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
             ry = by[i] - circle[1]
             rr = math.sqrt(rx * rx + ry * ry)
             r = abs(d_out)
-            w = (r2c - r * r) / den
-            w3 = w * w * w
-            fm = amp * w3 * w * r
+            fm, k_r = _smooth_pair(r, r2c, den, amp)
             if rr > 0.0:
                 fx[i] += fm * rx / rr
                 fy[i] += fm * ry / rr
@@ -201,7 +207,7 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
             else:
                 cx_i = circle[0] + circle[2]
                 cy_i = circle[1]
-            stiff[i] += abs(amp * (w3 * w - 8.0 * w3 * r * r / den))
+            stiff[i] += k_r
             any_c = True
             if fm > fmax:
                 fmax = fm
@@ -219,16 +225,14 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
                     s_curve = side
                 if r >= r_cut:
                     continue
-                w = (r2c - r * r) / den
-                w3 = w * w * w
+                fm, k_r = _smooth_pair(r, r2c, den, amp)
                 # push along the outward normal even if the centre crossed the curve
                 ex = side * (bx[i] - qx)
                 ey = side * (by[i] - qy)
-                fm = amp * w3 * w * r
                 if r > 0.0:
                     fx[i] += fm * ex / r
                     fy[i] += fm * ey / r
-                stiff[i] += abs(amp * (w3 * w - 8.0 * w3 * r * r / den))
+                stiff[i] += k_r
                 any_c = True
                 if fm > fmax:
                     fmax = fm
