@@ -11,35 +11,17 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _duct_case import solve_duct
 
 from fibersweep.flow.analysis import flux_separatrix, peak_speeds
-from fibersweep.flow.analytic import duct_velocity
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
-from fibersweep.flow.solver import solve_lattice
+from fibersweep.flow.settings import FlowSettings
 
 COARSE_SETTINGS = FlowSettings(dx=4.0)  # the tests' coarse field (conftest.coarse_field)
 
 
 def _duct(precision: str) -> tuple[float, np.ndarray, float]:
     """(relative L2 error of ux against the series, ux, mass change): 2:1 duct, 20 nodes deep."""
-    depth, width = 20, 40
-    settings = FlowSettings(
-        geometry=GeometrySettings(width=width, depth=depth, length=2, pillar_height=0.5),
-        dx=1.0,
-        tau=1.0,
-        tolerance=1e-7,
-        max_steps=60_000,
-        precision=precision,
-    )
-    nz = depth // 2
-    sol = solve_lattice(settings, pillar=False, initial=np.zeros((3, nz, width, 2)))
-    assert sol.report.converged, sol.report
-    nu = (sol.report.tau - 0.5) / 3.0
-    y = np.arange(width) + 0.5
-    z = np.arange(nz) + 0.5
-    exact = duct_velocity(y[None, :], z[:, None], width, depth, sol.report.force / nu)
-    ux = sol.u[0, :, :, 0]
-    err = float(np.linalg.norm(ux - exact) / np.linalg.norm(exact))
+    sol, ux, err = solve_duct(20, 40, tau=1.0, precision=precision)
     return err, ux, sol.report.mass_change
 
 
