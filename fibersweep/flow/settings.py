@@ -86,15 +86,8 @@ class GeometrySettings(_Strict):
 
     @model_validator(mode="after")
     def _pillar_fits(self) -> GeometrySettings:
-        if self.pillar_shape == "polygon" and self.pillar_vertices is None:
-            raise ValueError("pillar_vertices: pillar_shape 'polygon' needs its vertices")
-        if self.pillar_shape != "polygon" and self.pillar_vertices is not None:
-            raise ValueError(
-                f"pillar_vertices: only used with pillar_shape 'polygon' (here "
-                f"{self.pillar_shape!r}); remove it"
-            )
         geo = self.to_geometry()
-        if not geo.fits():
+        if not geo.fits():  # building the shape checks that vertices go with 'polygon' only
             x0, y0, x1, y1 = geo.shape.bounds
             raise ValueError(
                 f"pillar does not fit in the channel: its {self.pillar_shape} spans "

@@ -43,7 +43,7 @@ def check_shape_name(name: str) -> str:
 
 def _polygon_template(vertices, size: float) -> ConvexPolygon:
     if vertices is None:
-        raise ValueError("pillar_shape 'polygon' needs pillar_vertices")
+        raise ValueError("pillar_vertices: pillar_shape 'polygon' needs its vertices")
     poly = ConvexPolygon.from_vertices(np.asarray(vertices, dtype=np.float64) * size)
     cx, _ = poly.centroid
     return poly.moved(-cx, -poly.bounds[1])
@@ -53,7 +53,9 @@ def template(name: str, size: float, vertices=None) -> ConvexPolygon | Circle:
     """The unrotated shape of size ``size`` [µm], centroid at x = 0, lowest point at y = 0."""
     check_shape_name(name)
     if name != "polygon" and vertices is not None:
-        raise ValueError(f"pillar_vertices is only used with pillar_shape 'polygon', not {name!r}")
+        raise ValueError(
+            f"pillar_vertices: only used with pillar_shape 'polygon' (here {name!r}); remove it"
+        )
     if name == "triangle":
         half = 2.0 * size / math.sqrt(3.0) / 2.0
         return ConvexPolygon(np.array([[-half, 0.0], [half, 0.0], [0.0, size]]))
