@@ -148,41 +148,37 @@ def bootstrap_interval(
     L = np.stack([p[1] for p in pts])  # (k, n)
     n = L.shape[1]
     idx = rng.integers(0, n, size=(n_boot, n))
-    means = L[:, idx].mean(axis=2)  # (k, n_boot)
-    j = np.argmin(means, axis=0)
-    est = x[j].astype(np.float64)
-    inner = (j > 0) & (j < len(x) - 1)
-    if inner.any():
-        b = np.arange(n_boot)[inner]
-        jj = j[inner]
-        x0, x1, x2 = x[jj - 1], x[jj], x[jj + 1]
-        y0, y1, y2 = means[jj - 1, b], means[jj, b], means[jj + 1, b]
-        num = (x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)
-        den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            vert = x1 - 0.5 * num / den
-        vert = np.where(np.isfinite(vert), np.clip(vert, x0, x2), x1)
-        est[inner] = vert
+    est = _refined_argmin(x, L[:, idx].mean(axis=2))  # (n_boot,)
     # the same estimator on the full sample; the interval is centred on the fitted value
     # (basic bootstrap shifts), so it contains it even where the refined minimiser and
     # the best evaluated value differ
-    full = _refined_argmin(x, L.mean(axis=1))
+    full = float(_refined_argmin(x, L.mean(axis=1)[:, None])[0])
     a = (1.0 - level) / 2.0
     d = est - full
     return fit.value + float(np.quantile(d, a)), fit.value + float(np.quantile(d, 1.0 - a))
 
 
-def _refined_argmin(x: np.ndarray, y: np.ndarray) -> float:
-    """Best of the values x by loss y, refined by the parabola through its neighbours."""
-    j = int(np.argmin(y))
-    if 0 < j < len(x) - 1:
-        x0, x1, x2 = x[j - 1], x[j], x[j + 1]
-        y0, y1, y2 = y[j - 1], y[j], y[j + 1]
+def _refined_argmin(x: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """Minimiser over the sorted values x (k,) of each loss column of Y (k, m), shape (m,).
+
+    The best value, refined by the vertex of the parabola through it and its two
+    neighbours when it is interior (clipped to them; the best value itself when
+    the three are collinear).
+    """
+    j = np.argmin(Y, axis=0)
+    est = x[j].astype(np.float64)
+    inner = (j > 0) & (j < len(x) - 1)
+    if inner.any():
+        b = np.flatnonzero(inner)
+        jj = j[inner]
+        x0, x1, x2 = x[jj - 1], x[jj], x[jj + 1]
+        y0, y1, y2 = Y[jj - 1, b], Y[jj, b], Y[jj + 1, b]
+        num = (x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)
         den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0)
-        if den != 0.0:
-            num = (x1 - x0) ** 2 * (y1 - y2) - (x1 - x2) ** 2 * (y1 - y0)
-            return float(np.clip(x1 - 0.5 * num / den, x0, x2))
-    return float(x[j])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vert = x1 - 0.5 * num / den
+        est[inner] = np.where(np.isfinite(vert), np.clip(vert, x0, x2), x1)
+    return est
 
 
 def rank_effects(
