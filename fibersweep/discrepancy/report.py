@@ -224,7 +224,9 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
                 "effect": h.name,
                 "value": h.value,
                 "halves": fold.get(h.name),
-                "interval95": list(intervals[h.name]) if h.name in intervals else None,
+                "interval95": list(intervals[h.name][:2]) if h.name in intervals else None,
+                # True where the test did not reject up to the refit's search bound
+                "interval95_open": list(intervals[h.name][2:]) if h.name in intervals else None,
                 "improvement": dict(zip(("mean", "lo95", "hi95"), h.improvement, strict=True)),
                 "p": h.p_value,
                 "p_holm": h.p_holm,

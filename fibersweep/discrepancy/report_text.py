@@ -143,9 +143,11 @@ def _fits(s: dict[str, Any]) -> list[str]:
         "## Fits per half and the out-of-sample decision",
         "",
         "Each half is scored with the value fitted on the other half. Final: the value "
-        "refitted on all fibers (significant candidates), with its 95 % interval from a "
-        "bootstrap over the fibers (the copies held fixed, so it leaves out their Monte Carlo "
-        "noise: a lower bound on the uncertainty). Candidates whose fit kept the "
+        "refitted on all fibers (significant candidates), with its 95 % interval: the values "
+        "where the fibers' mean loss slope is not significantly different from zero (a score "
+        "test over the fibers; it includes the copies' Monte Carlo noise). '≤' / '≥' mark an "
+        "end where the refit's search range stopped before the test rejected. Candidates "
+        "whose fit kept the "
         "baseline (0) on both halves are left out.",
         "",
         "| effect | half A | half B | spread | final [95 % CI] | held-out improvement "
@@ -156,7 +158,12 @@ def _fits(s: dict[str, Any]) -> list[str]:
         a, b = (h["halves"] or [None, None])[:2]
         spread = abs(a - b) if a is not None and b is not None else None
         ci = h.get("interval95")
-        final = _f(h["value"]) + (f" [{_f(ci[0])}, {_f(ci[1])}]" if ci else "")
+        op = h.get("interval95_open") or [False, False]
+        final = _f(h["value"]) + (
+            f" [{'≤ ' if op[0] else ''}{_f(ci[0])}, {'≥ ' if op[1] else ''}{_f(ci[1])}]"
+            if ci
+            else ""
+        )
         lines.append(
             f"| {h['effect']} | {_f(a)} | {_f(b)} | {_f(spread, '.2g')} | {final} "
             f"| {_ci(h['improvement'])} | {_f(h['p'], '.2g')} | {_f(h['p_holm'], '.2g')} "

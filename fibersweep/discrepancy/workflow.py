@@ -33,9 +33,9 @@ from fibersweep.discrepancy.decide import (
 from fibersweep.discrepancy.fit import (
     Fit,
     Signature,
-    bootstrap_interval,
     fit_effect,
     rank_effects,
+    score_interval,
 )
 from fibersweep.discrepancy.followup import followup
 from fibersweep.discrepancy.gap import (
@@ -146,7 +146,8 @@ def run_discrepancy(
     perm = rng.permutation(n)
     folds = [np.sort(perm[: n // 2]), np.sort(perm[n // 2 :])]
     extra_values: dict[str, list[float]] = {}
-    intervals: dict[str, tuple[float, float]] = {}  # bootstrap 95 % of the pooled refits
+    # 95 % score-test interval of the pooled refits: (lo, hi, open_lo, open_hi)
+    intervals: dict[str, tuple[float, float, bool, bool]] = {}
 
     with Simulator(
         field_, fiber, workers=s.workers, budget=s.budget, progress=progress,
@@ -254,7 +255,7 @@ def run_discrepancy(
                     known=vals,  # both halves' values: their runs are held (no cost)
                 )
                 fits.append(fit)
-                intervals[h.name] = bootstrap_interval(fit, rng)
+                intervals[h.name] = score_interval(fit)
                 if fit.value == 0.0:
                     final[h.name] = (0.0, gap)
                     continue
