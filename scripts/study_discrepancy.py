@@ -273,6 +273,17 @@ def targets(rows: list[dict], predicted: dict[int, dict]) -> str:
         f"- false alarms on no-effect data: {sum(r['verdict'] != 'no significant gap' for r in fa)}"
         f" of {len(fa)}",
     ]
+    # the pooled refit's 95 % interval (score test) against the hidden value
+    cover = [
+        (r["scenario"], e, lo <= r["truth"][e] <= hi)
+        for r in rows
+        for e, (lo, hi, *_) in r.get("intervals", {}).items()
+        if e in r["truth"]
+    ]
+    if cover:
+        lines.append(f"- 95 % intervals of the refits containing the hidden value: "
+                     f"{sum(c for *_, c in cover)} of {len(cover)}"
+                     + "".join(f"; missed: {s} ({e})" for s, e, c in cover if not c))  # fmt: skip
     for n, pred in sorted(predicted.items()):
         lines.append(f"- power analysis at N = {n}: predicted vs observed detection (gap found):")
         for name in dict.fromkeys(r["scenario"] for r in rows if r["n"] == n):
@@ -342,9 +353,13 @@ def main() -> None:
         if args.power_fibers:
             predicted[n] = predicted_detection(field, n, 1, args.workers, args.power_fibers)
             log.warning("power at N = %d: %s", n, predicted[n]["limits"])
-        for name in args.scenarios:
-            seeds = (args.none_seeds or args.seeds) if name == "none" else args.seeds
-            for seed in seeds:
+        # seed-major: a study cut short still has every scenario at the first seeds
+        seeds_all = list(dict.fromkeys(args.seeds + (args.none_seeds or [])))
+        for seed in seeds_all:
+            for name in args.scenarios:
+                seeds = (args.none_seeds or args.seeds) if name == "none" else args.seeds
+                if seed not in seeds:
+                    continue
                 row = run_scenario(name, field, n, seed, args.workers, kw)
                 rows.append(row)
                 (out / "study.json").write_text(

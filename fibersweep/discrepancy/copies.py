@@ -15,7 +15,7 @@ effect's fold value, the final copies) reuses those runs.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 
 import numpy as np
 import pandas as pd
@@ -84,20 +84,48 @@ class CopyMaker:
         -------
         DataFrame, one row per requested fiber, outcome columns + status, reason.
         """
+        return self.copies([k], effects, rows, desc)[0]
+
+    def copies(
+        self,
+        ks: Iterable[int],
+        effects: Mapping[str, float] | None = None,
+        rows: np.ndarray | None = None,
+        desc: str = "copies",
+    ) -> list[pd.DataFrame]:
+        """Outcomes of copies ``ks`` for the given rows, the missing runs as one batch.
+
+        One batch keeps every worker busy until the last run of all the copies
+        (copy by copy, each batch waits for its own slowest run).
+
+        Returns
+        -------
+        list of DataFrame, one per k, one row per requested fiber.
+        """
+        ks = [int(k) for k in ks]
         eff = tuple(sorted((n, float(v)) for n, v in (effects or {}).items() if float(v) != 0.0))
         idx = np.arange(self.n) if rows is None else np.asarray(rows, dtype=np.int64)
-        key = (k, eff)
-        whole = (k, eff, idx.tobytes())
-        if (k, eff, None) not in self._whole and whole not in self._whole:
-            self.runs_without_reuse += len(idx)
-            self._whole.add((k, eff, None) if rows is None else whole)
-        have = self._cache.get(key)
-        missing = np.unique(idx) if have is None else np.setdiff1d(idx, have.index.to_numpy())
-        if len(missing):
-            starts, seeds, z = self.draws(k)
-            raw = self.sim.run(starts[missing], dict(eff), seeds[missing], desc=desc)
-            out = self.noise.observe(raw, {name: zn[missing] for name, zn in z.items()})
-            out.index = missing
-            have = out if have is None else pd.concat([have, out])
-            self._cache[key] = have
-        return have.loc[idx].reset_index(drop=True)
+        todo = []  # (k, missing fibers)
+        for k in ks:
+            whole = (k, eff, idx.tobytes())
+            if (k, eff, None) not in self._whole and whole not in self._whole:
+                self.runs_without_reuse += len(idx)
+                self._whole.add((k, eff, None) if rows is None else whole)
+            have = self._cache.get((k, eff))
+            missing = np.unique(idx) if have is None else np.setdiff1d(idx, have.index.to_numpy())
+            if len(missing) and k not in {t[0] for t in todo}:
+                todo.append((k, missing))
+        if todo:
+            drawn = [self.draws(k) for k, _ in todo]
+            starts = np.concatenate([d[0][m] for d, (_, m) in zip(drawn, todo, strict=True)])
+            seeds = np.concatenate([d[1][m] for d, (_, m) in zip(drawn, todo, strict=True)])
+            raw = self.sim.run(starts, dict(eff), seeds, desc=desc)
+            at = 0
+            for d, (k, m) in zip(drawn, todo, strict=True):
+                part = raw.iloc[at : at + len(m)].reset_index(drop=True)
+                at += len(m)
+                out = self.noise.observe(part, {name: zn[m] for name, zn in d[2].items()})
+                out.index = m
+                have = self._cache.get((k, eff))
+                self._cache[(k, eff)] = out if have is None else pd.concat([have, out])
+        return [self._cache[(k, eff)].loc[idx].reset_index(drop=True) for k in ks]

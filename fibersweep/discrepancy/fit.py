@@ -313,12 +313,9 @@ def fit_effect(
         if len(seen) - 1 >= limit:
             # Budget spent: this point is unknown; report the worst seen so Brent moves away.
             return max(seen.values())
-        copies = [
-            maker.copy(
-                k, {**(fixed or {}), cand.name: v}, rows, desc=f"{stage} {cand.name}={v:.4g}"
-            )
-            for k in range(k_fit)
-        ]
+        copies = maker.copies(
+            range(k_fit), {**(fixed or {}), cand.name: v}, rows, desc=f"{stage} {cand.name}={v:.4g}"
+        )
         per[v] = per_fiber_loss(value_matrices(observed, copies, observables), weights)
         seen[v] = float(np.mean(per[v]))
         return seen[v]

@@ -169,10 +169,10 @@ def discriminate(
     used0 = sim.used
     maker = CopyMaker(pts, noise, seed + 104729, sim)
     xa = np.stack(standardised_values(
-        [maker.copy(k, dict(hypotheses[0]), desc="next: A") for k in range(copies)], observables
+        maker.copies(range(copies), dict(hypotheses[0]), desc="next: A"), observables
     ))  # fmt: skip
     xb = np.stack(standardised_values(
-        [maker.copy(k, dict(hypotheses[1]), desc="next: B") for k in range(copies)], observables
+        maker.copies(range(copies), dict(hypotheses[1]), desc="next: B"), observables
     ))  # fmt: skip
     both = np.concatenate([xa, xb], axis=0)  # (2 copies, points, components)
     # per-component noise of one fiber: spread of the copies around their hypothesis' mean

@@ -166,10 +166,9 @@ def joint_fit(
         cand = order[r % 2]
         other = order[(r + 1) % 2]
         fixed = {other.name: cur[other.name]}
-        base_tr = [
-            maker.copy(k, fixed, train, desc=f"pair-fit {other.name} (+{cand.name})")
-            for k in range(inp.fit_copies)
-        ]
+        base_tr = maker.copies(
+            range(inp.fit_copies), fixed, train, desc=f"pair-fit {other.name} (+{cand.name})"
+        )
         fit = fit_effect(
             cand,
             maker,

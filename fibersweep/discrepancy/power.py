@@ -201,7 +201,7 @@ def _z_vector(
 ) -> tuple[np.ndarray, list[pd.DataFrame]]:
     """Mean feature vector of copy k with the effect vs the baseline copies j != k."""
     K = len(base)
-    eff = [maker.copy(k, effect, rows, desc=f"power {next(iter(effect))}") for k in range(K)]
+    eff = maker.copies(range(K), effect, rows, desc=f"power {next(iter(effect))}")
     zs = []
     for k in range(K):
         others = [base[j] for j in range(K) if j != k]
@@ -244,7 +244,7 @@ def analyse_power(
     n_sim = min(maker.n, n_sim or 60)
     rows = np.arange(n_sim)
     used0 = maker.sim.used
-    base = [maker.copy(k, None, rows, desc="power baseline") for k in range(copies)]
+    base = maker.copies(range(copies), None, rows, desc="power baseline")
     ens = math.sqrt((1 + 1 / (copies - 1)) / (1 + 1 / workflow_copies))
     m_tests = len(feature_vector(assess_gap(value_matrices(base[0], base[1:], observables), rng,
                                             n_perm=99, n_boot=10)))  # fmt: skip

@@ -79,15 +79,14 @@ def crossfit_copies(
     list of DataFrame, each with one row per fiber in the original order.
     """
     order = np.argsort(np.concatenate(folds))
-    out = []
-    for k in range(copies):
-        parts = [
-            maker.copy(k, dict(eff), held, desc=desc)
-            for held, eff in zip(folds, effects_per_fold, strict=True)
-        ]
-        df = pd.concat(parts, ignore_index=True)
-        out.append(df.iloc[order].reset_index(drop=True))
-    return out
+    per_fold = [
+        maker.copies(range(copies), dict(eff), held, desc=desc)
+        for held, eff in zip(folds, effects_per_fold, strict=True)
+    ]
+    return [
+        pd.concat([p[k] for p in per_fold], ignore_index=True).iloc[order].reset_index(drop=True)
+        for k in range(copies)
+    ]
 
 
 def forward_pairs(
@@ -197,9 +196,7 @@ def forward_pairs(
         )
         out_copies[st.name] = t["copies"]
         if st.significant(inp.alpha):
-            final = [
-                maker.copy(k, st.values, desc=f"pair-final {st.name}") for k in range(inp.copies)
-            ]
+            final = maker.copies(range(inp.copies), st.values, desc=f"pair-final {st.name}")
             v_final = value_matrices(obs, final, inp.observables)
             gap: GapResult = assess_gap(v_final, rng, alpha=inp.alpha, n_perm=inp.n_perm)
             st = replace(st, final=gap)

@@ -155,10 +155,7 @@ def run_discrepancy(
     ) as sim:  # fmt: skip
         maker = CopyMaker(measured.starts, s.noise, s.seed, sim)
         # (1) noise floor: jittered baseline copies
-        base = [
-            maker.copy(k, None, desc=f"baseline copy {k + 1}/{plan.copies}")
-            for k in range(plan.copies)
-        ]
+        base = maker.copies(range(plan.copies), None, desc=f"baseline ({plan.copies} copies)")
         values = value_matrices(observed, base, obs_names)
         weights = observable_weights(values)
         # (2) gap per observable
@@ -259,10 +256,7 @@ def run_discrepancy(
                 if fit.value == 0.0:
                     final[h.name] = (0.0, gap)
                     continue
-                cps = [
-                    maker.copy(k, {h.name: fit.value}, desc=f"final {h.name}")
-                    for k in range(plan.copies)
-                ]
+                cps = maker.copies(range(plan.copies), {h.name: fit.value}, desc=f"final {h.name}")
                 v_final = value_matrices(observed, cps, obs_names)
                 final[h.name] = (
                     fit.value,

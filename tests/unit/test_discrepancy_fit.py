@@ -19,6 +19,9 @@ class _ShiftModel:
         self.z = rng.standard_normal((4, n))
         self.calls = 0
 
+    def copies(self, ks, effects=None, rows=None, desc=""):
+        return [self.copy(k, effects, rows, desc) for k in ks]
+
     def copy(self, k, effects=None, rows=None, desc=""):
         self.calls += 1
         v = float((effects or {}).get("pillar_scale", 0.0))
@@ -108,6 +111,9 @@ class _NoisyShift:
         self.x = x
         self.z = rng.standard_normal((2, len(x)))
         self.sigma = sigma
+
+    def copies(self, ks, effects=None, rows=None, desc=""):
+        return [self.copy(k, effects, rows, desc) for k in ks]
 
     def copy(self, k, effects=None, rows=None, desc=""):
         v = float((effects or {}).get("pillar_scale", 0.0))

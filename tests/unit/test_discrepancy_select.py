@@ -166,6 +166,9 @@ class _PairModel:
         self.t = rng.uniform(0.5, 2.0, n)
         self.z = rng.standard_normal((2, 4, n))
 
+    def copies(self, ks, effects=None, rows=None, desc=""):
+        return [self.copy(k, effects, rows, desc) for k in ks]
+
     def copy(self, k, effects=None, rows=None, desc=""):
         e = effects or {}
         f, s = float(e.get("friction", 0.0)), float(e.get("inlet_speed", 0.0))

@@ -75,3 +75,26 @@ def test_copies_reuse_the_runs_of_a_subset_and_equal_a_fresh_full_copy(uniform_f
     assert full.equals(want)
     assert part.equals(want.iloc[[3, 1]].reset_index(drop=True))
     assert again.equals(want.iloc[[4, 0]].reset_index(drop=True))
+
+
+def test_several_copies_are_one_batch_and_equal_copy_by_copy(uniform_field):
+    # copies 0..2 of rows {0, 2, 4} after copy 1 of row 2: one batch of the 8 missing
+    # runs, and every table equals the one a fresh maker makes copy by copy
+    from fibersweep.discrepancy.copies import CopyMaker
+    from fibersweep.discrepancy.noise import NoiseModel
+
+    starts = np.array([[0.0, -2.0, 1.0], [5.0, -1.5, 0.8], [0.0, 1.0, 1.0],
+                       [-5.0, 2.5, 1.2], [2.0, 0.5, 0.9]])  # fmt: skip
+    rows = np.array([0, 2, 4])
+    eff = {"friction": 0.2}
+    with Simulator(uniform_field, FiberSettings(), workers=1, progress=False) as sim:
+        maker = CopyMaker(starts, NoiseModel(), 3, sim)
+        maker.copy(1, eff, np.array([2]))
+        batches = sim._batches
+        got = maker.copies(range(3), eff, rows)
+        assert sim._batches == batches + 1 and sim.used == 9
+    with Simulator(uniform_field, FiberSettings(), workers=1, progress=False) as sim:
+        fresh = CopyMaker(starts, NoiseModel(), 3, sim)
+        want = [fresh.copy(k, eff, rows) for k in range(3)]
+    for g, w in zip(got, want, strict=True):
+        assert g.equals(w)
