@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fibersweep.discrepancy.gap import GapResult, paired_improvement
-from fibersweep.discrepancy.stats import bootstrap_mean_ci, holm
+from fibersweep.discrepancy.stats import boot_p, bootstrap_mean_ci, holm
 
 __all__ = ["HeldOut", "SetHeldOut", "Verdict", "adequate", "evaluate_heldout", "decide"]
 
@@ -169,15 +169,6 @@ def _where(region: str) -> str:
     return region if region in ("", "everywhere") else f"in {region}"
 
 
-def _boot_p(d: np.ndarray, rng: np.random.Generator, n_boot: int = 4000) -> float:
-    """One-sided bootstrap p-value of mean(d) <= 0."""
-    d = d[np.isfinite(d)]
-    if len(d) == 0:
-        return 1.0
-    means = d[rng.integers(0, len(d), size=(n_boot, len(d)))].mean(axis=1)
-    return float((1 + np.sum(means <= 0.0)) / (1 + n_boot))
-
-
 def evaluate_heldout(
     fits: Mapping[str, float],
     base_scores: Mapping[str, np.ndarray],
@@ -200,7 +191,7 @@ def evaluate_heldout(
     """
     names = list(fits)
     per = {n: paired_improvement(base_scores, effect_scores[n]) for n in names}
-    p = np.array([_boot_p(per[n], rng) for n in names])
+    p = np.array([boot_p(per[n], rng) for n in names])
     p_adj = holm(p) if len(p) else p
     out = []
     for k, n in enumerate(names):

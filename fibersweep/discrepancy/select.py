@@ -48,21 +48,11 @@ from fibersweep.discrepancy.gap import (
 )
 from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit
-from fibersweep.discrepancy.stats import bootstrap_mean_ci, holm
+from fibersweep.discrepancy.stats import boot_p, bootstrap_mean_ci, holm
 
-__all__ = ["boot_p", "crossfit_copies", "forward_pairs"]
+__all__ = ["crossfit_copies", "forward_pairs"]
 
 log = logging.getLogger(__name__)
-
-
-def boot_p(d: np.ndarray, rng: np.random.Generator, n_boot: int = 4000) -> float:
-    """One-sided bootstrap p-value of mean(d) <= 0 over the finite entries of d."""
-    d = np.asarray(d, dtype=np.float64)
-    d = d[np.isfinite(d)]
-    if len(d) == 0:
-        return 1.0
-    means = d[rng.integers(0, len(d), size=(n_boot, len(d)))].mean(axis=1)
-    return float((1 + np.sum(means <= 0.0)) / (1 + n_boot))
 
 
 def crossfit_copies(

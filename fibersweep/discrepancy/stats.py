@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PermTest", "permutation_test", "holm", "bootstrap_mean_ci", "excess"]
+__all__ = ["PermTest", "permutation_test", "holm", "bootstrap_mean_ci", "boot_p", "excess"]
 
 
 @dataclass(frozen=True)
@@ -134,3 +134,13 @@ def excess(S: np.ndarray) -> np.ndarray:
         cnt = np.isfinite(S).sum(axis=1)
         mean = np.where(cnt > 0, np.nansum(S, axis=1) / np.maximum(cnt, 1), np.nan)
     return S[:, 0] - mean
+
+
+def boot_p(d: np.ndarray, rng: np.random.Generator, n_boot: int = 4000) -> float:
+    """One-sided bootstrap p-value of mean(d) <= 0 over the finite entries of d."""
+    d = np.asarray(d, dtype=np.float64)
+    d = d[np.isfinite(d)]
+    if len(d) == 0:
+        return 1.0
+    means = d[rng.integers(0, len(d), size=(n_boot, len(d)))].mean(axis=1)
+    return float((1 + np.sum(means <= 0.0)) / (1 + n_boot))

@@ -8,7 +8,7 @@ import pytest
 
 from fibersweep.discrepancy.decide import SetHeldOut, decide, evaluate_heldout
 from fibersweep.discrepancy.gap import assess_gap
-from fibersweep.discrepancy.select import boot_p
+from fibersweep.discrepancy.stats import boot_p
 
 
 def _gap(shift: float, seed: int):
