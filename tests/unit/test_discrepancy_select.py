@@ -246,3 +246,49 @@ def test_partners_are_ranked_by_the_gap_the_first_effect_leaves():
     order = rank_partners("inlet_speed", sig, left, 2)
     assert order[0] == "friction" and "inlet_speed" not in order
     assert rank_partners("inlet_speed", sig, left, 1) == ["friction"]
+
+
+def test_forward_step_stops_at_the_first_pair_that_explains_the_gap():
+    # truth friction 0.5 + inlet_speed 0.05 (stand-in model, 1 % copy noise, 60 fibers):
+    # the best-ranked partner (friction) explains the gap, so the next one (pillar_scale)
+    # is never simulated, and the pair's p-values are Holm-adjusted over the 4 members
+    # the step could have tried (the untried two counted with p = 1).
+    from dataclasses import replace
+
+    from fibersweep.discrepancy.gap import value_matrices
+    from fibersweep.discrepancy.library import LIBRARY
+    from fibersweep.discrepancy.select import crossfit_copies, forward_pairs
+    from fibersweep.discrepancy.stats import holm
+
+    n = 60
+    model = _PairModel(n)
+    asked = []
+    plain_copy = model.copy
+
+    def copy(k, effects=None, rows=None, desc=""):
+        asked.append(dict(effects or {}))
+        return plain_copy(k, effects, rows, desc)
+
+    model.copy = copy
+    folds = [np.arange(0, n, 2), np.arange(1, n, 2)]
+    inp = replace(_pair_input(model, n, 2), folds=folds, copies=4)
+    obs = inp.observed
+    base = [model.copy(k) for k in range(4)]
+    single = {"inlet_speed": [1.05 / 1.02 - 1] * 2}
+    cps = crossfit_copies(model, folds, [{"inlet_speed": v} for v in single["inlet_speed"]],
+                          4, "held-out")  # fmt: skip
+    inp = replace(
+        inp,
+        fold_values=single,
+        base_values=value_matrices(obs, base, inp.observables),
+        single_values={"inlet_speed": value_matrices(obs, cps, inp.observables)},
+    )
+    rng = np.random.default_rng(2)
+    sets, _ = forward_pairs(LIBRARY["inlet_speed"], [LIBRARY["friction"], LIBRARY["pillar_scale"]],
+                            inp, model, rng)  # fmt: skip
+    assert [st.name for st in sets] == ["inlet_speed + friction"]
+    assert sets[0].explains(0.05)
+    assert not any("pillar_scale" in e for e in asked)
+    p = [sets[0].p_values[m] for m in ("inlet_speed", "friction")]
+    want = holm(np.array(p + [1.0, 1.0]))[:2]
+    assert [sets[0].p_holm[m] for m in ("inlet_speed", "friction")] == pytest.approx(want)
