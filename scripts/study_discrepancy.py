@@ -332,6 +332,9 @@ def main() -> None:
     ap.add_argument("--pairs", type=int, default=2)
     ap.add_argument("--power-fibers", type=int, default=40,
                     help="fibers simulated by the power analyses (0: none)")  # fmt: skip
+    ap.add_argument("--predict-fibers", type=int, default=None,
+                    help="fibers of the predicted-detection power analysis per N "
+                         "(default: --power-fibers; 0: skip it)")  # fmt: skip
     ap.add_argument("--cache", default=".fibersweep-cache/tests")
     ap.add_argument("--out", default="results/study_discrepancy")
     args = ap.parse_args()
@@ -350,8 +353,9 @@ def main() -> None:
     rows: list[dict] = []
     predicted: dict[int, dict] = {}
     for n in args.n:
-        if args.power_fibers:
-            predicted[n] = predicted_detection(field, n, 1, args.workers, args.power_fibers)
+        n_pred = args.power_fibers if args.predict_fibers is None else args.predict_fibers
+        if n_pred:
+            predicted[n] = predicted_detection(field, n, 1, args.workers, n_pred)
             log.warning("power at N = %d: %s", n, predicted[n]["limits"])
         # seed-major: a study cut short still has every scenario at the first seeds
         seeds_all = list(dict.fromkeys(args.seeds + (args.none_seeds or [])))

@@ -38,9 +38,6 @@ OUTCOME_COLUMNS = tuple(OBSERVABLES)
 
 _WORKER: dict[str, Any] = {}
 
-#: Most runs in one task sent to a worker.
-CHUNK_RUNS = 8
-
 
 class BudgetExhausted(FibersweepError):
     """The simulation budget does not allow the requested batch."""
@@ -120,8 +117,6 @@ class Simulator:
         the ETA against ``planned``).
     planned : int or None
         Runs the caller plans in total (the bar's length; default ``budget``).
-    chunk_runs : int
-        Most runs per task sent to a worker (at least four tasks per worker).
     executor : str
         Executor name from :data:`fibersweep.sweep.executors.EXECUTORS`
         ('local' or 'dask').
@@ -141,7 +136,6 @@ class Simulator:
         executor: str = "local",
         scheduler: str | None = None,
         planned: int | None = None,
-        chunk_runs: int = CHUNK_RUNS,
     ) -> None:
         from fibersweep.sweep.executors import make_executor
 
@@ -150,7 +144,6 @@ class Simulator:
         self.field = field
         self.settings = settings
         self.workers = workers
-        self.chunk_runs = max(1, int(chunk_runs))
         self.budget = budget
         self.progress = progress
         self.used = 0
@@ -234,9 +227,7 @@ class Simulator:
                 f"{self.budget} are left"
             )
         rows: list[dict[str, Any] | None] = [None] * n
-        # small tasks (at most chunk_runs runs, at least 4 per worker): a batch ends
-        # when its slowest task does, and one Trapping run lasts as long as many others
-        n_chunks = max(1, min(n, max(4 * self.workers, math.ceil(n / self.chunk_runs))))
+        n_chunks = max(1, min(n, 4 * self.workers))
         chunks = [c for c in np.array_split(np.arange(n), n_chunks) if len(c)]
         self._batches += 1
         tasks = {
