@@ -95,8 +95,10 @@ class CopyMaker:
     ) -> list[pd.DataFrame]:
         """Outcomes of copies ``ks`` for the given rows, the missing runs as one batch.
 
-        One batch keeps every worker busy until the last run of all the copies
-        (copy by copy, each batch waits for its own slowest run).
+        The outcomes equal those of :meth:`copy` called per k (a run depends only
+        on its start, seed and effects). One batch instead of one per copy was
+        measured at 0.89-1.07x the wall time: the pool already keeps both
+        workers busy, so this is for the callers' brevity, not for speed.
 
         Returns
         -------
