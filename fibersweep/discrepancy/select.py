@@ -1,9 +1,10 @@
 """Forward selection: add a second effect to the best single one, out of sample.
 
-When no single effect explains the gap, every other fitted candidate B is
-added to the effect A that improved the held-out fibers most (A need not be
-significant alone: with B's part of the gap left in, A's own improvement can be
-too noisy to be; the set needs each member's own contribution significant):
+When no single effect explains the gap, other candidates B are added to the
+effect A that improved the held-out fibers most among the significant ones
+(A must be significant alone: from a non-significant start the step once named
+a wrong pair, a wrong A plus a B that undid A's side effect; the set also needs
+each member's own contribution significant):
 
 0. partners are ranked by their signature against the gap A leaves
    (:func:`rank_partners`), not against the whole gap, which A dominates; and
