@@ -155,7 +155,10 @@ def discrepancy(
         from fibersweep.flow.cache import get_flow_field
 
         names = _effect_names(effect, effects)
-        data = load_measured(measured, trajectories, ignore_extra=ignore_extra_columns)
+        data = load_measured(
+            measured, trajectories, ignore_extra=ignore_extra_columns,
+            geometry=cfg.flow.geometry.to_geometry(),
+        )  # fmt: skip
         settings = DiscrepancySettings(
             copies=copies, budget=budget, seed=seed, alpha=alpha, pairs=pairs,
             power_fibers=40 if power else 0, next_copies=2 if next_ else 0,

@@ -8,10 +8,16 @@ in their initializer. Every run has its own
 seed (Brownian noise, start-noise effects), so a batch is reproducible whatever
 the number of workers. A run that raises is recorded as ``status='failed'``
 with the reason, never dropped. The number of runs is counted against a budget.
+
+Every run records its trajectory (:data:`TRACK_SAMPLES` samples at least,
+whatever the config's ``record`` says: it changes no other outcome) so that
+the track observables (:mod:`fibersweep.discrepancy.tracks`) are in every
+outcome table.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import traceback
@@ -24,12 +30,14 @@ import pandas as pd
 from tqdm.auto import tqdm
 
 from fibersweep.discrepancy.observables import OBSERVABLES
+from fibersweep.discrepancy.tracks import nominal_track, track_values
 from fibersweep.errors import RUN_ERRORS, FibersweepError, InputError, RunBug
 from fibersweep.fiber.result import CLASSES, FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
+from fibersweep.units import Geometry
 
-__all__ = ["OUTCOME_COLUMNS", "Simulator", "BudgetExhausted", "outcome_row"]
+__all__ = ["OUTCOME_COLUMNS", "TRACK_SAMPLES", "Simulator", "BudgetExhausted", "outcome_row"]
 
 log = logging.getLogger(__name__)
 
@@ -41,19 +49,37 @@ _WORKER: dict[str, Any] = {}
 #: Most runs in one task sent to a worker.
 CHUNK_RUNS = 8
 
+#: Fewest trajectory samples a run keeps for its track observables (a 2 s pass: one
+#: sample per ~2 ms, ~1.2 µm of travel; linear interpolation at a station then errs
+#: by far less than the 1 µm measurement noise).
+TRACK_SAMPLES = 1000
+
 
 class BudgetExhausted(FibersweepError):
     """The simulation budget does not allow the requested batch."""
 
 
-def outcome_row(result: Any) -> dict[str, Any]:
+def outcome_row(result: Any, geometry: Geometry | None = None) -> dict[str, Any]:
     """Observable values of a RunResult (registry order), missing for a failed run.
 
     Values follow :mod:`fibersweep.discrepancy.observables` (class name, contact
     0.0/1.0, floats in the observables' units); plus ``status`` and ``reason``.
+
+    Parameters
+    ----------
+    result : RunResult
+    geometry : Geometry, optional
+        Channel and pillar of the run's (baseline) field; with it and
+        ``result.trajectory`` the track observables are derived
+        (:func:`fibersweep.discrepancy.tracks.track_values`), else NaN. NaN as
+        well for Trapping (their NaN rule).
     """
     ok = result.status == "ok" and result.cls in CLASSES
-    row = {name: o.outcome(result if ok else None) for name, o in OBSERVABLES.items()}
+    tracks = None
+    traj = getattr(result, "trajectory", None)
+    if ok and geometry is not None and traj is not None and result.cls != "Trapping":
+        tracks = track_values(traj.t, traj.x, traj.y, traj.theta, geometry, result.start.length)
+    row = {name: o.outcome(result if ok else None, tracks) for name, o in OBSERVABLES.items()}
     row["status"] = "ok" if ok else "failed"
     row["reason"] = "" if ok else (result.reason or f"class {result.cls!r}")
     return row
@@ -86,14 +112,26 @@ def _run_chunk(task: _Batch) -> list[tuple[int, dict[str, Any]]]:
 
     field: FlowField = _WORKER["field"]
     base: FiberSettings = _WORKER["settings"]
-    # the batch's effects come on top of those the baseline config already has
-    settings = base.model_copy(update={"effects": {**base.effects, **task.effects}})
+    # the batch's effects come on top of those the baseline config already has; the
+    # trajectory is kept for the track observables
+    record = base.record.model_copy(
+        update={"trajectories": True, "samples": max(base.record.samples, TRACK_SAMPLES)}
+    )
+    settings = base.model_copy(
+        update={"effects": {**base.effects, **task.effects}, "record": record}
+    )
     out = []
     for i, s, seed in zip(task.idx, task.starts, task.seeds, strict=True):
         start = FiberStart(theta0=float(s[0]), y0=float(s[1]), length=float(s[2]))
         try:
             res = simulate(field, settings, start, rng_seed=int(seed))
-            row = outcome_row(res)
+            scale = 1.0 + settings.effects.get("pillar_scale", 0.0)
+            if scale != 1.0 and res.trajectory is not None:
+                # pillar_scale runs in units of the real pillar; its tracks in µm are
+                # those units times (1 + ε) about the centroid (the real pillar's)
+                traj = nominal_track(res.trajectory, field.geometry.centroid, scale)
+                res = dataclasses.replace(res, trajectory=traj)
+            row = outcome_row(res, field.geometry)
         except RUN_ERRORS as exc:  # recorded, not dropped: the run failed (or bad start)
             row = _failed(f"{type(exc).__name__}: {exc}")
         except Exception as exc:  # a bug, not a failed run: stop the workflow

@@ -79,7 +79,7 @@ def measured_table(
         }
     )
     for name, o in OBSERVABLES.items():
-        if not o.derived_from:
+        if not o.derived_from and not o.track:
             table[name] = o.to_table(outcomes[name])
     for name, o in OBSERVABLES.items():
         if o.underive is not None:

@@ -31,14 +31,26 @@ there (NaN).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 
 import numpy as np
+import pandas as pd
 
+from fibersweep.analysis.trajectory import Trajectory
+from fibersweep.discrepancy.observables import OBSERVABLES, track_observables
+from fibersweep.errors import InputError
 from fibersweep.units import Geometry
 
-__all__ = ["STATIONS", "station_crossings", "station_positions", "track_values"]
+__all__ = [
+    "STATIONS",
+    "measured_track_values",
+    "nominal_track",
+    "station_crossings",
+    "station_positions",
+    "track_values",
+]
 
 #: Station names, in the order of :func:`station_positions`.
 STATIONS = ("in", "out", "far")
@@ -144,3 +156,120 @@ def track_values(
 def values_of(mapping: Mapping[str, float], names: tuple[str, ...]) -> list[float]:
     """``mapping[name]`` for each name (NaN where absent)."""
     return [float(mapping.get(n, math.nan)) for n in names]
+
+
+def nominal_track(traj: Trajectory, centre: tuple[float, float], scale: float) -> Trajectory:
+    """Positions of a run in units of a pillar ``scale`` times the nominal one, in µm.
+
+    The ``pillar_scale`` effect runs the nominal flow in units of the real pillar
+    (its centroid in place); a camera sees those positions stretched by ``scale``
+    about the centroid. Times and angles are unchanged.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        Run in the simulation's units [µm].
+    centre : (float, float)
+        Pillar centroid [µm].
+    scale : float
+        Real / nominal pillar size, 1 + ε.
+    """
+    c = np.asarray(centre, dtype=np.float64)
+
+    def s(p: np.ndarray) -> np.ndarray:
+        return c + scale * (p - c)
+
+    return dataclasses.replace(
+        traj,
+        x=c[0] + scale * (traj.x - c[0]),
+        y=c[1] + scale * (traj.y - c[1]),
+        head=s(traj.head),
+        tail=s(traj.tail),
+        head_speed=scale * traj.head_speed,
+        com_speed=scale * traj.com_speed,
+        beads=None if traj.beads is None else s(traj.beads),
+    )
+
+
+def measured_track_values(
+    traj: pd.DataFrame, fibers: pd.DataFrame, geometry: Geometry, source: str
+) -> pd.DataFrame:
+    """Track observables of measured fibers from their validated trajectories.
+
+    Parameters
+    ----------
+    traj : pandas.DataFrame
+        Validated trajectories (:func:`fibersweep.discrepancy.schema.validate_trajectories`):
+        ``fiber_id`` (str), ``t`` [s], ``x``, ``y`` [µm, channel frame], ``theta`` [deg].
+    fibers : pandas.DataFrame
+        Validated fibers table: ``fiber_id``, ``length`` [/l_obs], ``class``.
+    geometry : Geometry
+        Channel and pillar of the model (the frame of the tracks).
+    source : str
+        Name used in messages.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per fiber (the order of ``fibers``), one column per track observable
+        of the registry; NaN for Trapping.
+
+    Raises
+    ------
+    InputError
+        A fiber without a track (tracks must be given for every fiber or none), or a
+        fiber that is not Trapping whose track does not cross a station (wrong
+        frame, a track that starts too late or stops too early), or a value out of
+        its plausible range; each names the field and the fibers.
+    """
+    names = track_observables()
+    ids = fibers["fiber_id"].astype(str).to_numpy()
+    groups = {k: g for k, g in traj.groupby("fiber_id", sort=False)}
+    lacking = [i for i in ids if i not in groups]
+    if lacking:
+        raise InputError(
+            f"{source}: trajectories.fiber_id: no track for {len(lacking)} of {len(ids)} fibers "
+            f"({_few(lacking)}); give a track for every fiber of the table, or leave "
+            "--trajectories out"
+        )
+    trapped = (fibers["class"] == "Trapping").to_numpy()
+    lengths = fibers["length"].to_numpy(dtype=np.float64)
+    rows = []
+    for i, fid in enumerate(ids):
+        if trapped[i]:
+            rows.append([math.nan] * len(names))
+            continue
+        g = groups[fid]
+        v = track_values(
+            g["t"].to_numpy(), g["x"].to_numpy(), g["y"].to_numpy(), g["theta"].to_numpy(),
+            geometry, float(lengths[i]),
+        )  # fmt: skip
+        rows.append(values_of(v, names))
+    out = pd.DataFrame(rows, columns=list(names), index=fibers.index)
+    gone = out.isna().any(axis=1).to_numpy() & ~trapped
+    if gone.any():
+        xs = station_positions(geometry, geometry.pillar_base_length)
+        raise InputError(
+            f"{source}: trajectories: the track of {gone.sum()} fiber(s) that are not Trapping "
+            f"({_few(ids[gone])}) does not cross every station: the centre must go from "
+            f"upstream of the pillar (x < {xs[0]:.1f} µm) to one fiber length past it "
+            f"(x > {xs[1]:.1f} µm + the length). Tracks are in µm in the model's channel frame "
+            f"(pillar from x = {xs[0]:.1f} to {xs[1]:.1f} µm, base line y = "
+            f"{geometry.base_center[1]:.1f} µm, flow along +x)"
+        )
+    for name in names:
+        lo, hi = OBSERVABLES[name].bounds or (-math.inf, math.inf)
+        v = out[name].to_numpy()
+        bad = np.isfinite(v) & ((v < lo) | (v > hi))
+        if bad.any():
+            raise InputError(
+                f"{source}: trajectories: {name} out of range [{lo:g}, {hi:g}] for "
+                f"{_few(ids[bad])} (e.g. {v[bad][0]:.4g}); {OBSERVABLES[name].unit_hint}"
+            )
+    return out
+
+
+def _few(ids, most: int = 5) -> str:
+    ids = [str(i) for i in ids]
+    more = f" and {len(ids) - most} more" if len(ids) > most else ""
+    return f"fiber_id {', '.join(ids[:most])}{more}"
