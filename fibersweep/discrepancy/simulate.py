@@ -85,6 +85,27 @@ def outcome_row(result: Any, geometry: Geometry | None = None) -> dict[str, Any]
     return row
 
 
+def frames(traj: Any, fps: float) -> dict[str, np.ndarray] | None:
+    """A trajectory as a camera samples it (no noise): uniform frames from its start.
+
+    Parameters
+    ----------
+    traj : Trajectory or None
+    fps : float
+        Frame rate [1/s].
+
+    Returns
+    -------
+    dict 't', 'x', 'y', 'theta' -> ndarray, shape (f,), or None without a trajectory
+        Times [s] ``k / fps`` up to the run's end, centre [µm] and angle [deg]
+        interpolated linearly in time.
+    """
+    if traj is None or len(traj.t) < 2:
+        return None
+    t = traj.t[0] + np.arange(int(np.floor((traj.t[-1] - traj.t[0]) * fps)) + 1) / fps
+    return {"t": t, **{c: np.interp(t, traj.t, getattr(traj, c)) for c in ("x", "y", "theta")}}
+
+
 def _failed(reason: str) -> dict[str, Any]:
     row = {name: o.outcome(None) for name, o in OBSERVABLES.items()}
     row.update(status="failed", reason=reason)
@@ -105,6 +126,7 @@ class _Batch:
     starts: np.ndarray  # (k, 3) theta0 [deg], y0 [/h], length [/l_obs]
     effects: dict[str, float]
     seeds: np.ndarray  # (k,) int
+    fps: float | None = None  # frame rate of the tracks to return with the rows [1/s]
 
 
 def _run_chunk(task: _Batch) -> list[tuple[int, dict[str, Any]]]:
@@ -132,6 +154,8 @@ def _run_chunk(task: _Batch) -> list[tuple[int, dict[str, Any]]]:
                 traj = nominal_track(res.trajectory, field.geometry.centroid, scale)
                 res = dataclasses.replace(res, trajectory=traj)
             row = outcome_row(res, field.geometry)
+            if task.fps is not None:
+                row["track"] = frames(res.trajectory, task.fps)
         except RUN_ERRORS as exc:  # recorded, not dropped: the run failed (or bad start)
             row = _failed(f"{type(exc).__name__}: {exc}")
         except Exception as exc:  # a bug, not a failed run: stop the workflow
@@ -230,6 +254,7 @@ class Simulator:
         effects: Mapping[str, float] | None,
         seeds: np.ndarray,
         desc: str = "runs",
+        fps: float | None = None,
     ) -> pd.DataFrame:
         """Simulate one run per start.
 
@@ -244,6 +269,9 @@ class Simulator:
         desc : str
             Progress-bar label; its first word is the stage failures are counted
             under (``failed_by_stage``).
+        fps : float, optional
+            Also return each run's track sampled at this frame rate [1/s]
+            (:func:`frames`, column ``track``; None for a failed run).
 
         Returns
         -------
@@ -279,7 +307,7 @@ class Simulator:
         self._batches += 1
         tasks = {
             f"b{self._batches}-{k}": _Batch(
-                f"b{self._batches}-{k}", c, starts[c], effects, seeds[c]
+                f"b{self._batches}-{k}", c, starts[c], effects, seeds[c], fps
             )
             for k, c in enumerate(chunks)
         }
