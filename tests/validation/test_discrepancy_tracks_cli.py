@@ -11,8 +11,6 @@ from typer.testing import CliRunner
 
 from fibersweep.cli import app
 from fibersweep.discrepancy.observables import track_observables
-from fibersweep.discrepancy.schema import load_measured
-from fibersweep.units import Geometry
 
 
 @pytest.fixture()
@@ -29,11 +27,11 @@ def config(tmp_path, flow_cache_dir, coarse_field):
     return p
 
 
-def test_hidden_friction_with_tracks_end_to_end(tmp_path, config):
+def test_synth_tracks_then_discrepancy_with_trajectories(tmp_path, config):
     runner = CliRunner()
     m, t = tmp_path / "m.parquet", tmp_path / "t.csv"
-    r = runner.invoke(app, ["synth", str(config), "--n", "16", "--seed", "4", "-o", str(m),
-                            "--effect", "friction=0.5", "--tracks", str(t)])  # fmt: skip
+    r = runner.invoke(app, ["synth", str(config), "--n", "12", "--seed", "4", "-o", str(m),
+                            "--tracks", str(t)])  # fmt: skip
     assert r.exit_code == 0, r.output
     truth = json.loads((tmp_path / "m.truth.json").read_text())
     assert truth["tracks"] == {"fps": 100.0, "sd_xy_um": 1.0, "sd_theta_deg": 1.5}
@@ -41,26 +39,48 @@ def test_hidden_friction_with_tracks_end_to_end(tmp_path, config):
     table = pd.read_parquet(m)
     assert set(tracks["fiber_id"]) == set(table["fiber_id"])
     # frames at 100 per second from t = 0, in the channel frame: they start at x0 = L_ch / 4
-    first = tracks.groupby("fiber_id")["x"].first()
-    assert np.allclose(first, 600.0, atol=5.0)  # 1 µm frame noise, 5 sd
-    data = load_measured(m, t, geometry=Geometry())
-    assert set(track_observables()) <= set(data.observed)
-    # the synthetic tables without tracks are those synth writes without --tracks
+    assert np.allclose(tracks.groupby("fiber_id")["x"].first(), 600.0, atol=5.0)  # 5 sd
+    assert np.allclose(tracks.groupby("fiber_id")["t"].diff().dropna(), 0.01)
+    # the fibers table is the one synth writes without --tracks (tracks use their own stream)
     m2 = tmp_path / "m2.parquet"
-    r = runner.invoke(app, ["synth", str(config), "--n", "16", "--seed", "4", "-o", str(m2),
-                            "--effect", "friction=0.5"])  # fmt: skip
+    r = runner.invoke(app, ["synth", str(config), "--n", "12", "--seed", "4", "-o", str(m2)])
     assert r.exit_code == 0, r.output
     pd.testing.assert_frame_equal(pd.read_parquet(m2), table)
 
     out = tmp_path / "report"
     r = runner.invoke(app, ["discrepancy", str(m), str(config), "--trajectories", str(t),
-                            "-o", str(out), "--copies", "2", "--no-power", "--no-next",
-                            "--effect", "friction"])  # fmt: skip
+                            "-o", str(out), "--copies", "2", "--no-power"])  # fmt: skip
     assert r.exit_code == 0, r.output
     s = json.loads((out / "summary.json").read_text())
-    for name in track_observables():
-        assert name in s["observables"]
+    assert s["observables"][-3:] == list(track_observables())
+    assert s["verdict"]["kind"] == "no significant gap"
     assert "t_transit" in (out / "report.md").read_text()
+
+
+def test_hidden_friction_with_tracks_runs_the_whole_workflow(tmp_path, coarse_field):
+    """A small hidden-effect data set with tracks through gap, signatures and fit (reduced)."""
+    from fibersweep.discrepancy.schema import validate_measured, validate_trajectories, with_tracks
+    from fibersweep.discrepancy.synth import synthesize_with_tracks
+    from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
+    from fibersweep.fiber.settings import FiberSettings
+
+    box = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
+    table, tracks, _ = synthesize_with_tracks(
+        coarse_field, FiberSettings(), box, 16, {"friction": 1.0}, seed=1, workers=1,
+        progress=False, fps=100.0,
+    )  # fmt: skip
+    data = validate_measured(table)
+    data = with_tracks(data, validate_trajectories(tracks, data.table, "t"), coarse_field.geometry)
+    settings = DiscrepancySettings(
+        copies=2, fit_copies=2, candidates=1, fit_evals=3, refits=1, pairs=0, power_fibers=0,
+        next_copies=0, workers=1, seed=1, effects=("friction", "inlet_speed"), n_perm=999,
+    )  # fmt: skip
+    res = run_discrepancy(data, coarse_field, FiberSettings(), settings, progress=False)
+    for name in track_observables():
+        assert name in res.gap.gaps and res.gap.gaps[name].test.n > 0
+    # strong friction shows on the tracks (theta_out, t_transit; measured for this seed)
+    assert set(res.gap.flagged) & set(track_observables())
+    assert set(res.verdict.effects) <= {"friction"}  # never the wrong name
 
 
 def test_tracks_for_only_some_fibers_exit_2_naming_the_field(tmp_path, config):
