@@ -377,7 +377,7 @@ _REGISTRY: dict[str, Observable] = {
         ),
         # Track observables (docs/trajectories.md): chosen by their signature strength
         # (scripts/track_signatures.py); noise laws: the measured error of the derived value
-        # for tracks with 1 µm / 1.5° per-frame noise at 100 fps (0.0115 h_obs, 1.16°, 0.7 %)
+        # for tracks with 1 µm / 1.5° per-frame noise at 100 fps (0.0115 h_obs, 1.16°, 2.8 ms)
         Observable(
             "y_out",
             "continuous",
@@ -407,7 +407,8 @@ _REGISTRY: dict[str, Observable] = {
             "time for the centre to go from the pillar's upstream end to one fiber length "
             "past its downstream end",
             defined=("not_trapped",),
-            noise=NoiseLaw("lognormal", 0.007),
+            # the error of two crossing times (~2 ms each), not of the duration
+            noise=NoiseLaw("additive", 0.003),
             transform=log_scale,
             bounds=(0.0, 1e4),
             lower_open=True,
