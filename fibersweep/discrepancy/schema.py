@@ -111,12 +111,13 @@ class MeasuredData:
     ----------
     table : pandas.DataFrame
         One row per fiber, columns ``fiber_id`` + START_COLUMNS + the observed
-        columns present; angles in degrees, ``contact`` bool, ``class`` canonical.
+        columns present (+ the track observables with trajectories); angles in
+        degrees, ``contact`` bool, ``class`` canonical.
     observed : tuple of str
         The observables present (always 'class'; 'dwell' when t_pass and
-        t_contact are both given).
+        t_contact are both given; the track observables with trajectories).
     trajectories : pandas.DataFrame or None
-        Validated trajectory table, if given.
+        Validated trajectory table, if given (channel frame, see the module docstring).
     source : str
         Where the data came from (for messages and the report).
     """
