@@ -256,7 +256,7 @@ def power_cmd(
         with Simulator(
             field, cfg.fiber, workers=workers or cfg.run.workers, executor=cfg.run.executor,
             scheduler=cfg.run.scheduler, planned=3 * min(simulate, len(starts)) * (
-                1 + 2 * sum(len(c.probes) for c in cands)),
+                1 + 2 * sum(len(c.probes) for c in cands)), tracks=False,
         ) as sim:  # fmt: skip
             maker = CopyMaker(starts, NoiseModel(), seed, sim)
             pw = analyse_power(maker, cands, n, obs, rng, n_sim=simulate, alpha=alpha)

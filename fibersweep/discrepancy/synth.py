@@ -200,9 +200,11 @@ def synthesize_with_tracks(
     seeds = rng.integers(0, 2**31 - 1, size=n)
     z = noise_draws([seed, 4242], n)
     effects = {**fiber.effects, **effects}  # hidden effects on top of the config's own
+    # the frames of the tracks come with fps; the track observables are not written
     with Simulator(
-        field, fiber, workers=workers, progress=progress, executor=executor, scheduler=scheduler
-    ) as sim:
+        field, fiber, workers=workers, progress=progress, executor=executor,
+        scheduler=scheduler, tracks=False,
+    ) as sim:  # fmt: skip
         raw = sim.run(true, effects, seeds, desc="synth", fps=fps)
     obs = noise.observe(raw, z)
     ok = (obs["status"] == "ok").to_numpy()
