@@ -25,7 +25,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from fibersweep.config import load_config
+from fibersweep.config import axis_values, load_config
 from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.observables import log_scale, noise_draws
 from fibersweep.discrepancy.simulate import outcome_row
@@ -56,7 +56,7 @@ def one(field, settings, start, seed, noise_rng, args, geo) -> tuple[dict, dict]
         tr = r.trajectory
         exact = track_values(tr.t, tr.x, tr.y, tr.theta, geo, float(start[2]))
         seen = track_values(*observe_track(tr, args.fps, 1.0, 1.5, noise_rng), geo, float(start[2]))
-    return {**row, **{f"{k}": v for k, v in seen.items()}}, exact
+    return {**row, **seen}, exact
 
 
 def main() -> None:
@@ -78,8 +78,6 @@ def main() -> None:
     base = cfg.fiber.model_copy(update={"record": rec})
     rng = np.random.default_rng([args.seed, 1])
     box = {}
-    from fibersweep.config import axis_values
-
     for c in ("theta0", "y0", "length"):
         v = axis_values(getattr(cfg.sweep, c))
         box[c] = (float(v.min()), float(v.max()))
