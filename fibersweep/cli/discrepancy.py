@@ -153,7 +153,11 @@ def discrepancy(
         ),
     ] = True,
     trajectories: Annotated[
-        Path | None, typer.Option(help="Optional measured trajectories table.")
+        Path | None,
+        typer.Option(
+            help="Measured tracks (fiber_id, t [s], x, y [µm, the model's channel frame], "
+            "theta [deg]) of every fiber: adds y_out, theta_out, t_transit (docs/trajectories.md)."
+        ),
     ] = None,
     ignore_extra_columns: Annotated[
         bool, typer.Option(help="Ignore columns of MEASURED the schema does not know.")
