@@ -49,13 +49,20 @@ def synth(
     truth: Annotated[
         Path | None, typer.Option(help="Truth file [OUTPUT with suffix .truth.json].")
     ] = None,
+    tracks: Annotated[
+        Path | None,
+        typer.Option(help="Also write the fibers' trajectories here (.parquet or .csv)."),
+    ] = None,
+    fps: Annotated[float, typer.Option(help="Frame rate of the trajectories [1/s].")] = 100.0,
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
     """Measured-like fibers from the model with hidden effects and measurement noise.
 
     Starts are uniform in the range of CONFIG's sweep axes; the truth (effects,
-    noise, true starts) goes to a separate JSON file.
+    noise, true starts) goes to a separate JSON file. With --tracks, the
+    trajectories too (channel frame, per-frame noise 1 µm and 1.5°), for
+    ``discrepancy --trajectories``.
     """
     import json
 
@@ -63,22 +70,31 @@ def synth(
     with _errors():
         cfg = _load(config, overrides)
         from fibersweep.discrepancy.schema import write_table
-        from fibersweep.discrepancy.synth import parse_effects, synthesize
+        from fibersweep.discrepancy.synth import parse_effects, synthesize_with_tracks
+        from fibersweep.errors import InputError
         from fibersweep.flow.cache import get_flow_field
 
         effects = parse_effects(effect)
+        if not fps > 0:
+            raise InputError(f"--fps: must be > 0, got {fps}")
+        if tracks is not None and tracks.suffix.lower() not in (".parquet", ".csv"):
+            raise InputError(f"--tracks {tracks}: unknown table format; use .parquet or .csv")
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
-        table, tr = synthesize(
+        table, track_table, tr = synthesize_with_tracks(
             field, cfg.fiber, _sweep_box(cfg), n, effects, seed=seed,
             workers=workers or cfg.run.workers, executor=cfg.run.executor,
-            scheduler=cfg.run.scheduler,
+            scheduler=cfg.run.scheduler, fps=fps if tracks is not None else None,
         )  # fmt: skip
         write_table(table, output)
+        if tracks is not None and track_table is not None:
+            write_table(track_table, tracks)
         tpath = truth or output.with_suffix(".truth.json")
         from fibersweep.atomic import atomic_write
 
         atomic_write(tpath, json.dumps(tr, indent=2))
     typer.echo(f"wrote {output} ({len(table)} fibers) and {tpath}")
+    if tracks is not None:
+        typer.echo(f"wrote {tracks} (trajectories, {fps:g} frames/s)")
     if tr["failed"]:
         typer.secho(f"  {len(tr['failed'])} failed runs left out (listed in the truth)",
                     fg=typer.colors.YELLOW)  # fmt: skip
@@ -137,7 +153,11 @@ def discrepancy(
         ),
     ] = True,
     trajectories: Annotated[
-        Path | None, typer.Option(help="Optional measured trajectories table.")
+        Path | None,
+        typer.Option(
+            help="Measured tracks (fiber_id, t [s], x, y [µm, the model's channel frame], "
+            "theta [deg]) of every fiber: adds y_out, theta_out, t_transit (docs/trajectories.md)."
+        ),
     ] = None,
     ignore_extra_columns: Annotated[
         bool, typer.Option(help="Ignore columns of MEASURED the schema does not know.")
@@ -155,7 +175,10 @@ def discrepancy(
         from fibersweep.flow.cache import get_flow_field
 
         names = _effect_names(effect, effects)
-        data = load_measured(measured, trajectories, ignore_extra=ignore_extra_columns)
+        data = load_measured(
+            measured, trajectories, ignore_extra=ignore_extra_columns,
+            geometry=cfg.flow.geometry.to_geometry(),
+        )  # fmt: skip
         settings = DiscrepancySettings(
             copies=copies, budget=budget, seed=seed, alpha=alpha, pairs=pairs,
             power_fibers=40 if power else 0, next_copies=2 if next_ else 0,
@@ -237,7 +260,7 @@ def power_cmd(
         with Simulator(
             field, cfg.fiber, workers=workers or cfg.run.workers, executor=cfg.run.executor,
             scheduler=cfg.run.scheduler, planned=3 * min(simulate, len(starts)) * (
-                1 + 2 * sum(len(c.probes) for c in cands)),
+                1 + 2 * sum(len(c.probes) for c in cands)), tracks=False,
         ) as sim:  # fmt: skip
             maker = CopyMaker(starts, NoiseModel(), seed, sim)
             pw = analyse_power(maker, cands, n, obs, rng, n_sim=simulate, alpha=alpha)

@@ -175,7 +175,7 @@ def assess_gap(
     alpha : float
         Family-wise error rate (Holm over the observables).
     """
-    names = [o for o in scored() if o in values]
+    names = [o for o in scored(tracks=True) if o in values]
     tests: dict[str, PermTest] = {}
     per_fiber: dict[str, np.ndarray] = {}
     biases: dict[str, list[PermTest]] = {}
@@ -216,11 +216,14 @@ def feature_vector(gap: GapResult) -> np.ndarray:
     """Signature of a gap: excess z per observable, then signed bias z per component.
 
     Shape (k + sum of the residual widths,) over the k scored observables of the
-    registry (categories or 1 each); observables not present give zeros, so
-    vectors from different data sets are comparable.
+    registry (categories or 1 each; the track observables only when the gap has
+    them); observables not present give zeros, so vectors from data sets with
+    the same kind of data (with or without tracks) are comparable.
     """
     parts = []
-    names = scored()
+    # the track observables' components only when the gap has them (tracks measured):
+    # without tracks the vector is the same as before they existed
+    names = scored(tracks=any(OBSERVABLES[n].track for n in gap.gaps))
     for name in names:
         g = gap.gaps.get(name)
         parts.append(np.array([g.test.z if g else 0.0]))

@@ -22,8 +22,12 @@ from fibersweep.errors import InputError
 __all__ = ["NoiseModel"]
 
 
-def _default_outcome_sd() -> dict[str, float]:
-    return {n: o.noise.sd for n, o in OBSERVABLES.items() if o.noise is not None}
+def _default_outcome_sd(tracks: bool = True) -> dict[str, float]:
+    return {
+        n: o.noise.sd
+        for n, o in OBSERVABLES.items()
+        if o.noise is not None and (tracks or not o.track)
+    }
 
 
 @dataclass(frozen=True)
@@ -42,7 +46,8 @@ class NoiseModel:
         Error of each observable with a noise law, in its unit (relative for a
         log-normal law), e.g. ``delta`` [/h_obs], ``theta_c`` [deg], ``t_pass``
         [-], ``dwell`` [s]; observables left out get their registry default
-        (:mod:`fibersweep.discrepancy.observables`).
+        (:mod:`fibersweep.discrepancy.observables`). The track observables' are
+        listed only when given (so reports without tracks are unchanged).
     """
 
     theta0: float = 1.0
@@ -51,12 +56,14 @@ class NoiseModel:
     outcome: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        sd = _default_outcome_sd()
-        unknown = [k for k in self.outcome if k not in sd]
+        valid = _default_outcome_sd()
+        unknown = [k for k in self.outcome if k not in valid]
         if unknown:
             raise InputError(
-                f"noise: no measurement noise law for {', '.join(unknown)}; valid: {', '.join(sd)}"
+                f"noise: no measurement noise law for {', '.join(unknown)}; "
+                f"valid: {', '.join(valid)}"
             )
+        sd = _default_outcome_sd(tracks=False)
         sd.update({k: float(v) for k, v in self.outcome.items()})
         object.__setattr__(self, "outcome", sd)
         for name, v in self.as_dict().items():
@@ -70,6 +77,8 @@ class NoiseModel:
         """Standard deviation of the start column or observable ``name``."""
         if name in ("theta0", "y0", "length"):
             return float(getattr(self, name))
+        if name not in self.outcome and name in OBSERVABLES and OBSERVABLES[name].track:
+            return _default_outcome_sd()[name]
         return self.outcome[name]
 
     def as_dict(self) -> dict[str, float]:

@@ -7,6 +7,12 @@ the measurement model applies their noise law, ``synth`` writes them, the scores
 and gap tests compare them on their scoring scale, and the report lists them.
 A new observable is one new :class:`Observable` in ``_REGISTRY`` below.
 
+Track observables (``track=True``: ``y_out``, ``theta_out``, ``t_transit``) are
+derived from the measured trajectories (``discrepancy --trajectories``) and
+from ``RunResult.trajectory`` by one function,
+:func:`fibersweep.discrepancy.tracks.track_values`; they are not columns of
+the fibers table and are compared only when tracks are given.
+
 Values in outcome tables (simulated copies) and measured tables
 -----------------------------------------------------------------
 - ``class`` kind: the category name (one of ``categories``), None/'' when undefined;
@@ -43,6 +49,7 @@ __all__ = [
     "OBSERVABLES",
     "scored",
     "table_columns",
+    "track_observables",
     "stream_key",
     "noise_draws",
     "log_scale",
@@ -114,8 +121,10 @@ class Observable:
         Unit of the values ('' for categories), e.g. 'h_obs', 'deg', 's'.
     description : str
         One line for messages and the report.
-    extract : callable RunResult -> value
-        The value of a successful run (NaN or '' where undefined).
+    extract : callable RunResult -> value, or None
+        The value of a successful run (NaN or '' where undefined); None for a
+        track observable (its value comes from
+        :func:`fibersweep.discrepancy.tracks.track_values`).
     defined : tuple of {'not_trapped', 'contact'}
         Where the quantity exists: every condition holds (``()``: always). NaN is
         accepted only outside it (and anywhere for 'contact' when the table has
@@ -152,13 +161,16 @@ class Observable:
     measures : tuple of {'wasserstein', 'ratio'}
         Extra descriptive measures for the report (distance of the distributions,
         median ratio observed / model).
+    track : bool
+        Derived from the trajectories (not a fibers-table column); scored only
+        when the measured data has tracks.
     """
 
     name: str
     kind: Kind
     unit: str
     description: str
-    extract: Callable[[RunResult], Any]
+    extract: Callable[[RunResult], Any] | None = None
     defined: tuple[Condition, ...] = ()
     strict: bool = True
     required: bool = False
@@ -174,6 +186,7 @@ class Observable:
     derive: Callable[[Mapping[str, np.ndarray]], np.ndarray] | None = None
     underive: Callable[[pd.DataFrame, np.ndarray], None] | None = None
     measures: tuple[str, ...] = ()
+    track: bool = False
 
     @property
     def categorical(self) -> bool:
@@ -204,10 +217,21 @@ class Observable:
             mask &= np.asarray(contact, dtype=bool)
         return mask
 
-    def outcome(self, result: RunResult | None) -> Any:
-        """Value in an outcome table: extracted from an ok run, missing otherwise."""
+    def outcome(self, result: RunResult | None, tracks: Mapping[str, float] | None = None) -> Any:
+        """Value in an outcome table: extracted from an ok run, missing otherwise.
+
+        Parameters
+        ----------
+        result : RunResult or None
+            None for a failed run.
+        tracks : mapping name -> float, optional
+            The run's track values (:func:`fibersweep.discrepancy.tracks.track_values`);
+            a track observable is NaN without them.
+        """
         if result is None:
             return None if self.kind == "class" else math.nan
+        if self.extract is None:
+            return float(tracks.get(self.name, math.nan)) if tracks else math.nan
         v = self.extract(result)
         return v if self.kind == "class" else float(v)
 
@@ -351,6 +375,47 @@ _REGISTRY: dict[str, Observable] = {
             derive=_dwell,
             underive=_undwell,
         ),
+        # Track observables (docs/trajectories.md): chosen by their signature strength
+        # (scripts/track_signatures.py); noise laws: the measured error of the derived value
+        # for tracks with 1 µm / 1.5° per-frame noise at 100 fps (0.0115 h_obs, 1.16°, 2.8 ms)
+        Observable(
+            "y_out",
+            "continuous",
+            "h_obs",
+            "centre's lateral position from the base where it passes the pillar's downstream end",
+            defined=("not_trapped",),
+            noise=NoiseLaw("additive", 0.012),
+            bounds=(-10.0, 10.0),
+            unit_hint="tracks must be in µm in the model's channel frame",
+            track=True,
+        ),
+        Observable(
+            "theta_out",
+            "continuous",
+            "deg",
+            "fiber angle where the centre passes the pillar's downstream end",
+            defined=("not_trapped",),
+            noise=NoiseLaw("additive", 1.2),
+            bounds=(-90.0, 90.0),
+            unit_hint="trajectory angles must be in degrees",
+            track=True,
+        ),
+        Observable(
+            "t_transit",
+            "continuous",
+            "s",
+            "time for the centre to go from the pillar's upstream end to one fiber length "
+            "past its downstream end",
+            defined=("not_trapped",),
+            # the error of two crossing times (~2 ms each), not of the duration
+            noise=NoiseLaw("additive", 0.003),
+            transform=log_scale,
+            bounds=(0.0, 1e4),
+            lower_open=True,
+            unit_hint="trajectory times must be in seconds",
+            measures=("ratio",),
+            track=True,
+        ),
     )
 }
 
@@ -358,14 +423,25 @@ _REGISTRY: dict[str, Observable] = {
 OBSERVABLES: Mapping[str, Observable] = MappingProxyType(_REGISTRY)
 
 
-def scored() -> tuple[str, ...]:
-    """Names of the observables the workflow compares, in report order."""
-    return tuple(n for n, o in OBSERVABLES.items() if o.scored)
+def scored(tracks: bool = False) -> tuple[str, ...]:
+    """Names of the observables the workflow compares, in report order.
+
+    Parameters
+    ----------
+    tracks : bool
+        Include the track observables (compared only when tracks are measured).
+    """
+    return tuple(n for n, o in OBSERVABLES.items() if o.scored and (tracks or not o.track))
+
+
+def track_observables() -> tuple[str, ...]:
+    """Names of the observables derived from trajectories, in report order."""
+    return tuple(n for n, o in OBSERVABLES.items() if o.track)
 
 
 def table_columns() -> tuple[str, ...]:
     """Observed columns of a measured table (observables not derived from others)."""
-    return tuple(n for n, o in OBSERVABLES.items() if not o.derived_from)
+    return tuple(n for n, o in OBSERVABLES.items() if not o.derived_from and not o.track)
 
 
 def stream_key(name: str) -> int:

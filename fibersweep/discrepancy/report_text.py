@@ -24,9 +24,11 @@ def _ci(d: dict[str, Any] | None, spec: str = ".2g") -> str:
     return f"{_f(d.get('mean'), spec)} [{_f(d.get('lo95'), spec)}, {_f(d.get('hi95'), spec)}]"
 
 
-def _score_text() -> str:
-    cat = [n for n in scored() if OBSERVABLES[n].categorical]
-    logs = [n for n in scored() if OBSERVABLES[n].transform is log_scale]
+def _score_text(observed: list[str] | tuple[str, ...] = ()) -> str:
+    # the track observables only when tracks were measured (the text is unchanged without)
+    names = scored(tracks=any(OBSERVABLES[n].track for n in observed if n in OBSERVABLES))
+    cat = [n for n in names if OBSERVABLES[n].categorical]
+    logs = [n for n in names if OBSERVABLES[n].transform is log_scale]
     on_log = f"; {', '.join(logs)} on a log scale" if logs else ""
     return (
         f"Score: log-loss ({', '.join(cat)}) or fair CRPS (continuous{on_log}) of each "
@@ -72,7 +74,7 @@ def _gap_table(s: dict[str, Any]) -> list[str]:
         "",
         "## Gap per observable (all fibers, baseline model)",
         "",
-        _score_text(),
+        _score_text(s["observables"]),
         "",
         "| observable | n | gap [copy-spread units, 95 % CI] | p score (Holm) | p signed (Holm) "
         "| signed residual z | significant |",

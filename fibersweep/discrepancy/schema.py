@@ -26,7 +26,16 @@ not measured.
 
 Trajectories (optional second table): columns ``fiber_id, t [s], x [µm],
 y [µm], theta [deg]``, rows time-ordered per fiber; every fiber_id must be in
-the fibers table.
+the fibers table, and every fiber of the table needs a track. ``x, y`` are the
+fiber's centre in the model's channel frame: x along the flow (+x
+downstream), y across it, the pillar where the config's flow geometry puts it
+(by default its centroid at x = L_ch/2 = 1200 µm, its base line at
+y = W_ch/2 - h_obs/3 = 375 µm, spanning x = 1156.7 .. 1243.3 µm); ``theta``
+is the fiber's angle from +x (directed or not). From them the track
+observables (``y_out``, ``theta_out``, ``t_transit``;
+:mod:`fibersweep.discrepancy.tracks`) are derived and compared; each track
+must run from upstream of the pillar to one fiber length past it (a Trapping
+fiber's track may stop anywhere: its track observables are NaN).
 
 Validation never drops a row or a column: every problem raises
 :class:`InputError` that names the column, the rule and the offending rows
@@ -56,6 +65,7 @@ import pandas as pd
 from fibersweep.atomic import atomic_path
 from fibersweep.discrepancy.observables import OBSERVABLES, Observable, table_columns
 from fibersweep.errors import InputError
+from fibersweep.units import Geometry
 
 __all__ = [
     "START_COLUMNS",
@@ -64,6 +74,7 @@ __all__ = [
     "load_measured",
     "validate_measured",
     "validate_trajectories",
+    "with_tracks",
     "write_table",
 ]
 
@@ -100,12 +111,13 @@ class MeasuredData:
     ----------
     table : pandas.DataFrame
         One row per fiber, columns ``fiber_id`` + START_COLUMNS + the observed
-        columns present; angles in degrees, ``contact`` bool, ``class`` canonical.
+        columns present (+ the track observables with trajectories); angles in
+        degrees, ``contact`` bool, ``class`` canonical.
     observed : tuple of str
         The observables present (always 'class'; 'dwell' when t_pass and
-        t_contact are both given).
+        t_contact are both given; the track observables with trajectories).
     trajectories : pandas.DataFrame or None
-        Validated trajectory table, if given.
+        Validated trajectory table, if given (channel frame, see the module docstring).
     source : str
         Where the data came from (for messages and the report).
     """
@@ -477,7 +489,10 @@ def validate_trajectories(
 
 
 def load_measured(
-    path: str | Path, trajectories: str | Path | None = None, ignore_extra: bool = False
+    path: str | Path,
+    trajectories: str | Path | None = None,
+    ignore_extra: bool = False,
+    geometry: Geometry | None = None,
 ) -> MeasuredData:
     """Read and validate a measured-fiber table (and optionally its trajectories).
 
@@ -486,9 +501,13 @@ def load_measured(
     path : path
         ``.parquet`` or ``.csv`` file following the schema in the module docstring.
     trajectories : path, optional
-        ``.parquet`` or ``.csv`` trajectory table.
+        ``.parquet`` or ``.csv`` trajectory table; the track observables are
+        derived from it (:func:`with_tracks`).
     ignore_extra : bool
         Ignore columns the schema does not know instead of raising.
+    geometry : Geometry, optional
+        Channel and pillar of the model, the frame of the tracks (required with
+        ``trajectories``).
 
     Raises
     ------
@@ -503,9 +522,42 @@ def load_measured(
         tp = Path(trajectories)
         if not tp.exists():
             raise InputError(f"{tp}: no such file")
+        if geometry is None:
+            raise ValueError("load_measured: trajectories need the model's geometry")
         traj = validate_trajectories(_read_table(tp), data.table, str(tp))
-        data = MeasuredData(data.table, data.observed, traj, data.source)
+        data = with_tracks(data, traj, geometry, str(tp))
     return data
+
+
+def with_tracks(
+    data: MeasuredData, traj: pd.DataFrame, geometry: Geometry, source: str = "trajectories"
+) -> MeasuredData:
+    """``data`` with its validated trajectories and the track observables derived from them.
+
+    Parameters
+    ----------
+    data : MeasuredData
+        Validated fibers.
+    traj : pandas.DataFrame
+        Validated trajectories (:func:`validate_trajectories`), channel frame [µm].
+    geometry : Geometry
+        Channel and pillar of the model.
+    source : str
+        Name used in messages.
+
+    Raises
+    ------
+    InputError
+        Fibers without a track, tracks that do not cross the stations (e.g. in
+        another frame), each naming the field
+        (:func:`~fibersweep.discrepancy.tracks.measured_track_values`).
+    """
+    from fibersweep.discrepancy.tracks import measured_track_values
+
+    values = measured_track_values(traj, data.table, geometry, source)
+    table = pd.concat([data.table, values], axis=1)
+    observed = (*data.observed, *(n for n in values.columns if OBSERVABLES[n].scored))
+    return MeasuredData(table, observed, traj, data.source)
 
 
 def write_table(df: pd.DataFrame, path: str | Path) -> Path:
@@ -527,8 +579,9 @@ def observed_columns_doc() -> str:
     without = {"not_trapped": "for Trapping", "contact": "without contact"}
     rows = []
     for name, o in OBSERVABLES.items():
-        if o.derived_from:
-            rows.append((name, "-", f"{o.description} [{o.unit}], derived"))
+        if o.derived_from or o.track:
+            src = "from the trajectories" if o.track else "derived"
+            rows.append((name, "-", f"{o.description} [{o.unit}], {src}"))
             continue
         if o.kind == "class":
             what = f"{o.description}: {', '.join(o.categories)} (case-insensitive)"

@@ -8,10 +8,17 @@ in their initializer. Every run has its own
 seed (Brownian noise, start-noise effects), so a batch is reproducible whatever
 the number of workers. A run that raises is recorded as ``status='failed'``
 with the reason, never dropped. The number of runs is counted against a budget.
+
+With ``Simulator(tracks=True)`` (measured tracks are compared), every run
+records its trajectory (:data:`TRACK_SAMPLES` samples at least, whatever the
+config's ``record`` says: it changes no other outcome) so that the track
+observables (:mod:`fibersweep.discrepancy.tracks`) are in every outcome table;
+without, they are NaN and the runs skip that cost (~9 %).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import traceback
@@ -24,12 +31,14 @@ import pandas as pd
 from tqdm.auto import tqdm
 
 from fibersweep.discrepancy.observables import OBSERVABLES
+from fibersweep.discrepancy.tracks import nominal_track, track_values
 from fibersweep.errors import RUN_ERRORS, FibersweepError, InputError, RunBug
 from fibersweep.fiber.result import CLASSES, FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
+from fibersweep.units import Geometry
 
-__all__ = ["OUTCOME_COLUMNS", "Simulator", "BudgetExhausted", "outcome_row"]
+__all__ = ["OUTCOME_COLUMNS", "TRACK_SAMPLES", "Simulator", "BudgetExhausted", "outcome_row"]
 
 log = logging.getLogger(__name__)
 
@@ -38,22 +47,61 @@ OUTCOME_COLUMNS = tuple(OBSERVABLES)
 
 _WORKER: dict[str, Any] = {}
 
+#: Fewest trajectory samples a run keeps for its track observables (a 2 s pass: one
+#: sample per ~2 ms, ~1.2 µm of travel; linear interpolation at a station then errs
+#: by far less than the 1 µm measurement noise).
+TRACK_SAMPLES = 1000
+
 
 class BudgetExhausted(FibersweepError):
     """The simulation budget does not allow the requested batch."""
 
 
-def outcome_row(result: Any) -> dict[str, Any]:
+def outcome_row(result: Any, geometry: Geometry | None = None) -> dict[str, Any]:
     """Observable values of a RunResult (registry order), missing for a failed run.
 
     Values follow :mod:`fibersweep.discrepancy.observables` (class name, contact
     0.0/1.0, floats in the observables' units); plus ``status`` and ``reason``.
+
+    Parameters
+    ----------
+    result : RunResult
+    geometry : Geometry, optional
+        Channel and pillar of the run's (baseline) field; with it and
+        ``result.trajectory`` the track observables are derived
+        (:func:`fibersweep.discrepancy.tracks.track_values`), else NaN. NaN as
+        well for Trapping (their NaN rule).
     """
     ok = result.status == "ok" and result.cls in CLASSES
-    row = {name: o.outcome(result if ok else None) for name, o in OBSERVABLES.items()}
+    tracks = None
+    traj = getattr(result, "trajectory", None)
+    if ok and geometry is not None and traj is not None and result.cls != "Trapping":
+        tracks = track_values(traj.t, traj.x, traj.y, traj.theta, geometry, result.start.length)
+    row = {name: o.outcome(result if ok else None, tracks) for name, o in OBSERVABLES.items()}
     row["status"] = "ok" if ok else "failed"
     row["reason"] = "" if ok else (result.reason or f"class {result.cls!r}")
     return row
+
+
+def frames(traj: Any, fps: float) -> dict[str, np.ndarray] | None:
+    """A trajectory as a camera samples it (no noise): uniform frames from its start.
+
+    Parameters
+    ----------
+    traj : Trajectory or None
+    fps : float
+        Frame rate [1/s].
+
+    Returns
+    -------
+    dict 't', 'x', 'y', 'theta' -> ndarray, shape (f,), or None without a trajectory
+        Times [s] ``k / fps`` up to the run's end, centre [µm] and angle [deg]
+        interpolated linearly in time.
+    """
+    if traj is None or len(traj.t) < 2:
+        return None
+    t = traj.t[0] + np.arange(int(np.floor((traj.t[-1] - traj.t[0]) * fps)) + 1) / fps
+    return {"t": t, **{c: np.interp(t, traj.t, getattr(traj, c)) for c in ("x", "y", "theta")}}
 
 
 def _failed(reason: str) -> dict[str, Any]:
@@ -76,6 +124,8 @@ class _Batch:
     starts: np.ndarray  # (k, 3) theta0 [deg], y0 [/h], length [/l_obs]
     effects: dict[str, float]
     seeds: np.ndarray  # (k,) int
+    fps: float | None = None  # frame rate of the tracks to return with the rows [1/s]
+    tracks: bool = False  # keep the trajectory and derive the track observables
 
 
 def _run_chunk(task: _Batch) -> list[tuple[int, dict[str, Any]]]:
@@ -83,14 +133,28 @@ def _run_chunk(task: _Batch) -> list[tuple[int, dict[str, Any]]]:
 
     field: FlowField = _WORKER["field"]
     base: FiberSettings = _WORKER["settings"]
-    # the batch's effects come on top of those the baseline config already has
-    settings = base.model_copy(update={"effects": {**base.effects, **task.effects}})
+    # the batch's effects come on top of those the baseline config already has; the
+    # trajectory is kept for the track observables
+    update: dict[str, Any] = {"effects": {**base.effects, **task.effects}}
+    if task.tracks or task.fps is not None:
+        update["record"] = base.record.model_copy(
+            update={"trajectories": True, "samples": max(base.record.samples, TRACK_SAMPLES)}
+        )
+    settings = base.model_copy(update=update)
     out = []
     for i, s, seed in zip(task.idx, task.starts, task.seeds, strict=True):
         start = FiberStart(theta0=float(s[0]), y0=float(s[1]), length=float(s[2]))
         try:
             res = simulate(field, settings, start, rng_seed=int(seed))
-            row = outcome_row(res)
+            scale = 1.0 + settings.effects.get("pillar_scale", 0.0)
+            if scale != 1.0 and res.trajectory is not None:
+                # pillar_scale runs in units of the real pillar; its tracks in µm are
+                # those units times (1 + ε) about the centroid (the real pillar's)
+                traj = nominal_track(res.trajectory, field.geometry.centroid, scale)
+                res = dataclasses.replace(res, trajectory=traj)
+            row = outcome_row(res, field.geometry if task.tracks else None)
+            if task.fps is not None:
+                row["track"] = frames(res.trajectory, task.fps)
         except RUN_ERRORS as exc:  # recorded, not dropped: the run failed (or bad start)
             row = _failed(f"{type(exc).__name__}: {exc}")
         except Exception as exc:  # a bug, not a failed run: stop the workflow
@@ -117,6 +181,11 @@ class Simulator:
         the ETA against ``planned``).
     planned : int or None
         Runs the caller plans in total (the bar's length; default ``budget``).
+    tracks : bool
+        Keep every run's trajectory and derive the track observables
+        (:mod:`fibersweep.discrepancy.tracks`), for measured tracks. False (the
+        default) leaves them NaN and saves ~9 % of the run time
+        (scripts/bench_track_record.py).
     executor : str
         Executor name from :data:`fibersweep.sweep.executors.EXECUTORS`
         ('local' or 'dask').
@@ -136,6 +205,7 @@ class Simulator:
         executor: str = "local",
         scheduler: str | None = None,
         planned: int | None = None,
+        tracks: bool = False,
     ) -> None:
         from fibersweep.sweep.executors import make_executor
 
@@ -144,6 +214,7 @@ class Simulator:
         self.field = field
         self.settings = settings
         self.workers = workers
+        self.tracks = bool(tracks)
         self.budget = budget
         self.progress = progress
         self.used = 0
@@ -185,6 +256,7 @@ class Simulator:
         effects: Mapping[str, float] | None,
         seeds: np.ndarray,
         desc: str = "runs",
+        fps: float | None = None,
     ) -> pd.DataFrame:
         """Simulate one run per start.
 
@@ -199,6 +271,9 @@ class Simulator:
         desc : str
             Progress-bar label; its first word is the stage failures are counted
             under (``failed_by_stage``).
+        fps : float, optional
+            Also return each run's track sampled at this frame rate [1/s]
+            (:func:`frames`, column ``track``; None for a failed run).
 
         Returns
         -------
@@ -232,7 +307,7 @@ class Simulator:
         self._batches += 1
         tasks = {
             f"b{self._batches}-{k}": _Batch(
-                f"b{self._batches}-{k}", c, starts[c], effects, seeds[c]
+                f"b{self._batches}-{k}", c, starts[c], effects, seeds[c], fps, self.tracks
             )
             for k, c in enumerate(chunks)
         }

@@ -20,13 +20,18 @@ import pandas as pd
 
 from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws
-from fibersweep.discrepancy.schema import validate_measured
+from fibersweep.discrepancy.schema import validate_measured, validate_trajectories, with_tracks
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 
-__all__ = ["synthesize", "parse_effects", "measured_table"]
+__all__ = ["synthesize", "synthesize_with_tracks", "parse_effects", "measured_table", "TRACK_NOISE"]
+
+#: Per-frame error of synthetic tracks: centre position [µm] (x, y each), angle [deg].
+#: 1 µm is sub-pixel centroid tracking; the angle of a fiber from its two ends, each
+#: located to ~1 µm, errs by ~√2 µm / L, 1-2° for L = 40-90 µm.
+TRACK_NOISE = (1.0, 1.5)
 
 log = logging.getLogger(__name__)
 
@@ -79,7 +84,7 @@ def measured_table(
         }
     )
     for name, o in OBSERVABLES.items():
-        if not o.derived_from:
+        if not o.derived_from and not o.track:
             table[name] = o.to_table(outcomes[name])
     for name, o in OBSERVABLES.items():
         if o.underive is not None:
@@ -121,7 +126,37 @@ def synthesize(
     executor: str = "local",
     scheduler: str | None = None,
 ) -> tuple[pd.DataFrame, dict[str, Any]]:
-    """Make a measured-fiber table and its truth.
+    """Make a measured-fiber table and its truth (:func:`synthesize_with_tracks` without tracks).
+
+    Returns
+    -------
+    table : DataFrame
+        Follows :mod:`fibersweep.discrepancy.schema` (validated).
+    truth : dict
+        JSON-ready: effects, noise, seed, box, true starts, failed runs.
+    """
+    table, _, truth = synthesize_with_tracks(
+        field, fiber, box, n, effects, noise, seed, workers, progress, executor, scheduler
+    )
+    return table, truth
+
+
+def synthesize_with_tracks(
+    field: FlowField,
+    fiber: FiberSettings,
+    box: Mapping[str, tuple[float, float]],
+    n: int,
+    effects: Mapping[str, float] | None = None,
+    noise: NoiseModel | None = None,
+    seed: int = 0,
+    workers: int = 2,
+    progress: bool = True,
+    executor: str = "local",
+    scheduler: str | None = None,
+    fps: float | None = None,
+    track_noise: tuple[float, float] = TRACK_NOISE,
+) -> tuple[pd.DataFrame, pd.DataFrame | None, dict[str, Any]]:
+    """Make a measured-fiber table, optionally its trajectories, and its truth.
 
     Parameters
     ----------
@@ -137,11 +172,19 @@ def synthesize(
         Hidden effects.
     noise : NoiseModel
     seed : int
+    fps : float, optional
+        Also make the trajectories, sampled at this frame rate [1/s].
+    track_noise : (float, float)
+        Per-frame measurement error of the tracks: position [µm] (x and y, each)
+        and angle [deg], Gaussian, independent between frames.
 
     Returns
     -------
     table : DataFrame
         Follows :mod:`fibersweep.discrepancy.schema` (validated).
+    tracks : DataFrame or None
+        ``fiber_id, t [s], x, y [µm, channel frame], theta [deg]`` of every fiber
+        of the table (with ``fps``), with the measurement error; None without ``fps``.
     truth : dict
         JSON-ready: effects, noise, seed, box, true starts, failed runs.
     """
@@ -157,10 +200,12 @@ def synthesize(
     seeds = rng.integers(0, 2**31 - 1, size=n)
     z = noise_draws([seed, 4242], n)
     effects = {**fiber.effects, **effects}  # hidden effects on top of the config's own
+    # the frames of the tracks come with fps; the track observables are not written
     with Simulator(
-        field, fiber, workers=workers, progress=progress, executor=executor, scheduler=scheduler
-    ) as sim:
-        raw = sim.run(true, effects, seeds, desc="synth")
+        field, fiber, workers=workers, progress=progress, executor=executor,
+        scheduler=scheduler, tracks=False,
+    ) as sim:  # fmt: skip
+        raw = sim.run(true, effects, seeds, desc="synth", fps=fps)
     obs = noise.observe(raw, z)
     ok = (obs["status"] == "ok").to_numpy()
     table = measured_table(obs, reported)
@@ -181,8 +226,13 @@ def synthesize(
         log.warning(
             "synth: %d of %d runs failed and are left out (listed in the truth)", len(failures), n
         )
+    tracks = None
+    if fps is not None:
+        tracks = _noisy_tracks(raw, table["fiber_id"], keep, track_noise, seed)
     table = table[keep].reset_index(drop=True)
-    validate_measured(table, source="synth")  # the writer's own output must follow the schema
+    data = validate_measured(table, source="synth")  # the writer's own output must follow
+    if tracks is not None:  # the schema, with its tracks too
+        with_tracks(data, validate_trajectories(tracks, data.table, "synth"), field.geometry)
     truth = {
         "effects": effects,
         "noise": noise.as_dict(),
@@ -198,4 +248,38 @@ def synthesize(
         },
         "failed": failures,
     }
-    return table, truth
+    if fps is not None:
+        truth["tracks"] = {"fps": fps, "sd_xy_um": track_noise[0], "sd_theta_deg": track_noise[1]}
+    return table, tracks, truth
+
+
+def _noisy_tracks(
+    raw: pd.DataFrame,
+    ids: pd.Series,
+    keep: np.ndarray,
+    sd: tuple[float, float],
+    seed: int,
+) -> pd.DataFrame:
+    """The kept runs' frames (column ``track`` of ``raw``) with per-frame noise, one table.
+
+    The noise comes from its own stream (``[seed, 4243]``), so the fibers table
+    is the same with or without tracks.
+    """
+    rng = np.random.default_rng([seed, 4243])
+    parts = []
+    for i in np.flatnonzero(keep):
+        f = raw["track"][i]
+        m = len(f["t"])
+        z = rng.standard_normal((3, m))
+        parts.append(
+            pd.DataFrame(
+                {
+                    "fiber_id": ids[i],
+                    "t": f["t"],
+                    "x": f["x"] + sd[0] * z[0],
+                    "y": f["y"] + sd[0] * z[1],
+                    "theta": f["theta"] + sd[1] * z[2],
+                }
+            )
+        )
+    return pd.concat(parts, ignore_index=True)

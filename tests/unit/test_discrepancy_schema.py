@@ -8,6 +8,7 @@ import pytest
 
 from fibersweep.discrepancy.schema import load_measured, validate_measured, write_table
 from fibersweep.errors import InputError
+from fibersweep.units import Geometry
 
 
 def _table(n: int = 6) -> pd.DataFrame:
@@ -131,14 +132,17 @@ def test_trajectory_angles_in_radians_are_caught(tmp_path):
     p = write_table(df, tmp_path / "m.csv")
     t = np.linspace(0.0, 1.0, 5)
     rows = [
-        {"fiber_id": str(i), "t": tk, "x": 10.0 * tk, "y": 0.0, "theta": df["theta0"][i]}
+        # across the default pillar (x 1156.7 .. 1243.3 µm) in the channel frame
+        {"fiber_id": str(i), "t": tk, "x": 1000.0 + 500.0 * tk, "y": 400.0,
+         "theta": df["theta0"][i]}
         for i in range(len(df))
         for tk in t
     ]
     ok = pd.DataFrame(rows)
     write_table(ok, tmp_path / "t.csv")
-    assert load_measured(p, tmp_path / "t.csv").trajectories is not None
+    geo = Geometry()
+    assert load_measured(p, tmp_path / "t.csv", geometry=geo).trajectories is not None
     rad = ok.assign(theta=np.radians(ok["theta"]))
     write_table(rad, tmp_path / "t_rad.csv")
     with pytest.raises(InputError, match="trajectories.theta: the first sample .* radians"):
-        load_measured(p, tmp_path / "t_rad.csv")
+        load_measured(p, tmp_path / "t_rad.csv", geometry=geo)
