@@ -123,10 +123,17 @@ LOOKALIKES = {"off_midplane": {"inlet_speed"}, "inlet_speed": {"off_midplane", "
 
 
 def wrong_names(verdict, hidden: dict[str, float]) -> list[str]:
-    """Effects the verdict names that are neither hidden nor a look-alike of a hidden one."""
+    """Effects the verdict names that are neither hidden nor a look-alike of a hidden one.
+
+    An ambiguous verdict offers alternatives: it is wrong only when none of them
+    is right (an alternative that is the truth leaves the other one a candidate,
+    not a name).
+    """
     ok = set(hidden)
     for h in hidden:
         ok |= LOOKALIKES.get(h, set())
+    if verdict.kind == "ambiguous" and any(set(a) <= ok for a in verdict.alternatives):
+        return []
     return [e for e in verdict.effects if e not in ok]
 
 
