@@ -120,25 +120,32 @@ class _NoisyShift:
         return pd.DataFrame({"delta": self.x + v + self.sigma * self.z[k]})
 
 
+def _covered(model_cls, n: int, sigma: float, seed: int, observe, name: str) -> int:
+    """Of 100 data sets (n fibers, shift 0.08, noise sigma on the data and the copies),
+    how many fits' score intervals contain 0.08 (2 copies, 5 Brent evaluations)."""
+    from fibersweep.discrepancy.fit import score_interval
+
+    rng = np.random.default_rng(seed)
+    hits = 0
+    for _ in range(100):
+        x = rng.uniform(0.0, 0.5, n)
+        model = model_cls(x, sigma, rng)
+        observed = observe(x + 0.08 + sigma * rng.standard_normal(n))
+        base = [model.copy(k) for k in range(2)]
+        fit = fit_effect(LIBRARY["pillar_scale"], model, observed, base, np.arange(n),
+                         [name], {name: 1.0}, max_evals=5, side=1.0)  # fmt: skip
+        lo, hi, _, _ = score_interval(fit)
+        hits += lo <= 0.08 <= hi
+    return hits
+
+
 def test_score_interval_of_a_real_fit_covers_the_truth_with_copy_noise():
     # The whole fit (fair CRPS against 2 noisy copies per fiber, bounded Brent, 5
     # evaluations) on 100 data sets of 40 fibers with measurement noise 0.02 and copy
     # noise 0.02: the interval from the fit's own evaluations covers the true shift 0.08
     # in 88-99 % of them (binomial 95 % range of 100 draws at 0.95, widened for the
     # read-out of a few evaluated values).
-    from fibersweep.discrepancy.fit import score_interval
-
-    rng = np.random.default_rng(6)
-    hits = 0
-    for _ in range(100):
-        x = rng.uniform(0.0, 0.5, 40)
-        model = _NoisyShift(x, 0.02, rng)
-        observed = pd.DataFrame({"delta": x + 0.08 + 0.02 * rng.standard_normal(40)})
-        base = [model.copy(k) for k in range(2)]
-        fit = fit_effect(LIBRARY["pillar_scale"], model, observed, base, np.arange(40),
-                         ["delta"], {"delta": 1.0}, max_evals=5, side=1.0)  # fmt: skip
-        lo, hi, _, _ = score_interval(fit)
-        hits += lo <= 0.08 <= hi
+    hits = _covered(_NoisyShift, 40, 0.02, 6, lambda d: pd.DataFrame({"delta": d}), "delta")
     assert 0.88 <= hits / 100 <= 0.99
 
 
@@ -157,18 +164,7 @@ def test_score_interval_covers_the_truth_when_only_classes_are_seen():
     # 0.08 in 88-99 % of them. (In one measurement on this stand-in, a percentile
     # bootstrap of the argmin over the same evaluations covered it in 84 of 100: the
     # argmin of a step-like mean loss barely moves under resampling.)
-    from fibersweep.discrepancy.fit import score_interval
-
-    rng = np.random.default_rng(1)
-    hits = 0
-    for _ in range(100):
-        x = rng.uniform(0.0, 0.5, 100)
-        model = _ClassFlip(x, 0.05, rng)
-        d = x + 0.08 + 0.05 * rng.standard_normal(100)
-        observed = pd.DataFrame({"class": np.where(d > 0.3, "Above", "Below")})
-        base = [model.copy(k) for k in range(2)]
-        fit = fit_effect(LIBRARY["pillar_scale"], model, observed, base, np.arange(100),
-                         ["class"], {"class": 1.0}, max_evals=5, side=1.0)  # fmt: skip
-        lo, hi, _, _ = score_interval(fit)
-        hits += lo <= 0.08 <= hi
+    hits = _covered(_ClassFlip, 100, 0.05, 1,
+                    lambda d: pd.DataFrame({"class": np.where(d > 0.3, "Above", "Below")}),
+                    "class")  # fmt: skip
     assert 0.88 <= hits / 100 <= 0.99

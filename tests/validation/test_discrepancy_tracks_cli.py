@@ -6,25 +6,10 @@ import json
 
 import numpy as np
 import pandas as pd
-import pytest
 from typer.testing import CliRunner
 
 from fibersweep.cli import app
 from fibersweep.discrepancy.observables import track_observables
-
-
-@pytest.fixture()
-def config(tmp_path, flow_cache_dir, coarse_field):
-    # coarse_field makes sure the SPEC field at dx = 4 µm is in the shared test cache
-    p = tmp_path / "cfg.yaml"
-    p.write_text(
-        "sweep:\n"
-        "  theta0: {start: -10, stop: 10, num: 3}\n"
-        "  y0: {start: 0.15, stop: 0.65, num: 3}\n"
-        "  length: {start: 0.5, stop: 1.4, num: 3}\n"
-        f"run:\n  cache_dir: {flow_cache_dir}\n  workers: 1\n"
-    )
-    return p
 
 
 def test_synth_tracks_then_discrepancy_with_trajectories(tmp_path, config):
