@@ -8,7 +8,7 @@ import pytest
 @pytest.fixture()
 def config(tmp_path, flow_cache_dir, coarse_field):
     """A small sweep config on the shared test cache (the discrepancy CLI tests' box)."""
-    # coarse_field makes sure the SPEC field at dx = 4 µm is in the shared test cache
+    # coarse_field makes sure the default-geometry field at dx = 4 µm is in the test cache
     p = tmp_path / "cfg.yaml"
     p.write_text(
         "sweep:\n"
