@@ -186,7 +186,9 @@ def score_interval(
     sd = g.std(axis=1, ddof=1)
     mean = g.mean(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        T = np.where(sd > 0, mean / (sd / np.sqrt(n)), np.sign(mean) * np.inf)
+        # no spread: a slope of exactly 0 (no fiber's loss changes there) rejects nothing
+        flat = np.where(mean == 0, 0.0, np.sign(mean) * np.inf)
+        T = np.where(sd > 0, mean / (sd / np.sqrt(n)), flat)
     crit = float(student_t.ppf(0.5 + level / 2.0, max(n - 1, 1)))
     v = np.linspace(x[0], x[-1], grid)
     # interpolated T (constant beyond the outer midpoints); infinities kept finite

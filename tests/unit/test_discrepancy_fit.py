@@ -168,3 +168,19 @@ def test_score_interval_covers_the_truth_when_only_classes_are_seen():
                     lambda d: pd.DataFrame({"class": np.where(d > 0.3, "Above", "Below")}),
                     "class")  # fmt: skip
     assert 0.88 <= hits / 100 <= 0.99
+
+
+def test_score_interval_accepts_a_flat_stretch_where_no_fiber_changes():
+    # per-fiber loss constant on [0.2, 0.4] (no class flips there), rising outside: the
+    # flat stretch is inside the interval (a zero slope with zero spread rejects nothing),
+    # the steep sides are outside. T is read at the midpoints of the evaluated values
+    # (0.15, 0.25, ..., 0.55), so each end lies between the midpoints around 0.2 / 0.4.
+    from fibersweep.discrepancy.fit import Fit, score_interval
+
+    rng = np.random.default_rng(8)
+    n = 30
+    grid = np.array([0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6])
+    w = rng.uniform(0.5, 1.5, n)
+    prof = tuple((float(v), w * (max(0.2 - v, 0.0, v - 0.4) * 10) ** 2) for v in grid)
+    lo, hi, open_lo, open_hi = score_interval(Fit("friction", 0.3, 0.0, 0.0, (), prof))
+    assert 0.15 < lo <= 0.25 and 0.35 <= hi < 0.45 and not open_lo and not open_hi
