@@ -7,7 +7,7 @@ and ranks the library's effects on one half of the fibers, (5) fits the best
 few on each half and scores each half with the value fitted on the other
 (two-fold cross-fitting: every fiber is held out once), compares with the
 baseline and decides; (6) when no single effect explains the gap, it tries adding
-each other candidate to the one that helped most (:mod:`.select`, forward selection). The
+other candidates to the significant one that helped most (:mod:`.select`, forward selection). The
 simulation count is planned up front and never exceeds ``budget``.
 """
 
