@@ -6,9 +6,10 @@ It simulates (1) ``copies`` jittered baseline copies of every measured fiber,
 and ranks the library's effects on one half of the fibers, (5) fits the best
 few on each half and scores each half with the value fitted on the other
 (two-fold cross-fitting: every fiber is held out once), compares with the
-baseline and decides; (6) when no single effect explains the gap, it tries adding
-other candidates to the significant one that helped most (:mod:`.select`, forward selection). The
-simulation count is planned up front and never exceeds ``budget``.
+baseline and decides; (6) when no single effect explains the gap, it tries
+adding other candidates to the significant one that helped most
+(:mod:`.select`, forward selection). The simulation count is planned up front
+and never exceeds ``budget``.
 """
 
 from __future__ import annotations
