@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 from scipy.optimize import minimize_scalar
+from scipy.stats import t as student_t
 
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.gap import assess_gap, feature_vector, value_matrices
@@ -161,8 +162,6 @@ def score_interval(
         cut there (the value may lie further out). ``(value, value, True, True)``
         with fewer than two evaluated values.
     """
-    from scipy.stats import t as student_t
-
     if len(fit.profile) < 2:
         return (fit.value, fit.value, True, True)
     pts = sorted(fit.profile, key=lambda p: p[0])

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import wasserstein_distance
 
-from fibersweep.discrepancy.observables import OBSERVABLES, scored
+from fibersweep.discrepancy.observables import OBSERVABLES, has_tracks, scored
 from fibersweep.discrepancy.scores import residual_matrix, score_matrix
 from fibersweep.discrepancy.stats import (
     PermTest,
@@ -223,7 +223,7 @@ def feature_vector(gap: GapResult) -> np.ndarray:
     parts = []
     # the track observables' components only when the gap has them (tracks measured):
     # without tracks the vector is the same as before they existed
-    names = scored(tracks=any(OBSERVABLES[n].track for n in gap.gaps))
+    names = scored(tracks=has_tracks(gap.gaps))
     for name in names:
         g = gap.gaps.get(name)
         parts.append(np.array([g.test.z if g else 0.0]))

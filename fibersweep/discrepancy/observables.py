@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import hashlib
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Literal
@@ -50,6 +50,7 @@ __all__ = [
     "scored",
     "table_columns",
     "track_observables",
+    "has_tracks",
     "stream_key",
     "noise_draws",
     "log_scale",
@@ -437,6 +438,11 @@ def scored(tracks: bool = False) -> tuple[str, ...]:
 def track_observables() -> tuple[str, ...]:
     """Names of the observables derived from trajectories, in report order."""
     return tuple(n for n, o in OBSERVABLES.items() if o.track)
+
+
+def has_tracks(names: Iterable[str]) -> bool:
+    """Whether any of ``names`` is a track observable (tracks were measured)."""
+    return any(n in OBSERVABLES and OBSERVABLES[n].track for n in names)
 
 
 def table_columns() -> tuple[str, ...]:

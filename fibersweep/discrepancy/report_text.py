@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from fibersweep.discrepancy.observables import OBSERVABLES, log_scale, scored
+from fibersweep.discrepancy.observables import OBSERVABLES, has_tracks, log_scale, scored
 
 __all__ = ["markdown"]
 
@@ -26,7 +26,7 @@ def _ci(d: dict[str, Any] | None, spec: str = ".2g") -> str:
 
 def _score_text(observed: list[str] | tuple[str, ...] = ()) -> str:
     # the track observables only when tracks were measured (the text is unchanged without)
-    names = scored(tracks=any(OBSERVABLES[n].track for n in observed if n in OBSERVABLES))
+    names = scored(tracks=has_tracks(observed))
     cat = [n for n in names if OBSERVABLES[n].categorical]
     logs = [n for n in names if OBSERVABLES[n].transform is log_scale]
     on_log = f"; {', '.join(logs)} on a log scale" if logs else ""

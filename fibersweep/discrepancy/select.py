@@ -171,11 +171,12 @@ def forward_pairs(
             {
                 "values": {m: float(np.mean([pf[m] for pf in per_fold])) for m in names},
                 "fold": {m: (per_fold[0][m], per_fold[1][m]) for m in names},
-                "gains": gains,
-                "improvement": paired_improvement(base_scores, scores),
                 "residual": assess_gap(v_after, rng, alpha=inp.alpha, n_perm=inp.n_perm),
                 "copies": cps,
                 "p": {m: boot_p(gains[m], rng) for m in names},
+                # the bootstrap intervals once per pair (_set_of is called again at the end)
+                "gains_ci": {m: bootstrap_mean_ci(gains[m], rng) for m in names},
+                "improvement_ci": bootstrap_mean_ci(paired_improvement(base_scores, scores), rng),
             }
         )
         st = _set_of(tried, len(tried) - 1, family, rng)
@@ -219,9 +220,9 @@ def _set_of(tried: list[dict], i: int, family: int, rng: np.random.Generator) ->
     return SetHeldOut(
         values=t["values"],
         fold_values=t["fold"],
-        gains={m: bootstrap_mean_ci(t["gains"][m], rng) for m in names},
+        gains=t["gains_ci"],
         p_values=dict(t["p"]),
         p_holm={m: float(adj[at + j]) for j, m in enumerate(names)},
-        improvement=bootstrap_mean_ci(t["improvement"], rng),
+        improvement=t["improvement_ci"],
         residual=t["residual"],
     )

@@ -136,7 +136,8 @@ def _run_chunk(task: _Batch) -> list[tuple[int, dict[str, Any]]]:
     # the batch's effects come on top of those the baseline config already has; the
     # trajectory is kept for the track observables
     update: dict[str, Any] = {"effects": {**base.effects, **task.effects}}
-    if task.tracks or task.fps is not None:
+    keep_track = task.tracks or task.fps is not None
+    if keep_track:
         update["record"] = base.record.model_copy(
             update={"trajectories": True, "samples": max(base.record.samples, TRACK_SAMPLES)}
         )
@@ -147,7 +148,7 @@ def _run_chunk(task: _Batch) -> list[tuple[int, dict[str, Any]]]:
         try:
             res = simulate(field, settings, start, rng_seed=int(seed))
             scale = 1.0 + settings.effects.get("pillar_scale", 0.0)
-            if scale != 1.0 and res.trajectory is not None:
+            if keep_track and scale != 1.0 and res.trajectory is not None:
                 # pillar_scale runs in units of the real pillar; its tracks in µm are
                 # those units times (1 + ε) about the centroid (the real pillar's)
                 traj = nominal_track(res.trajectory, field.geometry.centroid, scale)

@@ -51,7 +51,7 @@ from fibersweep.discrepancy.gap import (
 )
 from fibersweep.discrepancy.library import get_candidates
 from fibersweep.discrepancy.localise import FEATURES, Region, find_region
-from fibersweep.discrepancy.observables import OBSERVABLES
+from fibersweep.discrepancy.observables import has_tracks
 from fibersweep.discrepancy.pairfit import SelectionInput, pair_weights, rank_partners
 from fibersweep.discrepancy.schema import MeasuredData
 from fibersweep.discrepancy.select import crossfit_copies, forward_pairs
@@ -154,7 +154,7 @@ def run_discrepancy(
     with Simulator(
         field_, fiber, workers=s.workers, budget=s.budget, progress=progress,
         executor=s.executor, scheduler=s.scheduler, planned=plan.total(n),
-        tracks=any(OBSERVABLES[o].track for o in obs_names if o in OBSERVABLES),
+        tracks=has_tracks(obs_names),
     ) as sim:  # fmt: skip
         maker = CopyMaker(measured.starts, s.noise, s.seed, sim)
         # (1) noise floor: jittered baseline copies
