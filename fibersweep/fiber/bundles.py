@@ -90,6 +90,7 @@ class Params(NamedTuple):
     t_stop : mode 1 stops at this time
     mode : 0 run past the pillar, 1 run until t_stop
     trap_speed, trap_time : a fiber in contact slower than trap_speed for trap_time is trapped
+    stopped_implicit : rigid: linearly implicit steps while stopped in contact
     y_lo, y_hi : bead centres must stay between these
     stretch, bend : bead-spring S [pN] and B [pN µm²]
     """
@@ -106,6 +107,7 @@ class Params(NamedTuple):
     mode: int
     trap_speed: float
     trap_time: float
+    stopped_implicit: bool
     y_lo: float
     y_hi: float
     stretch: float
@@ -216,6 +218,8 @@ def build_kernel(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> Kerne
         mode=int(mode),
         trap_speed=st.classify.trap_speed * abs(setup.u_center),
         trap_time=float(st.classify.trap_time),
+        # Brownian increments scale with the step: keep the short explicit steps then
+        stopped_implicit=bool(st.step.stopped_implicit and not setup.effects.random),
         y_lo=a,
         y_hi=geo.width - a,
         stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²

@@ -14,6 +14,17 @@ Time stepping: explicit midpoint (RK2). The step is bounded by
   bead mobility of the rigid body and k_i = Σ_pairs |d|F|/dr| (stability of
   the explicit step, whose real stability interval is [−2, 0]);
 - ``dt_max``.
+
+While the fiber is *stopped* (in contact and slower than ``trap_speed``) it
+sits in the stiff well of the contact force, and the stiffness bound would make
+the explicit step ~10⁴ times shorter than the displacement bound. There, when
+``stopped_implicit`` is on, the step is a linearly implicit two-stage
+Rosenbrock step (ROS2, γ = 1 + 1/√2: second order for any Jacobian, L-stable)
+with the 3×3 Jacobian of (ẋ, ẏ, θ̇) by forward differences, bounded by the
+displacement and ``dt_max`` only, and by the end of the trap time so that a
+trapped run ends exactly trap_time after it stopped. Its fixed points are the
+ODE's (zero velocity gives a zero step), so where a fiber comes to rest does
+not depend on the step.
 """
 
 from __future__ import annotations
@@ -30,9 +41,11 @@ from fibersweep.fiber.contact import pillar_forces
 from fibersweep.fiber.mobility import body_velocity
 from fibersweep.flow.field import interpolate_ib
 
-__all__ = ["CHUNK", "integrate_rigid", "rigid_velocity", "run_rigid", "seed_numba"]
+__all__ = ["CHUNK", "integrate_rigid", "rigid_velocity", "ros2_step", "run_rigid", "seed_numba"]
 
 CHUNK = 20_000  # record rows per kernel call
+ROS2_GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
+FD_STEP = 1e-5  # finite-difference step of the Jacobian [µm] (angle: this / half-length)
 
 
 @nb.njit(cache=True)
@@ -100,6 +113,70 @@ def rigid_velocity(flow, pillar, body, w, effects, xc, yc, th):
 
 
 @nb.njit(cache=True)
+def _solve3(a, b0, b1, b2):
+    """Solve the 3×3 system ``a`` x = b by Cramer's rule (``a`` well conditioned: I − γΔt J)."""
+    c00 = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
+    c01 = a[1, 2] * a[2, 0] - a[1, 0] * a[2, 2]
+    c02 = a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]
+    det = a[0, 0] * c00 + a[0, 1] * c01 + a[0, 2] * c02
+    x0 = (b0 * c00 + b1 * (a[0, 2] * a[2, 1] - a[0, 1] * a[2, 2])
+          + b2 * (a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1])) / det  # fmt: skip
+    x1 = (b0 * c01 + b1 * (a[0, 0] * a[2, 2] - a[0, 2] * a[2, 0])
+          + b2 * (a[0, 2] * a[1, 0] - a[0, 0] * a[1, 2])) / det  # fmt: skip
+    x2 = (b0 * c02 + b1 * (a[0, 1] * a[2, 0] - a[0, 0] * a[2, 1])
+          + b2 * (a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0])) / det  # fmt: skip
+    return x0, x1, x2
+
+
+@nb.njit(cache=True)
+def ros2_step(flow, pillar, body, w, effects, xc, yc, th, vx, vy, om, dt, dth):
+    """One linearly implicit Rosenbrock step (ROS2) of the rigid fiber.
+
+    (I − γΔt J) k₁ = f(q),  (I − γΔt J) k₂ = f(q + Δt k₁) − 2k₁,
+    q ← q + Δt (3k₁ + k₂)/2, with q = (xc, yc, th), f the lab-frame body
+    velocity and J = ∂f/∂q by forward differences. Second order for any J; J only
+    sets the stability, so the finite-difference error costs no accuracy.
+
+    Parameters
+    ----------
+    flow, pillar, body, w, effects : as :func:`rigid_velocity`
+    xc, yc, th : float
+        State [µm, µm, rad].
+    vx, vy, om : float
+        f(q), already evaluated [µm/s, rad/s].
+    dt : float
+        Step [s].
+    dth : float
+        Finite-difference step of the angle [rad] (``FD_STEP`` over the half-length).
+
+    Returns
+    -------
+    (xc, yc, th) : the state after the step.
+    """
+    a = np.empty((3, 3))
+    q0 = (xc, yc, th)
+    for j in range(3):
+        h = dth if j == 2 else FD_STEP
+        qx = q0[0] + (h if j == 0 else 0.0)
+        qy = q0[1] + (h if j == 1 else 0.0)
+        qt = q0[2] + (h if j == 2 else 0.0)
+        fx, fy, fo, _, _, _, _, _ = rigid_velocity(flow, pillar, body, w, effects, qx, qy, qt)
+        g = ROS2_GAMMA * dt / h
+        a[0, j] = -g * (fx - vx)
+        a[1, j] = -g * (fy - vy)
+        a[2, j] = -g * (fo - om)
+    for j in range(3):
+        a[j, j] += 1.0
+    k0, k1, k2 = _solve3(a, vx, vy, om)
+    f0, f1, f2, _, _, _, _, _ = rigid_velocity(
+        flow, pillar, body, w, effects, xc + dt * k0, yc + dt * k1, th + dt * k2
+    )
+    m0, m1, m2 = _solve3(a, f0 - 2.0 * k0, f1 - 2.0 * k1, f2 - 2.0 * k2)
+    return (xc + dt * (1.5 * k0 + 0.5 * m0), yc + dt * (1.5 * k1 + 0.5 * m1),
+            th + dt * (1.5 * k2 + 0.5 * m2))  # fmt: skip
+
+
+@nb.njit(cache=True)
 def integrate_rigid(state, k, rec):
     """Advance a rigid fiber until a stop condition or until ``rec`` is full.
 
@@ -134,10 +211,17 @@ def integrate_rigid(state, k, rec):
     rows = 0
     code = np.int64(R.CHUNK_FULL)
     cap = rec.shape[0]
+    # f at the current state, when an accepted implicit step has evaluated it already
+    have_f = False
+    shrink = 1.0  # implicit steps are shortened after a rejected one
+    vx = vy = om = cx = cy = min_d = stiff = 0.0
+    any_c = False
     while rows < cap:
-        vx, vy, om, any_c, cx, cy, min_d, stiff = rigid_velocity(
-            flow, pillar, body, w, effects, xc, yc, th
-        )
+        if not have_f:
+            vx, vy, om, any_c, cx, cy, min_d, stiff = rigid_velocity(
+                flow, pillar, body, w, effects, xc, yc, th
+            )
+        have_f = False
         c = math.cos(th)
         sn = math.sin(th)
         hvx = vx - om * sh * sn
@@ -170,10 +254,30 @@ def integrate_rigid(state, k, rec):
         free = min_d - r_cut
         disp = min(p.max_disp, max(p.contact_disp, 0.5 * free))
         dt = min(disp / speed, p.dt_max)
-        if stiff > 0.0:
-            dt = min(dt, 0.5 / (tip_m * stiff))
         if p.mode == 1 and t + dt > p.t_stop:
             dt = max(p.t_stop - t, 1e-12)
+        if p.stopped_implicit and math.isfinite(stopped_since):
+            # land on the end of the trap time, not past it
+            dti = max(min(dt * shrink, stopped_since + p.trap_time - t), 1e-12)
+            xi, yi, ti = ros2_step(flow, pillar, body, w, effects, xc, yc, th, vx, vy, om, dti,
+                                   FD_STEP / half)  # fmt: skip
+            fi = rigid_velocity(flow, pillar, body, w, effects, xi, yi, ti)
+            # Accepted only if the fiber is still stopped: leaving the stop (stick-slip
+            # under friction, a slow slide off the pillar) is left to the explicit step.
+            if fi[3] and math.sqrt(fi[0] * fi[0] + fi[1] * fi[1]) < p.trap_speed:
+                vx, vy, om, any_c, cx, cy, min_d, stiff = fi
+                have_f = True
+                xc = xi
+                yc = yi
+                th = ti
+                t += dti
+                shrink = min(1.0, 2.0 * shrink)
+                continue
+            # Rejected: shorter implicit steps next time; now an explicit step (which
+            # needs only f(q), not the buffers in w).
+            shrink *= 0.25
+        if stiff > 0.0:
+            dt = min(dt, 0.5 / (tip_m * stiff))
         # Midpoint step.
         xm = xc + 0.5 * dt * vx
         ym = yc + 0.5 * dt * vy

@@ -48,6 +48,11 @@ class StepSettings(_Strict):
         0.02, gt=0, description="rigid: largest bead move per step near the pillar [µm]"
     )
     t_max: float = Field(30.0, gt=0, description="give up after this time [s] (status failed)")
+    stopped_implicit: bool = Field(
+        True,
+        description="rigid: while stopped in contact, linearly implicit steps bound by the "
+        "displacement (false: explicit steps bound by the contact stiffness)",
+    )
     x_end: float = Field(
         300.0, gt=0, description="stop when the rearmost bead is this far past the pillar [µm]"
     )
