@@ -3,14 +3,16 @@
 Runs the same fibers with ``fiber.step.stopped_implicit`` on (the default) and off,
 interleaved in one process, and prints the ratio of the total times, for all
 runs and for the trapping runs alone, with the step counts and whether every
-run got the same class. The starts are uniform in the quick config's box
-(θ0 in [-8, 8]°, y0/h in [0.05, 0.9], L/l_obs in [0.75, 1.25]); ``--effects``
-adds effects to both (e.g. ``friction=0.3``).
+run got the same class. The starts are uniform in a box: ``quick`` (θ0 in
+[-8, 8]°, y0/h in [0.05, 0.9], L/l_obs in [0.75, 1.25]) or ``study``, the box
+the discrepancy study draws its fibers from (θ0 in [-10, 10]°, y0/h in
+[0.15, 0.65], L/l_obs in [0.5, 1.4]), where more fibers are trapped.
+``--effects`` adds effects to both (e.g. ``friction=0.3``).
 
 Usage::
 
     nice -n 5 python scripts/bench_stopped_step.py --n 80
-    nice -n 5 python scripts/bench_stopped_step.py --n 80 --effects friction=0.3
+    nice -n 5 python scripts/bench_stopped_step.py --n 80 --box study --effects friction=0.5
 """
 
 from __future__ import annotations
@@ -25,12 +27,18 @@ from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
 from fibersweep.flow.cache import get_flow_field
 
+BOXES = {
+    "quick": ((-8.0, 8.0), (0.05, 0.9), (0.75, 1.25)),
+    "study": ((-10.0, 10.0), (0.15, 0.65), (0.5, 1.4)),
+}
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--config", default="configs/quick.yaml")
     ap.add_argument("--cache", default=".fibersweep-cache")
     ap.add_argument("--n", type=int, default=80)
+    ap.add_argument("--box", choices=list(BOXES), default="quick")
     ap.add_argument("--effects", nargs="*", default=[], help="name=value ...")
     args = ap.parse_args()
     cfg = load_config(args.config)
@@ -39,10 +47,7 @@ def main() -> None:
     imp = cfg.fiber.model_copy(update={"effects": effects})
     exp = imp.model_copy(update={"step": imp.step.model_copy(update={"stopped_implicit": False})})
     rng = np.random.default_rng(0)
-    starts = np.column_stack(
-        [rng.uniform(-8, 8, args.n), rng.uniform(0.05, 0.9, args.n),
-         rng.uniform(0.75, 1.25, args.n)]
-    )  # fmt: skip
+    starts = np.column_stack([rng.uniform(*r, args.n) for r in BOXES[args.box]])
     for st in (imp, exp):
         simulate(field, st, FiberStart(0.0, 0.3, 1.0))  # compile
     wall = {"implicit": [], "explicit": []}
@@ -60,7 +65,8 @@ def main() -> None:
     w = {k: np.array(v) for k, v in wall.items()}
     n = {k: np.array(v) for k, v in steps.items()}
     same = sum(a == b for a, b in zip(classes["implicit"], classes["explicit"], strict=True))
-    print(f"{args.n} runs, effects {effects or 'none'}; {trap.sum()} trapping (explicit)")
+    print(f"{args.n} runs in the {args.box} box, effects {effects or 'none'}; "
+          f"{trap.sum()} trapping (explicit)")  # fmt: skip
     print(f"same class: {same} of {args.n}")
     for label, m in (("all runs", np.ones_like(trap)), ("trapping runs", trap)):
         if not m.any():
