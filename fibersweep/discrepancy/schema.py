@@ -24,18 +24,8 @@ theta_c, y_c and t_contact without contact); a value given where it does not
 exist is an error for the strict ones. Leave a column out entirely if it was
 not measured.
 
-Trajectories (optional second table): columns ``fiber_id, t [s], x [µm],
-y [µm], theta [deg]``, rows time-ordered per fiber; every fiber_id must be in
-the fibers table, and every fiber of the table needs a track. ``x, y`` are the
-fiber's centre in the model's channel frame: x along the flow (+x
-downstream), y across it, the pillar where the config's flow geometry puts it
-(by default its centroid at x = L_ch/2 = 1200 µm, its base line at
-y = W_ch/2 - h_obs/3 = 375 µm, spanning x = 1156.7 .. 1243.3 µm); ``theta``
-is the fiber's angle from +x (directed or not). From them the track
-observables (``y_out``, ``theta_out``, ``t_transit``;
-:mod:`fibersweep.discrepancy.tracks`) are derived and compared; each track
-must run from upstream of the pillar to one fiber length past it (a Trapping
-fiber's track may stop anywhere: its track observables are NaN).
+Trajectories (optional second table): their schema and checks are in
+:mod:`fibersweep.discrepancy.measured_tracks`; :func:`load_measured` reads them.
 
 Validation never drops a row or a column: every problem raises
 :class:`InputError` that names the column, the rule and the offending rows
@@ -47,7 +37,8 @@ theta0 when every |theta0| is below 0.2 with a non-zero spread (the source study
 ±10° is ±0.17 rad); an angle observable (theta_c) when at least three values
 are given and every one is at most π in size (contact angles in degrees spread
 over tens of degrees); the trajectories' theta when their first samples match theta0
-converted to radians far better than theta0 itself. ``angle_unit = 'deg'``
+converted to radians far better than theta0 itself (measured_tracks).
+``angle_unit = 'deg'``
 states degrees and turns the guess off.
 """
 
@@ -73,8 +64,6 @@ __all__ = [
     "MeasuredData",
     "load_measured",
     "validate_measured",
-    "validate_trajectories",
-    "with_tracks",
     "write_table",
 ]
 
@@ -83,7 +72,6 @@ log = logging.getLogger(__name__)
 START_COLUMNS = ("theta0", "y0", "length")
 #: Observed columns of the schema (the registry's observables that are table columns).
 OBSERVED_COLUMNS = table_columns()
-TRAJECTORY_COLUMNS = ("fiber_id", "t", "x", "y", "theta")
 
 # Plausible start ranges (inclusive; values outside point to a unit error) and unit hints.
 # The observed columns' ranges and hints are in the observable registry.
@@ -136,7 +124,7 @@ class MeasuredData:
         return self.table[list(START_COLUMNS)].to_numpy(dtype=np.float64)
 
 
-def _rows(mask: np.ndarray | pd.Series) -> str:
+def rows_text(mask: np.ndarray | pd.Series) -> str:
     idx = np.flatnonzero(np.asarray(mask))
     shown = ", ".join(str(i) for i in idx[:_MAX_ROWS_SHOWN])
     more = f" and {len(idx) - _MAX_ROWS_SHOWN} more" if len(idx) > _MAX_ROWS_SHOWN else ""
@@ -159,7 +147,7 @@ def _to_float(df: pd.DataFrame, col: str, problems: list[str]) -> np.ndarray | N
     num = pd.to_numeric(df[col], errors="coerce")
     bad = num.isna() & df[col].notna()
     if bad.any():
-        problems.append(f"{col}: not a number in {_rows(bad)}")
+        problems.append(f"{col}: not a number in {rows_text(bad)}")
         return None
     return num.to_numpy(dtype=np.float64)
 
@@ -178,7 +166,7 @@ def _to_bool(series: pd.Series, name: str, problems: list[str]) -> np.ndarray | 
         else:
             bad[k] = True
     if bad.any():
-        problems.append(f"{name}: not a boolean (true/false/0/1) in {_rows(bad)}")
+        problems.append(f"{name}: not a boolean (true/false/0/1) in {rows_text(bad)}")
         return None
     return out
 
@@ -207,7 +195,7 @@ def _angles_to_degrees(df: pd.DataFrame, vals: dict[str, np.ndarray], problems: 
         units = df["angle_unit"].astype(str).str.strip().str.lower()
         bad = ~units.isin(["deg", "rad"])
         if bad.any():
-            problems.append(f"angle_unit: must be 'deg' or 'rad' in {_rows(bad)}")
+            problems.append(f"angle_unit: must be 'deg' or 'rad' in {rows_text(bad)}")
             return
         if units.nunique() > 1:
             problems.append("angle_unit: must be the same in every row (mixed 'deg' and 'rad')")
@@ -309,7 +297,7 @@ def validate_measured(
         ids = df["fiber_id"].astype(str)
         dup = ids.duplicated(keep=False).to_numpy()
         if dup.any():
-            problems.append(f"fiber_id: duplicated in {_rows(dup)}")
+            problems.append(f"fiber_id: duplicated in {rows_text(dup)}")
     else:
         ids = pd.Series([str(i) for i in range(len(df))])
 
@@ -341,7 +329,7 @@ def _to_labels(series: pd.Series, o: Observable, problems: list[str]) -> pd.Seri
     bad = labels.isna().to_numpy()
     if bad.any():
         problems.append(
-            f"{o.name}: unknown value in {_rows(bad)} "
+            f"{o.name}: unknown value in {rows_text(bad)} "
             f"(e.g. {series[bad].iloc[0]!r}); valid: {', '.join(o.categories)}"
         )
     return labels
@@ -357,7 +345,7 @@ def _check_values(
     """Finite, NaN only where the quantity does not exist, within the plausible range."""
     inf = np.isinf(v)
     if inf.any():
-        problems.append(f"{col}: infinite value in {_rows(inf)}")
+        problems.append(f"{col}: infinite value in {rows_text(inf)}")
     nan = np.isnan(v)
     if col in _START_RANGES:
         (lo, hi), hint = _START_RANGES[col]
@@ -374,14 +362,15 @@ def _check_values(
     bad_nan = nan & ~allowed
     if bad_nan.any():
         problems.append(
-            f"{col}: missing/NaN value in {_rows(bad_nan)} ({why}; "
+            f"{col}: missing/NaN value in {rows_text(bad_nan)} ({why}; "
             "leave the column out if it was not measured)"
         )
     below = (v <= lo) if lower_open else (v < lo)
     out = np.isfinite(v) & (below | (v > hi))
     if out.any():
         problems.append(
-            f"{col}: out of range [{lo:g}, {hi:g}] in {_rows(out)} (e.g. {v[out][0]:.4g}); {hint}"
+            f"{col}: out of range [{lo:g}, {hi:g}] in {rows_text(out)} "
+            f"(e.g. {v[out][0]:.4g}); {hint}"
         )
 
 
@@ -397,7 +386,7 @@ def _check_consistency(
         must = (classes.isin(["Trapping", "Pole-vaulting"])).to_numpy() & ~contact
         if must.any():
             problems.append(
-                f"contact: false for a Trapping or Pole-vaulting fiber in {_rows(must)} "
+                f"contact: false for a Trapping or Pole-vaulting fiber in {rows_text(must)} "
                 "(both classes require contact)"
             )
     for col, v in vals.items():
@@ -409,83 +398,12 @@ def _check_consistency(
             given = np.isfinite(v) & ~defined
             if given.any():
                 where = " or ".join(_GIVEN[c] for c in o.defined)
-                problems.append(f"{col}: given {where} in {_rows(given)}")
+                problems.append(f"{col}: given {where} in {rows_text(given)}")
     if "t_contact" in vals and "t_pass" in vals:
         late = np.isfinite(vals["t_contact"]) & np.isfinite(vals["t_pass"])
         late &= vals["t_contact"] > vals["t_pass"]
         if late.any():
-            problems.append(f"t_contact: later than t_pass in {_rows(late)}")
-
-
-def _trajectory_radians(traj: pd.DataFrame, fibers: pd.DataFrame) -> str | None:
-    """Why the trajectories' theta looks like radians, judged against theta0 [deg]."""
-    first = traj.groupby("fiber_id", sort=False)["theta"].first()
-    theta0 = fibers.set_index("fiber_id")["theta0"].reindex(first.index).to_numpy()
-    th = first.to_numpy()
-    ok = np.isfinite(theta0) & np.isfinite(th)
-    if ok.sum() < 3 or np.max(np.abs(theta0[ok])) < 1.0:
-        return None  # starts too close to 0 to tell degrees from radians
-    miss_deg = float(np.median(np.abs(th[ok] - theta0[ok])))
-    miss_rad = float(np.median(np.abs(th[ok] - np.radians(theta0[ok]))))
-    if miss_rad < 0.2 * miss_deg:
-        return (
-            f"the first sample of each track matches theta0 in radians (median miss "
-            f"{miss_rad:.3g}) far better than theta0 in degrees ({miss_deg:.3g})"
-        )
-    return None
-
-
-def validate_trajectories(
-    traj: pd.DataFrame, fibers: pd.DataFrame | pd.Series, source: str
-) -> pd.DataFrame:
-    """Check the optional trajectory table (see module docstring).
-
-    Parameters
-    ----------
-    traj : pandas.DataFrame
-        Raw trajectory table.
-    fibers : pandas.DataFrame or pandas.Series
-        The validated fibers table (``fiber_id`` and ``theta0`` [deg], used for
-        the radians check), or only its ``fiber_id`` column.
-    source : str
-        Name used in messages.
-
-    Raises
-    ------
-    InputError
-        Missing columns, non-finite values, unknown fiber ids, times that go
-        backwards, or angles that look like radians, each naming the rows.
-    """
-    fiber_ids = fibers["fiber_id"] if isinstance(fibers, pd.DataFrame) else fibers
-    missing = [c for c in TRAJECTORY_COLUMNS if c not in traj.columns]
-    if missing:
-        raise InputError(f"{source}: trajectories: missing column(s) {', '.join(missing)}")
-    traj = traj.reset_index(drop=True).copy()
-    traj["fiber_id"] = traj["fiber_id"].astype(str)
-    problems = []
-    for col in ("t", "x", "y", "theta"):
-        v = pd.to_numeric(traj[col], errors="coerce").to_numpy(dtype=np.float64)
-        bad = ~np.isfinite(v)
-        if bad.any():
-            problems.append(f"trajectories.{col}: non-finite or non-numeric in {_rows(bad)}")
-        traj[col] = v
-    unknown = ~traj["fiber_id"].isin(set(fiber_ids.astype(str)))
-    if unknown.any():
-        problems.append(f"trajectories.fiber_id: not in the fibers table in {_rows(unknown)}")
-    if not problems:
-        back = (traj.groupby("fiber_id", sort=False)["t"].diff() <= 0).to_numpy()
-        if back.any():
-            problems.append(f"trajectories.t: not increasing within a fiber in {_rows(back)}")
-    if not problems and isinstance(fibers, pd.DataFrame) and "theta0" in fibers.columns:
-        why = _trajectory_radians(traj, fibers)
-        if why:
-            problems.append(
-                f"trajectories.theta: {why}; these look like radians, but degrees are "
-                "expected. Convert to degrees"
-            )
-    if problems:
-        raise InputError(f"{source}: " + "; ".join(problems))
-    return traj
+            problems.append(f"t_contact: later than t_pass in {rows_text(late)}")
 
 
 def load_measured(
@@ -502,7 +420,7 @@ def load_measured(
         ``.parquet`` or ``.csv`` file following the schema in the module docstring.
     trajectories : path, optional
         ``.parquet`` or ``.csv`` trajectory table; the track observables are
-        derived from it (:func:`with_tracks`).
+        derived from it (:func:`~fibersweep.discrepancy.measured_tracks.with_tracks`).
     ignore_extra : bool
         Ignore columns the schema does not know instead of raising.
     geometry : Geometry, optional
@@ -524,40 +442,11 @@ def load_measured(
             raise InputError(f"{tp}: no such file")
         if geometry is None:
             raise ValueError("load_measured: trajectories need the model's geometry")
+        from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
+
         traj = validate_trajectories(_read_table(tp), data.table, str(tp))
         data = with_tracks(data, traj, geometry, str(tp))
     return data
-
-
-def with_tracks(
-    data: MeasuredData, traj: pd.DataFrame, geometry: Geometry, source: str = "trajectories"
-) -> MeasuredData:
-    """``data`` with its validated trajectories and the track observables derived from them.
-
-    Parameters
-    ----------
-    data : MeasuredData
-        Validated fibers.
-    traj : pandas.DataFrame
-        Validated trajectories (:func:`validate_trajectories`), channel frame [µm].
-    geometry : Geometry
-        Channel and pillar of the model.
-    source : str
-        Name used in messages.
-
-    Raises
-    ------
-    InputError
-        Fibers without a track, tracks that do not cross the stations (e.g. in
-        another frame), each naming the field
-        (:func:`~fibersweep.discrepancy.tracks.measured_track_values`).
-    """
-    from fibersweep.discrepancy.tracks import measured_track_values
-
-    values = measured_track_values(traj, data.table, geometry, source)
-    table = pd.concat([data.table, values], axis=1)
-    observed = (*data.observed, *(n for n in values.columns if OBSERVABLES[n].scored))
-    return MeasuredData(table, observed, traj, data.source)
 
 
 def write_table(df: pd.DataFrame, path: str | Path) -> Path:

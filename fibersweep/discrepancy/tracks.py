@@ -199,7 +199,7 @@ def measured_track_values(
     Parameters
     ----------
     traj : pandas.DataFrame
-        Validated trajectories (:func:`fibersweep.discrepancy.schema.validate_trajectories`):
+        Validated trajectories (``measured_tracks.validate_trajectories``):
         ``fiber_id`` (str), ``t`` [s], ``x``, ``y`` [µm, channel frame], ``theta`` [deg].
     fibers : pandas.DataFrame
         Validated fibers table: ``fiber_id``, ``length`` [/l_obs], ``class``.

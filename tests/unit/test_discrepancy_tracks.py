@@ -10,9 +10,10 @@ import pandas as pd
 import pytest
 
 from fibersweep.analysis.trajectory import Trajectory
+from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
 from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws, scored, track_observables
-from fibersweep.discrepancy.schema import validate_measured, validate_trajectories, with_tracks
+from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import frames, outcome_row
 from fibersweep.discrepancy.tracks import (
     measured_track_values,
