@@ -422,7 +422,9 @@ def contact_figure(runs: pd.DataFrame) -> Figure:
         q = _of_class(c, k)
         if len(q):
             ax.scatter(q["theta_c"], q["y_c"], s=16, lw=0.4, edgecolor="k", label=k, **_style(k))
-    for y, what in ((0.0, "base"), (1.0, "apex")):
+    # y/h is quoted from the pillar's lowest point for every shape and rotation; only the
+    # unrotated triangle has its apex at 1, so the upper line is named by its height
+    for y, what in ((0.0, "base line"), (1.0, r"base line + $h_{obs}$")):
         ax.axhline(y, color="0.6", lw=0.8, ls=":")
         ax.annotate(what, (1.0, y), xycoords=("axes fraction", "data"), ha="right", va="bottom",
                     fontsize=7, color="0.4")  # fmt: skip
