@@ -237,7 +237,7 @@ def feature_vector(gap: GapResult) -> np.ndarray:
 def observable_weights(values: Mapping[str, np.ndarray]) -> dict[str, float]:
     """1 / per-fiber spread of each observable's scores among the model copies.
 
-    Puts scores of different units (nats, degrees, h_obs) on one scale for the
+    Puts scores of different units (Brier points, degrees, h_obs) on one scale for the
     combined loss; computed from the baseline copies only (columns 1..m-1).
     """
     w = {}

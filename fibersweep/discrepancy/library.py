@@ -31,6 +31,11 @@ class Candidate:
         A realistic magnitude (what the source or a plausible calibration error suggests).
     note : str
         What the value means.
+    random : bool
+        The effect draws random numbers per run (it spreads outcomes rather
+        than moving them): its copies carry Monte Carlo noise of their own, so
+        the workflow gives its fits and held-out scores more copies
+        (``DiscrepancySettings.random_fit_copies``, ``random_copies``).
     """
 
     name: str
@@ -39,6 +44,7 @@ class Candidate:
     probes: tuple[float, ...]
     realistic: float
     note: str
+    random: bool = False
 
     @property
     def signed(self) -> bool:
@@ -52,9 +58,11 @@ LIBRARY: dict[str, Candidate] = {
         Candidate("pillar_hydro", 0.0, 3.0, (1.0,), 0.5, "multiplier on the Faxén pillar drag"),
         Candidate("off_midplane", 0.0, 0.35, (0.25,), 0.15, "offset from the midplane / depth"),
         # 1e3 x kT: rotational diffusion of ~25° over a ~1 s pass, already extreme
-        Candidate("brownian", 0.0, 3.0e3, (1.0e3,), 1.0, "multiplier on kT at 295 K"),
+        Candidate("brownian", 0.0, 3.0e3, (1.0e3,), 1.0, "multiplier on kT at 295 K", True),
         Candidate("inlet_speed", -0.3, 0.3, (-0.15, 0.15), 0.1, "relative speed error"),
-        Candidate("start_noise", 0.0, 5.0, (3.0,), 2.0, "start noise / reference noise"),
+        Candidate(
+            "start_noise", 0.0, 5.0, (3.0,), 2.0, "start noise / reference noise", True
+        ),
         Candidate("pillar_scale", -0.2, 0.2, (-0.1, 0.1), 0.08, "relative pillar size error"),
     )
 }

@@ -86,7 +86,7 @@ class Observable:
     name : str
         Column name in measured and outcome tables.
     kind : {'class', 'binary', 'continuous'}
-        Scored by log-loss over ``categories`` (class, binary) or by the fair CRPS
+        Scored by the fair Brier score over ``categories`` (class, binary) or the fair CRPS
         on the ``transform`` scale (continuous).
     unit : str
         Unit of the values ('' for categories), e.g. 'h_obs', 'deg', 's'.
@@ -161,7 +161,7 @@ class Observable:
 
     @property
     def categorical(self) -> bool:
-        """Scored by log-loss over categories."""
+        """Scored by the fair Brier score over categories."""
         return self.kind in ("class", "binary")
 
     @property

@@ -31,7 +31,7 @@ def _score_text(observed: list[str] | tuple[str, ...] = ()) -> str:
     logs = [n for n in names if OBSERVABLES[n].transform is log_scale]
     on_log = f"; {', '.join(logs)} on a log scale" if logs else ""
     return (
-        f"Score: log-loss ({', '.join(cat)}) or fair CRPS (continuous{on_log}) of each "
+        f"Score: fair Brier score ({', '.join(cat)}) or fair CRPS (continuous{on_log}) of each "
         "observation against the model's jittered copies. Two tests per observable, one Holm "
         "family: the score (does the measurement sit worse than a copy?) and the signed "
         "residual (is it shifted?). Gap: the excess score over the copies' own, divided by the "

@@ -15,9 +15,19 @@ Scores (lower is better, all proper):
   log t_pass): the *fair* CRPS of an m-member ensemble (Ferro 2014),
   ``mean_k |x_k - y| - sum_{k != l} |x_k - x_l| / (2 m (m - 1))``, unbiased for
   the CRPS of the distribution the members come from;
-- categorical observables (kinds class and binary: class, contact): the log-loss
-  of the additively smoothed ensemble frequency ``(n_c + alpha) / (m + K alpha)``;
-  the smoothing keeps a class the copies never produced at a finite cost.
+- categorical observables (kinds class and binary: class, contact): the *fair*
+  Brier score of an m-member ensemble (Ferro 2014), ``sum_c (f_c - o_c)^2 -
+  f_c (1 - f_c) / (m - 1)`` with f_c the members' frequency of category c and
+  o_c the one-hot observation, unbiased for the Brier score of the
+  distribution the members come from.
+
+Both are unbiased at every ensemble size, so comparing two models on a few
+copies each favours the one whose outcome distribution is right, whatever its
+spread. The log-loss of a smoothed frequency, used before, is not: with 8
+copies, an observation that is one class with probability 0.9 scored better
+against copies that always give that class than against copies drawn from the
+true distribution, so effects that spread outcomes (start noise) were fitted
+too small.
 """
 
 from __future__ import annotations
@@ -28,15 +38,11 @@ from fibersweep.discrepancy.observables import OBSERVABLES, Observable
 
 __all__ = [
     "crps_fair_loo",
-    "logloss_loo",
+    "brier_fair_loo",
     "score_matrix",
     "residual_matrix",
     "transform",
 ]
-
-#: Additive smoothing of ensemble frequencies (Jeffreys' 1/2).
-ALPHA = 0.5
-
 
 def _observable(name: str) -> Observable:
     try:
@@ -83,34 +89,33 @@ def crps_fair_loo(V: np.ndarray) -> np.ndarray:
     return S
 
 
-def logloss_loo(codes: np.ndarray, n_categories: int, alpha: float = ALPHA) -> np.ndarray:
-    """Leave-one-out log-loss of every member's category against the rest of its row.
+def brier_fair_loo(codes: np.ndarray, n_categories: int) -> np.ndarray:
+    """Leave-one-out fair Brier score of every member's category against the rest of its row.
 
     Parameters
     ----------
     codes : ndarray, shape (n, m), int
         Category 0..n_categories-1, or -1 where undefined (failed run).
     n_categories : int
-    alpha : float
-        Additive smoothing of the leave-one-out frequency.
 
     Returns
     -------
     ndarray, shape (n, m)
-        −log p̂ [nats]; NaN where the code is -1 or no other member is defined.
+        ``sum_c (f_c - o_c)^2 - f_c (1 - f_c) / (k - 1)`` over the k defined
+        other members (f_c their frequency of c, o_c the member's one-hot
+        category), in [-1/(k-1), 2]; NaN where the code is -1 or fewer than two
+        other members are defined.
     """
     c = np.asarray(codes)
     if c.ndim != 2:
         raise ValueError(f"codes must be 2D (fibers, members), got shape {c.shape}")
     fin = c >= 0
-    counts = np.stack([(c == k).sum(axis=1) for k in range(n_categories)], axis=1)
-    total = fin.sum(axis=1, keepdims=True)
-    own = np.take_along_axis(counts, np.where(fin, c, 0), axis=1)  # count of own category
+    onehot = np.stack([(c == q) & fin for q in range(n_categories)], axis=2).astype(np.float64)
+    others = fin.sum(axis=1)[:, None, None].astype(np.float64) - 1.0  # k per member of a row
     with np.errstate(divide="ignore", invalid="ignore"):
-        p = (own - 1 + alpha) / (total - 1 + n_categories * alpha)
-        S = -np.log(p)
-    S = S.astype(np.float64)
-    S[~fin | (total - 1 < 1)] = np.nan
+        f = (onehot.sum(axis=1, keepdims=True) - onehot) / others  # (n, m, K)
+        S = ((f - onehot) ** 2 - f * (1.0 - f) / (others - 1.0)).sum(axis=2)
+    S[~fin | (others[:, :, 0] < 2.0)] = np.nan
     return S
 
 
@@ -132,7 +137,7 @@ def score_matrix(name: str, V: np.ndarray) -> np.ndarray:
     """
     o = _observable(name)
     if o.categorical:
-        return logloss_loo(_codes(V), o.width)
+        return brier_fair_loo(_codes(V), o.width)
     return crps_fair_loo(transform(name, V))
 
 

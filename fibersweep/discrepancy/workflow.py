@@ -189,7 +189,7 @@ def run_discrepancy(
                 base_fit,
                 folds[1],
                 obs_names,
-                probe_copy=plan.copies + 1,
+                probe_copy=max(plan.copies, plan.random_copies) + 1,
                 rng=rng,
             )
             chosen = [sg for sg in signatures if sg.cosine > 0][: plan.candidates]
@@ -199,14 +199,13 @@ def run_discrepancy(
             for f_idx in range(len(folds)):
                 train = folds[1 - f_idx]
                 obs_tr = observed.iloc[train].reset_index(drop=True)
-                base_tr = _subset(base, train)[: plan.fit_copies]
                 for sg in chosen:
                     cand = next(c for c in candidates if c.name == sg.name)
                     fit = fit_effect(
                         cand,
                         maker,
                         obs_tr,
-                        base_tr,
+                        _subset(base[: plan.fit_copies_of(cand)], train),
                         train,
                         obs_names,
                         w_gap,
@@ -221,8 +220,11 @@ def run_discrepancy(
             for name, vals in fold_values.items():
                 if all(v == 0.0 for v in vals):
                     continue  # both folds kept the baseline: nothing to add
+                # scored against the 8 baseline copies: both fair scores are unbiased
+                # at any ensemble size, so the two ensembles need not be the same size
+                ncp = plan.copies_of(next(c for c in candidates if c.name == name))
                 cps = crossfit_copies(
-                    maker, folds, [{name: v} for v in vals], plan.copies, f"held-out {name}"
+                    maker, folds, [{name: v} for v in vals], ncp, f"held-out {name}"
                 )
                 effect_copies[name] = cps
                 v_after = value_matrices(observed, cps, obs_names)
@@ -245,7 +247,7 @@ def run_discrepancy(
                     cand,
                     maker,
                     observed,
-                    base[: plan.fit_copies],
+                    base[: plan.fit_copies_of(cand)],
                     np.arange(n),
                     obs_names,
                     w_gap,

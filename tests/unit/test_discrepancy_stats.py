@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from fibersweep.discrepancy.scores import crps_fair_loo, logloss_loo, residual_matrix
+from fibersweep.discrepancy.scores import brier_fair_loo, crps_fair_loo, residual_matrix
 from fibersweep.discrepancy.stats import bootstrap_mean_ci, excess, holm, permutation_test
 
 
@@ -40,14 +40,40 @@ def test_fair_crps_large_ensemble_and_nan_members():
     assert np.isnan(crps_fair_loo(np.array([[0.0, 1.0, np.nan]]))[0, 0])
 
 
-def test_logloss_by_hand():
-    # row: observed class 2, copies 0, 0, 2 -> others have n_2 = 1 of 3 members
+def test_fair_brier_by_hand():
+    # row: observed class 2, copies 0, 0, 2 -> others have f = (2/3, 0, 1/3, 0), k = 3
     codes = np.array([[2, 0, 0, 2, -1]])
-    s = logloss_loo(codes, 4, alpha=0.5)
-    assert s[0, 0] == pytest.approx(-math.log((1 + 0.5) / (3 + 4 * 0.5)))
-    # copy 0 (class 0): others 2, 0, 2 -> one class-0 member of 3
-    assert s[0, 1] == pytest.approx(-math.log((1 + 0.5) / (3 + 2.0)))
+    s = brier_fair_loo(codes, 4)
+    f, o = np.array([2 / 3, 0, 1 / 3, 0]), np.array([0, 0, 1, 0])
+    assert s[0, 0] == pytest.approx(np.sum((f - o) ** 2 - f * (1 - f) / 2))
+    # copy 0 (class 0): others 2, 0, 2 -> f = (1/3, 0, 2/3, 0)
+    f, o = np.array([1 / 3, 0, 2 / 3, 0]), np.array([1, 0, 0, 0])
+    assert s[0, 1] == pytest.approx(np.sum((f - o) ** 2 - f * (1 - f) / 2))
     assert np.isnan(s[0, 4])
+    # fewer than two other members: undefined
+    assert np.isnan(brier_fair_loo(np.array([[1, 0, -1]]), 2)[0, 0])
+
+
+@pytest.mark.parametrize("k", [2, 3, 8])
+@pytest.mark.parametrize("p", [0.6, 0.9, 0.97])
+def test_fair_brier_is_unbiased_and_proper_for_small_ensembles(k, p):
+    # Exact expectation over k other members ~ Bernoulli(q) and an observation ~
+    # Bernoulli(p): the fair score's mean equals the Brier score of q,
+    # 2 (p - q)^2 + 2 p (1 - p) (to 1e-12), so it is least at q = p for every k.
+    # The smoothed log-loss it replaces preferred q = 1 at p = 0.9, k = 8.
+    def expected(q: float) -> float:
+        total = 0.0
+        for n1 in range(k + 1):  # others in category 1
+            w = math.comb(k, n1) * q**n1 * (1 - q) ** (k - n1)
+            row = np.array([[1] + [1] * n1 + [0] * (k - n1), [0] + [1] * n1 + [0] * (k - n1)])
+            s = brier_fair_loo(row, 2)[:, 0]
+            total += w * (p * s[0] + (1 - p) * s[1])
+        return total
+
+    qs = np.linspace(0.0, 1.0, 101)
+    e = np.array([expected(q) for q in qs])
+    assert np.allclose(e, 2 * (p - qs) ** 2 + 2 * p * (1 - p), atol=1e-12)
+    assert qs[np.argmin(e)] == pytest.approx(p, abs=0.006)
 
 
 def test_residuals_sum_to_zero_per_row():
