@@ -351,6 +351,10 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--copies", type=int, default=8)
     ap.add_argument("--fit-copies", type=int, default=2)
+    ap.add_argument("--random-fit-copies", type=int, default=None,
+                    help="fit copies of random effects (default: --copies)")  # fmt: skip
+    ap.add_argument("--random-copies", type=int, default=None,
+                    help="held-out copies of random effects (default: 2 x --copies)")  # fmt: skip
     ap.add_argument("--candidates", type=int, default=3)
     ap.add_argument("--fit-evals", type=int, default=5)
     ap.add_argument("--refits", type=int, default=2)
@@ -375,6 +379,7 @@ def main() -> None:
             raise SystemExit(f"unknown scenario {s!r}; valid: {', '.join(SCENARIOS)}")
     kw = dict(
         copies=args.copies, fit_copies=args.fit_copies, candidates=args.candidates,
+        random_fit_copies=args.random_fit_copies, random_copies=args.random_copies,
         fit_evals=args.fit_evals, refits=args.refits, pairs=args.pairs,
         power_fibers=args.power_fibers,
     )  # fmt: skip

@@ -134,7 +134,8 @@ def score_interval(
     values v_j < v_{j+1} the per-fiber slope g_i = (ℓ_i(v_{j+1}) - ℓ_i(v_j)) /
     (v_{j+1} - v_j) gives T = mean(g) / (sd(g) / sqrt(n)) at the midpoint; T is
     interpolated linearly between midpoints, and the interval is the stretch
-    where |T| <= t_{n-1}(1 - (1 - level)/2) nearest the fitted value. Evaluated
+    where |T| <= t_{n-1}(1 - (1 - level)/2) nearest the fitted value, widened to
+    the fitted value where that lies outside it. Evaluated
     values closer than a twentieth of their range count as one (a slope over a
     tiny step is set by the few fibers whose class flips there).
 
@@ -207,7 +208,11 @@ def score_interval(
     i1 = c
     while i1 < grid - 1 and inside[i1 + 1]:
         i1 += 1
-    return float(v[i0]), float(v[i1]), i0 == 0, i1 == grid - 1
+    # On a step-like loss the best evaluated value can sit just past the accepted
+    # stretch (the slope into it is significant); the interval is widened to it,
+    # so it never excludes the value it is reported with.
+    lo, hi = min(float(v[i0]), fit.value), max(float(v[i1]), fit.value)
+    return lo, hi, i0 == 0, i1 == grid - 1
 
 
 def rank_effects(

@@ -120,6 +120,26 @@ def test_budget_plan_shrinks_and_refuses_too_small():
         plan_budget(100, DiscrepancySettings(budget=150), cands)
 
 
+def test_random_effects_get_more_copies_and_lose_them_first_under_a_budget():
+    s = DiscrepancySettings()
+    det = plan_budget(100, s, get_candidates(["friction", "inlet_speed"]))
+    assert det.cost(100)["random"] == 0
+    rnd = plan_budget(100, s, get_candidates(["friction", "start_noise"]))
+    assert rnd.fit_copies_of(LIBRARY["start_noise"]) == 8
+    assert rnd.fit_copies_of(LIBRARY["friction"]) == 2
+    assert rnd.copies_of(LIBRARY["start_noise"]) == 16
+    assert rnd.copies_of(LIBRARY["friction"]) == 8
+    # fits: 2 halves x (5 + 1) evaluations x 6 extra copies x 50 fibers; held-out:
+    # 8 extra copies x 100; refit: 3 Brent steps x 6 extra copies x 100
+    assert rnd.cost(100)["random"] == 2 * 6 * 6 * 50 + 8 * 100 + 3 * 6 * 100
+    # a budget just short of the full plan drops the extra copies before anything else
+    cut = plan_budget(100, DiscrepancySettings(budget=rnd.total(100) - 1), get_candidates(
+        ["friction", "start_noise"]))  # fmt: skip
+    assert cut.random_copies == cut.copies == 8 and cut.fit_evals == rnd.fit_evals
+    with pytest.raises(InputError, match="random_fit_copies"):
+        DiscrepancySettings(copies=4, random_fit_copies=6)
+
+
 def test_library_rejects_unknown_names_listing_valid_ones():
     with pytest.raises(InputError, match="valid: .*friction"):
         get_candidates(["frictoin"])
