@@ -193,6 +193,7 @@ def run_discrepancy(
                 rng=rng,
             )
             chosen = [sg for sg in signatures if sg.cosine > 0][: plan.candidates]
+            lead = chosen[0].name if chosen else ""  # a random lead gets more copies
             # (5) cross-fitting: fibers of fold f are scored with the value fitted on
             # the other fold, so every fiber is held out exactly once.
             fold_values: dict[str, list[float]] = {}
@@ -205,7 +206,7 @@ def run_discrepancy(
                         cand,
                         maker,
                         obs_tr,
-                        _subset(base[: plan.fit_copies_of(cand)], train),
+                        _subset(base[: plan.fit_copies_of(cand, cand.name == lead)], train),
                         train,
                         obs_names,
                         w_gap,
@@ -222,7 +223,7 @@ def run_discrepancy(
                     continue  # both folds kept the baseline: nothing to add
                 # scored against the 8 baseline copies: both fair scores are unbiased
                 # at any ensemble size, so the two ensembles need not be the same size
-                ncp = plan.copies_of(next(c for c in candidates if c.name == name))
+                ncp = plan.copies_of(next(c for c in candidates if c.name == name), name == lead)
                 cps = crossfit_copies(
                     maker, folds, [{name: v} for v in vals], ncp, f"held-out {name}"
                 )
@@ -247,7 +248,7 @@ def run_discrepancy(
                     cand,
                     maker,
                     observed,
-                    base[: plan.fit_copies_of(cand)],
+                    base[: plan.fit_copies_of(cand, cand.name == lead)],
                     np.arange(n),
                     obs_names,
                     w_gap,
