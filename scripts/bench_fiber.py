@@ -53,9 +53,7 @@ def main() -> None:
     ap.add_argument("--dx", type=float, default=4.0)
     ap.add_argument("--cache", default=".fibersweep-cache")
     ap.add_argument("--repeat", type=int, default=20, help="rigid repetitions (median, min)")
-    ap.add_argument(
-        "--no-effects", action="store_true", help="skip the rigid runs with effects on"
-    )
+    ap.add_argument("--no-effects", action="store_true", help="skip the rigid runs with effects on")
     args = ap.parse_args()
     field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
     rigid = FiberSettings()

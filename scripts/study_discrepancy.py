@@ -312,8 +312,13 @@ def targets(rows: list[dict], predicted: dict[int, dict]) -> str:
         tot = sum(stages.values()) or 1
         top = sorted(stages.items(), key=lambda x: -x[1])
         # runs of the workflow's copy maker (what-to-measure-next has its own grid)
-        used = sum(v for r in rows if r["n"] == n
-                   for k, v in r["runs_by_stage"].items() if not k.startswith("next"))
+        used = sum(
+            v
+            for r in rows
+            if r["n"] == n
+            for k, v in r["runs_by_stage"].items()
+            if not k.startswith("next")
+        )
         old = sum(r.get("runs_without_reuse") or 0 for r in rows if r["n"] == n)
         if old:
             lines.append(f"- per-fiber reuse of runs at N = {n}: {used} runs where a cache by "

@@ -60,9 +60,7 @@ LIBRARY: dict[str, Candidate] = {
         # 1e3 x kT: rotational diffusion of ~25° over a ~1 s pass, already extreme
         Candidate("brownian", 0.0, 3.0e3, (1.0e3,), 1.0, "multiplier on kT at 295 K", True),
         Candidate("inlet_speed", -0.3, 0.3, (-0.15, 0.15), 0.1, "relative speed error"),
-        Candidate(
-            "start_noise", 0.0, 5.0, (3.0,), 2.0, "start noise / reference noise", True
-        ),
+        Candidate("start_noise", 0.0, 5.0, (3.0,), 2.0, "start noise / reference noise", True),
         Candidate("pillar_scale", -0.2, 0.2, (-0.1, 0.1), 0.08, "relative pillar size error"),
     )
 }

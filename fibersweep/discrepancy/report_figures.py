@@ -196,7 +196,12 @@ def next_figure(nx: Discrimination, measured: np.ndarray, path: Path) -> Path:
 
     im = ax.pcolormesh(edges(th), edges(ys), D.T, cmap="viridis", vmin=0)
     ax.scatter(
-        measured[:, 0], measured[:, 1], s=8, color="w", edgecolors="0.2", linewidths=0.4,
+        measured[:, 0],
+        measured[:, 1],
+        s=8,
+        color="w",
+        edgecolors="0.2",
+        linewidths=0.4,
         label="measured starts",
     )  # dark edge: visible on the map and in the legend
     bt = np.array([[b.theta0, b.y0] for b in nx.best])

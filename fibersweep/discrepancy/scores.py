@@ -44,6 +44,7 @@ __all__ = [
     "transform",
 ]
 
+
 def _observable(name: str) -> Observable:
     try:
         return OBSERVABLES[name]

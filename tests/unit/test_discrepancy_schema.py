@@ -133,8 +133,13 @@ def test_trajectory_angles_in_radians_are_caught(tmp_path):
     t = np.linspace(0.0, 1.0, 5)
     rows = [
         # across the default pillar (x 1156.7 .. 1243.3 µm) in the channel frame
-        {"fiber_id": str(i), "t": tk, "x": 1000.0 + 500.0 * tk, "y": 400.0,
-         "theta": df["theta0"][i]}
+        {
+            "fiber_id": str(i),
+            "t": tk,
+            "x": 1000.0 + 500.0 * tk,
+            "y": 400.0,
+            "theta": df["theta0"][i],
+        }
         for i in range(len(df))
         for tk in t
     ]

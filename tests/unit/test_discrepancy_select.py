@@ -176,8 +176,7 @@ class _PairModel:
         return pd.DataFrame(
             {
                 "delta": self.x[idx] + 0.1 * f + 0.01 * self.z[0, k, idx],
-                "t_pass": self.t[idx] * (1 + 0.04 * f) / (1 + s)
-                * np.exp(0.01 * self.z[1, k, idx]),
+                "t_pass": self.t[idx] * (1 + 0.04 * f) / (1 + s) * np.exp(0.01 * self.z[1, k, idx]),
             }
         )
 
