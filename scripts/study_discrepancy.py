@@ -70,6 +70,13 @@ SCENARIOS = {
         None,
         {"named:pillar_hydro", "ambiguous:inlet_speed+pillar_hydro"},
     ),
+    # near the power analysis's detection limit (0.1-0.6 over sets of 40 simulated
+    # starts): a calibration point of the predicted detection probability
+    "pillar_hydro=0.15": (
+        {"pillar_hydro": 0.15},
+        None,
+        {"named:pillar_hydro", "ambiguous:inlet_speed+pillar_hydro"},
+    ),
     # k = 1, the Faxén estimate itself: contact dwell +14-36 %
     "pillar_hydro=1": ({"pillar_hydro": 1.0}, None, {"named:pillar_hydro"}),
     "off_midplane=0.15": (
@@ -240,6 +247,23 @@ def predicted_detection(field, n: int, seed: int, workers: int, n_sim: int) -> d
     return out
 
 
+def predicted_over_seeds(field, n: int, seeds: list[int], workers: int, n_sim: int) -> dict:
+    """:func:`predicted_detection` for several power seeds (other simulated starts).
+
+    The prediction scales z-scores measured on ``n_sim`` fibers, so it carries
+    their sampling noise; its spread over seeds shows how much. Each scenario's
+    value is the mean over the seeds, ``per_seed`` holds them all.
+    """
+    each = [predicted_detection(field, n, s, workers, n_sim) for s in seeds]
+    out = dict(each[0])
+    names = [k for k, v in out.items() if k in SCENARIOS and v is not None]
+    for name in names:
+        out[name] = float(np.mean([e[name] for e in each]))
+    out["per_seed"] = {name: [e[name] for e in each] for name in names}
+    out["limits_per_seed"] = [e["limits"] for e in each]
+    return out
+
+
 def markdown(rows: list[dict]) -> str:
     lines = [
         "| scenario | seed | N | verdict | correct | fitted (truth) | significant before "
@@ -300,8 +324,11 @@ def targets(rows: list[dict], predicted: dict[int, dict]) -> str:
             if pred.get(name) is None:
                 continue
             obs = [r["detected"] for r in rows if r["scenario"] == name and r["n"] == n]
-            lines.append(f"  - {name}: predicted {pred[name]:.2f}, observed {np.mean(obs):.2f} "
-                         f"({sum(obs)} of {len(obs)})")  # fmt: skip
+            each = pred.get("per_seed", {}).get(name)
+            spread = (f" (mean of {len(each)} power seeds, {min(each):.2f}–{max(each):.2f})"
+                      if each and len(each) > 1 else "")  # fmt: skip
+            lines.append(f"  - {name}: predicted {pred[name]:.2f}{spread}, observed "
+                         f"{np.mean(obs):.2f} ({sum(obs)} of {len(obs)})")  # fmt: skip
     for n in sorted({r["n"] for r in rows}):
         # where the runs go (the profile that guides the speed work), summed over the rows
         stages: dict[str, int] = {}
@@ -369,6 +396,12 @@ def main() -> None:
     ap.add_argument("--predict-fibers", type=int, default=None,
                     help="fibers of the predicted-detection power analysis per N "
                          "(default: --power-fibers; 0: skip it)")  # fmt: skip
+    ap.add_argument("--power-seeds", type=int, nargs="+", default=[1],
+                    help="seeds of the predicted-detection power analysis (its simulated "
+                         "starts); several give the prediction's spread")  # fmt: skip
+    ap.add_argument("--predict-only", action="store_true",
+                    help="only the predicted-detection power analysis, no scenarios "
+                         "(tabulate it after the scenario files)")  # fmt: skip
     ap.add_argument("--cache", default=".fibersweep-cache/tests")
     ap.add_argument("--out", default="results/study_discrepancy")
     ap.add_argument("--tabulate", nargs="+", metavar="STUDY_JSON", default=None,
@@ -396,8 +429,10 @@ def main() -> None:
     for n in args.n:
         n_pred = args.power_fibers if args.predict_fibers is None else args.predict_fibers
         if n_pred:
-            predicted[n] = predicted_detection(field, n, 1, args.workers, n_pred)
+            predicted[n] = predicted_over_seeds(field, n, args.power_seeds, args.workers, n_pred)
             log.warning("power at N = %d: %s", n, predicted[n]["limits"])
+        if args.predict_only:
+            continue
         # seed-major: a study cut short still has every scenario at the first seeds
         seeds_all = list(dict.fromkeys(args.seeds + (args.none_seeds or [])))
         for seed in seeds_all:
@@ -417,6 +452,14 @@ def main() -> None:
                 (out / "study.md").write_text(markdown(rows) + "\n" + targets(rows, predicted))
                 log.warning("%s N=%d seed %d: %s (%s)", name, n, seed, row["verdict"],
                             row["fitted"])  # fmt: skip
+    if args.predict_only:
+        doc = {"rows": [], "predicted": predicted, "settings": kw}
+        (out / "study.json").write_text(json.dumps(doc, indent=2, default=float))
+        for n, pred in predicted.items():
+            for name, each in pred["per_seed"].items():
+                print(f"N = {n} {name}: predicted detection {pred[name]:.2f} "
+                      f"(power seeds: {', '.join(f'{p:.2f}' for p in each)})")  # fmt: skip
+        return
     text = markdown(rows) + "\n" + targets(rows, predicted) + "\n"
     (out / "study.md").write_text(text)
     print(text)

@@ -39,6 +39,7 @@ __all__ = [
     "assess_gap",
     "describe",
     "feature_vector",
+    "feature_one_sided",
     "weighted_loss",
     "combined_excess",
 ]
@@ -232,6 +233,17 @@ def feature_vector(gap: GapResult) -> np.ndarray:
         parts.append(np.array(g.bias_z) if g else np.zeros(OBSERVABLES[name].width))
     v = np.concatenate(parts)
     return np.where(np.isfinite(v), v, 0.0)
+
+
+def feature_one_sided(gap: GapResult) -> np.ndarray:
+    """Which entries of :func:`feature_vector` are one-sided tests, same layout.
+
+    The score tests reject only when the data score worse than the model's
+    copies (one-sided); the signed residual components reject either way.
+    """
+    names = scored(tracks=has_tracks(gap.gaps))
+    widths = [OBSERVABLES[n].width for n in names]
+    return np.concatenate([np.ones(len(names), bool), np.zeros(sum(widths), bool)])
 
 
 def observable_weights(values: Mapping[str, np.ndarray]) -> dict[str, float]:

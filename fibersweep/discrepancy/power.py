@@ -5,15 +5,19 @@ the measurement model, every library effect is switched on at its probe value
 ``m_p`` and at ``m_p / 2``. Copy k of the fibers with the effect on plays the
 measurement; the baseline copies j != k (common random numbers) are the model.
 The gap tests of :func:`gap.assess_gap` give a z-score per test of the family
-(score per observable, signed residual per component); averaged over the
-copies k, this is the expected z-vector at that magnitude and number of fibers.
+(score per observable, one-sided; signed residual per component, two-sided);
+averaged over the copies k, this is the expected z-vector at that magnitude
+and number of fibers.
 
 Scaling (the approximation this rests on, checked by the study): the z of a
 test grows as ``sqrt(N)`` with the number of fibers, and as ``m ** gamma`` with
 the magnitude, gamma read off the two probes (1 for a shift, 2 for a spread
 whose variance grows as m², clipped to [0.5, 3]). The family detects when
-any test passes its Bonferroni threshold (Holm is at least as powerful):
-``P(detect) = 1 - prod_j (1 - Phi(|z_j| - z_crit))``. The smallest magnitude
+any test passes its Bonferroni threshold at alpha / m (Holm is at least as
+powerful): ``P(detect) = 1 - prod_j (1 - P_j)``, with ``P_j = Phi(z_j - z1)``
+for a one-sided score test (z1 = Phi^-1(1 - alpha/m); a score better than the
+model's never rejects) and ``Phi(|z_j| - z_crit)`` for a two-sided residual
+(z_crit = Phi^-1(1 - alpha/2m)). The smallest magnitude
 with ``P(detect) >= power`` is the detection limit; the fibers needed for a
 magnitude m follow from the same formula. Detection is the first gate only:
 naming needs the held-out improvement too (half of the fibers fit, the other
@@ -32,14 +36,19 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
 from scipy.stats import norm
 
 from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.gap import assess_gap, feature_vector, value_matrices
+from fibersweep.discrepancy.gap import (
+    assess_gap,
+    feature_one_sided,
+    feature_vector,
+    value_matrices,
+)
 from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.scores import transform
@@ -74,6 +83,8 @@ class EffectPower:
     limit : float or None
         Smallest magnitude (same sign as the probe) detected with the target
         power at ``n`` fibers; None when not within the effect's range.
+    one_sided : tuple of bool or None
+        Which tests of ``z`` are one-sided (the score tests); None: all two-sided.
     """
 
     name: str
@@ -81,13 +92,14 @@ class EffectPower:
     z: tuple[float, ...]
     gamma: float
     limit: float | None
+    one_sided: tuple[bool, ...] | None = None
 
     def detect(self, m: float, n_fibers: int, n_sim: int, z_crit: float) -> float:
         """Detection probability at magnitude m (same sign as the probe) and N fibers."""
         if m == 0.0 or np.sign(m) != np.sign(self.probe):
             return 0.0
         scale = math.sqrt(n_fibers / n_sim) * (abs(m) / abs(self.probe)) ** self.gamma
-        return detect_probability(np.asarray(self.z) * scale, z_crit)
+        return detect_probability(np.asarray(self.z) * scale, z_crit, self.one_sided)
 
     def fibers_needed(
         self, m: float, n_sim: int, z_crit: float, power: float, most: int = 100_000
@@ -150,15 +162,35 @@ class PowerResult:
         return None if e is None else e.fibers_needed(m, self.n_sim, self.z_crit, self.power)
 
 
-def detect_probability(z: np.ndarray, z_crit: float) -> float:
+def detect_probability(
+    z: np.ndarray, z_crit: float, one_sided: Sequence[bool] | np.ndarray | None = None
+) -> float:
     """P(at least one test of the family rejects) for expected z-scores ``z``.
 
-    Each test rejects with probability Phi(|z| - z_crit) (normal approximation,
-    the far tail ignored); tests treated as independent.
+    Parameters
+    ----------
+    z : ndarray, shape (m,)
+        Expected z-score of each test.
+    z_crit : float
+        Two-sided Bonferroni threshold Phi^-1(1 - alpha / 2m).
+    one_sided : sequence of bool, shape (m,), optional
+        Tests that reject only for large positive z (default: none). Their
+        threshold is Phi^-1(1 - alpha / m), at the same per-test level.
+
+    A two-sided test rejects with probability Phi(|z| - z_crit), a one-sided
+    one with Phi(z - z1) (normal approximation, the far tail ignored); tests
+    treated as independent.
     """
-    z = np.abs(np.asarray(z, dtype=np.float64))
-    z = z[np.isfinite(z)]
-    miss = np.prod(1.0 - norm.cdf(z - z_crit)) if len(z) else 1.0
+    z = np.asarray(z, dtype=np.float64)
+    side = np.zeros(len(z), bool) if one_sided is None else np.asarray(one_sided, bool)
+    if side.shape != z.shape:
+        raise ValueError(f"one_sided has shape {side.shape}, z has {z.shape}")
+    ok = np.isfinite(z)
+    z, side = z[ok], side[ok]
+    level = 2.0 * norm.sf(z_crit)  # alpha / m, the per-test level
+    z1 = float(norm.isf(level))
+    shift = np.where(side, z - z1, np.abs(z) - z_crit)
+    miss = np.prod(1.0 - norm.cdf(shift)) if len(z) else 1.0
     return float(1.0 - miss)
 
 
@@ -246,8 +278,9 @@ def analyse_power(
     used0 = maker.sim.used
     base = maker.copies(range(copies), None, rows, desc="power baseline")
     ens = math.sqrt((1 + 1 / (copies - 1)) / (1 + 1 / workflow_copies))
-    m_tests = len(feature_vector(assess_gap(value_matrices(base[0], base[1:], observables), rng,
-                                            n_perm=99, n_boot=10)))  # fmt: skip
+    g0 = assess_gap(value_matrices(base[0], base[1:], observables), rng, n_perm=99, n_boot=10)
+    one_sided = tuple(bool(x) for x in feature_one_sided(g0))
+    m_tests = len(one_sided)
     z_crit = float(norm.ppf(1 - alpha / (2 * m_tests)))
     base_std = standardised_values(base, observables)
     spread = np.nanstd(np.stack(base_std), axis=(0, 1))
@@ -262,9 +295,10 @@ def analyse_power(
             j = int(np.argmax(np.abs(z_full)))
             a, b = abs(z_full[j]), abs(z_half[j])
             gamma = float(np.clip(math.log2(a / b), 0.5, 3.0)) if a > 3 and b > 0.5 else 1.0
-            e = EffectPower(cand.name, float(mp), tuple(float(x) for x in z_full), gamma, None)
+            zt = tuple(float(x) for x in z_full)
+            e = EffectPower(cand.name, float(mp), zt, gamma, None, one_sided)
             lim = _limit(e, cand, n, n_sim, z_crit, power)
-            effects.append(EffectPower(e.name, e.probe, e.z, e.gamma, lim))
+            effects.append(replace(e, limit=lim))
             diff = np.stack(standardised_values(eff, observables)) - np.stack(base_std)
             cnt = np.isfinite(diff).sum(axis=0)
             d = np.where(cnt > 0, np.nansum(diff, axis=0) / np.maximum(cnt, 1), np.nan)

@@ -21,6 +21,22 @@ def test_detect_probability_of_one_test_is_the_normal_tail():
     assert detect_probability(np.array([2.2, -2.2]), zc) == pytest.approx(1 - (1 - p) ** 2)
 
 
+def test_one_sided_score_tests_use_their_own_threshold_and_sign():
+    # 10 tests at alpha = 0.05: two-sided threshold at alpha/20, one-sided at alpha/10
+    zc = norm.isf(0.05 / 20)
+    z1 = norm.isf(0.05 / 10)
+    assert detect_probability(np.array([z1]), zc, [True]) == pytest.approx(0.5, abs=1e-12)
+    # a score better than the model's (negative z) cannot reject a one-sided test
+    assert detect_probability(np.array([-6.0]), zc, [True]) < 1e-12
+    assert detect_probability(np.array([-6.0]), zc, [False]) > 0.99
+    # mixed family: independent tests multiply their miss probabilities (tolerance 1e-12)
+    z = np.array([2.5, -2.5])
+    want = 1 - (1 - norm.cdf(2.5 - z1)) * (1 - norm.cdf(2.5 - zc))
+    assert detect_probability(z, zc, [True, False]) == pytest.approx(want, abs=1e-12)
+    with pytest.raises(ValueError, match="shape"):
+        detect_probability(z, zc, [True])
+
+
 def test_fibers_needed_follows_the_square_root_law():
     # one test, z = 2 at 50 fibers: N solves 2 sqrt(N/50) = zc + z_0.8 (analytic)
     zc = 2.8
