@@ -213,6 +213,22 @@ def assess_gap(
     return GapResult(gaps=gaps, alpha=alpha, per_fiber=per_fiber)
 
 
+def _feature_parts(gap: GapResult) -> list[tuple[np.ndarray, bool]]:
+    """The blocks of :func:`feature_vector`, each with whether its tests are one-sided."""
+    # the track observables' components only when the gap has them (tracks measured):
+    # without tracks the vector is the same as before they existed
+    names = scored(tracks=has_tracks(gap.gaps))
+    parts = []
+    for name in names:
+        g = gap.gaps.get(name)
+        parts.append((np.array([g.test.z if g else 0.0]), True))
+    for name in names:
+        g = gap.gaps.get(name)
+        bias = np.array(g.bias_z) if g else np.zeros(OBSERVABLES[name].width)
+        parts.append((bias, False))
+    return parts
+
+
 def feature_vector(gap: GapResult) -> np.ndarray:
     """Signature of a gap: excess z per observable, then signed bias z per component.
 
@@ -221,17 +237,7 @@ def feature_vector(gap: GapResult) -> np.ndarray:
     them); observables not present give zeros, so vectors from data sets with
     the same kind of data (with or without tracks) are comparable.
     """
-    parts = []
-    # the track observables' components only when the gap has them (tracks measured):
-    # without tracks the vector is the same as before they existed
-    names = scored(tracks=has_tracks(gap.gaps))
-    for name in names:
-        g = gap.gaps.get(name)
-        parts.append(np.array([g.test.z if g else 0.0]))
-    for name in names:
-        g = gap.gaps.get(name)
-        parts.append(np.array(g.bias_z) if g else np.zeros(OBSERVABLES[name].width))
-    v = np.concatenate(parts)
+    v = np.concatenate([x for x, _ in _feature_parts(gap)])
     return np.where(np.isfinite(v), v, 0.0)
 
 
@@ -241,9 +247,7 @@ def feature_one_sided(gap: GapResult) -> np.ndarray:
     The score tests reject only when the data score worse than the model's
     copies (one-sided); the signed residual components reject either way.
     """
-    names = scored(tracks=has_tracks(gap.gaps))
-    widths = [OBSERVABLES[n].width for n in names]
-    return np.concatenate([np.ones(len(names), bool), np.zeros(sum(widths), bool)])
+    return np.concatenate([np.full(len(x), one) for x, one in _feature_parts(gap)])
 
 
 def observable_weights(values: Mapping[str, np.ndarray]) -> dict[str, float]:

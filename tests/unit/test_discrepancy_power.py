@@ -68,3 +68,19 @@ def test_start_grid_does_not_vary_an_axis_the_data_do_not_vary():
 def test_component_names_follow_the_registry():
     names = component_names(("class", "delta", "t_pass"))
     assert names[0].startswith("class=") and names[-2:] == ["delta", "t_pass"]
+
+
+def test_one_sided_mask_has_the_feature_vector_layout():
+    # score tests (one per scored observable) are one-sided, residual components
+    # two-sided; both functions must agree entry by entry (exact)
+    from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, feature_vector
+    from fibersweep.discrepancy.observables import OBSERVABLES, scored
+
+    rng = np.random.default_rng(4)
+    values = {"t_pass": rng.standard_normal((30, 5)), "delta": rng.standard_normal((30, 5))}
+    g = assess_gap(values, np.random.default_rng(5), n_perm=99, n_boot=10)
+    mask = feature_one_sided(g)
+    names = scored(tracks=False)
+    assert mask.shape == feature_vector(g).shape
+    assert mask[: len(names)].all() and not mask[len(names) :].any()
+    assert len(mask) == len(names) + sum(OBSERVABLES[n].width for n in names)
