@@ -114,7 +114,9 @@ def chronophotograph(
             rf"$L/l_{{obs}}$ = {st.length:g}  →  {cls}"
             + (rf",  $\delta$ = {result.delta:.3f}" if np.isfinite(result.delta) else "")
         )
-        cb = fig.colorbar(lc, ax=ax, shrink=0.75, pad=0.01, aspect=15)
+        # the bar in the axes' own coordinates: exactly as tall as the (equal-aspect) axes
+        cax = ax.inset_axes([1.015, 0.0, 0.018, 1.0])
+        cb = fig.colorbar(lc, cax=cax)
         cb.set_label(r"$t$ [s]")
         ax.legend(loc="upper left", handlelength=1.5, borderaxespad=0.2)
         return save_figure(fig, path)
