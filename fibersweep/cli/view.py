@@ -143,7 +143,9 @@ def plot_tracks(
     where: Where = None,
     out: Annotated[
         Path | None,
-        typer.Option("--output", "-o", help="Figure file.", show_default="RESULTS/figures/tracks.png"),
+        typer.Option(
+            "--output", "-o", help="Figure file.", show_default="RESULTS/figures/tracks.png"
+        ),
     ] = None,
     verbose: Verbose = False,
 ) -> None:
@@ -171,7 +173,9 @@ def animate(
     out: Annotated[
         Path | None,
         typer.Option(
-            "--output", "-o", help=".gif (Pillow, always there) or .mp4 (needs ffmpeg).",
+            "--output",
+            "-o",
+            help=".gif (Pillow, always there) or .mp4 (needs ffmpeg).",
             show_default="RESULTS/figures/run-ID.gif",
         ),
     ] = None,

@@ -170,6 +170,19 @@ const C = D.columns, R = D.rows, col = name => C.indexOf(name);
 const iClass = col('class'), iStatus = col('status'), iId = col('id');
 const iSet = col('settings');
 const filters = {};   // column -> function(value) -> bool
+// runs that differ only in a setting (length, a swept key) would sit on one point:
+// set them side by side along θ0 by the first such setting that varies
+const dodgeKey = C.filter(c => c.includes('.')).concat(['length']).find(c =>
+  col(c) >= 0 && new Set(R.map(r => r[col(c)])).size > 1);
+const dodgeVals = dodgeKey ? [...new Set(R.map(r => r[col(dodgeKey)]))].sort(
+  (a, b) => (a < b ? -1 : a > b ? 1 : 0)) : [null];
+const thetas = [...new Set(R.map(r => r[col('theta0')]))].sort((a, b) => a - b);
+const dTheta = thetas.length > 1 ? Math.min(...thetas.slice(1).map((v, j) => v - thetas[j])) : 1;
+function xOf(r) {
+  if (!dodgeKey) return r[col('theta0')];
+  const j = dodgeVals.indexOf(r[col(dodgeKey)]), n = dodgeVals.length;
+  return r[col('theta0')] + (j - (n - 1) / 2) * 0.6 * dTheta / n;
+}
 
 function category(r) {
   if (r[iStatus] !== 'ok') return 'failed';
@@ -186,8 +199,8 @@ function buildFilters() {
     div.innerHTML = '<b>' + name + '</b>';
     if (vals.length && vals.every(v => typeof v === 'number') && uniq.length > 1) {
       const lo = Math.min(...vals), hi = Math.max(...vals);
-      div.innerHTML += '<input type="number" step="any" class="lo" placeholder="' + lo +
-        '"> to <input type="number" step="any" class="hi" placeholder="' + hi + '">';
+      div.innerHTML += '<input type="number" step="any" class="lo" placeholder="' + fmt(lo) +
+        '"> to <input type="number" step="any" class="hi" placeholder="' + fmt(hi) + '">';
       div.querySelectorAll('input').forEach(inp => inp.addEventListener('input', () => {
         const a = parseFloat(div.querySelector('.lo').value);
         const b = parseFloat(div.querySelector('.hi').value);
@@ -245,7 +258,7 @@ function draw() {
   const order = [...D.classes, 'unclassified', 'failed'].filter(c => c in groups);
   const traces = order.map(c => ({
     type: 'scatter', mode: 'markers', name: c + ' (' + groups[c].length + ')',
-    x: groups[c].map(k => R[k][col('theta0')]), y: groups[c].map(k => R[k][col('y0')]),
+    x: groups[c].map(k => xOf(R[k])), y: groups[c].map(k => R[k][col('y0')]),
     customdata: groups[c], text: groups[c].map(k => hover(R[k])),
     hovertemplate: '%{text}<extra></extra>',
     marker: {color: D.styles[c].color, symbol: D.styles[c].symbol, size: 9,
@@ -254,9 +267,11 @@ function draw() {
   const shapes = D.separatrix === null ? [] : [{type: 'line', xref: 'paper', x0: 0, x1: 1,
     y0: D.separatrix, y1: D.separatrix, line: {dash: 'dash', color: '#333', width: 1}}];
   Plotly.react('phase', traces, {
-    margin: {l: 55, r: 10, t: 30, b: 40}, hovermode: 'closest', shapes: shapes,
-    title: {text: 'phase diagram: hover a run, click it for its trajectory', font: {size: 13}},
-    xaxis: {title: {text: 'θ0 [deg]'}}, yaxis: {title: {text: 'y0/h_obs'}},
+    margin: {l: 55, r: 10, t: 45, b: 40}, hovermode: 'closest', shapes: shapes,
+    title: {text: 'phase diagram: hover a run, click it for its trajectory' + (dodgeKey ?
+      '<br><sub>runs of different ' + dodgeKey + ' side by side (' + dodgeVals.join(', ') +
+      ', left to right)</sub>' : ''), font: {size: 13}, x: 0.01, xanchor: 'left'},
+    xaxis: {title: {text: 'θ0 [deg]'}, tickvals: thetas}, yaxis: {title: {text: 'y0/h_obs'}},
     legend: {orientation: 'h', y: 1.0, yanchor: 'bottom', x: 1, xanchor: 'right'},
   }, {displaylogo: false, responsive: true});
   document.getElementById('count').textContent = shown.length + ' of ' + R.length + ' runs shown';
@@ -305,6 +320,7 @@ function showRun(k) {
 buildFilters();
 draw();
 Plotly.newPlot('traj', [], {title: {text: 'click a run to see its trajectory',
-  font: {size: 13}}, margin: {l: 55, r: 10, t: 30, b: 40}}, {displaylogo: false});
+  font: {size: 13}}, margin: {l: 55, r: 10, t: 30, b: 40}, xaxis: {visible: false},
+  yaxis: {visible: false}}, {displaylogo: false});
 document.getElementById('phase').on('plotly_click', ev => showRun(ev.points[0].customdata));
 """
