@@ -292,10 +292,14 @@ function showRun(k) {
     traces.push({type: 'scatter', mode: 'lines', name: 'centre of mass', x: tr.x, y: tr.y,
       line: {color: D.styles[category(r)] ? D.styles[category(r)].color : '#000', width: 2},
       text: tr.t.map(t => 't = ' + t + ' s'), hovertemplate: '%{text}<extra></extra>'});
-    const n = tr.t.length, m = Math.min(16, n), t0 = tr.t[0], t1 = tr.t[n - 1];
+    // the fiber drawn at regular samples while it is near the pillar (within the window)
+    const px = out.map(p => p[0]), lo = Math.min(...px) - 2, hi = Math.max(...px) + 2;
+    let near = tr.x.map((x, i) => i).filter(i => tr.x[i] > lo && tr.x[i] < hi);
+    if (near.length < 2) near = tr.x.map((x, i) => i);
+    const n = near.length, m = Math.min(16, n), t0 = tr.t[0], t1 = tr.t[tr.t.length - 1];
     const fx = [], fy = [], fc = [];
     for (let q = 0; q < m; q++) {
-      const i = Math.round(q * (n - 1) / Math.max(m - 1, 1));
+      const i = near[Math.round(q * (n - 1) / Math.max(m - 1, 1))];
       fx.push(tr.tail_x[i], tr.head_x[i], null); fy.push(tr.tail_y[i], tr.head_y[i], null);
       fc.push(tr.t[i]);
     }
@@ -308,11 +312,14 @@ function showRun(k) {
   } else {
     title += ' (no stored trajectory)';
   }
+  const px = out.map(p => p[0]);
+  const range = px.length ? [Math.min(...px) - 2.5, Math.max(...px) + 2.5] : undefined;
   Plotly.react('traj', traces, {
-    margin: {l: 55, r: 10, t: 30, b: 40}, title: {text: title, font: {size: 13}},
-    xaxis: {title: {text: 'x/h_obs (from the pillar centroid)'}},
+    margin: {l: 55, r: 10, t: 30, b: 40},
+    title: {text: title, font: {size: 13}, x: 0.01, xanchor: 'left'},
+    xaxis: {title: {text: 'x/h_obs (from the pillar centroid)'}, range: range},
     yaxis: {title: {text: 'y/h_obs (from the base)'}, scaleanchor: 'x'},
-    legend: {orientation: 'h', y: 1.0, yanchor: 'bottom'},
+    legend: {x: 0.01, y: 0.99, bgcolor: 'rgba(255,255,255,0.7)'},
   }, {displaylogo: false, responsive: true});
   document.getElementById('traj').dataset.run = id;
 }
