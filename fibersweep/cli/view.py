@@ -168,8 +168,10 @@ def plot_tracks(
 def animate(
     results: Results,
     run_id: Annotated[
-        str, typer.Argument(help="Id of the run (or a unique start of it).", show_default=False)
-    ],
+        str | None,
+        typer.Argument(help="Id of the run (or a unique start of it).", show_default=False),
+    ] = None,
+    where: Where = None,
     out: Annotated[
         Path | None,
         typer.Option(
@@ -183,19 +185,28 @@ def animate(
     fps: Annotated[int, typer.Option("--fps", min=1, help="Frames per second.")] = 20,
     verbose: Verbose = False,
 ) -> None:
-    """Animate one run of a sweep: the fiber moving past the pillar."""
+    """Animate one run of a sweep: the fiber moving past the pillar.
+
+    The run is RUN_ID, or the first run --where selects. A .gif is written with
+    matplotlib's PillowWriter (Pillow comes with matplotlib); an .mp4 needs ffmpeg.
+    """
     _setup_logging(verbose)
     with _errors():
         from fibersweep.plots.style import paper_style
         from fibersweep.plots.tracks import animate_run
         from fibersweep.sweep.store import read_trajectories
 
-        runs = _runs(results)
-        hit = runs[runs["id"].astype(str).str.startswith(run_id)]
-        if len(hit) != 1:
-            raise InputError(
-                f"run {run_id!r}: " + ("no such run" if hit.empty else f"{len(hit)} runs match")
-            )
+        if (run_id is None) == (where is None):
+            raise InputError("name the run: a RUN_ID or --where (one of them)")
+        runs = _runs(results, where)
+        if run_id is not None:
+            runs = runs[runs["id"].astype(str).str.startswith(run_id)]
+            if len(runs) != 1:
+                what = "no such run" if runs.empty else f"{len(runs)} runs match"
+                raise InputError(f"run {run_id!r}: {what}")
+        elif len(runs) > 1:
+            typer.echo(f"{len(runs)} runs match --where; animating the first, {runs['id'].iloc[0]}")
+        hit = runs.iloc[:1]
         run = hit.iloc[0]
         samples = read_trajectories(results, [run["id"]])
         geometry = _geometries(results, hit)[str(run["settings"])]

@@ -117,6 +117,11 @@ def class_fractions(runs: pd.DataFrame, key: str, level: float = 0.95) -> pd.Dat
     return pd.concat(rows, ignore_index=True)
 
 
+def _axis_label(key: str) -> str:
+    """Axis label of ``key``: the start coordinates as the phase diagrams write them."""
+    return {"theta0": r"$\theta_0$ [deg]", "y0": r"$y_0/h_{obs}$"}.get(key) or _label(key)
+
+
 def _positions(values: pd.Series) -> tuple[np.ndarray, list[str] | None]:
     """Horizontal positions of ``values``: themselves if numeric, else 0, 1, 2... with labels."""
     if pd.api.types.is_numeric_dtype(values) and not pd.api.types.is_bool_dtype(values):
@@ -152,8 +157,7 @@ def fractions_figure(runs: pd.DataFrame, key: str, level: float = 0.95) -> Figur
     elif values.size <= 9:
         ax.set_xticks(values)
     ax.set_ylim(-0.03, 1.03)
-    ax.set_xlabel(_label(key) if key not in ("theta0", "y0") else {"theta0": r"$\theta_0$ [deg]",
-                  "y0": r"$y_0/h_{obs}$"}[key])  # fmt: skip
+    ax.set_xlabel(_axis_label(key))
     ax.set_ylabel("fraction of runs")
     n = fr.drop_duplicates(key)
     counts = f"{int(n['n'].min())}" if n["n"].nunique() == 1 else (
@@ -233,7 +237,7 @@ def delta_by_figure(runs: pd.DataFrame, key: str = "length", seed: int = 0) -> F
         ax.set_xticks(range(len(labels)), labels)
     elif x_sp.size <= 9:
         ax.set_xticks(x_sp)
-    ax.set_xlabel(_label(key))
+    ax.set_xlabel(_axis_label(key))
     ax.set_ylabel(r"$\delta = (y_f - y_0)/h_{obs}$")
     n_trap = int((runs["status"].eq("ok") & runs["class"].eq("Trapping")).sum())
     notes = [f"{len(d)} runs with δ"] + ([f"{n_trap} trapped (no δ)"] if n_trap else [])

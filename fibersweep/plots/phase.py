@@ -362,8 +362,9 @@ def phase_figure(
             ax.set_title(", ".join(title), fontsize=7 if len(title) > 1 else None)
         elif n_panels == 1:
             ax.set_title(_fixed_title(runs, col, row))
-    if n_panels > 1 and (fixed := _fixed_title(runs, col, row)):
-        fig.suptitle(fixed, fontsize="medium")
+    # settings fixed over a faceted figure head its legend (a suptitle would collide with it)
+    fixed = _fixed_title(runs, col, row) if n_panels > 1 else ""
+    legend_kw = {"title": fixed, "title_fontsize": "medium"} if fixed else {}
     thetas = np.unique(runs["theta0"].to_numpy(dtype=float))
     if 1 < thetas.size <= 9:  # few start angles: a tick at each
         for ax, _, _ in cells:
@@ -384,7 +385,7 @@ def phase_figure(
         if len(seps) > 1:
             hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label="separatrix (per field)"))
         fig.legend(handles=hs, loc="outside upper center", ncol=_legend_columns(hs, n_panels),
-                   frameon=False)  # fmt: skip
+                   frameon=False, **legend_kw)  # fmt: skip
     else:
         visible = [a for a in axes.flat if a.get_visible()]
         cb = fig.colorbar(sc, ax=visible, shrink=0.9, extend="both")
@@ -402,7 +403,9 @@ def phase_figure(
             hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label=_sep_label(legend_sep)))
         if hs:
             fig.legend(handles=hs, loc="outside upper center", ncol=_legend_columns(hs, n_panels),
-                   frameon=False)  # fmt: skip
+                   frameon=False, **legend_kw)  # fmt: skip
+        elif fixed:
+            fig.suptitle(fixed, fontsize="medium")
     return fig
 
 

@@ -108,7 +108,8 @@ def test_facets_keep_the_length_in_a_title():
     runs = pd.concat([runs.assign(**{"fiber.effects.friction": f}) for f in (0.0, 0.3)])
     with paper_style():
         fig = phase.phase_figure(runs, None, "class", col="fiber.effects.friction")
-    assert "L/l" in fig.get_suptitle() and "= 1" in fig.get_suptitle()
+    title = fig.legends[0].get_title().get_text()
+    assert "L/l" in title and "= 1" in title
     assert all("friction" in a.get_title() for a in fig.axes if a.get_visible())
 
 
