@@ -28,6 +28,9 @@ Where = Annotated[
 ]
 Format = choices("Format", FORMATS)
 
+#: Most trajectory points written into an explorer page (about 7 numbers each).
+MAX_PAGE_POINTS = 1_500_000
+
 
 def _runs(results: Path, where: str | None = None):
     """The runs table of ``results`` (only those ``where`` selects); InputError if none."""
@@ -99,10 +102,7 @@ def plot_fractions(
             )
         table = class_fractions(runs, by, level)
     for r in table.itertuples(index=False):
-        typer.echo(
-            f"{by} = {getattr(r, '_0', r[0])}: {r[1]} {r.k}/{r.n} = {r.fraction:.2f} "
-            f"[{r.lo:.2f}, {r.hi:.2f}]"
-        )
+        typer.echo(f"{by} = {r[0]}: {r[1]} {r.k}/{r.n} = {r.fraction:.2f} [{r.lo:.2f}, {r.hi:.2f}]")
     typer.echo(f"wrote {path}")
 
 
@@ -243,6 +243,10 @@ def explore(
 
         runs = _runs(results)
         traj = read_trajectories(results)
+        n_tracks = max(1, traj["id"].nunique()) if len(traj) else 1
+        if samples * n_tracks > MAX_PAGE_POINTS:  # keep the page a size a browser opens
+            samples = max(10, MAX_PAGE_POINTS // n_tracks)
+            typer.echo(f"{n_tracks} trajectories: keeping {samples} points of each (--samples)")
         sep = (read_manifest(results) or {}).get("separatrix")
         html = explorer_html(
             runs, traj, _geometries(results, runs), title=str(results), separatrix=sep,

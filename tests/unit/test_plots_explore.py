@@ -171,3 +171,20 @@ def test_explorer_in_a_headless_browser(page, tmp_path):
         wait.until(lambda d: d.find_element(By.ID, "count").text != want)
     finally:
         driver.quit()
+
+
+def test_page_data_survives_awkward_values():
+    import pandas as pd
+
+    from fibersweep.plots.explore import explorer_html
+    from fibersweep.units import Geometry
+
+    runs = pd.DataFrame({"id": ["a"], "theta0": [0.0], "y0": [0.3], "length": [1.0],
+                         "class": [None], "status": ["failed"], "reason": ["</script><b>x"],
+                         "delta": [float("nan")], "settings": ["s"]})  # fmt: skip
+    html = explorer_html(runs, pd.DataFrame(columns=["id", "sample"]), {"s": Geometry()})
+    assert html.count("</script>") == html.count("<script")  # the reason cannot close a script
+    data = _data(html)
+    row = dict(zip(data["columns"], data["rows"][0], strict=True))
+    assert row["delta"] is None and row["class"] is None and row["reason"] == "</script><b>x"
+    assert data["tracks"] == {} and len(data["outlines"]["s"]) == 3  # the triangle
