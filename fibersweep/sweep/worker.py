@@ -217,18 +217,13 @@ def _warm(field: Any, fiber: Any) -> None:
 
 
 def failed_row(task: SweepTask, reason: str, attempts: int = 1) -> dict[str, Any]:
-    """The row recorded for a run that did not finish."""
+    """The row recorded for a run that did not finish: the run record's defaults."""
+    from fibersweep.fiber.result import FiberStart, RunResult
+
+    start = FiberStart(theta0=task.theta0, y0=task.y0, length=task.length)
     return {
         "id": task.key,
-        "theta0": task.theta0,
-        "y0": task.y0,
-        "length": task.length,
-        "class": "",
-        "status": "failed",
-        "reason": reason,
-        "contact": False,
-        "n_steps": 0,
-        "wall_time": 0.0,
+        **RunResult(start=start, status="failed", reason=reason).row(),
         "worker": "",
         "attempts": attempts,
         "finished_at": time.time(),
