@@ -61,8 +61,9 @@ def diff_tables(a: pd.DataFrame, b: pd.DataFrame, key: list[str], what: str) -> 
         if not same.all():
             bad += 1
             k = int(np.flatnonzero(~same)[0])
+            where, va, vb = a.loc[k, key].tolist(), a.loc[k, col], b.loc[k, col]
             print(f"{what}: column {col!r} differs in {int((~same).sum())} of {len(a)} rows, "
-                  f"e.g. {a.loc[k, key].tolist()}: {a.loc[k, col]!r} vs {b.loc[k, col]!r}")  # fmt: skip
+                  f"e.g. {where}: {va!r} vs {vb!r}")  # fmt: skip
     print(f"{what}: {len(a)} rows, {len(a.columns)} columns: "
           f"{'identical' if not bad else f'{bad} columns differ'}")  # fmt: skip
     return bad

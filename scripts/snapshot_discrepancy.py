@@ -95,8 +95,9 @@ def main() -> None:
     (args.out / "timing.json").write_text(
         json.dumps({"synth_s": t_synth, "discrepancy_s": t_disc, "batches": len(batches)})
     )
+    kind, named = verdict["kind"], verdict["effects"]
     print(f"{len(batches)} batches, {res.simulations} runs; synth {t_synth:.1f} s, "
-          f"discrepancy {t_disc:.1f} s; verdict {verdict['kind']} {verdict['effects']}")  # fmt: skip
+          f"discrepancy {t_disc:.1f} s; verdict {kind} {named}")  # fmt: skip
 
 
 if __name__ == "__main__":
