@@ -169,9 +169,8 @@ def test_worker_records_failed_runs_and_raises_bugs(monkeypatch):
     import fibersweep.fiber.run as run_module
     from fibersweep.errors import RunBug
     from fibersweep.errors import SolverError as Solver
-    from fibersweep.sweep import worker
-
     from fibersweep.fiber.settings import FiberSettings
+    from fibersweep.sweep import worker
 
     # a worker set up with a field that travels itself (no cache entry), no warm-up
     setting = worker.SettingSpec("", "test-field", "", "", FiberSettings().model_dump_json(), "F")
