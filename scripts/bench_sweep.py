@@ -18,15 +18,15 @@ With ``--against TREE`` (a checkout of another version, e.g. the commit before a
 refactor), it instead times this tree and TREE alternately, ``--rounds`` times
 each after one untimed warm-up (Numba caches), in one run so the machine's load
 hits both alike, and prints the ratios of the medians (this / other):
-  * a whole sweep, ``fibersweep run CONFIG`` from an empty folder (start-up included),
-    timed by its own report ("ran N runs in S s");
+  * a whole sweep, ``fibersweep run CONFIG`` from an empty folder, the command's wall
+    time (interpreter and pool start-up included; the flow field is cached);
   * the discrepancy check of scripts/snapshot_discrepancy.py (``--disc-n`` fibers),
     timed by its own report (the workflow alone, synthesis excluded).
 
 Usage:  python scripts/bench_sweep.py [--config configs/quick.yaml] [--paper-sample 60]
                                       [--chunk-size 1 --chunk-size auto]
         python scripts/bench_sweep.py --against /tmp/before [--rounds 3] [--disc-n 30]
-                                      [--cache DIR]
+                                      [--cache DIR] [--only sweep|discrepancy]
 """
 
 from __future__ import annotations
@@ -113,6 +113,7 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3, help="timed runs per tree (--against)")
     ap.add_argument("--disc-n", type=int, default=30, help="fibers of the discrepancy check")
     ap.add_argument("--cache", default=".fibersweep-cache", help="flow cache (--against)")
+    ap.add_argument("--only", choices=("sweep", "discrepancy"), help="time one of the two")
     args = ap.parse_args()
     if args.against is not None:
         compare_trees(args)
@@ -190,14 +191,17 @@ def paper_estimate(paper_path: str, cfg, spec, info, n_sample: int) -> None:
         )
 
 
-def _timed(tree: Path, argv: list[str], pattern: str) -> float:
-    """Run ``argv`` with ``tree`` first on the path; the seconds its own report prints."""
+def _timed(tree: Path, argv: list[str], pattern: str | None) -> float:
+    """Run ``argv`` with ``tree`` first on the path; the seconds its own report prints
+    (``pattern``'s group), or the command's wall time when ``pattern`` is None."""
     env = {**os.environ, "PYTHONPATH": str(tree)}
+    t0 = time.perf_counter()
     out = subprocess.run(argv, cwd=tree, env=env, capture_output=True, text=True)
-    m = re.search(pattern, out.stdout + out.stderr)
-    if out.returncode != 0 or m is None:
+    wall = time.perf_counter() - t0
+    m = re.search(pattern, out.stdout + out.stderr) if pattern else None
+    if out.returncode != 0 or (pattern and m is None):
         raise SystemExit(f"{tree}: {' '.join(argv)} failed:\n{out.stdout}\n{out.stderr}")
-    return float(m.group(1))
+    return float(m.group(1)) if m else wall
 
 
 def compare_trees(args: argparse.Namespace) -> None:
@@ -213,7 +217,7 @@ def compare_trees(args: argparse.Namespace) -> None:
             out = Path(tmp) / f"sweep-{k}"
             argv = [sys.executable, "-m", "fibersweep", "run", str(Path(args.config).resolve()),
                     "-o", str(out), "--no-resume", f"run.cache_dir={cache}"]  # fmt: skip
-            return _timed(tree, argv, r"ran \d+ runs in ([\d.]+) s")
+            return _timed(tree, argv, None)
 
         def disc(tree: Path, k: str) -> float:
             argv = [sys.executable, snap, str(Path(tmp) / f"disc-{k}"), "--n", str(args.disc_n),
@@ -223,12 +227,14 @@ def compare_trees(args: argparse.Namespace) -> None:
         for rnd in range(args.rounds + 1):  # round 0: warm-up (Numba caches), not counted
             for name, tree in trees.items():
                 for what, fn in (("sweep", sweep), ("discrepancy", disc)):
+                    if args.only and what != args.only:
+                        continue
                     t = fn(tree, f"{name}-{rnd}")
                     print(f"round {rnd} {name:>5} {what:<12} {t:7.2f} s", flush=True)
                     if rnd:
                         times.setdefault((what, name), []).append(t)
     print(f"this: {trees['this']}, other: {trees['other']}; {args.rounds} timed rounds")
-    for what in ("sweep", "discrepancy"):
+    for what in [w for w in ("sweep", "discrepancy") if (w, "this") in times]:
         a = statistics.median(times[(what, "this")])
         b = statistics.median(times[(what, "other")])
         spread = max(times[(what, "other")]) / min(times[(what, "other")])
