@@ -191,8 +191,9 @@ def flow_progress() -> Iterator[None]:
 
 def _load(path: Path, overrides: list[str] | None = None, max_points: int | None = None):
     from fibersweep.config import load_config
+    from fibersweep.sweep.executors import EXECUTORS
 
-    return load_config(path, overrides or (), max_points=max_points)
+    return load_config(path, overrides or (), max_points=max_points, executors=EXECUTORS)
 
 
 def _version(value: bool) -> None:

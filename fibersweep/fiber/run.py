@@ -149,7 +149,7 @@ def simulate(
             start=start, status="failed", reason=f"numerical error: {exc}", model=settings.model
         )
     result = _result(setup, k, rec, beads, code, time.perf_counter() - t_wall)
-    return setup.effects.result(result, start)
+    return setup.effects.result(result, start, field.geometry)
 
 
 def simulate_reversible(

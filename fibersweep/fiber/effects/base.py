@@ -13,6 +13,7 @@ from fibersweep.errors import InputError
 if TYPE_CHECKING:  # pragma: no cover
     from fibersweep.fiber.result import FiberStart, RunResult
     from fibersweep.flow.field import FlowField
+    from fibersweep.units import Geometry
 
 __all__ = ["DynamicsContext", "Effect"]
 
@@ -105,5 +106,8 @@ class Effect:
     def kernel(self, ctx: DynamicsContext) -> NamedTuple | None:
         return None
 
-    def transform_result(self, result: RunResult, start: FiberStart) -> RunResult:
+    def transform_result(
+        self, result: RunResult, start: FiberStart, geometry: Geometry
+    ) -> RunResult:
+        """The report in the units the user asked in (``geometry``: the run's channel)."""
         return result
