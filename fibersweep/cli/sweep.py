@@ -20,7 +20,6 @@ from fibersweep.cli._app import (
     app,
     choices,
     flow_progress,
-    progress_interval,
 )
 from fibersweep.errors import InputError, Terminated
 from fibersweep.plots import FORMATS
@@ -277,8 +276,7 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
     """Run the sweep with a progress bar; True if any run of the table failed."""
     from collections import Counter
 
-    from tqdm import tqdm
-
+    from fibersweep.progressbar import progress_bar
     from fibersweep.sweep.runner import run_sweep
 
     bar = None
@@ -291,13 +289,7 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
         if not plan.todo:
             return
         # On a terminal: a live bar; into a log file: a line every 10 s, not thousands.
-        bar = tqdm(
-            total=len(plan.todo),
-            unit="run",
-            dynamic_ncols=True,
-            smoothing=0.1,
-            mininterval=progress_interval(),
-        )
+        bar = progress_bar(total=len(plan.todo), unit="run", smoothing=0.1)
 
     def progress(row) -> None:
         counts[row["class"] if row["status"] == "ok" else "failed"] += 1
@@ -318,10 +310,7 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
             f"({len(plan.tasks)} points in the sweep so far)"
         )
         if plan.todo:
-            import sys
-
-            every = 0.2 if sys.stderr.isatty() else 10.0
-            bar = tqdm(total=len(plan.todo), unit="run", dynamic_ncols=True, mininterval=every)
+            bar = progress_bar(total=len(plan.todo), unit="run", smoothing=0.1)
 
     line, cached = _fields_line(cfg)
     typer.echo(line if cached else f"{line}; computing into {cfg.run.cache_dir} ...")

@@ -28,7 +28,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from tqdm.auto import tqdm
 
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.tracks import nominal_track, track_values
@@ -36,6 +35,7 @@ from fibersweep.errors import RUN_ERRORS, FibersweepError, InputError, RunBug
 from fibersweep.fiber.result import CLASSES, FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
+from fibersweep.progressbar import finish, progress_bar
 from fibersweep.units import Geometry
 
 __all__ = ["OUTCOME_COLUMNS", "TRACK_SAMPLES", "Simulator", "BudgetExhausted", "outcome_row"]
@@ -241,7 +241,7 @@ class Simulator:
     def close(self) -> None:
         """Stop the workers (and close the progress bar)."""
         if self._bar is not None:
-            self._bar.close()
+            finish(self._bar)  # a workflow that stops early ends at its real total
             self._bar = None
         if self._executor is not None:
             self._executor.close()
@@ -313,7 +313,7 @@ class Simulator:
             for k, c in enumerate(chunks)
         }
         if self._bar is None and self.progress:
-            self._bar = tqdm(total=self._planned, unit="run", dynamic_ncols=True)
+            self._bar = progress_bar(total=self._planned, unit="run")
         bar = self._bar
         if bar is not None:
             if bar.total is not None and bar.n + n > bar.total:
