@@ -347,6 +347,10 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
     )
     if summary.refinement is not None:
         typer.echo(_refinement_line(summary.refinement, cfg.sweep.refine))
+    if summary.ran:  # rows added under this config's rule to a folder labelled by another
+        from fibersweep.sweep.store import read_runs
+
+        _warn_mixed_rules(read_runs(summary.out), summary.out)
     for line in summary.failures[:10]:
         typer.secho(f"  failed {line}", err=True, fg=typer.colors.RED)
     if summary.failed:
@@ -426,6 +430,15 @@ def classify(
         typer.secho(f"warning: {w}", err=True, fg=typer.colors.YELLOW)
 
 
+def _warn_mixed_rules(runs, results: Path) -> None:
+    """Warn on stderr when the class column of ``results`` mixes pole-vaulting rules."""
+    from fibersweep.sweep.rules import mixed_rules_message
+
+    message = mixed_rules_message(runs, results)
+    if message:
+        typer.secho(f"warning: {message}", err=True, fg=typer.colors.YELLOW)
+
+
 @app.command("plot-phase")
 def plot_phase(
     results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
@@ -474,6 +487,7 @@ def plot_phase(
         paths = plot_all(
             runs, out or results / "figures", Format(fmt).value, separatrix=sep, col=col, row=row
         )
+    _warn_mixed_rules(runs, results)
     for p in paths:
         typer.echo(f"wrote {p}")
 

@@ -33,6 +33,7 @@ import pyarrow.parquet as pq
 
 from fibersweep.atomic import TMP_GLOB, atomic_path
 from fibersweep.errors import ResultsError
+from fibersweep.sweep.coldocs import RUN_EXTRA_DOCS, TRAJ_COLUMN_DOCS, docs_for, with_docs
 
 __all__ = [
     "COLUMN_DOCS",
@@ -181,7 +182,7 @@ def runs_table(
             f, arr = _setting_field(name, df[name].tolist())
         else:
             arr = pa.array(df[name].tolist(), from_pandas=True)
-            f = pa.field(name, arr.type)
+            f = pa.field(name, arr.type, metadata=docs_for(name, RUN_EXTRA_DOCS))
         fields.append(f)
         arrays.append(arr)
     return _with_meta(pa.Table.from_arrays(arrays, schema=pa.schema(fields)), meta)
@@ -226,7 +227,7 @@ def _traj_table(run_id: str, cols: Mapping[str, np.ndarray]) -> pa.Table:
             data[k] = pa.array(arr)
         else:  # e.g. beads, shape (m, n_beads, 2): one list per sample
             data[k] = pa.array([a.ravel().tolist() for a in arr], type=pa.list_(pa.float64()))
-    return pa.table(data)
+    return with_docs(pa.table(data), TRAJ_COLUMN_DOCS)
 
 
 def _read_part(path: Path, **kw: Any) -> pa.Table:
@@ -510,7 +511,7 @@ def compact(out: Path, meta: Mapping[str, Any] | None = None) -> None:
     traj_parts = list_parts(out / TRAJ_DIR)
     if len(traj_parts) > 1:
         df = read_trajectories(out)
-        t = pa.Table.from_pandas(df, preserve_index=False)
+        t = with_docs(pa.Table.from_pandas(df, preserve_index=False), TRAJ_COLUMN_DOCS)
         write_table_atomic(_with_meta(t, meta), out / TRAJ_DIR / part_name("-merged"))
         for p in traj_parts:
             p.unlink(missing_ok=True)
