@@ -23,7 +23,7 @@ app = typer.Typer(
     help="Parameter sweeps of rigid fibers meeting a triangular pillar in a shallow channel.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
-    add_completion=False,
+    add_completion=True,  # --install-completion / --show-completion (bash, zsh, fish, PowerShell)
     # help texts carry units in brackets ([deg], [s]): print them, do not parse them as markup
     rich_markup_mode=None,
 )

@@ -122,6 +122,10 @@ COLUMN_DOCS: dict[str, tuple[str, str]] = {
     "round": ("", "refinement round that first ran the run (0: the grid; see sweep.refine)"),
 }
 
+#: Columns written only when some row of the part has a non-zero value; read as 0
+#: where a part lacks them.
+ONLY_WHEN_SET = ("round",)
+
 _seq = 0
 
 
@@ -171,6 +175,8 @@ def runs_table(
     df = pd.DataFrame(list(rows))
     fields, arrays = [], []
     for name, typ in RUN_COLUMNS.items():
+        if name in ONLY_WHEN_SET and not (name in df and (df[name].fillna(0) != 0).any()):
+            continue  # e.g. no 'round' column in a sweep that was never refined
         col = df[name] if name in df else pd.Series([None] * len(df), dtype=object)
         unit, doc = COLUMN_DOCS[name]
         fields.append(pa.field(name, typ, metadata={"unit": unit, "doc": doc}))
@@ -314,6 +320,9 @@ def read_runs(out: Path, skip: Sequence[Path] = ()) -> pd.DataFrame:
     if t is None:
         return runs_table([]).to_pandas()
     df = t.to_pandas()
+    for name in ONLY_WHEN_SET:  # parts written before the first non-zero value lack it
+        if name in df:
+            df[name] = df[name].fillna(0).astype(np.int64)
     df = df.drop_duplicates(subset="id", keep="last")
     return df.sort_values(["length", "y0", "theta0", "id"], kind="stable").reset_index(drop=True)
 
