@@ -151,3 +151,16 @@ def test_trajectory_angles_in_radians_are_caught(tmp_path):
     write_table(rad, tmp_path / "t_rad.csv")
     with pytest.raises(InputError, match="trajectories.theta: the first sample .* radians"):
         load_measured(p, tmp_path / "t_rad.csv", geometry=geo)
+
+
+def test_rows_in_messages_count_data_rows_from_one_as_in_the_csv(tmp_path):
+    """The first data row of a CSV (the line after the header) is 'row 1'."""
+    df = _table()
+    df.loc[0, "y0"] = 30.0
+    path = tmp_path / "measured.csv"
+    df.to_csv(path, index=False)
+    with pytest.raises(InputError) as exc:
+        load_measured(path)
+    msg = str(exc.value)
+    assert "y0: out of range" in msg and "in row 1 " in msg, msg
+    assert path.read_text().splitlines()[1].split(",")[1] == "30.0"  # line 2: data row 1
