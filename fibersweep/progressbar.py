@@ -34,8 +34,9 @@ class LineTqdm(tqdm):
 
     tqdm decides *when* to refresh (``mininterval``, ``miniters``), so the counters,
     rate and ETA are tqdm's; only :meth:`display` changes: it appends a line with
-    a newline instead of redrawing one with ``\\r`` and cursor escapes. A line equal
-    to the last one written is skipped (tqdm redraws after every ``tqdm.write``).
+    a newline instead of redrawing one with ``\\r`` and cursor escapes. A redraw
+    sooner than ``mininterval`` after the last line (tqdm redraws after every
+    ``tqdm.write``, e.g. a log line) and a line equal to the last one are skipped.
 
     The bar is made with ``leave=False`` so that tqdm's ``close`` calls
     ``display(msg="")`` rather than writing its own newline; that call writes the
@@ -44,6 +45,7 @@ class LineTqdm(tqdm):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         self._last_line: str | None = None
+        self._last_line_t: float | None = None
         kwargs["leave"] = False
         super().__init__(*args, **kwargs)
 
@@ -52,7 +54,11 @@ class LineTqdm(tqdm):
             self._ema_dt = lambda: None  # overall rate, as tqdm's own final line
             self._line(self.__str__())
             return False
+        now = self._time()
+        if self._last_line_t is not None and now - self._last_line_t < self.mininterval:
+            return True  # a redraw forced between refreshes (after a log line): not a new line
         self._line(self.__str__() if msg is None else msg)
+        self._last_line_t = now
         return True
 
     def clear(self, nolock: bool = False) -> None:

@@ -61,6 +61,12 @@ class UncachedEstimate:
         (dx [µm], cells) of each grid solved, coarsest first.
     probe_s : float
         Seconds this estimate took.
+    compile_s : float
+        Seconds to get the flow kernels ready in this process: compiling them on
+        first use (then they are cached on disk), else loading them.
+    warmup_s : float
+        Seconds the first fiber run took beyond a timed one: compiling (first use)
+        or loading the fiber kernels, which every worker of a sweep does once.
     """
 
     flow_s: float
@@ -68,6 +74,8 @@ class UncachedEstimate:
     mlups: float
     grids: tuple[tuple[float, int], ...]
     probe_s: float
+    compile_s: float = 0.0
+    warmup_s: float = 0.0
 
 
 def estimate_uncached(
@@ -103,7 +111,9 @@ def estimate_uncached(
             update={"width": 160.0, "length": 160.0, "pillar_height": 40.0,
                     "pillar_x": None, "pillar_y_base": None}
         )  # fmt: skip
+        t_compile = time.perf_counter()
         solve_lattice(probe.model_copy(update={"geometry": tiny, "max_steps": 4}))
+        compile_s = time.perf_counter() - t_compile
         sol = solve_lattice(probe)
     finally:
         lbm_log.removeFilter(quiet)
@@ -112,24 +122,36 @@ def estimate_uncached(
         cells * (TYPICAL_STEPS[0] if i == 0 else TYPICAL_STEPS[1])
         for i, (_, cells) in enumerate(grids)
     )
-    run_s = time_run(field_from_solution(probe, sol), fiber, start)
+    run_s, warmup_s = _time_run_and_warmup(field_from_solution(probe, sol), fiber, start)
     return UncachedEstimate(
         flow_s=updates / (mlups * 1e6),
         run_s=run_s,
         mlups=mlups,
         grids=grids,
         probe_s=time.perf_counter() - t_start,
+        compile_s=compile_s,
+        warmup_s=warmup_s,
     )
+
+
+def _time_run_and_warmup(
+    field: Any, fiber: FiberSettings, start: FiberStart
+) -> tuple[float, float]:
+    """Seconds of one fiber run, and the extra seconds of the first (kernels made ready)."""
+    from fibersweep.fiber.run import simulate
+
+    t0 = time.perf_counter()
+    simulate(field, fiber, start)  # compiles (or loads) the kernels
+    first = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    simulate(field, fiber, start)
+    run_s = time.perf_counter() - t0
+    return run_s, max(0.0, first - run_s)
 
 
 def time_run(field: Any, fiber: FiberSettings, start: FiberStart) -> float:
     """Seconds of one fiber run on ``field``, timed after a warm-up run (kernels compiled)."""
-    from fibersweep.fiber.run import simulate
-
-    simulate(field, fiber, start)  # compiles (or loads) the kernels
-    t0 = time.perf_counter()
-    simulate(field, fiber, start)
-    return time.perf_counter() - t0
+    return _time_run_and_warmup(field, fiber, start)[0]
 
 
 def estimate_run_s(cfg: Any, todo: list[SweepTask]) -> float:

@@ -24,7 +24,7 @@ def _line_bar(total, **kw):
     bar = progress_bar(total=total, desc="runs", unit="run", file=out, **kw)
     clock = _Clock()
     bar._time = clock  # tqdm's own clock hook: the bar's time comes from here
-    bar.start_t = bar.last_print_t = clock()
+    bar.start_t = bar.last_print_t = bar._last_line_t = clock()
     return bar, out, clock
 
 
