@@ -49,7 +49,8 @@ class LineTqdm(tqdm):
         kwargs["leave"] = False
         super().__init__(*args, **kwargs)
 
-    def display(self, msg: str | None = None, pos: int | None = None) -> bool:  # noqa: D102
+    def display(self, msg: str | None = None, pos: int | None = None) -> bool:
+        """Write the state as a line (tqdm calls this on every refresh and at close)."""
         if msg == "":  # tqdm's close: write the final state
             self._ema_dt = lambda: None  # overall rate, as tqdm's own final line
             self._line(self.__str__())

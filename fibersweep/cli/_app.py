@@ -167,11 +167,11 @@ def flow_progress() -> Iterator[None]:
                 progress_bar(
                     desc=f"flow field, dx = {p.dx:g} µm ({p.cells / 1e6:.2g} M cells)",
                     unit=" steps",
+                    postfix="starting (the first solve also compiles the kernels)",
                 )
             )
         bar = open_[0]
         if p.steps == 0:
-            bar.set_postfix_str("starting (the first solve also compiles the kernels)")
             return
         bar.set_postfix_str(
             f"residual {p.residual:.1e} (stops at {p.tolerance:.0e})", refresh=False

@@ -275,14 +275,14 @@ def _estimate_fields(cfg, task, missing) -> tuple[float, float, str]:
             f"({e.mlups:.0f} MLUPS timed over {PROBE_STEPS} steps; typical step counts)"
         )
     note = notes[0] if len(notes) == 1 else f"{len(notes)} flow fields: {'; '.join(notes)}"
-    # Every worker makes the fiber kernels ready once (in parallel): part of the run's time.
-    # The flow kernels were made ready here: a first use compiled and cached them.
-    total += warmup_s
-    note += (
-        f"; worker start-up about {_fmt_s(warmup_s)} (fiber kernels, included); this dry "
-        f"run made the flow kernels ready in {_fmt_s(compile_s)}"
-        + (" (compiled on first use; cached now)" if compile_s > COMPILED_S else "")
-    )
+    # This dry run made every kernel the run needs ready: a first use compiled them (and
+    # cached them on disk, so the run only loads them); say what that cost.
+    ready = compile_s + warmup_s
+    if ready > COMPILED_S:
+        note += (
+            f"; first use: this dry run compiled the kernels in {_fmt_s(ready)} (flow "
+            f"{_fmt_s(compile_s)}, fiber {_fmt_s(warmup_s)}); cached now, the run loads them"
+        )
     return total, per_run, note
 
 

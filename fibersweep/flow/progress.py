@@ -55,9 +55,7 @@ class SolveProgress:
         The solver stops right after such a report (or raises on divergence), so a
         bar can close here instead of when the whole command ends.
         """
-        return self.steps > 0 and (
-            self.residual < self.tolerance or self.steps >= self.max_steps
-        )
+        return self.steps > 0 and (self.residual < self.tolerance or self.steps >= self.max_steps)
 
 
 _CALLBACK: ContextVar[Callable[[SolveProgress], None] | None] = ContextVar(

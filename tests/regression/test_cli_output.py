@@ -107,6 +107,7 @@ def test_run_into_a_file_writes_plain_lines(tmp_path):
     lines = text.splitlines()
     flow = [ln for ln in lines if ln.startswith("flow field, dx = 4 µm")]
     assert flow and "residual" in flow[-1]  # the flow bar's final state, on its own line
+    assert "starting (the first solve also compiles the kernels)" in flow[0]
     runs = [ln for ln in lines if "run/s" in ln or "s/run" in ln]
     assert runs and "2/2" in runs[-1]
     # order: flow bar, then the plan, the sweep bar, the summary

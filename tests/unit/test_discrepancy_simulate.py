@@ -98,3 +98,14 @@ def test_several_copies_are_one_batch_and_equal_copy_by_copy(uniform_field):
         want = [fresh.copy(k, eff, rows) for k in range(3)]
     for g, w in zip(got, want, strict=True):
         assert g.equals(w)
+
+
+def test_a_workflow_that_stops_early_ends_its_bar_at_the_runs_it_used(uniform_field, capsys):
+    """Planned 1150 runs, 2 used: the bar (plain lines into a captured stderr) ends at 2/2."""
+    starts = np.array([[0.0, -2.0, 1.0], [5.0, -1.5, 0.8]])
+    with Simulator(uniform_field, FiberSettings(), workers=1, budget=1150) as sim:
+        sim.run(starts, {}, np.arange(2), desc="screen effects")
+    err = capsys.readouterr().err
+    lines = err.splitlines()
+    assert "\r" not in err and "0/1150" in lines[0]
+    assert lines[-1].startswith("screen effects") and "2/2" in lines[-1], lines

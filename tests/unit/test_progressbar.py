@@ -89,3 +89,23 @@ def test_the_form_follows_the_stream(tty):
     assert isinstance(bar, LineTqdm) is (not tty)
     assert bar.mininterval == (0.2 if tty else LINE_INTERVAL_S)
     bar.close()
+
+
+def test_a_jupyter_kernel_gets_tqdm_auto(monkeypatch):
+    """Inside a kernel (IPython's config holds IPKernelApp) the bar is tqdm.auto's."""
+    import sys
+    import types
+
+    from tqdm.auto import tqdm as auto_tqdm
+
+    class Shell:
+        config = {"IPKernelApp": {}}
+
+    fake = types.ModuleType("IPython")
+    fake.get_ipython = lambda: Shell()
+    monkeypatch.setitem(sys.modules, "IPython", fake)
+    bar = progress_bar(total=2)
+    try:
+        assert isinstance(bar, auto_tqdm) and not isinstance(bar, LineTqdm)
+    finally:
+        bar.close()
