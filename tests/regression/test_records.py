@@ -67,6 +67,9 @@ def test_every_column_carries_its_unit_and_meaning(swept):
     assert traj.field("head_speed").metadata[b"unit"] == b"\xc2\xb5m/s"
     assert traj.field("theta").metadata[b"unit"] == b"deg"
     assert {f.name for f in traj} <= set(TRAJ_COLUMN_DOCS)
+    # a sweep never refined has no 'round' column (tests/regression/test_refine_e2e.py has it)
+    assert "round" not in pq.read_schema(list_parts(out / RUNS_DIR)[-1]).names
+    assert "round" not in read_runs(out)
 
 
 def test_classify_keeps_provenance_and_records_the_rule(swept, tmp_path):
