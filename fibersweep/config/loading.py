@@ -257,18 +257,24 @@ def load_config(
     try:
         located = _yaml_with_lines(text)
     except yaml.YAMLError as exc:
+        for mark in (getattr(exc, "context_mark", None), getattr(exc, "problem_mark", None)):
+            if mark is not None:  # name the file, not "<unicode string>"
+                mark.name = str(p)
         raise ConfigError([f"invalid YAML: {exc}"], str(p)) from None
     except ConfigError as exc:
         raise ConfigError(exc.problems, str(p)) from None
     data = located.data
-    if overrides:
-        if data is None:
-            data = {}
-        if isinstance(data, dict):
-            try:
-                data = apply_overrides(data, located.lines, overrides)
-            except ConfigError as exc:
-                raise ConfigError(exc.problems, str(p)) from None
+    if data is None:  # an empty file (or only comments) is a mistake, not "all defaults"
+        raise ConfigError(
+            ["the file holds no settings (empty or only comments); `fibersweep init` writes "
+             "a commented starter config"],
+            str(p),
+        )  # fmt: skip
+    if overrides and isinstance(data, dict):
+        try:
+            data = apply_overrides(data, located.lines, overrides)
+        except ConfigError as exc:
+            raise ConfigError(exc.problems, str(p)) from None
     if max_points is not None and isinstance(data, dict):
         run = data.get("run") if isinstance(data.get("run"), dict) else {}
         data = {**data, "run": {**run, "max_points": max_points}}

@@ -28,7 +28,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from tqdm.auto import tqdm
 
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.tracks import track_values
@@ -38,6 +37,7 @@ from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 from fibersweep.sweep.executors import EXECUTORS, make_executor
 from fibersweep.sweep.worker import RunBatch, WorkerSpec, init_worker, run_batch, setting_for_field
+from fibersweep.progressbar import finish, progress_bar
 from fibersweep.units import Geometry
 
 __all__ = ["OUTCOME_COLUMNS", "TRACK_SAMPLES", "Simulator", "BudgetExhausted", "outcome_row"]
@@ -200,7 +200,7 @@ class Simulator:
     def close(self) -> None:
         """Stop the workers (and close the progress bar)."""
         if self._bar is not None:
-            self._bar.close()
+            finish(self._bar)  # a workflow that stops early ends at its real total
             self._bar = None
         self._executor.close()
 
@@ -280,7 +280,7 @@ class Simulator:
             for k, c in enumerate(chunks)
         }
         if self._bar is None and self.progress:
-            self._bar = tqdm(total=self._planned, unit="run", dynamic_ncols=True)
+            self._bar = progress_bar(total=self._planned, unit="run")
         bar = self._bar
         if bar is not None:
             if bar.total is not None and bar.n + n > bar.total:

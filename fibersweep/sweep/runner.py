@@ -180,6 +180,7 @@ def _run_locked(
     meta = {
         "fibersweep": prov["fibersweep"],
         "git": prov["git"],
+        "git_from": prov["git_from"],
         "flow_key": info.key,
         "flow_keys": list(fields),
         "swept": plan.columns,

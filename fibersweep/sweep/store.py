@@ -34,6 +34,7 @@ import pyarrow.parquet as pq
 from fibersweep.atomic import TMP_GLOB, atomic_path
 from fibersweep.errors import ResultsError
 from fibersweep.fiber.result import Column, record_columns
+from fibersweep.sweep.coldocs import RUN_EXTRA_DOCS, TRAJ_COLUMN_DOCS, docs_for, with_docs
 
 __all__ = [
     "COLUMN_DOCS",
@@ -94,6 +95,10 @@ RUN_COLUMNS: dict[str, pa.DataType] = {c.name: pa.type_for_alias(c.arrow) for c 
 #: (``unit`` and ``doc``), so a table read outside fibersweep says what it holds.
 COLUMN_DOCS: dict[str, tuple[str, str]] = {c.name: (c.unit, c.doc) for c in _COLUMNS}
 
+#: Columns written only when some row of the part has a non-zero value; read as 0
+#: where a part lacks them.
+ONLY_WHEN_SET = ("round",)
+
 _seq = 0
 
 
@@ -143,6 +148,8 @@ def runs_table(
     df = pd.DataFrame(list(rows))
     fields, arrays = [], []
     for name, typ in RUN_COLUMNS.items():
+        if name in ONLY_WHEN_SET and not (name in df and (df[name].fillna(0) != 0).any()):
+            continue  # e.g. no 'round' column in a sweep that was never refined
         col = df[name] if name in df else pd.Series([None] * len(df), dtype=object)
         unit, doc = COLUMN_DOCS[name]
         fields.append(pa.field(name, typ, metadata={"unit": unit, "doc": doc}))
@@ -154,7 +161,7 @@ def runs_table(
             f, arr = _setting_field(name, df[name].tolist())
         else:
             arr = pa.array(df[name].tolist(), from_pandas=True)
-            f = pa.field(name, arr.type)
+            f = pa.field(name, arr.type, metadata=docs_for(name, RUN_EXTRA_DOCS))
         fields.append(f)
         arrays.append(arr)
     return _with_meta(pa.Table.from_arrays(arrays, schema=pa.schema(fields)), meta)
@@ -199,7 +206,7 @@ def _traj_table(run_id: str, cols: Mapping[str, np.ndarray]) -> pa.Table:
             data[k] = pa.array(arr)
         else:  # e.g. beads, shape (m, n_beads, 2): one list per sample
             data[k] = pa.array([a.ravel().tolist() for a in arr], type=pa.list_(pa.float64()))
-    return pa.table(data)
+    return with_docs(pa.table(data), TRAJ_COLUMN_DOCS)
 
 
 def _read_part(path: Path, **kw: Any) -> pa.Table:
@@ -286,6 +293,9 @@ def read_runs(out: Path, skip: Sequence[Path] = ()) -> pd.DataFrame:
     if t is None:
         return runs_table([]).to_pandas()
     df = t.to_pandas()
+    for name in ONLY_WHEN_SET:  # parts written before the first non-zero value lack it
+        if name in df:
+            df[name] = df[name].fillna(0).astype(np.int64)
     df = df.drop_duplicates(subset="id", keep="last")
     return df.sort_values(["length", "y0", "theta0", "id"], kind="stable").reset_index(drop=True)
 
@@ -483,7 +493,7 @@ def compact(out: Path, meta: Mapping[str, Any] | None = None) -> None:
     traj_parts = list_parts(out / TRAJ_DIR)
     if len(traj_parts) > 1:
         df = read_trajectories(out)
-        t = pa.Table.from_pandas(df, preserve_index=False)
+        t = with_docs(pa.Table.from_pandas(df, preserve_index=False), TRAJ_COLUMN_DOCS)
         write_table_atomic(_with_meta(t, meta), out / TRAJ_DIR / part_name("-merged"))
         for p in traj_parts:
             p.unlink(missing_ok=True)

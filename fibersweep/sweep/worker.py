@@ -399,6 +399,7 @@ def run_task(task: SweepTask) -> dict[str, Any]:
         finished_at=time.time(),
         # CPU seconds of this run: with wall_time, shows whether the machine was shared.
         cpu_time=time.process_time() - c0,
+        class_rule=fiber.classify.rule,  # which rule labelled 'class' (mixed folders)
         **task.columns(),
     )
     traj = res.trajectory.columns() if res.trajectory is not None else None
