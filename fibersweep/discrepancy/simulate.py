@@ -35,9 +35,9 @@ from fibersweep.errors import FibersweepError, InputError
 from fibersweep.fiber.result import CLASSES
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
+from fibersweep.progressbar import finish, progress_bar
 from fibersweep.sweep.executors import EXECUTORS, make_executor
 from fibersweep.sweep.worker import RunBatch, WorkerSpec, init_worker, run_batch, setting_for_field
-from fibersweep.progressbar import finish, progress_bar
 from fibersweep.units import Geometry
 
 __all__ = ["OUTCOME_COLUMNS", "TRACK_SAMPLES", "Simulator", "BudgetExhausted", "outcome_row"]
