@@ -153,7 +153,7 @@ def test_every_column_of_a_run_is_typed_and_documented(tmp_path):
     assert all(doc for _, doc in COLUMN_DOCS.values()), "every column says what it holds"
     task = SweepTask("x", 1.0, 0.3, 0.5)
     with PartWriter(tmp_path) as w:
-        w.add({**row, "id": "a", "settings": "", "round": 0}, None)
+        w.add({**row, "id": "a", "settings": "", "round": 1}, None)  # round > 0: written
         w.add(failed_row(task, "worker process died"), None)
     schema = pq.read_schema(list_parts(tmp_path / RUNS_DIR)[0])
     for name, typ in RUN_COLUMNS.items():
