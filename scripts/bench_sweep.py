@@ -20,10 +20,8 @@ each after one untimed warm-up (Numba caches), in one run so the machine's load
 hits both alike, and prints the ratios of the medians (this / other):
   * a whole sweep, ``fibersweep run CONFIG`` from an empty folder, the command's wall
     time (interpreter and pool start-up included; the flow field is cached);
-  * the discrepancy check of scripts/snapshot_discrepancy.py (``--disc-n`` fibers):
-    the CPU seconds of the workflow and its workers (synthesis excluded), as its own
-    report prints them; CPU, not wall time, as the shared machine's load swings
-    the wall time of a multi-minute job by tens of per cent.
+  * the discrepancy check of scripts/snapshot_discrepancy.py (``--disc-n`` fibers),
+    timed by its own report (the workflow alone, synthesis excluded).
 
 Usage:  python scripts/bench_sweep.py [--config configs/quick.yaml] [--paper-sample 60]
                                       [--chunk-size 1 --chunk-size auto]
@@ -224,7 +222,7 @@ def compare_trees(args: argparse.Namespace) -> None:
         def disc(tree: Path, k: str) -> float:
             argv = [sys.executable, snap, str(Path(tmp) / f"disc-{k}"), "--n", str(args.disc_n),
                     "--cache", cache]  # fmt: skip
-            return _timed(tree, argv, r"discrepancy [\d.]+ s \(cpu ([\d.]+) s\)")
+            return _timed(tree, argv, r"discrepancy ([\d.]+) s")
 
         for rnd in range(args.rounds + 1):  # round 0: warm-up (Numba caches), not counted
             for name, tree in trees.items():

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import resource
 import time
 from pathlib import Path
 
@@ -42,13 +41,6 @@ PLAN = dict(
     power_fibers=0, next_copies=0, pairs=1,
     effects=("pillar_scale", "friction", "inlet_speed"),
 )  # fmt: skip
-
-
-def _cpu() -> float:
-    """CPU seconds of this process and of its ended children (the workers)."""
-    me = resource.getrusage(resource.RUSAGE_SELF)
-    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def main() -> None:
@@ -85,11 +77,9 @@ def main() -> None:
 
     sim_mod.Simulator.run = recording
     settings = DiscrepancySettings(seed=args.seed, workers=args.workers, **PLAN)
-    cpu0 = _cpu()
     t1 = time.perf_counter()
     res = run_discrepancy(data, field, fiber, settings, progress=False)
     t_disc = time.perf_counter() - t1
-    cpu_disc = _cpu() - cpu0  # its pools have ended: their CPU time is counted
     sim_mod.Simulator.run = original
 
     table.to_parquet(args.out / "measured.parquet")
@@ -103,18 +93,11 @@ def main() -> None:
     }
     (args.out / "verdict.json").write_text(json.dumps(verdict, indent=1, sort_keys=True))
     (args.out / "timing.json").write_text(
-        json.dumps(
-            {
-                "synth_s": t_synth,
-                "discrepancy_s": t_disc,
-                "discrepancy_cpu_s": cpu_disc,
-                "batches": len(batches),
-            }
-        )  # fmt: skip
+        json.dumps({"synth_s": t_synth, "discrepancy_s": t_disc, "batches": len(batches)})
     )
     kind, named = verdict["kind"], verdict["effects"]
     print(f"{len(batches)} batches, {res.simulations} runs; synth {t_synth:.1f} s, "
-          f"discrepancy {t_disc:.1f} s (cpu {cpu_disc:.1f} s); verdict {kind} {named}")  # fmt: skip
+          f"discrepancy {t_disc:.1f} s; verdict {kind} {named}")  # fmt: skip
 
 
 if __name__ == "__main__":
