@@ -13,7 +13,9 @@ from collections.abc import Mapping
 
 import pyarrow as pa
 
-__all__ = ["RUN_EXTRA_DOCS", "TRAJ_COLUMN_DOCS", "docs_for", "with_docs"]
+from fibersweep.analysis.classify import RULES
+
+__all__ = ["RUN_EXTRA_DOCS", "TRAJ_COLUMN_DOCS", "docs_for", "rule_column", "with_docs"]
 
 #: Columns of the trajectories table: (unit, meaning). Positions are in the channel
 #: frame (x along the flow from the inlet end, y from the side wall at 0).
@@ -34,13 +36,17 @@ TRAJ_COLUMN_DOCS: dict[str, tuple[str, str]] = {
     "beads": ("µm", "every bead centre, flattened (x0, y0, x1, y1, ...) per sample"),
 }
 
+
+def rule_column(rule: str) -> str:
+    """Runs-table column holding the class under a rule (``head-speed`` -> ``class_head_speed``)."""
+    return "class_" + rule.replace("-", "_")
+
+
 #: Runs-table columns outside the fixed list: the labelling rule and, after
-#: ``fibersweep classify``, the class under each rule.
+#: ``fibersweep classify``, the class under each rule of the registry.
 RUN_EXTRA_DOCS: dict[str, tuple[str, str]] = {
-    "class_rule": ("", "pole-vaulting rule that labelled 'class' (head-speed, pivot or switch)"),
-    "class_head_speed": ("", "class under the head-speed rule (written by classify)"),
-    "class_pivot": ("", "class under the pivot rule (written by classify)"),
-    "class_switch": ("", "class under the switch rule (written by classify)"),
+    "class_rule": ("", f"pole-vaulting rule that labelled 'class' (one of {', '.join(RULES)})"),
+    **{rule_column(r): ("", f"class under the {r} rule (written by classify)") for r in RULES},
 }
 
 

@@ -19,6 +19,7 @@ from fibersweep.errors import InputError
 from fibersweep.fiber.result import CLASSES, Trajectory
 from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.flow.settings import FlowSettings
+from fibersweep.sweep.coldocs import rule_column
 from fibersweep.sweep.lock import output_lock
 from fibersweep.sweep.manifest import read_manifest, write_manifest
 from fibersweep.sweep.store import (
@@ -155,11 +156,6 @@ def class_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFram
     total = max(1, int(df["runs"].sum()))
     df["fraction"] = (df["runs"] / total).round(4)
     return df
-
-
-def rule_column(rule: str) -> str:
-    """Runs-table column holding the class under a rule (``head-speed`` -> ``class_head_speed``)."""
-    return "class_" + rule.replace("-", "_")
 
 
 def classified_meta(parts: list[Path], man: dict, thresholds: ClassifySettings) -> dict[str, Any]:
