@@ -41,6 +41,7 @@ __all__ = [
     "combined_loss",
     "per_fiber_loss",
     "score_interval",
+    "slope_estimate",
 ]
 
 log = logging.getLogger(__name__)
@@ -165,11 +166,22 @@ def score_interval(
     """
     if len(fit.profile) < 2:
         return (fit.value, fit.value, True, True)
+    lo, hi, open_lo, open_hi = _accepted(fit, level, grid)
+    # never excludes the value it is reported with (see slope_estimate: a fit's value
+    # lies inside by construction; a hand-made Fit may not)
+    return min(lo, fit.value), max(hi, fit.value), open_lo, open_hi
+
+
+def _merged(fit: Fit) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluated values (sorted) and per-fiber losses (k, n), near-duplicates merged.
+
+    Values closer than a twentieth of their range count as one (the lower mean loss
+    kept): a slope over a tiny step is set by the one or two fibers whose class
+    flips there.
+    """
     pts = sorted(fit.profile, key=lambda p: p[0])
     x = np.array([p[0] for p in pts])
     L = np.stack([p[1] for p in pts])  # (k, n)
-    # values closer than a twentieth of the range are one point (the lower loss kept):
-    # a slope over a tiny step is set by the one or two fibers whose class flips there
     keep = [0]
     for j in range(1, len(x)):
         if x[j] - x[keep[-1]] < (x[-1] - x[0]) / 20.0:
@@ -177,42 +189,92 @@ def score_interval(
                 keep[-1] = j
         else:
             keep.append(j)
-    x, L = x[keep], L[keep]
-    if len(x) < 2:
-        return (fit.value, fit.value, True, True)
+    return x[keep], L[keep]
+
+
+def _slope_t(x: np.ndarray, L: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Midpoints, mean per-fiber slope and its t statistic between neighbouring values."""
     n = L.shape[1]
     g = np.diff(L, axis=0) / np.diff(x)[:, None]  # (k-1, n) per-fiber slopes
     mid = 0.5 * (x[1:] + x[:-1])
-    sd = g.std(axis=1, ddof=1)
+    sd = g.std(axis=1, ddof=1) if n > 1 else np.zeros(len(mid))
     mean = g.mean(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         # no spread: a slope of exactly 0 (no fiber's loss changes there) rejects nothing
         flat = np.where(mean == 0, 0.0, np.sign(mean) * np.inf)
         T = np.where(sd > 0, mean / (sd / np.sqrt(n)), flat)
+    return mid, mean, T
+
+
+def _accepted(
+    fit: Fit, level: float, grid: int, centre: float | None = None
+) -> tuple[float, float, bool, bool]:
+    """The stretch where |T| stays below the t quantile nearest ``centre`` (default: the
+    fitted value); ``(centre, centre, False, False)`` when every value is rejected."""
+    centre = fit.value if centre is None else centre
+    x, L = _merged(fit)
+    if len(x) < 2:
+        return (centre, centre, True, True)
+    n = L.shape[1]
+    mid, _, T = _slope_t(x, L)
     crit = float(student_t.ppf(0.5 + level / 2.0, max(n - 1, 1)))
     v = np.linspace(x[0], x[-1], grid)
     # interpolated T (constant beyond the outer midpoints); infinities kept finite
     Tv = np.interp(v, mid, np.clip(T, -1e6, 1e6))
     inside = np.abs(Tv) <= crit
-    # the stretch around the minimiser of the mean loss (the fitted value when it
-    # lies in the evaluated range)
     if not inside.any():
-        return (fit.value, fit.value, False, False)
-    # the accepted stretch nearest the fitted value (with a noisy loss, the slope's
-    # zero crossing need not be at the best evaluated value)
+        return (centre, centre, False, False)
+    # the accepted stretch nearest the centre (with a noisy loss, the slope's zero
+    # crossing need not be at the best evaluated value)
     ok = np.flatnonzero(inside)
-    c = int(ok[np.argmin(np.abs(v[ok] - fit.value))])
+    c = int(ok[np.argmin(np.abs(v[ok] - centre))])
     i0 = c
     while i0 > 0 and inside[i0 - 1]:
         i0 -= 1
     i1 = c
     while i1 < grid - 1 and inside[i1 + 1]:
         i1 += 1
-    # On a step-like loss the best evaluated value can sit just past the accepted
-    # stretch (the slope into it is significant); the interval is widened to it,
-    # so it never excludes the value it is reported with.
-    lo, hi = min(float(v[i0]), fit.value), max(float(v[i1]), fit.value)
-    return lo, hi, i0 == 0, i1 == grid - 1
+    return float(v[i0]), float(v[i1]), i0 == 0, i1 == grid - 1
+
+
+def slope_estimate(fit: Fit, level: float = 0.95, grid: int = 400) -> float:
+    """The value the score test is most compatible with: the deepest zero of its T.
+
+    The argmin of the evaluated mean losses (the search's best point) is the best
+    of a few noisy, step-like points. With 2 copies per fiber a single fiber
+    whose copies switch between two outcome branches (contact or not, a long
+    dwell or none) changes its loss by tens of times the typical fiber's, so the
+    best point is wherever that fiber's copies happened to match its
+    observation: the pooled refit reported pillar_hydro 0.901 for a truth of
+    0.6, at the top of its own interval, at Brent's second golden-section point
+    (``scripts/diagnose_fit_bias.py``).
+
+    Here the slope between neighbouring evaluated values is read through its t
+    statistic T (mean per-fiber slope over its standard error, as in
+    :func:`score_interval`), which down-weights a step set by one fiber. The
+    estimate minimises the pseudo-loss Λ(v) = ∫ T, the interpolated T
+    integrated from the lowest evaluated value: a zero of T where it turns
+    from negative to positive, the deepest if there are several. For a
+    quadratic per-fiber loss with equal spread of the slopes it is the exact
+    minimiser. It lies in the accepted stretch of the score test, so the
+    interval :func:`score_interval` reports around it holds it. A fit that kept
+    the baseline (value 0) stays at 0.
+
+    Returns
+    -------
+    float
+        The estimate, in the units of the fitted value.
+    """
+    if fit.value == 0.0 or len(fit.profile) < 3:
+        return fit.value
+    x, L = _merged(fit)
+    if len(x) < 3:
+        return fit.value
+    mid, _, T = _slope_t(x, L)
+    v = np.linspace(x[0], x[-1], grid)
+    Tv = np.interp(v, mid, np.clip(T, -1e6, 1e6))
+    lam = np.concatenate([[0.0], np.cumsum(0.5 * (Tv[1:] + Tv[:-1]) * np.diff(v))])
+    return float(v[int(np.argmin(lam))])
 
 
 def rank_effects(
@@ -273,6 +335,7 @@ def fit_effect(
     fixed: Mapping[str, float] | None = None,
     stage: str = "fit",
     known: Sequence[float] = (),
+    estimate: bool = False,
 ) -> Fit:
     """Fit the value of one effect on the fit fibers.
 
@@ -300,6 +363,12 @@ def fit_effect(
         values whose runs the copy maker already holds (the pooled refit passes
         the two halves' values: each half was simulated there, one by its fit,
         the other by its cross-fitted copies), so they cost no simulation.
+    estimate : bool
+        Report :func:`slope_estimate` (the zero of the score test's T, smoothed
+        over every evaluated value) instead of the best evaluated value: the
+        value a report quotes (the pooled refit). ``loss`` stays the loss at
+        the best evaluated value. The halves' fits keep the best evaluated value,
+        a point their copies were simulated at.
     """
     k_fit = len(base_copies)
     # The signature suggests the sign of a signed effect; one evaluation at a fifth
@@ -347,4 +416,8 @@ def fit_effect(
     evals = tuple(sorted(seen.items()))
     log.info("fit %s: %.4g (loss %.4g vs baseline %.4g)", cand.name, best, seen[best], seen[0.0])
     profile = tuple((float(u), per[u]) for u in sorted(per))
-    return Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]), evals, profile)
+    fit = Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]), evals, profile)
+    if estimate:
+        fit = replace(fit, value=slope_estimate(fit))
+        log.info("fit %s: estimate %.4g (best evaluated %.4g)", cand.name, fit.value, best)
+    return fit
