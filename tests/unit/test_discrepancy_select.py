@@ -291,3 +291,22 @@ def test_forward_step_stops_at_the_first_pair_that_explains_the_gap():
     p = [sets[0].p_values[m] for m in ("inlet_speed", "friction")]
     want = holm(np.array(p + [1.0, 1.0]))[:2]
     assert [sets[0].p_holm[m] for m in ("inlet_speed", "friction")] == pytest.approx(want)
+
+
+def test_an_unexplained_gap_gets_starts_that_test_its_best_candidate():
+    # one candidate helped (not significantly), halves 0.3 and 0.35 (not weak): the
+    # hypotheses are the model as it is and that candidate at its value
+    from dataclasses import replace
+
+    from fibersweep.discrepancy.decide import Verdict
+    from fibersweep.discrepancy.followup import next_hypotheses
+
+    rng = np.random.default_rng(8)
+    ho = _single(rng, 0.02, 1.5)
+    best = max(ho, key=lambda h: h.improvement[0])
+    ho = [replace(h, value=0.0) for h in ho]  # no refit: the fold values are used
+    un = Verdict("unexplained", {})
+    a, b, why = next_hypotheses(un, ho, {best.name: [0.3, 0.35]})
+    assert a == {} and b == {best.name: pytest.approx(0.325)} and "unexplained" in why
+    # nothing helped anywhere (every value 0): nothing to test
+    assert next_hypotheses(un, ho, {best.name: [0.0, 0.0]}) is None
