@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.fit import Fit, per_fiber_loss
 from fibersweep.discrepancy.gap import assess_gap, observable_weights, value_matrices
 from fibersweep.discrepancy.noise import NoiseModel
@@ -56,7 +57,7 @@ def measure(args) -> Path:
     obs = tuple(data.observed)
     grid = np.linspace(args.grid[0], args.grid[1], int(args.grid[2]))
     grid = np.union1d(grid, [0.0])
-    profiles, fits, refits = [], [], []
+    profiles, fits, refits, disp = [], [], [], []
     with Simulator(field, FiberSettings(), workers=args.workers, progress=False) as sim:
         for cs in args.copy_seeds:
             maker = CopyMaker(data.starts, NoiseModel(), cs, sim)
@@ -66,28 +67,38 @@ def measure(args) -> Path:
             gap = assess_gap(values, np.random.default_rng(cs), n_perm=999)
             w_gap = {o: (x if o in gap.flagged else 0.0) for o, x in w.items()}
             log.warning("copy seed %d: gap in %s", cs, gap.flagged)
-            rows = []
+            rows, dz = [], []
             for v in grid:
                 cps = maker.copies(range(args.fit_copies), {name: float(v)} if v else None)
-                rows.append(per_fiber_loss(value_matrices(observed, cps, obs), w_gap))
+                vals = value_matrices(observed, cps, obs)
+                rows.append(per_fiber_loss(vals, w_gap))
+                # how widely the observations spread among copies at v (1: as a copy)
+                dz.append(dispersion_test(vals, np.random.default_rng(cs), 999).statistic)
             profiles.append(np.stack(rows))
+            disp.append(dz)
+            log.warning("copy seed %d: dispersion score %s", cs, np.round(dz, 2))
             log.warning("copy seed %d: argmin %.3g", cs, grid[np.argmin(profiles[-1].mean(1))])
             if args.workflow_fits:
-                row, refit = workflow_fits(name, maker, observed, base, obs, w_gap, cs)
+                row, refit = workflow_fits(
+                    name, maker, observed, base, obs, w_gap, cs, args.fit_copies
+                )
                 fits.append(row)
                 refits.append(refit)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     np.savez(out / "profile.npz", grid=grid, profiles=np.stack(profiles), truth=truth,
              name=name, n=args.n, seed=args.seed, copy_seeds=np.array(args.copy_seeds),
-             fits=np.array(fits, dtype=np.float64).reshape(-1, 7))  # fmt: skip
+             fits=np.array(fits, dtype=np.float64).reshape(-1, 7),
+             dispersion=np.array(disp))  # fmt: skip
     if refits:  # the pooled refits' per-fiber profiles, to compare estimators offline
         with open(out / "refits.pkl", "wb") as fh:
             pickle.dump(refits, fh)
     return out / "profile.npz"
 
 
-def workflow_fits(name, maker, observed, base, obs, w_gap, seed) -> tuple[list[float], Fit]:
+def workflow_fits(
+    name, maker, observed, base, obs, w_gap, seed, k_fit=2
+) -> tuple[list[float], Fit]:
     """The workflow's fits on these copies: each half by Brent (5 evaluations), then the
     pooled refit around the halves' values (3 more, the halves' values known).
 
@@ -104,12 +115,12 @@ def workflow_fits(name, maker, observed, base, obs, w_gap, seed) -> tuple[list[f
     halves = []
     for train in folds[::-1]:
         obs_tr = observed.iloc[train].reset_index(drop=True)
-        sub = [b.iloc[train].reset_index(drop=True) for b in base[:2]]
+        sub = [b.iloc[train].reset_index(drop=True) for b in base[:k_fit]]
         f = fit_effect(cand, maker, obs_tr, sub, train, obs, w_gap, 5, side=1.0)
         halves.append(f.value)
     pad = 0.25 * (cand.hi - cand.lo)
     bounds = (max(cand.lo, min(halves) - pad), min(cand.hi, max(halves) + pad))
-    f = fit_effect(cand, maker, observed, base[:2], np.arange(n), obs, w_gap, 3,
+    f = fit_effect(cand, maker, observed, base[:k_fit], np.arange(n), obs, w_gap, 3,
                    bounds=bounds, stage="refit", known=halves)  # fmt: skip
     lo, hi, *_ = score_interval(f)
     row = [*halves, f.value, slope_estimate(f), lo, hi, float(seed)]
@@ -146,6 +157,10 @@ def summarise(path: str, n_sub: int = 6, n_rep: int = 400) -> str:
             f"  {n_sub} random grid values: argmin mean {np.mean(am):.3g} sd "
             f"{np.std(am):.3g}; slope zero mean {np.mean(sz):.3g} sd {np.std(sz):.3g}"
         )
+    if "dispersion" in d.files and d["dispersion"].size:
+        for s, dz in enumerate(d["dispersion"]):
+            lines.append(f"copies {s}: dispersion score of the observations at each grid value: "
+                         + " ".join(f"{x:.2f}" for x in dz))  # fmt: skip
     if "fits" in d.files and len(d["fits"]):
         F = d["fits"]
         lines.append("workflow fits (halves, refit argmin, refit estimate, interval):")
