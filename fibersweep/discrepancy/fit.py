@@ -29,6 +29,7 @@ from scipy.optimize import minimize_scalar
 from scipy.stats import t as student_t
 
 from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.dispersion import dispersion_matrix
 from fibersweep.discrepancy.gap import assess_gap, feature_vector, value_matrices
 from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.scores import score_matrix
@@ -42,6 +43,8 @@ __all__ = [
     "per_fiber_loss",
     "score_interval",
     "slope_estimate",
+    "dispersion_root",
+    "dispersion_interval",
 ]
 
 log = logging.getLogger(__name__)
@@ -86,6 +89,12 @@ class Fit:
     profile : tuple of (value, ndarray (n_fit,))
         Per-fiber loss at every evaluated value (:func:`per_fiber_loss`; its
         mean is the loss), for :func:`score_interval`.
+    dispersion : tuple of (value, ndarray (n_fit,))
+        For a random effect: each fiber's dispersion score of its observation
+        among its copies at every evaluated value
+        (:func:`~fibersweep.discrepancy.dispersion.dispersion_matrix`, column 0;
+        mean 1 where the copies are as spread as the data), for
+        :func:`dispersion_root` and the interval. Empty otherwise.
     """
 
     name: str
@@ -94,6 +103,7 @@ class Fit:
     loss0: float
     evaluations: tuple[tuple[float, float], ...]
     profile: tuple[tuple[float, np.ndarray], ...] = field(default=(), repr=False, compare=False)
+    dispersion: tuple[tuple[float, np.ndarray], ...] = field(default=(), repr=False, compare=False)
 
 
 def combined_loss(values: Mapping[str, np.ndarray], weights: Mapping[str, float]) -> float:
@@ -164,6 +174,8 @@ def score_interval(
         cut there (the value may lie further out). ``(value, value, True, True)``
         with fewer than two evaluated values.
     """
+    if len(fit.dispersion) >= 2:
+        return dispersion_interval(fit, level, grid)
     if len(fit.profile) < 2:
         return (fit.value, fit.value, True, True)
     lo, hi, open_lo, open_hi = _accepted(fit, level, grid)
@@ -277,6 +289,71 @@ def slope_estimate(fit: Fit, level: float = 0.95, grid: int = 400) -> float:
     return float(v[int(np.argmin(lam))])
 
 
+def _dispersion_t(fit: Fit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Evaluated values, mean dispersion score and its t statistic against 1."""
+    pts = sorted(fit.dispersion, key=lambda p: p[0])
+    x = np.array([p[0] for p in pts])
+    D = np.stack([p[1] for p in pts])  # (k, n)
+    n = np.isfinite(D).sum(axis=1)
+    mean = np.nanmean(D, axis=1)
+    sd = np.nanstd(D, axis=1, ddof=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        T = np.where(sd > 0, (mean - 1.0) / (sd / np.sqrt(np.maximum(n, 1))), 0.0)
+    return x, mean, T
+
+
+def dispersion_root(fit: Fit) -> float:
+    """The value of a random effect at which the data are as spread as its copies.
+
+    A random effect (start noise, Brownian motion) widens the outcomes. Its fair
+    scores against a few copies move little with the value and carry the effect's
+    own Monte Carlo noise: with start_noise = 2.5 hidden in 60 fibers and 8
+    copies, the mean loss was lowest at 2.5, yet no slope between evaluated
+    values was significant (the score interval was the whole range [0, 5]), so a
+    half of 30 fibers could fit 0 (``scripts/diagnose_fit_bias.py``). The
+    dispersion score of each observation among its copies (1 on average exactly
+    when the observation is one more copy, whatever the number of copies) fell
+    steadily over the same values, 1.37 at 0 to 0.72 at 5. This is its
+    crossing of 1, read by linear interpolation between the evaluated values,
+    the first one going up from the lowest; 0 when the data are not more spread
+    than the baseline's copies (a mean of at most 1 at the lowest value), the
+    highest evaluated value when they are more spread than every copy set.
+    """
+    x, mean, _ = _dispersion_t(fit)
+    if mean[0] <= 1.0:
+        return float(x[0])
+    for j in range(len(x) - 1):
+        if mean[j] > 1.0 >= mean[j + 1]:
+            return float(x[j] + (mean[j] - 1.0) / (mean[j] - mean[j + 1]) * (x[j + 1] - x[j]))
+    return float(x[-1])
+
+
+def dispersion_interval(
+    fit: Fit, level: float = 0.95, grid: int = 400
+) -> tuple[float, float, bool, bool]:
+    """Interval of a random effect's value: where the mean dispersion score is not
+    significantly different from 1 (a t test over the fibers at each evaluated
+    value, T interpolated between them), the stretch around the fitted value
+    (widened to hold it). Same return as :func:`score_interval`."""
+    x, _, T = _dispersion_t(fit)
+    n = len(fit.dispersion[0][1])
+    crit = float(student_t.ppf(0.5 + level / 2.0, max(n - 1, 1)))
+    v = np.linspace(x[0], x[-1], grid)
+    inside = np.abs(np.interp(v, x, T)) <= crit
+    if not inside.any():
+        return (fit.value, fit.value, False, False)
+    ok = np.flatnonzero(inside)
+    c = int(ok[np.argmin(np.abs(v[ok] - fit.value))])
+    i0 = c
+    while i0 > 0 and inside[i0 - 1]:
+        i0 -= 1
+    i1 = c
+    while i1 < grid - 1 and inside[i1 + 1]:
+        i1 += 1
+    lo, hi = min(float(v[i0]), fit.value), max(float(v[i1]), fit.value)
+    return lo, hi, i0 == 0, i1 == grid - 1
+
+
 def rank_effects(
     gap_features: np.ndarray,
     candidates: Sequence[Candidate],
@@ -366,19 +443,29 @@ def fit_effect(
     estimate : bool
         Report :func:`slope_estimate` (the zero of the score test's T, smoothed
         over every evaluated value) instead of the best evaluated value: the
-        value a report quotes (the pooled refit). ``loss`` stays the loss at
-        the best evaluated value. The halves' fits keep the best evaluated value,
-        a point their copies were simulated at.
+        value a report quotes (the pooled refit). For a random effect, the value
+        where the data are as spread as its copies (:func:`dispersion_root`).
+        ``loss`` stays the loss at the best evaluated value. The halves' fits keep
+        the best evaluated value, a point their copies were simulated at.
     """
     k_fit = len(base_copies)
     # The signature suggests the sign of a signed effect; one evaluation at a fifth
     # of the other half checks it (a weak signature can point the wrong way).
     check_side = bounds is None and cand.signed and side != 0.0
     limit = max_evals + int(check_side) + len(set(known) - {0.0})
-    per: dict[float, np.ndarray] = {
-        0.0: per_fiber_loss(value_matrices(observed, base_copies, observables), weights)
-    }
+    vals0 = value_matrices(observed, base_copies, observables)
+    per: dict[float, np.ndarray] = {0.0: per_fiber_loss(vals0, weights)}
     seen: dict[float, float] = {0.0: float(np.mean(per[0.0]))}
+    # a random effect: each fiber's dispersion score at every value, with the same
+    # randomisation of the PIT at every value (common random numbers)
+    disp: dict[float, np.ndarray] = {}
+
+    def _disp(vals: Mapping[str, np.ndarray]) -> np.ndarray | None:
+        D = dispersion_matrix(vals, np.random.default_rng(20301))
+        return None if D is None else D[:, 0]
+
+    if cand.random and (d0 := _disp(vals0)) is not None:
+        disp[0.0] = d0
 
     def loss(v: float) -> float:
         v = float(v)
@@ -391,8 +478,11 @@ def fit_effect(
         copies = maker.copies(
             range(k_fit), {**(fixed or {}), cand.name: v}, rows, desc=f"{stage} {cand.name}={v:.4g}"
         )
-        per[v] = per_fiber_loss(value_matrices(observed, copies, observables), weights)
+        vals = value_matrices(observed, copies, observables)
+        per[v] = per_fiber_loss(vals, weights)
         seen[v] = float(np.mean(per[v]))
+        if disp and (dv := _disp(vals)) is not None:
+            disp[v] = dv
         return seen[v]
 
     for v in known:
@@ -417,7 +507,13 @@ def fit_effect(
     log.info("fit %s: %.4g (loss %.4g vs baseline %.4g)", cand.name, best, seen[best], seen[0.0])
     profile = tuple((float(u), per[u]) for u in sorted(per))
     fit = Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]), evals, profile)
-    if estimate:
+    if len(disp) >= 2:  # its interval is the dispersion test's (score_interval)
+        fit = replace(fit, dispersion=tuple((float(u), disp[u]) for u in sorted(disp)))
+    if estimate and fit.dispersion:
+        # a random effect: the value at which the data are as spread as the copies
+        fit = replace(fit, value=dispersion_root(fit))
+        log.info("fit %s: dispersion root %.4g (best evaluated %.4g)", cand.name, fit.value, best)
+    elif estimate:
         fit = replace(fit, value=slope_estimate(fit))
         log.info("fit %s: estimate %.4g (best evaluated %.4g)", cand.name, fit.value, best)
     return fit
