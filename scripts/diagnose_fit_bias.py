@@ -181,7 +181,7 @@ def main() -> None:
     ap.add_argument("--copy-seeds", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--fit-copies", type=int, default=2)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--cache", default="/work/testcache")
+    ap.add_argument("--cache", default=".fibersweep-cache/tests")
     ap.add_argument("--out", default="results/fitbias")
     ap.add_argument(
         "--workflow-fits",
