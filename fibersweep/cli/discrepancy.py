@@ -279,6 +279,7 @@ def power_cmd(
                 {
                     "effect": e.name, "probe": e.probe, "limit": e.limit, "gamma": e.gamma,
                     "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
+                    "dispersion_limit": e.dispersion_limit,
                     "realistic": real, "fibers_for_realistic": pw.fibers_needed(e.name, real),
                 }
             )  # fmt: skip
@@ -295,6 +296,8 @@ def power_cmd(
         if r["limit_ci"] is not None:
             lo, hi = (f"{x:.3g}" if x is not None else "out of range" for x in r["limit_ci"])
             lim += f" [{lo}, {hi}]"
+        if r["dispersion_limit"] is not None:
+            lim += f"; dispersion test from {r['dispersion_limit']:.3g}"
         need = r["fibers_for_realistic"]
         typer.echo(
             f"  {r['effect']:>13} {'+' if r['probe'] > 0 else '-'}  from {lim:>36}"

@@ -43,6 +43,7 @@ import pandas as pd
 from scipy.stats import norm
 
 from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.gap import (
     assess_gap,
     feature_one_sided,
@@ -90,6 +91,11 @@ class EffectPower:
         95 % bootstrap interval of ``limit`` over the simulated starts
         (:func:`limit_intervals`); an end None: beyond the effect's range in
         more than 2.5 % of the resamples. None: not computed.
+    dispersion_limit : float or None
+        For a random effect: the smallest magnitude the dispersion test alone
+        (:mod:`.dispersion`, one-sided at alpha) detects with the target power
+        at ``n`` fibers, scaled like ``limit``. None: not a random effect, or
+        not within its range.
     """
 
     name: str
@@ -99,6 +105,7 @@ class EffectPower:
     limit: float | None
     one_sided: tuple[bool, ...] | None = None
     limit_ci: tuple[float | None, float | None] | None = None
+    dispersion_limit: float | None = None
 
     def detect(self, m: float, n_fibers: int, n_sim: int, z_crit: float) -> float:
         """Detection probability at magnitude m (same sign as the probe) and N fibers."""
@@ -260,6 +267,21 @@ def _z_vector(
     return _z_of(eff, base, observables, rng), eff
 
 
+def _z_dispersion(
+    eff: list[pd.DataFrame],
+    base: list[pd.DataFrame],
+    observables: Sequence[str],
+    rng: np.random.Generator,
+) -> float:
+    """Mean z of the dispersion test, copy k with the effect vs the baseline copies j != k."""
+    K = len(base)
+    zs = []
+    for k in range(K):
+        vals = value_matrices(eff[k], [base[j] for j in range(K) if j != k], observables)
+        zs.append(dispersion_test(vals, rng, n_perm=499).z)
+    return float(np.mean(zs))
+
+
 def _gamma(z_full: np.ndarray, z_half: np.ndarray) -> float:
     """Growth exponent of the strongest test's z with the magnitude (see module docstring)."""
     j = int(np.argmax(np.abs(z_full)))
@@ -379,6 +401,8 @@ def analyse_power(
     spread = np.where(spread > 0, spread, np.nan)
     effects: list[EffectPower] = []
     kept: list[tuple[list[pd.DataFrame], list[pd.DataFrame]]] = []
+    # the dispersion test's own stream: the limits of the gap family stay as they were
+    drng = np.random.default_rng([n_sim, 8101])
     shifts: dict[str, np.ndarray] = {}
     for cand in candidates:
         for mp in cand.probes:
@@ -390,7 +414,21 @@ def analyse_power(
             zt = tuple(float(x) for x in z_full)
             e = EffectPower(cand.name, float(mp), zt, gamma, None, one_sided)
             lim = _limit(e, cand, n, n_sim, z_crit, power)
-            effects.append(replace(e, limit=lim))
+            d_lim = None
+            if cand.random:
+                zd_full = _z_dispersion(eff, base, observables, drng) * ens
+                zd_half = _z_dispersion(eff_h, base, observables, drng) * ens
+                ed = EffectPower(
+                    cand.name,
+                    float(mp),
+                    (zd_full,),
+                    _gamma(np.array([zd_full]), np.array([zd_half])),
+                    None,
+                    (True,),
+                )
+                # one test alone at alpha: its one-sided threshold z_{1-alpha}
+                d_lim = _limit(ed, cand, n, n_sim, float(norm.isf(alpha / 2)), power)
+            effects.append(replace(e, limit=lim, dispersion_limit=d_lim))
             diff = np.stack(standardised_values(eff, observables)) - np.stack(base_std)
             cnt = np.isfinite(diff).sum(axis=0)
             d = np.where(cnt > 0, np.nansum(diff, axis=0) / np.maximum(cnt, 1), np.nan)

@@ -131,6 +131,7 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
                 "gamma": e.gamma,
                 "limit": e.limit,
                 "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
+                "dispersion_limit": e.dispersion_limit,
                 "realistic": real,
                 "fibers_for_realistic": pw.fibers_needed(e.name, real) if real else None,
             }

@@ -273,6 +273,15 @@ def _power(s: dict[str, Any]) -> list[str]:
             f"| {e['effect']} | {e['direction']} | {lim} | {ci_txt} | {_f(e['realistic'])} "
             f"| {_f(e['fibers_for_realistic'], 'd') if e['fibers_for_realistic'] else '> 100000'} |"
         )
+    disp = [e for e in pw["effects"] if e.get("dispersion_limit") is not None]
+    if disp:
+        lines += [
+            "",
+            "The dispersion test alone (one-sided at alpha, outside the gap family) would "
+            "detect with the same probability: "
+            + ", ".join(f"{e['effect']} from {_f(e['dispersion_limit'])}" for e in disp)
+            + ".",
+        ]
     if pw["lookalikes"]:
         lines += [
             "",

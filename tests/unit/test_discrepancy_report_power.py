@@ -12,6 +12,8 @@ def _summary(kind: str) -> dict:
          "realistic": 0.4, "fibers_for_realistic": 12},
         {"effect": "pillar_hydro", "direction": "+", "limit": 0.3, "limit_ci": [0.1, None],
          "realistic": 0.5, "fibers_for_realistic": 80},
+        {"effect": "start_noise", "direction": "+", "limit": 1.6, "limit_ci": None,
+         "realistic": 2.0, "fibers_for_realistic": 60, "dispersion_limit": 1.3},
     ]  # fmt: skip
     power = {"n": 100, "n_simulated": 40, "alpha": 0.05, "power": 0.8, "effects": effects,
              "lookalikes": [], "leading": None, "simulations": 1}  # fmt: skip
@@ -26,6 +28,8 @@ def test_power_table_shows_each_limit_with_its_interval():
     assert "| friction | + | 0.11 | [0.08, 0.2] |" in text
     # an upper end beyond the effect's range in more than 2.5 % of the resamples
     assert "| pillar_hydro | + | 0.3 | [0.1, out of range] |" in text
+    assert "| start_noise | + | 1.6 | – |" in text
+    assert "dispersion test alone" in text and "start_noise from 1.3" in text
 
 
 def test_advice_of_an_unexplained_gap_names_the_next_measurement_and_the_unseen_sizes():
