@@ -347,6 +347,7 @@ def refit(st: State) -> State:
             bounds=bounds,
             stage="refit",
             known=vals,  # both halves' values: their runs are held (no cost)
+            estimate=True,  # the quoted value: the score test's zero (issue 30)
         )
         fits.append(fit)
         intervals[h.name] = score_interval(fit)
