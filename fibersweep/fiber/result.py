@@ -70,6 +70,16 @@ class RunResult:
         Time at the end of the run [s].
     min_clearance : float
         Smallest bead-centre distance to the pillar outline minus a, over the run [µm].
+    max_curvature : float
+        Largest curvature of the fiber over the run [1/µm] (bead-spring models;
+        NaN for rigid; :mod:`fibersweep.fiber.deformation`).
+    min_end_to_end : float
+        Smallest end-to-end distance over contour length over the run (NaN for rigid).
+    max_tension : float
+        Largest stretching-spring tension over the run [pN] (NaN for rigid).
+    max_wrap : float
+        Largest angle the fiber's tangent turns along its beads on the pillar [deg]
+        (NaN for rigid).
     trajectory : Trajectory or None
     """
 
@@ -92,6 +102,10 @@ class RunResult:
     n_beads: int = 0
     t_end: float = math.nan
     min_clearance: float = math.nan
+    max_curvature: float = math.nan
+    min_end_to_end: float = math.nan
+    max_tension: float = math.nan
+    max_wrap: float = math.nan
     trajectory: Trajectory | None = field(default=None, compare=False, repr=False)
 
     def row(self) -> dict[str, object]:

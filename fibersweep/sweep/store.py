@@ -89,6 +89,10 @@ RUN_COLUMNS: dict[str, pa.DataType] = {
     "attempts": pa.int64(),
     "finished_at": pa.float64(),
     "round": pa.int64(),
+    "max_curvature": pa.float64(),
+    "min_end_to_end": pa.float64(),
+    "max_tension": pa.float64(),
+    "max_wrap": pa.float64(),
 }
 
 #: Unit and frame of the runs-table columns, stored as Parquet field metadata
@@ -113,12 +117,16 @@ COLUMN_DOCS: dict[str, tuple[str, str]] = {
     "n_steps": ("", "integrator steps"),
     "wall_time": ("s", "wall-clock time of the run"),
     "cpu_time": ("s", "CPU time of the run in its worker"),
-    "model": ("", "fiber model (rigid or bead-spring)"),
+    "model": ("", "fiber model (rigid, bead-spring or bead-spring-ros2)"),
     "settings": ("", "id of the run's settings (hash of fiber settings and flow field)"),
     "worker": ("", "host:pid of the worker that ran it"),
     "attempts": ("", "times the run was started (worker crashes re-run it)"),
     "finished_at": ("s", "Unix time the run finished"),
     "round": ("", "refinement round that first ran the run (0: the grid; see sweep.refine)"),
+    "max_curvature": ("1/µm", "largest fiber curvature over the run (NaN for rigid)"),
+    "min_end_to_end": ("", "smallest end-to-end distance / contour length (NaN for rigid)"),
+    "max_tension": ("pN", "largest stretching-spring tension over the run (NaN for rigid)"),
+    "max_wrap": ("deg", "largest turning of the tangent along the beads on the pillar"),
 }
 
 _seq = 0
