@@ -97,7 +97,7 @@ def _figure(table: pd.DataFrame, path: Path) -> None:
         bx.set_xscale("log")
         bx.set_xlabel("E [MPa]")
         bx.set_ylabel("class fraction")
-        bx.legend(fontsize="xx-small", ncol=2)
+        bx.legend(fontsize="xx-small", ncol=2, loc="center left", bbox_to_anchor=(0.0, 0.7))
         save_figure(fig, path)
 
 
@@ -110,17 +110,23 @@ def main() -> None:
     ap.add_argument("--moduli", type=float, nargs="+", default=[26e6, 2e6, 0.5e6, 0.1e6, 0.03e6])
     ap.add_argument("--thetas", type=float, nargs="+", default=[-10.0, 0.0, 10.0])
     ap.add_argument("--y0s", type=int, default=10, help="y0/h values, evenly inside (0, 1)")
+    ap.add_argument("--replot", action="store_true", help="table and figure from DIR/study.csv")
     args = ap.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
-    y0s = (np.arange(args.y0s) + 0.5) / args.y0s
-    df = _runs(field, args.lengths, args.moduli, args.thetas, y0s)
-    df.to_csv(out / "study.csv", index=False)
+    if args.replot:
+        df = pd.read_csv(out / "study.csv", keep_default_na=False, na_values=["", "nan"])
+    else:
+        field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
+        y0s = (np.arange(args.y0s) + 0.5) / args.y0s
+        df = _runs(field, args.lengths, args.moduli, args.thetas, y0s)
+        df.to_csv(out / "study.csv", index=False)
     table = _table(df)
     with pd.option_context("display.width", 200, "display.max_columns", 30):
         print(table.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     _figure(table, out / "stiffness_study.png")
+    if args.replot:
+        return
     soft = FiberSettings(
         model="bead-spring-ros2",
         young_modulus=min(args.moduli),
