@@ -13,6 +13,9 @@ run of ``bead-spring`` at Δt = ``--reference-dt`` (1e-6 s; minutes per run)
 gives the error of both models: |Δδ| (δ = (y_f - y0)/h_obs) and the largest
 distance between the final bead positions at the reference's end time [µm]
 (``simulate_for`` to the same time). ``--reference-dt 0`` skips the references.
+``--equal-accuracy`` instead times both models at matched δ errors (L = l_obs,
+E = 26 MPa): fixed Δt = 2e-4 and 1e-4 s against ROS2 at tighter tolerances, the
+errors taken against the Δt = 5e-5 s δ (within 1e-6 of Δt = 1e-6 s).
 """
 
 from __future__ import annotations
@@ -44,6 +47,30 @@ def _beads_at(field, model, E, start, t_end, dt=None):
     return traj.beads[-1]
 
 
+ACCURACY_RUNS = (
+    ("fixed dt = 2e-4 s", "bead-spring", {"dt": 2e-4}),
+    ("ros2 tol 1e-3, disp 1.0/0.05", "bead-spring-ros2",
+     {"tolerance": 1e-3, "ros2_max_displacement": 1.0, "ros2_contact_displacement": 0.05}),
+    ("fixed dt = 1e-4 s", "bead-spring", {"dt": 1e-4}),
+    ("ros2 tol 3e-4, disp 0.5/0.02", "bead-spring-ros2",
+     {"tolerance": 3e-4, "ros2_max_displacement": 0.5, "ros2_contact_displacement": 0.02}),
+)  # fmt: skip
+
+
+def equal_accuracy(field, y0: float) -> None:
+    """Print wall time, steps and |Δδ| of ACCURACY_RUNS (L = l_obs, E = 26 MPa)."""
+    start = FiberStart(0.0, y0, 1.0)
+    _, ref = _run(field, "bead-spring", 26e6, start)
+    print(f"reference: fixed dt = 5e-5 s, delta {ref.delta:+.7f}")
+    for label, model, step in ACCURACY_RUNS:
+        st = FiberSettings(model=model, step=StepSettings(**step))
+        t0 = time.perf_counter()
+        r = simulate(field, st, start)
+        dt = time.perf_counter() - t0
+        print(f"  {label:30s} {dt:7.3f} s {r.n_steps:7d} steps  |d delta| "
+              f"{abs(r.delta - ref.delta):.1e}", flush=True)  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dx", type=float, default=4.0)
@@ -54,11 +81,15 @@ def main() -> None:
     ap.add_argument("--reference-dt", type=float, default=1e-6)
     ap.add_argument("--reference-moduli", type=float, nargs="*", default=[26e6])
     ap.add_argument("--reference-lengths", type=float, nargs="*", default=[1.0])
+    ap.add_argument("--equal-accuracy", action="store_true", help="only the matched-error table")
     args = ap.parse_args()
     field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
     warm = FiberStart(0.0, 0.8, 0.5)
     for m in ("bead-spring", "bead-spring-ros2"):
         _run(field, m, 26e6, warm)
+    if args.equal_accuracy:
+        equal_accuracy(field, args.y0)
+        return
     print(
         f"flow field dx = {args.dx} µm; start theta0 = 0, y0/h = {args.y0}; compiled before timing"
     )
