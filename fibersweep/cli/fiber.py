@@ -104,6 +104,12 @@ def simulate(
             f"y = {f(res.y_f, '.1f')} µm, theta = {f(res.theta_f, '.1f')}°; "
             f"min clearance {f(res.min_clearance, '.3f')} µm"
         )
+        if math.isfinite(res.min_end_to_end):
+            typer.echo(
+                f"deformation: max curvature {res.max_curvature:.4f} 1/µm, min end-to-end "
+                f"{res.min_end_to_end:.3f} of the contour, max tension "
+                f"{res.max_tension:.3g} pN, max wrap {res.max_wrap:.1f}°"
+            )
         typer.echo(f"steps: {res.n_steps} in {res.wall_time:.2f} s")
         if reversible:
             typer.echo(f"reversed flow: returns within {f(back, '.3g')} µm of the start")

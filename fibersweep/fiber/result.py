@@ -140,6 +140,16 @@ class RunResult:
         Time at the end of the run [s].
     min_clearance : float
         Smallest bead-centre distance to the pillar outline minus a, over the run [µm].
+    max_curvature : float
+        Largest curvature of the fiber over the run [1/µm] (bead-spring models;
+        NaN for rigid; :mod:`fibersweep.fiber.deformation`).
+    min_end_to_end : float
+        Smallest end-to-end distance over contour length over the run (NaN for rigid).
+    max_tension : float
+        Largest stretching-spring tension over the run [pN] (NaN for rigid).
+    max_wrap : float
+        Largest angle the fiber's tangent turns along its beads on the pillar [deg]
+        (NaN for rigid).
     trajectory : Trajectory or None
     """
 
@@ -178,7 +188,7 @@ class RunResult:
     theta_f: float = column(math.nan, "float64", "deg", "final directed angle, unwrapped")
     n_steps: int = column(0, "int64", "", "integrator steps")
     wall_time: float = column(0.0, "float64", "s", "wall-clock time of the run")
-    model: str = column("", "string", "", "fiber model (rigid or bead-spring)")
+    model: str = column("", "string", "", "fiber model (rigid, bead-spring or bead-spring-ros2)")
     n_beads: int = column(0, "int64", "", "beads of the fiber (0 when the run did not start)")
     t_end: float = column(
         math.nan, "float64", "s", "time at the end of the run (stop or time limit)"
@@ -188,6 +198,27 @@ class RunResult:
         "float64",
         "µm",
         "smallest bead-centre distance to the pillar outline minus the bead radius, over the run",
+    )
+    max_curvature: float = column(
+        math.nan, "float64", "1/µm", "largest fiber curvature over the run (NaN for rigid)"
+    )
+    min_end_to_end: float = column(
+        math.nan,
+        "float64",
+        "",
+        "smallest end-to-end distance / contour length over the run (NaN for rigid)",
+    )
+    max_tension: float = column(
+        math.nan,
+        "float64",
+        "pN",
+        "largest stretching-spring tension over the run (NaN for rigid)",
+    )
+    max_wrap: float = column(
+        math.nan,
+        "float64",
+        "deg",
+        "largest turning of the tangent along the beads on the pillar (NaN for rigid)",
     )
     trajectory: Trajectory | None = field(default=None, compare=False, repr=False)
 
