@@ -81,7 +81,7 @@ class CacheInfo:
 # computed before they existed: at that value they stay out of the key, so those
 # fields keep their keys (and stored sweeps compare equal, see key_settings).
 GEOMETRY_ADDED = {"pillar_shape": "triangle", "pillar_rotation": 0.0, "pillar_vertices": None}
-FLOW_ADDED = {"precision": "float32"}
+FLOW_ADDED = {"precision": "float32", "patch": None}
 
 
 def key_settings(flow: dict[str, Any]) -> dict[str, Any]:
@@ -173,12 +173,12 @@ def load_entry(
     geometry = settings.geometry.to_geometry()
     if settings.pillar_boundary != "staircase" and meta.get("wall_ghosts") != GHOST_METHOD:
         # entry written before ghost values were stored: derive them (in memory)
-        ux, uy = extend_into_wall(ux, uy, solid, geometry.shape, float(settings.dx))
+        ux, uy = extend_into_wall(ux, uy, solid, geometry.shape, float(settings.field_dx))
         meta = {**meta, "wall_ghosts": GHOST_METHOD}
     return FlowField(
         ux=ux,
         uy=uy,
-        dx=float(settings.dx),
+        dx=float(settings.field_dx),
         geometry=geometry,
         fluid=settings.fluid.to_fluid(),
         solid=solid,

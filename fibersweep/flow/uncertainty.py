@@ -84,9 +84,12 @@ def other_level(
 
     for factor in (0.5, 2.0):
         try:
-            other = FlowSettings.model_validate(
-                {**settings.model_dump(), "dx": settings.dx * factor}
-            )
+            dump = settings.model_dump()
+            if settings.patch is None:
+                dump["dx"] = settings.dx * factor
+            else:  # the patch levels: the same channel, the patch at 2 or 1/2 its spacing
+                dump["patch"] = {**dump["patch"], "dx": settings.patch.dx * factor}
+            other = FlowSettings.model_validate(dump)
         except ValueError:
             continue
         path = Path(cache_dir) / f"flow-{cache_key(other)}"
