@@ -19,7 +19,9 @@ whole channel is solved at ``settings.dx`` and only a box around the pillar
   where the fine solution would not change the coarse one (the patch-size study
   in docs/fidelity.md measures how far that is);
 * the stored field is the whole channel at ``patch.dx``: the patch's midplane
-  field inside the box, the channel's field interpolated bilinearly outside.
+  field inside the box, the channel's field interpolated bilinearly outside
+  (rescaled for the thinner layer the finer grid's midplane average spans,
+  :func:`depth_factor`).
   Fibers and the separatrix analysis read it like any single-grid field.
 """
 
@@ -50,12 +52,12 @@ from fibersweep.flow.lbm import (
     lattice_of,
     solve_nested,
 )
-from fibersweep.flow.midplane import midplane_average
+from fibersweep.flow.midplane import midplane_average, midplane_weights
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.steppers import PullStepper
 from fibersweep.units import Geometry
 
-__all__ = ["PatchBox", "patch_box", "PatchStepper", "solve_patched", "compose"]
+__all__ = ["PatchBox", "patch_box", "PatchStepper", "solve_patched", "compose", "depth_factor"]
 
 log = logging.getLogger(__name__)
 
@@ -134,9 +136,7 @@ def _bilinear(plane: np.ndarray, dc: float, xs: np.ndarray, ys: np.ndarray, sign
     gy = ys / dc - 0.5 + 1.0
     gx = xs / dc - 0.5 + 1.0
     Y, X = np.meshgrid(gy, gx, indexing="ij")
-    return map_coordinates(padded, [Y.ravel(), X.ravel()], order=1, mode="nearest").reshape(
-        Y.shape
-    )
+    return map_coordinates(padded, [Y.ravel(), X.ravel()], order=1, mode="nearest").reshape(Y.shape)
 
 
 def boundary_field(
@@ -260,8 +260,26 @@ def solve_patch_lattice(
     return sol, box, pgeom
 
 
+def depth_factor(grid: Grid) -> float:
+    """IB z-average of the Poiseuille parabola on ``grid`` over its midplane value.
+
+    The midplane field is the IB-kernel average over a few nodes around z = H/2, so
+    a coarser grid averages over a thicker layer (0.978 at 10 nodes across the
+    depth, 0.995 at 20): the channel's field is rescaled by the ratio of the two
+    factors outside the patch so that it joins the patch's without a step.
+    """
+    depth = grid.nz_full
+    par = lambda k: (k + 0.5) * (depth - k - 0.5)  # noqa: E731
+    return sum(w * par(k) for k, w in midplane_weights(grid)) / (depth / 2.0) ** 2
+
+
 def compose(
-    coarse_field: FlowField, patch_ux: np.ndarray, patch_uy: np.ndarray, patch_solid, box: PatchBox
+    coarse_field: FlowField,
+    patch_ux: np.ndarray,
+    patch_uy: np.ndarray,
+    patch_solid,
+    box: PatchBox,
+    outside_scale: float = 1.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The whole channel at the patch spacing: the patch inside its box, the channel outside.
 
@@ -272,6 +290,8 @@ def compose(
     patch_ux, patch_uy, patch_solid : ndarray, shape (box.nx, box.ny)
         The patch's midplane field [µm/s] and its solid nodes.
     box : PatchBox
+    outside_scale : float
+        Factor on the channel's field (:func:`depth_factor` of the patch over the channel's).
 
     Returns
     -------
@@ -286,6 +306,7 @@ def compose(
     out = []
     for comp, patch in ((coarse_field.ux, patch_ux), (coarse_field.uy, patch_uy)):
         full = _bilinear(np.asarray(comp, dtype=np.float64).T, coarse_field.dx, xs, ys, -1.0).T
+        full *= outside_scale
         full[box.i0 : box.i0 + box.nx, box.j0 : box.j0 + box.ny] = patch
         out.append(np.ascontiguousarray(full))
     solid = np.zeros((nx, ny), dtype=bool)
@@ -320,7 +341,8 @@ def solve_patched(
     ux, uy = midplane_average(sol.u, sol.grid) * scale
     if settings.pillar_boundary != "staircase":
         ux, uy = extend_into_wall(ux, uy, sol.grid.solid, pgeom.shape, box.dx)
-    ux, uy, solid = compose(coarse_field, ux, uy, sol.grid.solid, box)
+    outside = depth_factor(sol.grid) / depth_factor(coarse.grid)
+    ux, uy, solid = compose(coarse_field, ux, uy, sol.grid.solid, box, outside)
     rep = sol.report
     meta = {
         "solver_version": SOLVER_VERSION,
@@ -337,6 +359,7 @@ def solve_patched(
             "y0_um": box.y0,
             "nodes": [box.nx, box.ny, sol.grid.nz],
             "channel_dx_um": settings.dx,
+            "outside_scale": outside,
             "channel_report": coarse_field.meta["report"],
             "channel_seconds": t_coarse,
             "seconds": time.perf_counter() - t0,
