@@ -20,7 +20,7 @@ Candidates:
   instead of the IB kernel's z-average, from the patch's 3D solution
   (u = c0 − c2 ζ² through the two nodes nearest the midplane).
 
-Usage: python3 scripts/offset_study.py [--taus 0.8 1 1.5] [--shifts 0.5 1 1.5] [--examples]
+Usage: python3 scripts/offset_study.py [--taus 0.8 1 1.5] [--shifts 0.5 1] [--axes y] [--examples]
 """
 
 from __future__ import annotations
@@ -102,11 +102,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--taus", type=float, nargs="*", default=[0.8, 1.0, 1.5])
     ap.add_argument("--shifts", type=float, nargs="*", default=[0.5, 1.0, 1.5], help="µm")
+    ap.add_argument("--axes", default="y", help="move the pillar along 'x', 'y' or 'xy'")
     ap.add_argument("--radius", type=float, default=2.0, help="bead radius a [µm]")
     ap.add_argument("--no-thickness", action="store_true")
     ap.add_argument("--examples", action="store_true", help="run the two worked examples")
     ap.add_argument("--config", default="configs/paper.yaml", help="fiber settings (examples)")
-    ap.add_argument("--cache", default=".fibersweep-cache/offset")
+    ap.add_argument("--cache", default=".fibersweep-cache/patch")
     args = ap.parse_args()
     logging.basicConfig(level=logging.WARNING)
     fiber = None
@@ -123,10 +124,12 @@ def main() -> None:
     for s in args.shifts:
         geo_y = {"pillar_y_base": base[1] + s}
         geo_x = {"pillar_x": base[0] + s}
-        cands.append((f"BGK tau=1, staircase, pillar y +{s:g} um",
-                      settings_of(**source, geometry=geo_y)))  # fmt: skip
-        cands.append((f"BGK tau=1, staircase, pillar x +{s:g} um",
-                      settings_of(**source, geometry=geo_x)))  # fmt: skip
+        if "y" in args.axes:
+            cands.append((f"BGK tau=1, staircase, pillar y +{s:g} um",
+                          settings_of(**source, geometry=geo_y)))  # fmt: skip
+        if "x" in args.axes:
+            cands.append((f"BGK tau=1, staircase, pillar x +{s:g} um",
+                          settings_of(**source, geometry=geo_x)))  # fmt: skip
     rows = []
     ref = None
     for name, s in cands:

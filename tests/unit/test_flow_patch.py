@@ -134,3 +134,18 @@ def test_compose_patch_inside_channel_outside():
     away[:2] = away[-2:] = False  # periodic wrap of a non-periodic test field
     np.testing.assert_allclose(ux[away], fine.ux[away], rtol=1e-12)
     np.testing.assert_allclose(uy[away], fine.uy[away], rtol=1e-12, atol=1e-12)
+
+
+def test_patch_levels_for_the_error_estimate(flow_cache_dir, small_field, tmp_path):
+    """The patch's coarser level is the channel alone; its finer one the patch at half dx."""
+    from fibersweep.flow.cache import cache_key
+    from fibersweep.flow.uncertainty import other_level
+
+    s = _patched(margin=160.0)
+    level = other_level(s, flow_cache_dir)  # the small channel at dx = 4 µm is cached
+    assert level is not None
+    other, field = level
+    assert other.patch is None and other.dx == 4.0 and field.dx == 4.0
+    finer = (tmp_path / f"flow-{cache_key(_patched(pdx=1.0, margin=160.0))}").name
+    assert finer != f"flow-{cache_key(s)}"
+    assert other_level(s, tmp_path) is None  # nothing cached there
