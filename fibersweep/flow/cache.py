@@ -112,6 +112,10 @@ def cache_key(settings: FlowSettings) -> str:
     that reproduces those fields (:func:`key_settings`), so they keep their keys.
     """
     payload = {"settings": key_settings(settings.model_dump(mode="json")), "solver": SOLVER_VERSION}
+    if settings.patch is not None:  # the nesting's version (a field without a patch: no key)
+        from fibersweep.flow.patch import PATCH_METHOD
+
+        payload["patch_method"] = PATCH_METHOD
     blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
     return hashlib.sha256(blob).hexdigest()[:24]
 

@@ -42,7 +42,7 @@ from fibersweep.flow.field import FlowField
 from fibersweep.flow.ghost import GHOST_METHOD, extend_into_wall
 from fibersweep.flow.initial import velocity_gradient
 from fibersweep.flow.kernels import stream_collide
-from fibersweep.flow.lattice import Grid, make_grid
+from fibersweep.flow.lattice import E, W, Grid, make_grid
 from fibersweep.flow.lbm import (
     SERIAL_BELOW_CELLS,
     SOLVER_VERSION,
@@ -61,7 +61,7 @@ __all__ = ["PatchBox", "patch_box", "PatchStepper", "solve_patched", "compose", 
 
 log = logging.getLogger(__name__)
 
-PATCH_METHOD = "one-way-frame-1"  # recorded in meta; change when the nesting changes
+PATCH_METHOD = "one-way-frame-2"  # in the cache key of patched fields: change with the nesting
 
 
 @dataclasses.dataclass(frozen=True)
@@ -186,8 +186,10 @@ def boundary_field(
 class PatchStepper(PullStepper):
     """The pull stepper with the frame (outermost ring of nodes) held at fixed populations.
 
-    The frame's populations are those it starts with (the channel solution), so
-    interior nodes next to it pull the channel's populations every step.
+    The frame's populations are those it starts with (the channel solution, plus
+    the half force the collision leaves in the momentum), so interior nodes next
+    to it pull the channel's populations every step. ``args`` as for
+    :class:`PullStepper`: (u0, rho0, grad, fx, omega_p, omega_m).
     """
 
     def __init__(self, grid: Grid, *args, **kwargs):
@@ -199,7 +201,16 @@ class PatchStepper(PullStepper):
             (slice(None), slice(1, -1), 1, slice(1, -1)),
             (slice(None), slice(1, -1), ny, slice(1, -1)),
         )
-        self.held = tuple(self.g[s].copy() for s in self.frame)
+        # init_populations carries momentum ρu; after a collision with the Guo force the
+        # populations carry ρu + F/2 (the odd part of the force term): add it
+        fx = args[3]
+        shift = (1.5 * fx * W * E[:, 0]).astype(self.g.dtype)[:, None, None]
+        held = []
+        for s in self.frame:
+            v = self.g[s].copy()
+            v += shift
+            held.append(v)
+        self.held = tuple(held)
 
     def _pin(self, g: np.ndarray) -> None:
         for s, v in zip(self.frame, self.held, strict=True):
@@ -283,6 +294,9 @@ def compose(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The whole channel at the patch spacing: the patch inside its box, the channel outside.
 
+    The patch's outermost ring (held at the channel's populations, its own
+    moments meaningless) takes the channel's values too.
+
     Parameters
     ----------
     coarse_field : FlowField
@@ -304,10 +318,12 @@ def compose(
     xs = (np.arange(nx) + 0.5) * df
     ys = (np.arange(ny) + 0.5) * df
     out = []
+    # the patch's frame ring is held at the channel's values: the channel's field stands there
+    inner = (slice(box.i0 + 1, box.i0 + box.nx - 1), slice(box.j0 + 1, box.j0 + box.ny - 1))
     for comp, patch in ((coarse_field.ux, patch_ux), (coarse_field.uy, patch_uy)):
         full = _bilinear(np.asarray(comp, dtype=np.float64).T, coarse_field.dx, xs, ys, -1.0).T
         full *= outside_scale
-        full[box.i0 : box.i0 + box.nx, box.j0 : box.j0 + box.ny] = patch
+        full[inner] = patch[1:-1, 1:-1]
         out.append(np.ascontiguousarray(full))
     solid = np.zeros((nx, ny), dtype=bool)
     solid[box.i0 : box.i0 + box.nx, box.j0 : box.j0 + box.ny] = patch_solid

@@ -113,7 +113,7 @@ def test_boundary_field_exact_for_hele_shaw_with_linear_amplitude():
 
 
 def test_compose_patch_inside_channel_outside():
-    """Inside the box the patch's values; outside the channel field, bilinear (exact if linear)."""
+    """Inside the box the patch's values; outside (and on the frame ring) the channel's."""
     s = _patched()
     geom = s.geometry.to_geometry()
     box = patch_box(s)
@@ -124,8 +124,8 @@ def test_compose_patch_inside_channel_outside():
     psolid[3, 4] = True
     ux, uy, solid = compose(coarse, pux, -pux, psolid, box)
     fine = FlowField.from_function(lin, geom, 2.0)
-    inside = np.zeros(ux.shape, dtype=bool)
-    inside[box.i0 : box.i0 + box.nx, box.j0 : box.j0 + box.ny] = True
+    inside = np.zeros(ux.shape, dtype=bool)  # the patch less its frame ring
+    inside[box.i0 + 1 : box.i0 + box.nx - 1, box.j0 + 1 : box.j0 + box.ny - 1] = True
     assert np.all(ux[inside] == 7.0) and np.all(uy[inside] == -7.0)
     assert solid.sum() == 1 and solid[box.i0 + 3, box.j0 + 4]
     # exact away from the walls (bilinear of a linear field; the wall ghosts are odd)
