@@ -42,7 +42,7 @@ from fibersweep.flow.field import FlowField
 from fibersweep.flow.ghost import GHOST_METHOD, extend_into_wall
 from fibersweep.flow.initial import velocity_gradient
 from fibersweep.flow.kernels import stream_collide
-from fibersweep.flow.lattice import E, W, Grid, make_grid
+from fibersweep.flow.lattice import E, Grid, W, make_grid
 from fibersweep.flow.lbm import (
     SERIAL_BELOW_CELLS,
     SOLVER_VERSION,
