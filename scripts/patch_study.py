@@ -99,8 +99,8 @@ def main() -> None:
     print(f"peak speed of the fine field {p_ref:.2f} um/s; L2 over {int(mask.sum())} fluid nodes "
           f"within {args.reach:g} um of the pillar's bounding box")  # fmt: skip
     if args.save:
-        np.savez(args.save, ref_ux=ref.ux, ref_uy=ref.uy,
-                 **{f"m{m:g}_{c}": getattr(f, c) for m, (f, _) in patched.items() for c in ("ux", "uy")})  # fmt: skip
+        arrays = {f"m{m:g}_{c}": getattr(f, "u" + c) for m, (f, _) in patched.items() for c in "xy"}
+        np.savez(args.save, ref_ux=ref.ux, ref_uy=ref.uy, **arrays)
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(rows, fh, indent=1)
