@@ -1,0 +1,179 @@
+"""Where the time of a ``bead-spring-ros2`` pillar pass goes; prints a per-part table.
+
+Usage: python scripts/profile_flexible.py [--dx 4] [--cache .fibersweep-cache]
+       [--young-modulus 26e6] [--length 1.0] [--y0 0.45] [--tolerance 0.01]
+
+One run (theta0 = 0, y0/h, L/l_obs) is timed after the kernels are compiled, and
+its accepted / rejected steps are counted. Each part of a step is then timed on
+its own in a compiled loop at the run's start configuration (repeated 2 000
+times): the bead velocity f(q) (flow interpolation, elastic and contact forces,
+the RPY mobility rebuild and M F), the Jacobian J = dF/dq, the system matrix
+I - γhMJ, the factorisation and the solves. Per-step costs times the number of
+calls per step (two f, one J, one system, one factorisation, two solves; a
+rejected step redoes all but f(q) and J) estimate the share of each part.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numba as nb
+import numpy as np
+
+from fibersweep.fiber import implicit_beadspring as I
+from fibersweep.fiber import record as R
+from fibersweep.fiber.beadspring import bead_velocity, force_jacobian, force_jacobian_fd
+from fibersweep.fiber.bundles import build_kernel
+from fibersweep.fiber.lu import lu_solve
+from fibersweep.fiber.mobility import fiber_offsets, rpy_fill
+from fibersweep.fiber.result import FiberStart
+from fibersweep.fiber.run import simulate
+from fibersweep.fiber.settings import FiberSettings, StepSettings
+from fibersweep.fiber.setup import prepare
+from fibersweep.flow.cache import get_flow_field
+from fibersweep.flow.settings import FlowSettings
+
+REPS = 2000
+
+
+@nb.njit(cache=True)
+def _t_velocity(k, reps):
+    flow, pillar, body, p, w, bw, effects = k
+    for _ in range(reps):
+        bead_velocity(flow, pillar, body, p, w, bw, effects)
+
+
+@nb.njit(cache=True)
+def _t_mobility(k, reps):
+    w = k.work
+    for _ in range(reps):
+        rpy_fill(w.x, w.y, k.params.a, k.params.mu, k.bead.mob)
+
+
+@nb.njit(cache=True)
+def _t_jacobian(k, reps):
+    for _ in range(reps):
+        force_jacobian(k.pillar, k.params, k.work, k.bead)
+
+
+@nb.njit(cache=True)
+def _t_jacobian_fd(k, reps):
+    for _ in range(reps):
+        force_jacobian_fd(k.pillar, k.params, k.work, k.bead)
+
+
+@nb.njit(cache=True)
+def _t_wmatrix(k, reps):
+    for _ in range(reps):
+        force_jacobian(k.pillar, k.params, k.work, k.bead)
+        I.w_matrix(k.bead)
+
+
+@nb.njit(cache=True)
+def _t_factor(k, reps, piv):
+    for _ in range(reps):
+        I.system(k.bead, 1e-4, piv)
+
+
+@nb.njit(cache=True)
+def _t_solve(k, reps, piv, b):
+    for _ in range(reps):
+        lu_solve(k.bead.lhs, piv, b)
+
+
+@nb.njit(cache=True)
+def _t_np_solve(k, reps, b):
+    for _ in range(reps):
+        lhs = k.bead.lhs.copy()
+        np.linalg.solve(lhs, b)
+
+
+def _count(k, setup):
+    """(accepted, rejected) steps of an integrate_ros2 run (as run_bead_spring_ros2)."""
+    n = setup.n
+    s = fiber_offsets(n, k.params.a)
+    th0 = setup.th0
+    q = np.column_stack([setup.x0 + s * np.cos(th0), setup.y0_abs + s * np.sin(th0)]).ravel()
+    state = np.array([0.0, np.nan, th0, min(1e-5, k.params.dt_max), 0.0])
+    scratch = [np.zeros(2 * n) for _ in range(5)]
+    accepted = 0
+    while True:
+        rec = np.empty((I.CHUNK, R.NCOLS))
+        brec = np.empty((I.CHUNK, n, 2))
+        rows, code = I.integrate_ros2(q, state, k, rec, brec, *scratch)
+        accepted += rows
+        if code != R.CHUNK_FULL:
+            return accepted - 1, int(state[4])
+
+
+def _time(fn, *args) -> float:
+    fn(*args[:1], 2, *args[1:])  # compile
+    t0 = time.perf_counter()
+    fn(args[0], REPS, *args[1:])
+    return (time.perf_counter() - t0) / REPS
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dx", type=float, default=4.0)
+    ap.add_argument("--cache", default=".fibersweep-cache")
+    ap.add_argument("--young-modulus", type=float, default=26e6)
+    ap.add_argument("--length", type=float, default=1.0)
+    ap.add_argument("--y0", type=float, default=0.45)
+    ap.add_argument("--tolerance", type=float, default=0.01)
+    args = ap.parse_args()
+    field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
+    st = FiberSettings(
+        model="bead-spring-ros2",
+        young_modulus=args.young_modulus,
+        step=StepSettings(tolerance=args.tolerance),
+    )
+    start = FiberStart(0.0, args.y0, args.length)
+    simulate(field, st, start)  # compile
+    t0 = time.perf_counter()
+    r = simulate(field, st, start)
+    wall = time.perf_counter() - t0
+    setup = prepare(field, st, start, np.random.default_rng(0))
+    k = build_kernel(setup)
+    n = setup.n
+    s = fiber_offsets(n, k.params.a)
+    k.work.x[:] = setup.x0 + s
+    k.work.y[:] = setup.y0_abs
+    piv = np.zeros(2 * n, dtype=np.int64)
+    b = np.ones(2 * n)
+    bead_velocity(*k)
+    t_f = _time(_t_velocity, k)
+    t_m = _time(_t_mobility, k)
+    t_j = _time(_t_jacobian, k)
+    t_jfd = _time(_t_jacobian_fd, k)
+    t_w = _time(_t_wmatrix, k) - t_j
+    t_lu = _time(_t_factor, k, piv)
+    t_sol = _time(_t_solve, k, piv, b)
+    t_np = _time(_t_np_solve, k, b)
+    acc, rej = _count(build_kernel(setup), setup)
+    # calls: f(q) once per accepted step, f(q + h k1) once per try; J and W once per
+    # accepted step; system + LU and the two solves once per try
+    tries = acc + rej
+    parts = {
+        "f(q): flow, forces, mobility, M F": (t_f, acc + tries),
+        "  of which the RPY mobility rebuild": (t_m, acc + tries),
+        "Jacobian J (analytic elastic)": (t_j, acc),
+        "W = M J": (t_w, acc),
+        "I - γhW and its LU": (t_lu, tries),
+        "two triangular solves": (2 * t_sol, tries),
+    }
+    print(f"run: {n} beads, E = {args.young_modulus:g} Pa, L/l = {args.length}, "
+          f"tol {args.tolerance} µm: {wall:.3f} s wall, {acc} accepted + {rej} rejected steps, "
+          f"{1e6 * wall / acc:.1f} µs per accepted step")  # fmt: skip
+    print(f"{'part':38s} {'µs/call':>8} {'calls':>7} {'s':>7} {'share':>6}")
+    for name, (t, calls) in parts.items():
+        print(f"{name:38s} {1e6 * t:8.2f} {calls:7d} {t * calls:7.3f} {t * calls / wall:6.1%}")
+    rest = wall - sum(t * c for nm, (t, c) in parts.items() if not nm.startswith(" "))
+    print(f"{'rest (recording, stop test, setup)':38s} {'':8s} {'':7s} {rest:7.3f}")
+    print(f"for comparison (µs/call): Jacobian by central differences {1e6 * t_jfd:.2f}, "
+          f"copy + np.linalg.solve {1e6 * t_np:.2f}")
+
+
+if __name__ == "__main__":
+    main()
