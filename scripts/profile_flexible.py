@@ -132,7 +132,7 @@ def main() -> None:
     start = FiberStart(0.0, args.y0, args.length)
     simulate(field, st, start)  # compile
     t0 = time.perf_counter()
-    r = simulate(field, st, start)
+    simulate(field, st, start)
     wall = time.perf_counter() - t0
     setup = prepare(field, st, start, np.random.default_rng(0))
     k = build_kernel(setup)
@@ -171,8 +171,10 @@ def main() -> None:
         print(f"{name:38s} {1e6 * t:8.2f} {calls:7d} {t * calls:7.3f} {t * calls / wall:6.1%}")
     rest = wall - sum(t * c for nm, (t, c) in parts.items() if not nm.startswith(" "))
     print(f"{'rest (recording, stop test, setup)':38s} {'':8s} {'':7s} {rest:7.3f}")
-    print(f"for comparison (µs/call): Jacobian by central differences {1e6 * t_jfd:.2f}, "
-          f"copy + np.linalg.solve {1e6 * t_np:.2f}")
+    print(
+        f"for comparison (µs/call): Jacobian by central differences {1e6 * t_jfd:.2f}, "
+        f"copy + np.linalg.solve {1e6 * t_np:.2f}"
+    )
 
 
 if __name__ == "__main__":

@@ -66,23 +66,11 @@ def _velocity(flow, pillar, body, p, w, bw, effects, q, fext, has_ext, out):
 def w_matrix(bw):
     """W = M J into ``bw.jac`` (2n, 2n), from the mobility ``bw.mob`` and Jacobian ``bw.jac``.
 
-    J is block pentadiagonal (bead k couples to beads k−2..k+2), so row i of W
-    sums over at most 10 columns of J per row of M. ``bw.lhs`` is scratch.
+    A dense BLAS product (``bw.lhs`` is scratch): at 2n ≈ 44 it is ~5 times faster
+    than a loop over J's band (scripts/profile_flexible.py).
     """
-    mob = bw.mob
-    jac = bw.jac
-    out = bw.lhs
-    n2 = out.shape[0]
-    for i2 in range(n2):
-        for j2 in range(n2):
-            out[i2, j2] = 0.0
-        for k2 in range(n2):
-            m = mob[i2, k2]
-            for j2 in range(max(0, 2 * (k2 // 2) - 4), min(n2, 2 * (k2 // 2) + 6)):
-                out[i2, j2] += m * jac[k2, j2]
-    for i2 in range(n2):
-        for j2 in range(n2):
-            jac[i2, j2] = out[i2, j2]
+    np.dot(bw.mob, bw.jac, bw.lhs)
+    bw.jac[:, :] = bw.lhs
 
 
 @nb.njit(cache=True)
