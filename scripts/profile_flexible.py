@@ -5,10 +5,11 @@ Usage: python scripts/profile_flexible.py [--dx 4] [--cache .fibersweep-cache]
 
 One run (theta0 = 0, y0/h, L/l_obs) is timed after the kernels are compiled, and
 its accepted / rejected steps are counted. Each part of a step is then timed on
-its own in a compiled loop at the run's start configuration (repeated 2 000
-times): the bead velocity f(q) (flow interpolation, elastic and contact forces,
-the RPY mobility rebuild and M F), the Jacobian J = dF/dq, the system matrix
-I - γhMJ, the factorisation and the solves. Per-step costs times the number of
+its own in a compiled loop over the run's recorded configurations (so the
+contact phase weighs as in the run): the bead velocity f(q) (flow interpolation,
+elastic and contact forces, the RPY mobility rebuild and M F), the Jacobian
+J = dF/dq and W = M J; the factorisation of I - γhW and the solves (whose cost does
+not depend on the configuration) 2 000 times at the last one. Per-step costs times the number of
 calls per step (two f, one J, one system, one factorisation, two solves; a
 rejected step redoes all but f(q) and J) estimate the share of each part.
 """
@@ -38,36 +39,55 @@ REPS = 2000
 
 
 @nb.njit(cache=True)
-def _t_velocity(k, reps):
+def _set(k, beads, i):
+    for j in range(beads.shape[1]):
+        k.work.x[j] = beads[i, j, 0]
+        k.work.y[j] = beads[i, j, 1]
+
+
+@nb.njit(cache=True)
+def _t_velocity(k, beads):
     flow, pillar, body, p, w, bw, effects = k
-    for _ in range(reps):
+    for i in range(beads.shape[0]):
+        _set(k, beads, i)
         bead_velocity(flow, pillar, body, p, w, bw, effects)
 
 
 @nb.njit(cache=True)
-def _t_mobility(k, reps):
+def _t_mobility(k, beads):
     w = k.work
-    for _ in range(reps):
+    for i in range(beads.shape[0]):
+        _set(k, beads, i)
         rpy_fill(w.x, w.y, k.params.a, k.params.mu, k.bead.mob)
 
 
 @nb.njit(cache=True)
-def _t_jacobian(k, reps):
-    for _ in range(reps):
-        force_jacobian(k.pillar, k.params, k.work, k.bead)
+def _t_set(k, beads):
+    for i in range(beads.shape[0]):
+        _set(k, beads, i)
 
 
 @nb.njit(cache=True)
-def _t_jacobian_fd(k, reps):
-    for _ in range(reps):
-        force_jacobian_fd(k.pillar, k.params, k.work, k.bead)
+def _t_jacobian(k, beads, fd):
+    flow, pillar, body, p, w, bw, effects = k
+    for i in range(beads.shape[0]):
+        _set(k, beads, i)
+        # the contact stiffness w.st of this configuration (which beads are in contact)
+        bead_velocity(flow, pillar, body, p, w, bw, effects)
+        if fd:
+            force_jacobian_fd(pillar, p, w, bw)
+        else:
+            force_jacobian(pillar, p, w, bw)
 
 
 @nb.njit(cache=True)
-def _t_wmatrix(k, reps):
-    for _ in range(reps):
-        force_jacobian(k.pillar, k.params, k.work, k.bead)
-        I.w_matrix(k.bead)
+def _t_wmatrix(k, beads):
+    flow, pillar, body, p, w, bw, effects = k
+    for i in range(beads.shape[0]):
+        _set(k, beads, i)
+        bead_velocity(flow, pillar, body, p, w, bw, effects)
+        force_jacobian(pillar, p, w, bw)
+        I.w_matrix(bw)
 
 
 @nb.njit(cache=True)
@@ -89,26 +109,36 @@ def _t_np_solve(k, reps, b):
         np.linalg.solve(lhs, b)
 
 
-def _count(k, setup):
-    """(accepted, rejected) steps of an integrate_ros2 run (as run_bead_spring_ros2)."""
+def _run(k, setup):
+    """(accepted, rejected, beads (rows, n, 2)) of a run, stepped as run_bead_spring_ros2."""
     n = setup.n
     s = fiber_offsets(n, k.params.a)
     th0 = setup.th0
     q = np.column_stack([setup.x0 + s * np.cos(th0), setup.y0_abs + s * np.sin(th0)]).ravel()
     state = np.array([0.0, np.nan, th0, min(1e-5, k.params.dt_max), 0.0])
     scratch = [np.zeros(2 * n) for _ in range(5)]
-    accepted = 0
+    brecs = []
     while True:
         rec = np.empty((I.CHUNK, R.NCOLS))
         brec = np.empty((I.CHUNK, n, 2))
         rows, code = I.integrate_ros2(q, state, k, rec, brec, *scratch)
-        accepted += rows
+        brecs.append(brec[:rows])
         if code != R.CHUNK_FULL:
-            return accepted - 1, int(state[4])
+            beads = np.concatenate(brecs)
+            return beads.shape[0] - 1, int(state[4]), beads
+
+
+def _per_config(fn, k, beads, *args) -> float:
+    """Seconds per configuration of ``fn`` over the run's configurations ``beads``."""
+    fn(k, beads[:2], *args)  # compile
+    t0 = time.perf_counter()
+    fn(k, beads, *args)
+    return (time.perf_counter() - t0) / beads.shape[0]
 
 
 def _time(fn, *args) -> float:
-    fn(*args[:1], 2, *args[1:])  # compile
+    """Seconds per call of a part at a fixed configuration (REPS calls)."""
+    fn(args[0], 2, *args[1:])  # compile
     t0 = time.perf_counter()
     fn(args[0], REPS, *args[1:])
     return (time.perf_counter() - t0) / REPS
@@ -142,16 +172,19 @@ def main() -> None:
     k.work.y[:] = setup.y0_abs
     piv = np.zeros(2 * n, dtype=np.int64)
     b = np.ones(2 * n)
+    acc, rej, beads = _run(build_kernel(setup), setup)
+    t_set = _per_config(_t_set, k, beads)
+    t_f = _per_config(_t_velocity, k, beads) - t_set
+    t_m = _per_config(_t_mobility, k, beads) - t_set
+    t_j = _per_config(_t_jacobian, k, beads, False) - t_f - t_set
+    t_jfd = _per_config(_t_jacobian, k, beads, True) - t_f - t_set
+    t_w = _per_config(_t_wmatrix, k, beads) - t_j - t_f - t_set
     bead_velocity(*k)
-    t_f = _time(_t_velocity, k)
-    t_m = _time(_t_mobility, k)
-    t_j = _time(_t_jacobian, k)
-    t_jfd = _time(_t_jacobian_fd, k)
-    t_w = _time(_t_wmatrix, k) - t_j
+    force_jacobian(k.pillar, k.params, k.work, k.bead)
+    I.w_matrix(k.bead)
     t_lu = _time(_t_factor, k, piv)
     t_sol = _time(_t_solve, k, piv, b)
     t_np = _time(_t_np_solve, k, b)
-    acc, rej = _count(build_kernel(setup), setup)
     # calls: f(q) once per accepted step, f(q + h k1) once per try; J and W once per
     # accepted step; system + LU and the two solves once per try
     tries = acc + rej
