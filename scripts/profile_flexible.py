@@ -38,14 +38,14 @@ from fibersweep.flow.settings import FlowSettings
 REPS = 2000
 
 
-@nb.njit(cache=True)
+@nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _set(k, beads, i):
     for j in range(beads.shape[1]):
         k.work.x[j] = beads[i, j, 0]
         k.work.y[j] = beads[i, j, 1]
 
 
-@nb.njit(cache=True)
+@nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_velocity(k, beads):
     flow, pillar, body, p, w, bw, effects = k
     for i in range(beads.shape[0]):
@@ -53,7 +53,7 @@ def _t_velocity(k, beads):
         bead_velocity(flow, pillar, body, p, w, bw, effects)
 
 
-@nb.njit(cache=True)
+@nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_mobility(k, beads):
     w = k.work
     for i in range(beads.shape[0]):
@@ -61,13 +61,13 @@ def _t_mobility(k, beads):
         rpy_fill(w.x, w.y, k.params.a, k.params.mu, k.bead.mob)
 
 
-@nb.njit(cache=True)
+@nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_set(k, beads):
     for i in range(beads.shape[0]):
         _set(k, beads, i)
 
 
-@nb.njit(cache=True)
+@nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_jacobian(k, beads, fd):
     flow, pillar, body, p, w, bw, effects = k
     for i in range(beads.shape[0]):
@@ -80,7 +80,7 @@ def _t_jacobian(k, beads, fd):
             force_jacobian(pillar, p, w, bw)
 
 
-@nb.njit(cache=True)
+@nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_wmatrix(k, beads):
     flow, pillar, body, p, w, bw, effects = k
     for i in range(beads.shape[0]):
@@ -90,19 +90,19 @@ def _t_wmatrix(k, beads):
         I.w_matrix(bw)
 
 
-@nb.njit(cache=True)
+@nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_factor(k, reps, piv):
     for _ in range(reps):
         I.system(k.bead, 1e-4, piv)
 
 
-@nb.njit(cache=True)
+@nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_solve(k, reps, piv, b):
     for _ in range(reps):
         lu_solve(k.bead.lhs, piv, b)
 
 
-@nb.njit(cache=True)
+@nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_np_solve(k, reps, b):
     for _ in range(reps):
         lhs = k.bead.lhs.copy()

@@ -19,6 +19,14 @@ e <= ``Params.tol`` and the next h is h · min(2, max(0.2, 0.9 √(tol / e))).
 The displacement of a bead per step is also kept below ``Params.max_disp``
 and, approaching the pillar, below half the gap to the contact cutoff (so that
 the step does not jump into contact), but not below ``Params.contact_disp``.
+
+Cost of a step (scripts/profile_flexible.py): two evaluations of f (each
+rebuilds the RPY mobility), the analytic banded Jacobian
+(:func:`~fibersweep.fiber.beadspring.force_jacobian`), W = M J by one BLAS
+product, and one in-place LU factorisation of I − γhW whose factors serve both
+stages (:mod:`fibersweep.fiber.lu`); a rejected step redoes the LU and the
+stage-2 f only. The mobility is lagged in W only: f itself always uses M at its
+own argument.
 """
 
 from __future__ import annotations
