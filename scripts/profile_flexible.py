@@ -110,22 +110,23 @@ def _t_np_solve(k, reps, b):
 
 
 def _run(k, setup):
-    """(accepted, rejected, beads (rows, n, 2)) of a run, stepped as run_bead_spring_ros2."""
+    """(accepted, rejected, beads (rows, n, 2), record rows) of a run, as run_bead_spring_ros2."""
     n = setup.n
     s = fiber_offsets(n, k.params.a)
     th0 = setup.th0
     q = np.column_stack([setup.x0 + s * np.cos(th0), setup.y0_abs + s * np.sin(th0)]).ravel()
     state = np.array([0.0, np.nan, th0, min(1e-5, k.params.dt_max), 0.0])
     scratch = [np.zeros(2 * n) for _ in range(5)]
-    brecs = []
+    recs, brecs = [], []
     while True:
         rec = np.empty((I.CHUNK, R.NCOLS))
         brec = np.empty((I.CHUNK, n, 2))
         rows, code = I.integrate_ros2(q, state, k, rec, brec, *scratch)
+        recs.append(rec[:rows])
         brecs.append(brec[:rows])
         if code != R.CHUNK_FULL:
             beads = np.concatenate(brecs)
-            return beads.shape[0] - 1, int(state[4]), beads
+            return beads.shape[0] - 1, int(state[4]), beads, np.concatenate(recs)
 
 
 def _per_config(fn, k, beads, *args) -> float:
@@ -172,7 +173,7 @@ def main() -> None:
     k.work.y[:] = setup.y0_abs
     piv = np.zeros(2 * n, dtype=np.int64)
     b = np.ones(2 * n)
-    acc, rej, beads = _run(build_kernel(setup), setup)
+    acc, rej, beads, rec = _run(build_kernel(setup), setup)
     t_set = _per_config(_t_set, k, beads)
     t_f = _per_config(_t_velocity, k, beads) - t_set
     t_m = _per_config(_t_mobility, k, beads) - t_set
@@ -204,6 +205,11 @@ def main() -> None:
         print(f"{name:38s} {1e6 * t:8.2f} {calls:7d} {t * calls:7.3f} {t * calls / wall:6.1%}")
     rest = wall - sum(t * c for nm, (t, c) in parts.items() if not nm.startswith(" "))
     print(f"{'rest (recording, stop test, setup)':38s} {'':8s} {'':7s} {rest:7.3f}")
+    h = np.diff(rec[:, R.COLS.index("t")])
+    c = rec[:-1, R.COLS.index("contact")] > 0
+    print(f"in contact: {int(c.sum())} steps over {h[c].sum():.3f} s (median step "
+          f"{np.median(h[c]):.1e} s); free: {int((~c).sum())} steps over {h[~c].sum():.3f} s "
+          f"(median step {np.median(h[~c]):.1e} s)")  # fmt: skip
     print(
         f"for comparison (µs/call): Jacobian by central differences {1e6 * t_jfd:.2f}, "
         f"copy + np.linalg.solve {1e6 * t_np:.2f}"
