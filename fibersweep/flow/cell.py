@@ -56,7 +56,7 @@ log = logging.getLogger(__name__)
 
 CELL_SOLVER_VERSION = "cell-d3q19-trt-guo-1"
 U_LATTICE = 1e-5
-EDGE_CELLS = 5  # an interpolated pillar wall needs this many cells to the cell's edges
+EDGE_CELLS = 4  # cells between an interpolated pillar wall and the cell's edges (its stencil)
 
 
 @dataclass(frozen=True)

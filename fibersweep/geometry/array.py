@@ -31,7 +31,7 @@ from functools import cached_property
 
 import numpy as np
 
-from fibersweep.geometry.pillars import centroid_height, unit_width
+from fibersweep.geometry.pillars import unit_width
 from fibersweep.units import Geometry
 
 __all__ = ["PillarArray", "ArrayError"]
@@ -104,17 +104,25 @@ class PillarArray:
     # ------------------------------------------------------------ the cell
     @cached_property
     def cell_geometry(self) -> Geometry:
-        """The unit cell as a single-pillar Geometry: λx × λy, pillar centroid at the centre."""
-        rise = centroid_height(
-            self.pillar_shape, self.pillar_size, self.pillar_rotation, self.pillar_vertices
-        )
+        """The unit cell as a single-pillar Geometry: λx × λy, the pillar's bounding box centred.
+
+        Centring the box (not the centroid) leaves the widest margin between the
+        pillar and the cell's edges on every side.
+        """
+        probe = Geometry(
+            width=self.period_y, depth=self.depth, length=self.period_x,
+            pillar_height=self.pillar_size, pillar_x=0.0, pillar_y_base=0.0,
+            pillar_shape=self.pillar_shape, pillar_rotation=self.pillar_rotation,
+            pillar_vertices=self.pillar_vertices,
+        )  # fmt: skip
+        x0, y0, x1, y1 = probe.shape.bounds  # centroid at x = 0, lowest point at y = 0
         return Geometry(
             width=self.period_y,
             depth=self.depth,
             length=self.period_x,
             pillar_height=self.pillar_size,
-            pillar_x=self.period_x / 2.0,
-            pillar_y_base=self.period_y / 2.0 - rise,
+            pillar_x=0.5 * self.period_x - 0.5 * (x0 + x1),
+            pillar_y_base=0.5 * (self.period_y - (y1 - y0)),
             pillar_shape=self.pillar_shape,
             pillar_rotation=self.pillar_rotation,
             pillar_vertices=self.pillar_vertices,
