@@ -194,11 +194,13 @@ def periodic_links(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
 
 
 @nb.njit(cache=True)
-def fill_ghosts(g: np.ndarray, s: int) -> None:
-    """Ghost columns with the row shift ``s`` [cells], then periodic ghost rows.
+def fill_ghosts(g: np.ndarray, s: int, t: int) -> None:
+    """Ghost columns and rows of a shifted periodic box (one of ``s``, ``t`` is 0).
 
-    u(−1, j) = u(nx − 1, j + s) and u(nx, j) = u(0, j − s) (y modulo ny);
-    the ghost rows copy whole padded rows, so the corners come out right.
+    ``s``: shift of the x faces in y [cells], u(−1, j) = u(nx − 1, j + s) and
+    u(nx, j) = u(0, j − s); ``t``: shift of the y faces in x [cells],
+    u(i, −1) = u(i + t, ny − 1) and u(i, ny) = u(i − t, 0) (indices modulo the
+    box). Columns are filled first, then whole rows, so the corners come out right.
     """
     nq, nzp, nyp, nxp = g.shape
     nx = nxp - 2
@@ -209,16 +211,21 @@ def fill_ghosts(g: np.ndarray, s: int) -> None:
                 g[q, z, j + 1, 0] = g[q, z, (j + s) % ny + 1, nx]
                 g[q, z, j + 1, nx + 1] = g[q, z, (j - s) % ny + 1, 1]
             for i in range(nxp):
-                g[q, z, 0, i] = g[q, z, ny, i]
-                g[q, z, ny + 1, i] = g[q, z, 1, i]
+                if t == 0:  # whole padded rows: the shifted ghost columns come along
+                    g[q, z, 0, i] = g[q, z, ny, i]
+                    g[q, z, ny + 1, i] = g[q, z, 1, i]
+                else:  # s == 0: x is plainly periodic, wrap the interior
+                    g[q, z, 0, i] = g[q, z, ny, (i - 1 + t) % nx + 1]
+                    g[q, z, ny + 1, i] = g[q, z, 1, (i - 1 - t) % nx + 1]
 
 
 class CellStepper:
     """Two-array pull-stream-collide on a periodic box with a shifted x boundary."""
 
     def __init__(self, grid: Grid, shift: int, u0: np.ndarray, fx: float, omega_p: float,
-                 omega_m: float, cuts=None, dtype=np.float32):  # fmt: skip
-        self.fx, self.omega_p, self.omega_m, self.shift = fx, omega_p, omega_m, int(shift)
+                 omega_m: float, cuts=None, dtype=np.float32, shift_y: int = 0):  # fmt: skip
+        self.fx, self.omega_p, self.omega_m = fx, omega_p, omega_m
+        self.shift, self.shift_y = int(shift), int(shift_y)
         self.sources = periodic_sources(grid)
         self.links, self.solid_cells = periodic_links(grid)
         self.table = None
@@ -239,7 +246,7 @@ class CellStepper:
         else:
             t = self.table
             kernels.apply_interpolated(g, t.dst, t.src, t.coef, self.buf, self.solid_cells)
-        fill_ghosts(g, self.shift)
+        fill_ghosts(g, self.shift, self.shift_y)
 
     def advance(self, n: int) -> None:
         for _ in range(n):
@@ -255,7 +262,7 @@ class CellStepper:
 
 # ----------------------------------------------------------------- solve
 def _solve(grid: Grid, shift: int, cuts, tau: float, tolerance: float, max_steps: int,
-           check_every: int, dtype) -> CellSolve:  # fmt: skip
+           check_every: int, dtype, shift_y: int = 0) -> CellSolve:  # fmt: skip
     nu = (tau - 0.5) / 3.0
     h = grid.nz_full
     fx = 8.0 * nu * U_LATTICE / h**2  # plane Poiseuille centre speed U_LATTICE
@@ -265,7 +272,7 @@ def _solve(grid: Grid, shift: int, cuts, tau: float, tolerance: float, max_steps
     prof = fx / (2.0 * nu) * z * (h - z)
     u0 = np.zeros((3, grid.nz, grid.ny, grid.nx))
     u0[0] = prof[:, None, None] * (~grid.solid.T)[None, :, :] * (1.0 - grid.solid.mean())
-    st = CellStepper(grid, shift, u0, fx, omega_p, omega_m, cuts, dtype)
+    st = CellStepper(grid, shift, u0, fx, omega_p, omega_m, cuts, dtype, shift_y)
     fluid = ~grid.solid.T[None, :, :]
     mom = np.zeros((4, grid.nz, grid.ny, grid.nx))
     st.moments(mom)
@@ -301,8 +308,16 @@ def _tau(grid: Grid) -> float:
 def solve_cell(array: PillarArray, dx: float, *, boundary: str = "interpolated",
                symmetry: bool = True, tolerance: float = 1e-6, max_steps: int = 200_000,
                check_every: int = 100, tau: float | None = None,
-               precision: str = "float32") -> CellSolve:  # fmt: skip
+               precision: str = "float32", mean_flow: str = "x") -> CellSolve:  # fmt: skip
     """Steady lattice flow of one unit cell.
+
+    With ``mean_flow="x"`` (default) the mean flow is made to run exactly along
+    x, as the side walls of a device make it: Stokes flow is linear in the
+    body force, so the cell is solved twice, with a force along x and (on the
+    transposed cell, whose y faces carry the shift) a force along y, and the
+    two fields are combined so that the mean lateral velocity is zero. With
+    ``mean_flow="force"`` the force is along x only and the mean flow takes
+    the direction the cell's permeability gives it (reported by :func:`field_of`).
 
     Parameters
     ----------
@@ -315,6 +330,8 @@ def solve_cell(array: PillarArray, dx: float, *, boundary: str = "interpolated",
         Half depth with the free-slip midplane.
     tolerance, max_steps, check_every, tau, precision :
         As :class:`fibersweep.flow.settings.FlowSettings`.
+    mean_flow : {"x", "force"}
+        What sets the mean flow direction (above).
 
     Raises
     ------
@@ -342,9 +359,41 @@ def solve_cell(array: PillarArray, dx: float, *, boundary: str = "interpolated",
             f"flow.dx: the pillar is {edge:.1f} cells from the unit cell's edge; the sub-grid "
             f"wall needs {EDGE_CELLS} (refine dx, or widen the gaps)"
         )
+    if mean_flow not in ("x", "force"):
+        raise InputError(f"flow.mean_flow: {mean_flow!r} is not one of 'x', 'force'")
     cuts = pillar_cuts(grid, array.shape, boundary)
-    return _solve(grid, shift, cuts, tau or _tau(grid), tolerance, max_steps, check_every,
-                  np.dtype(precision))  # fmt: skip
+    tau = tau or _tau(grid)
+    along = _solve(grid, shift, cuts, tau, tolerance, max_steps, check_every, np.dtype(precision))
+    if mean_flow == "force" or shift == 0 and _mirror_symmetric(grid):
+        return along
+    # the transposed cell (x <-> y): its x faces are plain periodic, its y faces
+    # carry the shift, and its force along its x is a force along our y
+    shape_t = _transposed(array.shape)
+    grid_t = cell_grid([shape_t], ny, nx, nz_full, dx, symmetry, closed)
+    cuts_t = pillar_cuts(grid_t, shape_t, boundary)
+    across = _solve(grid_t, 0, cuts_t, tau, tolerance, max_steps, check_every,
+                    np.dtype(precision), shift_y=shift)  # fmt: skip
+    u_y = np.swapaxes(across.u, 2, 3)[[1, 0, 2]]  # back to (ux, uy, uz)[z, y, x]
+    alpha = -float(along.u[1].sum()) / float(u_y[1].sum())
+    u = along.u + alpha * u_y
+    log.info("unit cell: lateral force %.4g x the axial one sets the mean flow along x", alpha)
+    return CellSolve(u, grid, shift, along.steps + across.steps,
+                     along.seconds + across.seconds, max(along.residual, across.residual),
+                     along.converged and across.converged, tau)  # fmt: skip
+
+
+def _mirror_symmetric(grid: Grid) -> bool:
+    """True if the solid mask is symmetric under y -> −y (no lateral mean flow possible)."""
+    return bool(np.array_equal(grid.solid, grid.solid[:, ::-1]))
+
+
+def _transposed(shape):
+    """``shape`` mirrored across the line y = x [µm]."""
+    from fibersweep.geometry import Circle, ConvexPolygon
+
+    if isinstance(shape, Circle):
+        return Circle(shape.cy, shape.cx, shape.radius)
+    return ConvexPolygon.from_vertices(shape.vertices[:, ::-1])
 
 
 def solve_block(array: PillarArray, dx: float, rows: int, *, symmetry: bool = True,

@@ -107,6 +107,11 @@ class CellFlowSettings(_Strict):
     symmetry: bool = True
     tolerance: float = Field(1e-6, gt=0, lt=1)
     max_steps: int = Field(200_000, ge=1)
+    mean_flow: Literal["x", "force"] = Field(
+        "x",
+        description="x: a lateral body force keeps the mean flow along x (as side walls do); "
+        "force: body force along x only, the mean flow follows the cell's permeability",
+    )
     u_center: float = Field(600.0, gt=0, description="midplane speed of the same flux [µm/s]")
     viscosity: float = Field(0.340, gt=0, description="dynamic viscosity [Pa s]")
 
@@ -220,7 +225,8 @@ def cell_field(arr_settings: dict, flow: CellFlowSettings, cache_dir: str | Path
     if path is not None and path.exists():
         return load_field(path, array)
     sol = solve_cell(array, flow.dx, boundary=flow.pillar_boundary, symmetry=flow.symmetry,
-                     tolerance=flow.tolerance, max_steps=flow.max_steps)  # fmt: skip
+                     tolerance=flow.tolerance, max_steps=flow.max_steps,
+                     mean_flow=flow.mean_flow)  # fmt: skip
     field = field_of(array, sol, flow.u_center, flow.pillar_boundary,
                      {"array": arr_settings, "flow": flow.model_dump()})  # fmt: skip
     if path is not None:
