@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from matplotlib.patches import Polygon
+from matplotlib.patches import Circle, Polygon
 
 from fibersweep.analysis.modes import MODES
 from fibersweep.plots.style import subplots
@@ -76,6 +76,9 @@ def chrono_figure(array, runs: list[dict], bead_radius: float, frames: int = 30)
         col = _MODE_COLOURS.get(run["mode"], "k")
         for j in k:
             c, s = math.cos(th[j]), math.sin(th[j])
+            if half == 0.0:  # one bead: a sphere
+                ax.add_patch(Circle((xc[j], yc[j]), bead_radius, fc=col, ec="none", alpha=0.8))
+                continue
             ax.plot([xc[j] - half * c, xc[j] + half * c], [yc[j] - half * s, yc[j] + half * s],
                     color=col, lw=1.4, alpha=0.8, solid_capstyle="round")  # fmt: skip
         x0, x1 = xc.min() - half - 10, xc.max() + half + 10

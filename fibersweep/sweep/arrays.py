@@ -25,12 +25,19 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from fibersweep.config.errors import ConfigError, FieldError
 from fibersweep.errors import InputError
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.geometry import PILLAR_SHAPES
+from fibersweep.geometry import PILLAR_SHAPES, check_shape_name
 from fibersweep.geometry.array import ArrayError, PillarArray
 
 __all__ = [
@@ -90,12 +97,19 @@ class ArraySettings(_Strict):
     def to_array(self) -> PillarArray:
         return PillarArray(**self.model_dump())
 
+    @field_validator("pillar_shape")
+    @classmethod
+    def _known_shape(cls, name: str) -> str:
+        return check_shape_name(name)
+
     @model_validator(mode="after")
     def _valid(self) -> ArraySettings:
         try:
             self.to_array()
         except ArrayError as exc:
             raise FieldError(exc.field, str(exc)) from None
+        except ValueError as exc:  # the shape's own checks (polygon vertices)
+            raise FieldError("pillar_vertices", str(exc)) from None
         return self
 
 
