@@ -48,10 +48,14 @@ def main() -> None:
         dc = float(d[k[0]] - f[k[0]] * (d[k[0] + 1] - d[k[0]]) / (f[k[0] + 1] - f[k[0]])) if \
             k.size else float("nan")  # fmt: skip
         davis = 1.4 * 40.0 * eps**0.48
-        print(f"eps = {eps:g}: mean fraction by D [µm]: "
-              + ", ".join(f"{di:g}:{fi:.2f}" for di, fi in zip(d, fr, strict=True)))
-        print(f"  D_c (model) = {dc:.1f} µm; Davis 1.4 G eps^0.48 = {davis:.1f} µm; "
-              f"ratio {dc / davis:.2f}")
+        print(
+            f"eps = {eps:g}: mean fraction by D [µm]: "
+            + ", ".join(f"{di:g}:{fi:.2f}" for di, fi in zip(d, fr, strict=True))
+        )
+        print(
+            f"  D_c (model) = {dc:.1f} µm; Davis 1.4 G eps^0.48 = {davis:.1f} µm; "
+            f"ratio {dc / davis:.2f}"
+        )
 
 
 if __name__ == "__main__":

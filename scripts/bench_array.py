@@ -20,8 +20,8 @@ import time
 
 import numba
 
-from fibersweep.flow.cell import field_of, solve_cell
 from fibersweep.fiber.rows import run_rows
+from fibersweep.flow.cell import field_of, solve_cell
 from fibersweep.sweep.arrays import ArrayConfig, prepare_run, run_array_sweep
 
 ARRAY = {"pillar_size": 50.0, "period_x": 100.0, "period_y": 100.0, "shift": 0.1, "depth": 40.0}
@@ -69,8 +69,10 @@ def main() -> None:
         t_sweep = time.perf_counter() - t0
     n = len(df)
     est = t_field + (t_sweep - t_field) * 1000.0 / n
-    print(f"3. {n} starts over 10 lengths, 2 workers, field included: {t_sweep:.1f} s; "
-          f"1000 starts extrapolated: {est:.0f} s -> {est / 600.0:.2f} of the 600 s target")
+    print(
+        f"3. {n} starts over 10 lengths, 2 workers, field included: {t_sweep:.1f} s; "
+        f"1000 starts extrapolated: {est:.0f} s -> {est / 600.0:.2f} of the 600 s target"
+    )
 
 
 if __name__ == "__main__":

@@ -34,9 +34,12 @@ def run_array(
 @app.command("sort-report")
 def sort_report(
     results: Annotated[Path, typer.Argument(help="Output folder of run-array.")],
-    rows: Annotated[int | None, typer.Option(help="Rows of the device [default: swept rows].")] = None,
-    outlets: Annotated[str, typer.Option(help="Outlet edges, fractions of the full "
-                                         "displacement, comma separated.")] = "0.5",
+    rows: Annotated[
+        int | None, typer.Option(help="Rows of the device [default: swept rows].")
+    ] = None,
+    outlets: Annotated[
+        str, typer.Option(help="Outlet edges, fractions of the full displacement, comma separated.")
+    ] = "0.5",
     figures: Annotated[bool, typer.Option(help="Write the figures.")] = True,
     zigzag_max: Annotated[float, typer.Option(help="Mode rule: |f| below this is zigzag.")] = 0.25,
     displacement_min: Annotated[float, typer.Option(help="f above this is displacement.")] = 0.75,
@@ -71,11 +74,15 @@ def sort_report(
         typer.echo(table.round(3).to_string(index=False))
         for s, crit in sr.critical_lengths(table).items():
             lab = meta["settings"][s]["label"] or "array"
-            typer.echo(f"critical length(s) of {lab} (mean fraction 0.5): "
-                       + (", ".join(f"{c:.1f} µm" for c in crit) or "none in the swept range"))
+            typer.echo(
+                f"critical length(s) of {lab} (mean fraction 0.5): "
+                + (", ".join(f"{c:.1f} µm" for c in crit) or "none in the swept range")
+            )
         out = sr.outlet_table(runs, meta["settings"], n_rows, edges)
-        typer.echo(f"device of {n_rows} rows, outlet edges {edges} (fraction of full "
-                   "displacement): recovery and purity per outlet")
+        typer.echo(
+            f"device of {n_rows} rows, outlet edges {edges} (fraction of full "
+            "displacement): recovery and purity per outlet"
+        )
         typer.echo(out.round(3).to_string(index=False))
         table.to_csv(results / "migration.csv", index=False)
         out.to_csv(results / "outlets.csv", index=False)
@@ -93,15 +100,16 @@ def _figures(results: Path, runs, table, meta, cfg) -> None:
         for i, s in enumerate(meta["settings"]):
             array = _array_of(s["array"])
             field = load_field(results / f"field-{i}.npz", array)
-            written.append(save_figure(pa.cell_flow_figure(field), results / f"cell-flow-{i}.png"))
+            written.append(save_figure(pa.cell_flow_figure(field), results / f"cell-flow-{i}.png",
+                                       dpi=110))  # fmt: skip
             sub = runs[runs["setting"] == i]
             picks = [sub[sub["mode"] == m].iloc[0].to_dict() for m in
                      ("zigzag", "displacement", "wrap-and-jump", "mixed", "trapped")
                      if (sub["mode"] == m).any()]  # fmt: skip
             fig = pa.chrono_figure(array, picks, cfg["fiber"]["bead_radius"])
-            written.append(save_figure(fig, results / f"chrono-{i}.png"))
+            written.append(save_figure(fig, results / f"chrono-{i}.png", dpi=100))
             fig = pa.overlay_figure(sub, array.period_x, sorted(sub["length"].unique()))
-            written.append(save_figure(fig, results / f"overlay-{i}.png"))
+            written.append(save_figure(fig, results / f"overlay-{i}.png", dpi=110))
         tilts = {i: _array_of(s["array"]).tilt_deg for i, s in enumerate(meta["settings"])}
         labels = {i: s["label"] for i, s in enumerate(meta["settings"])}
         written.append(save_figure(pa.migration_figure(table, tilts, labels),

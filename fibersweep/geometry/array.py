@@ -223,11 +223,13 @@ class PillarArray:
         """Pillars (row, col, shape) whose outline may come within ``reach`` of a box [µm]."""
         bx0, by0, bx1, by1 = self.shape.bounds
         out = []
-        for r in range(int(math.floor((x0 - reach - bx1) / self.period_x)),
-                       int(math.floor((x1 + reach - bx0) / self.period_x)) + 1):  # fmt: skip
+        r0 = math.floor((x0 - reach - bx1) / self.period_x)
+        r1 = math.floor((x1 + reach - bx0) / self.period_x)
+        for r in range(r0, r1 + 1):
             dy = r * self.lateral_shift
-            for c in range(int(math.floor((y0 - reach - by1 - dy) / self.period_y)),
-                           int(math.floor((y1 + reach - by0 - dy) / self.period_y)) + 1):  # fmt: skip
+            c0 = math.floor((y0 - reach - by1 - dy) / self.period_y)
+            c1 = math.floor((y1 + reach - by0 - dy) / self.period_y)
+            for c in range(c0, c1 + 1):
                 ox, oy = self.offset(r, c)
                 out.append((r, c, self.shape.moved(ox, oy)))
         return out
@@ -257,4 +259,3 @@ class PillarArray:
             "tilt_deg": self.tilt_deg,
             "rows_per_period": (1.0 / self.shift) if self.shift > 0 else math.inf,
         }
-

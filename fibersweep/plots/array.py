@@ -37,8 +37,8 @@ def cell_flow_figure(field):
     for r in range(reps):
         for c in range(reps):
             s = int(field.meta["shift_cells"]) * r
-            big_u[r * nx:(r + 1) * nx, c * ny:(c + 1) * ny] = np.roll(ux, s, axis=1)
-            big_v[r * nx:(r + 1) * nx, c * ny:(c + 1) * ny] = np.roll(uy, s, axis=1)
+            big_u[r * nx : (r + 1) * nx, c * ny : (c + 1) * ny] = np.roll(ux, s, axis=1)
+            big_v[r * nx : (r + 1) * nx, c * ny : (c + 1) * ny] = np.roll(uy, s, axis=1)
     Y = (np.arange(reps * ny) + 0.5) * field.dx
     inside = np.zeros_like(big_u, dtype=bool)
     XX, YY = np.meshgrid(X, Y, indexing="ij")
@@ -109,18 +109,24 @@ def migration_figure(table, tilts: dict[int, float], labels: dict[int, str]):
     return fig
 
 
-def overlay_figure(runs, period_x: float, lengths: list[float]):
+def overlay_figure(runs, period_x: float, lengths: list[float], ncols: int = 3):
     """Lateral displacement y − y0 against rows crossed, many fibers per length."""
-    fig, axes = subplots(1, len(lengths), figsize=(2.6 * len(lengths), 3.0), sharey=True,
-                         squeeze=False)  # fmt: skip
-    for ax, L in zip(axes[0], lengths, strict=True):
+    nrows = -(-len(lengths) // ncols)
+    fig, axes = subplots(nrows, ncols, figsize=(2.4 * ncols, 2.2 * nrows), sharey=True,
+                         sharex=True, squeeze=False)  # fmt: skip
+    flat = axes.ravel()
+    for ax, L in zip(flat, lengths, strict=False):
         for _, r in runs[runs["length"] == L].iterrows():
             x = (np.asarray(r["traj_xc"]) - r["traj_xc"][0]) / period_x
             y = np.asarray(r["traj_yc"]) - r["traj_yc"][0]
             ax.plot(x, y, color=_MODE_COLOURS.get(r["mode"], "k"), lw=0.6, alpha=0.7)
         ax.set_title(f"L = {L:g} µm", fontsize=8)
+    for ax in flat[len(lengths) :]:
+        ax.set_visible(False)
+    for ax in axes[-1]:
         ax.set_xlabel("rows")
-    axes[0, 0].set_ylabel("y − y0 [µm]")
-    handles = [axes[0, 0].plot([], [], color=c, label=m)[0] for m, c in _MODE_COLOURS.items()]
-    axes[0, -1].legend(handles=handles, fontsize=6)
+    for ax in axes[:, 0]:
+        ax.set_ylabel("y − y0 [µm]")
+    handles = [flat[0].plot([], [], color=c, label=m)[0] for m, c in _MODE_COLOURS.items()]
+    flat[0].legend(handles=handles, fontsize=6)
     return fig

@@ -417,7 +417,9 @@ def run_array_sweep(cfg: ArrayConfig, workers: int | None = None, progress=None)
     else:
         with ProcessPoolExecutor(workers, initializer=_init_worker,
                                  initargs=(cfg.model_dump_json(), fields)) as ex:  # fmt: skip
-            for i, r in enumerate(ex.map(_task, tasks, chunksize=max(1, len(tasks) // (8 * workers)))):
+            for i, r in enumerate(
+                ex.map(_task, tasks, chunksize=max(1, len(tasks) // (8 * workers)))
+            ):
                 rows.append(r)
                 if progress:
                     progress(i + 1, len(tasks))

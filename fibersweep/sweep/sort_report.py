@@ -22,7 +22,9 @@ def relabel(runs: pd.DataFrame, settings_meta: list[dict], modes: ModeSettings) 
     out = runs.copy()
     for i, row in out.iterrows():
         arr = settings_meta[int(row["setting"])]["array"]
-        traj = {c: np.asarray(row[f"traj_{c}"]) for c in ("t", "xc", "yc", "th", "contact", "speed")}
+        traj = {
+            c: np.asarray(row[f"traj_{c}"]) for c in ("t", "xc", "yc", "th", "contact", "speed")
+        }
         s = summarise_rows(traj, arr["period_x"], arr["shift"] * arr["period_y"], modes)
         out.at[i, "mode"] = s.mode
         out.at[i, "fraction"] = s.fraction
@@ -97,7 +99,9 @@ def outlet_table(runs: pd.DataFrame, settings_meta: list[dict], rows: int,
             tot = sum(c[k] / c[-1] for c in counts.values())
             for L, c in counts.items():
                 rec = c[k] / c[-1]
-                out.append({"setting": int(s), "outlet": k,
-                            "from": bounds[k], "to": bounds[k + 1], "length": L,
-                            "recovery": rec, "purity": rec / tot if tot > 0 else math.nan})  # fmt: skip
+                pur = rec / tot if tot > 0 else math.nan
+                out.append(
+                    {"setting": int(s), "outlet": k, "from": bounds[k], "to": bounds[k + 1],
+                     "length": L, "recovery": rec, "purity": pur}
+                )  # fmt: skip
     return pd.DataFrame(out)
