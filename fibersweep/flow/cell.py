@@ -50,7 +50,14 @@ from fibersweep.flow.lbm import MACH_LIMIT
 from fibersweep.flow.midplane import midplane_average
 from fibersweep.geometry.array import ArrayError, PillarArray
 
-__all__ = ["CELL_SOLVER_VERSION", "CellField", "CellSolve", "solve_cell", "solve_block"]
+__all__ = [
+    "CELL_SOLVER_VERSION",
+    "CellField",
+    "CellSolve",
+    "first_streamline_width",
+    "solve_cell",
+    "solve_block",
+]
 
 log = logging.getLogger(__name__)
 
@@ -440,3 +447,27 @@ def field_of(array: PillarArray, sol: CellSolve, u_center: float, boundary: str,
         "grid": [grid.nx, grid.ny, grid.nz, grid.nz_full],
     }
     return CellField(array, np.ascontiguousarray(ux), np.ascontiguousarray(uy), grid.dx, meta)
+
+
+def first_streamline_width(array: PillarArray, u: np.ndarray, dx: float) -> tuple[float, float]:
+    """(β, G) [µm]: width of the first streamline next to a pillar, and the gap.
+
+    From the depth-integrated velocity across the gap above the pillar, at the x
+    of its highest point: ∫_0^β ū dy = ε ∫_0^G ū dy (y from the pillar's top),
+    the flux a row hands to the next one. ``u``: a cell solution's velocity
+    (3, nz, ny, nx) (:attr:`CellSolve.u`), any scale.
+    """
+    _, _, _, y1 = array.shape.bounds
+    outline = array.shape.outline(720)
+    x_top = outline[np.argmax(outline[:, 1]), 0]
+    prof = u[0].sum(axis=0)[:, int(x_top / dx)]
+    y = (np.arange(prof.size) + 0.5) * dx
+    gap = array.gap
+    d = (y - y1) % array.period_y
+    inside = d < gap
+    order = np.argsort(d[inside])
+    p = prof[inside][order]
+    ds = d[inside][order]
+    edges = np.concatenate([[0.0], 0.5 * (ds[1:] + ds[:-1]), [gap]])
+    q = np.concatenate([[0.0], np.cumsum(p * np.diff(edges))])
+    return float(np.interp(array.shift * q[-1], q, edges)), float(gap)

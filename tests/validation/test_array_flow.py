@@ -18,6 +18,7 @@ from fibersweep.flow.cell import (
     _transposed,
     cell_grid,
     field_of,
+    first_streamline_width,
     solve_block,
     solve_cell,
 )
@@ -91,24 +92,6 @@ def test_mean_flow_along_x_and_flux_through_every_section():
     assert np.ptp(flux) < 1e-2 * flux.mean()
 
 
-def _beta(a: PillarArray, u: np.ndarray, dx: float) -> tuple[float, float]:
-    """(β, G): first-streamline width from the depth-integrated profile at the pillar's
-    lateral extreme, ∫_0^β ū dy = ε ∫_0^G ū dy, and the gap width [µm]."""
-    x0, y0, x1, y1 = a.shape.bounds
-    ys = a.shape.outline(720)
-    xtop = ys[np.argmax(ys[:, 1]), 0]
-    prof = u[0].sum(axis=0)[:, int(xtop / dx)]
-    y = (np.arange(prof.size) + 0.5) * dx
-    gap = a.gap
-    d = (y - y1) % a.period_y
-    m = d < gap
-    order = np.argsort(d[m])
-    p = prof[m][order]
-    edges = np.concatenate([[0.0], 0.5 * (d[m][order][1:] + d[m][order][:-1]), [gap]])
-    q = np.concatenate([[0.0], np.cumsum(p * np.diff(edges))])
-    return float(np.interp(a.shift * q[-1], q, edges)), gap
-
-
 @pytest.mark.slow
 def test_first_streamline_width_against_dld_estimates():
     """β from the simulated gap profile (dx = 2 µm) vs the standard parabolic estimate
@@ -127,11 +110,11 @@ def test_first_streamline_width_against_dld_estimates():
     qd = np.concatenate([[0.0], np.cumsum(0.5 * (ud[1:] + ud[:-1]) * np.diff(yy[:, 0]))])
     duct = float(np.interp(eps * qd[-1], qd, yy[:, 0]))
     a = _array(eps, "circle")
-    beta, gap = _beta(a, solve_cell(a, 2.0).u, 2.0)
+    beta, gap = first_streamline_width(a, solve_cell(a, 2.0).u, 2.0)
     assert beta == pytest.approx(parab * gap, rel=0.15)
     assert beta == pytest.approx(duct, rel=0.10)
     t = _array(eps, "triangle")
-    beta_t, gap_t = _beta(t, solve_cell(t, 2.0).u, 2.0)
+    beta_t, gap_t = first_streamline_width(t, solve_cell(t, 2.0).u, 2.0)
     assert beta_t < parab * gap_t
 
 
