@@ -47,6 +47,8 @@ __all__ = [
     "cell_velocity",
     "image_forces",
     "integrate_rows",
+    "run_rows",
+    "work",
 ]
 
 COLS = ("t", "xc", "yc", "th", "contact", "n_pillars", "speed")

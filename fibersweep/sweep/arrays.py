@@ -19,7 +19,6 @@ import itertools
 import json
 import logging
 import math
-import os
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any, Literal
@@ -173,7 +172,7 @@ class ArrayConfig(_Strict):
     def _combinations(self) -> ArrayConfig:
         if self.fiber.model != "rigid":
             raise FieldError("fiber.model", "array runs use the rigid model for now")
-        for label, s in settings_grid(self, check=False):
+        for label, s in settings_grid(self):
             try:
                 arr = ArraySettings.model_validate(s).to_array()
                 arr.check_fiber(self.fiber.bead_radius)
@@ -190,7 +189,7 @@ class ArrayConfig(_Strict):
         return self
 
 
-def settings_grid(cfg: ArrayConfig, check: bool = True) -> list[tuple[str, dict]]:
+def settings_grid(cfg: ArrayConfig) -> list[tuple[str, dict]]:
     """(label, array settings dict) of every combination of the swept array values."""
     base = cfg.array.model_dump()
     keys = list(cfg.sweep.axes)
@@ -439,6 +438,3 @@ def run_array_sweep(cfg: ArrayConfig, workers: int | None = None, progress=None)
         save_field(fields[i], out / f"field-{i}.npz")
     return df
 
-
-def workers_default() -> int:
-    return min(2, os.cpu_count() or 1)
