@@ -17,6 +17,9 @@ def run_array(
     config: ConfigArg,
     overrides: Overrides = None,
     workers: Annotated[int | None, typer.Option(help="Worker processes.")] = None,
+    refine: Annotated[
+        int, typer.Option(help="Rounds of bisection of the critical length (adds lengths).")
+    ] = 0,
     verbose: Verbose = False,
 ) -> None:
     """Fibers through a tilted pillar array: unit-cell flow, seeded random starts, many rows."""
@@ -25,7 +28,7 @@ def run_array(
         from fibersweep.sweep.arrays import load_array_config, run_array_sweep
 
         cfg = load_array_config(config, overrides or ())
-        df = run_array_sweep(cfg, workers)
+        df = run_array_sweep(cfg, workers, refine=refine)
         typer.echo(f"{len(df)} runs -> {Path(cfg.run.output) / 'runs.parquet'}")
         typer.echo(df.groupby(["setting", "length"])["mode"].value_counts().unstack(fill_value=0)
                    .to_string())  # fmt: skip

@@ -384,8 +384,59 @@ def _task(task: tuple) -> dict:
     return {"setting": setting, "setting_label": label, "start": start, **row}
 
 
-def run_array_sweep(cfg: ArrayConfig, workers: int | None = None, progress=None):
+def _execute(cfg: ArrayConfig, fields: dict, tasks: list, workers: int, progress) -> list:
+    """Run ``tasks`` on ``workers`` processes (1: in this process); rows in task order."""
+    rows = []
+    if workers <= 1:
+        _init_worker(cfg.model_dump_json(), fields)
+        for i, t in enumerate(tasks):
+            rows.append(_task(t))
+            if progress:
+                progress(i + 1, len(tasks))
+        return rows
+    with ProcessPoolExecutor(workers, initializer=_init_worker,
+                             initargs=(cfg.model_dump_json(), fields)) as ex:  # fmt: skip
+        chunk = max(1, len(tasks) // (8 * workers))
+        for i, r in enumerate(ex.map(_task, tasks, chunksize=chunk)):
+            rows.append(r)
+            if progress:
+                progress(i + 1, len(tasks))
+    return rows
+
+
+def _length_tasks(cfg, si, label, li, length, array, pillar) -> list[tuple]:
+    n = _n_beads(length, cfg.fiber.bead_radius)
+    starts = draw_starts(cfg, si, li, array, pillar, n)
+    return [(si, label, li, k, float(length), y0, th) for k, (y0, th) in enumerate(starts)]
+
+
+def refine_lengths(runs, level: float = 0.5) -> dict[int, list[float]]:
+    """Per setting, the midpoints of neighbouring lengths whose mean fraction brackets ``level``.
+
+    The next round of an adaptive search for the critical length (a pure
+    function of the runs; trapped runs are left out of the means).
+    """
+    out: dict[int, list[float]] = {}
+    moving = runs[runs["mode"] != "trapped"]
+    for s, g in moving.groupby("setting"):
+        f = g.groupby("length")["fraction"].mean().sort_index()
+        L = f.index.to_numpy()
+        d = f.to_numpy() - level
+        out[int(s)] = [
+            0.5 * (L[k] + L[k + 1]) for k in range(len(L) - 1) if np.isfinite(d[k] * d[k + 1])
+            and d[k] * d[k + 1] < 0
+        ]  # fmt: skip
+    return out
+
+
+def run_array_sweep(cfg: ArrayConfig, workers: int | None = None, progress=None,
+                    refine: int = 0):  # fmt: skip
     """Run every (setting, length, start) and write ``run.output``/runs.parquet.
+
+    ``refine``: rounds of bisection of the critical length; each round adds,
+    for every setting, the midpoint of each pair of neighbouring lengths whose
+    mean displacement fraction brackets 1/2 (:func:`refine_lengths`), with
+    ``sweep.starts`` new seeded starts (seeded by the round, so reproducible).
 
     Returns the runs as a pandas DataFrame.
     """
@@ -394,34 +445,30 @@ def run_array_sweep(cfg: ArrayConfig, workers: int | None = None, progress=None)
     from fibersweep.fiber.contact import make_pillar
 
     grid = settings_grid(cfg)
-    fields, tasks = {}, []
+    fields, tasks, pillars = {}, [], {}
     for si, (label, s) in enumerate(grid):
         fields[si] = cell_field(s, cfg.flow, cfg.run.cache_dir)
         log.info("setting %d (%s): field ready, mean-flow angle %.2f deg", si, label or "base",
                  fields[si].meta["mean_flow_angle_deg"])  # fmt: skip
         array = fields[si].array
-        pillar = make_pillar(array.cell_geometry, cfg.fiber.contact, cfg.fiber.bead_radius, 1.0)
+        pillars[si] = make_pillar(array.cell_geometry, cfg.fiber.contact,
+                                  cfg.fiber.bead_radius, 1.0)  # fmt: skip
         for li, L in enumerate(cfg.sweep.length):
-            n = _n_beads(L, cfg.fiber.bead_radius)
-            for k, (y0, th) in enumerate(draw_starts(cfg, si, li, array, pillar, n)):
-                tasks.append((si, label, li, k, float(L), y0, th))
+            tasks += _length_tasks(cfg, si, label, li, L, array, pillars[si])
     workers = workers or cfg.run.workers
-    rows = []
-    if workers <= 1:
-        _init_worker(cfg.model_dump_json(), fields)
-        for i, t in enumerate(tasks):
-            rows.append(_task(t))
-            if progress:
-                progress(i + 1, len(tasks))
-    else:
-        with ProcessPoolExecutor(workers, initializer=_init_worker,
-                                 initargs=(cfg.model_dump_json(), fields)) as ex:  # fmt: skip
-            for i, r in enumerate(
-                ex.map(_task, tasks, chunksize=max(1, len(tasks) // (8 * workers)))
-            ):
-                rows.append(r)
-                if progress:
-                    progress(i + 1, len(tasks))
+    rows = _execute(cfg, fields, tasks, workers, progress)
+    for rnd in range(refine):
+        new = refine_lengths(pd.DataFrame(rows))
+        tasks = []
+        for si, lengths in new.items():
+            for j, L in enumerate(lengths):
+                li = 1000 * (rnd + 1) + j  # seeds apart from the base lengths
+                tasks += _length_tasks(cfg, si, grid[si][0], li, L, fields[si].array,
+                                       pillars[si])  # fmt: skip
+        if not tasks:
+            break
+        log.info("refinement round %d: %d runs at %s", rnd + 1, len(tasks), new)
+        rows += _execute(cfg, fields, tasks, workers, progress)
     df = pd.DataFrame(rows)
     out = Path(cfg.run.output)
     out.mkdir(parents=True, exist_ok=True)
@@ -437,4 +484,3 @@ def run_array_sweep(cfg: ArrayConfig, workers: int | None = None, progress=None)
     for i in fields:
         save_field(fields[i], out / f"field-{i}.npz")
     return df
-
