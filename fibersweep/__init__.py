@@ -7,4 +7,17 @@ try:
 except PackageNotFoundError:  # running from a source tree without install
     __version__ = "0.0.0+unknown"
 
-__all__ = ["__version__"]
+__all__ = ["__version__", "load"]
+
+
+def load(results, trajectories: bool = True):
+    """A sweep's output folder in one call: runs, trajectories, settings and units.
+
+    ``res = fibersweep.load("results/quick")`` gives ``res.runs`` and
+    ``res.trajectories`` (pandas), ``res.settings`` (the resolved config),
+    ``res.units`` and ``res.docs`` (per column) and ``res.provenance``; see
+    :func:`fibersweep.results.load_results`.
+    """
+    from fibersweep.results import load_results
+
+    return load_results(results, trajectories)

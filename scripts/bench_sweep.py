@@ -14,8 +14,19 @@ own timestamps: start-up is left out, gaps between runs and an idle tail at the 
 (Timestamps taken as results reach the client would favour chunks, whose runs arrive in
 bursts.)
 
+With ``--against TREE`` (a checkout of another version, e.g. the commit before a
+refactor), it instead times this tree and TREE alternately, ``--rounds`` times
+each after one untimed warm-up (Numba caches), in one run so the machine's load
+hits both alike, and prints the ratios of the medians (this / other):
+  * a whole sweep, ``fibersweep run CONFIG`` from an empty folder, the command's wall
+    time (interpreter and pool start-up included; the flow field is cached);
+  * the discrepancy check of scripts/snapshot_discrepancy.py (``--disc-n`` fibers),
+    timed by its own report (the workflow alone, synthesis excluded).
+
 Usage:  python scripts/bench_sweep.py [--config configs/quick.yaml] [--paper-sample 60]
                                       [--chunk-size 1 --chunk-size auto]
+        python scripts/bench_sweep.py --against /tmp/before [--rounds 3] [--disc-n 30]
+                                      [--cache DIR] [--only sweep|discrepancy]
 """
 
 from __future__ import annotations
@@ -24,7 +35,11 @@ import argparse
 import logging
 import os
 import random
+import re
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -54,7 +69,7 @@ def measure(name: str, workers: int, tasks, spec, chunk_size: int | None = None)
     ex = make_executor(name, workers, **kw)
     t0 = time.time()
     starts, ends, run_s, cpu_s = [], [], [], []
-    for oc in ex.run(run_task, tasks, init_worker, (spec, name == "local")):
+    for oc in ex.run(run_task, tasks, init_worker, (spec, ex.parent_handles_ctrl_c)):
         row = oc.value["row"] if oc.value else {}
         if oc.error or row.get("status") != "ok":
             log.warning("%s: %s", oc.key, oc.error or row.get("reason"))
@@ -94,7 +109,15 @@ def main() -> None:
         action="append",
         help="runs per Dask task, or 'auto' (repeat to compare; default: 1 and auto)",
     )
+    ap.add_argument("--against", type=Path, help="another checkout: before/after ratios")
+    ap.add_argument("--rounds", type=int, default=3, help="timed runs per tree (--against)")
+    ap.add_argument("--disc-n", type=int, default=30, help="fibers of the discrepancy check")
+    ap.add_argument("--cache", default=".fibersweep-cache", help="flow cache (--against)")
+    ap.add_argument("--only", choices=("sweep", "discrepancy"), help="time one of the two")
     args = ap.parse_args()
+    if args.against is not None:
+        compare_trees(args)
+        return
     chunk_sizes = args.chunk_size or [1, None]
     logging.basicConfig(level=logging.WARNING)
 
@@ -166,6 +189,57 @@ def paper_estimate(paper_path: str, cfg, spec, info, n_sample: int) -> None:
             f"  (measured on the dx = {cfg.flow.dx} µm field; paper.yaml uses dx = "
             f"{paper.flow.dx} µm: the per-step cost of a rigid fiber does not depend on dx)"
         )
+
+
+def _timed(tree: Path, argv: list[str], pattern: str | None) -> float:
+    """Run ``argv`` with ``tree`` first on the path; the seconds its own report prints
+    (``pattern``'s group), or the command's wall time when ``pattern`` is None."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    t0 = time.perf_counter()
+    out = subprocess.run(argv, cwd=tree, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    m = re.search(pattern, out.stdout + out.stderr) if pattern else None
+    if out.returncode != 0 or (pattern and m is None):
+        raise SystemExit(f"{tree}: {' '.join(argv)} failed:\n{out.stdout}\n{out.stderr}")
+    return float(m.group(1)) if m else wall
+
+
+def compare_trees(args: argparse.Namespace) -> None:
+    """Sweep and discrepancy times of this tree against ``args.against``, interleaved."""
+    here = Path(__file__).resolve().parent.parent
+    trees = {"this": here, "other": args.against.resolve()}
+    cache = str(Path(args.cache).resolve())
+    snap = str(here / "scripts" / "snapshot_discrepancy.py")
+    times: dict[tuple[str, str], list[float]] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+
+        def sweep(tree: Path, k: str) -> float:
+            out = Path(tmp) / f"sweep-{k}"
+            argv = [sys.executable, "-m", "fibersweep", "run", str(Path(args.config).resolve()),
+                    "-o", str(out), "--no-resume", f"run.cache_dir={cache}"]  # fmt: skip
+            return _timed(tree, argv, None)
+
+        def disc(tree: Path, k: str) -> float:
+            argv = [sys.executable, snap, str(Path(tmp) / f"disc-{k}"), "--n", str(args.disc_n),
+                    "--cache", cache]  # fmt: skip
+            return _timed(tree, argv, r"discrepancy ([\d.]+) s")
+
+        for rnd in range(args.rounds + 1):  # round 0: warm-up (Numba caches), not counted
+            for name, tree in trees.items():
+                for what, fn in (("sweep", sweep), ("discrepancy", disc)):
+                    if args.only and what != args.only:
+                        continue
+                    t = fn(tree, f"{name}-{rnd}")
+                    print(f"round {rnd} {name:>5} {what:<12} {t:7.2f} s", flush=True)
+                    if rnd:
+                        times.setdefault((what, name), []).append(t)
+    print(f"this: {trees['this']}, other: {trees['other']}; {args.rounds} timed rounds")
+    for what in [w for w in ("sweep", "discrepancy") if (w, "this") in times]:
+        a = statistics.median(times[(what, "this")])
+        b = statistics.median(times[(what, "other")])
+        spread = max(times[(what, "other")]) / min(times[(what, "other")])
+        print(f"{what:<12} median this {a:7.2f} s, other {b:7.2f} s: ratio this/other "
+              f"{a / b:.3f} (other's own max/min over rounds: {spread:.3f})")  # fmt: skip
 
 
 if __name__ == "__main__":

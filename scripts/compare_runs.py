@@ -1,26 +1,105 @@
-"""Compare two sweep result folders run by run (same ids): classes and δ.
+"""Compare two sweep result folders run by run (same ids): classes and δ, or bit for bit.
 
 Used to show that a refactor leaves results unchanged, or to count what a change
 of resolution or model moves.
 
-Usage:  python scripts/compare_runs.py RESULTS_A RESULTS_B
+* default: class changes and the largest |δ_A - δ_B|;
+* ``--exact``: every physical column of every run and every trajectory sample must
+  be equal bit for bit (NaN equal to NaN; the columns that record when, where and
+  how long a run ran are left out, and columns only one side has are listed);
+  exit status 1 on any difference;
+* ``--snapshot``: A and B are folders of ``scripts/snapshot_discrepancy.py``
+  (the discrepancy workflow's every simulated batch, the synthesised tables and
+  the verdict), compared bit for bit the same way.
+
+Usage:  python scripts/compare_runs.py RESULTS_A RESULTS_B [--exact | --snapshot]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
-from fibersweep.sweep.store import read_runs
+from fibersweep.sweep.store import read_runs, read_trajectories
+
+#: Columns that say when, where and how long a run ran: not results.
+VOLATILE = ("wall_time", "cpu_time", "worker", "finished_at", "attempts")
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("a")
-    ap.add_argument("b")
-    args = ap.parse_args()
-    a, b = read_runs(args.a), read_runs(args.b)
+def _same(a: pd.Series, b: pd.Series) -> np.ndarray:
+    """Element-wise equality, bit for bit for floats (NaN equal to NaN)."""
+    va, vb = a.to_numpy(), b.to_numpy()
+    if va.dtype.kind == "f" and vb.dtype.kind == "f":
+        return (va.view(np.int64) == vb.view(np.int64)) | (np.isnan(va) & np.isnan(vb))
+    eq = []
+    for x, y in zip(va, vb, strict=True):
+        if isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
+            eq.append(np.array_equal(np.asarray(x), np.asarray(y), equal_nan=True))
+        else:
+            eq.append(x == y or (pd.isna(x) and pd.isna(y)))
+    return np.array(eq, dtype=bool)
+
+
+def diff_tables(a: pd.DataFrame, b: pd.DataFrame, key: list[str], what: str) -> int:
+    """Print every column that differs between ``a`` and ``b`` (rows matched on ``key``)."""
+    bad = 0
+    only = sorted(set(a.columns) ^ set(b.columns))
+    if only:
+        print(f"{what}: columns in one side only: {only}")
+    if len(a) != len(b):
+        print(f"{what}: {len(a)} rows in A, {len(b)} in B")
+        return 1
+    a = a.sort_values(key, kind="stable").reset_index(drop=True)
+    b = b.sort_values(key, kind="stable").reset_index(drop=True)
+    for col in [c for c in a.columns if c in b.columns]:
+        same = _same(a[col], b[col])
+        if not same.all():
+            bad += 1
+            k = int(np.flatnonzero(~same)[0])
+            where, va, vb = a.loc[k, key].tolist(), a.loc[k, col], b.loc[k, col]
+            print(f"{what}: column {col!r} differs in {int((~same).sum())} of {len(a)} rows, "
+                  f"e.g. {where}: {va!r} vs {vb!r}")  # fmt: skip
+    print(f"{what}: {len(a)} rows, {len(a.columns)} columns: "
+          f"{'identical' if not bad else f'{bad} columns differ'}")  # fmt: skip
+    return bad
+
+
+def exact(a: str, b: str) -> int:
+    """Bit-for-bit comparison of two results folders; number of differing tables/columns."""
+    ra = read_runs(a).drop(columns=list(VOLATILE), errors="ignore")
+    rb = read_runs(b).drop(columns=list(VOLATILE), errors="ignore")
+    bad = diff_tables(ra, rb, ["id"], "runs")
+    ta, tb = read_trajectories(a), read_trajectories(b)
+    return bad + diff_tables(ta, tb, ["id", "sample"], "trajectories")
+
+
+def snapshot(a: str, b: str) -> int:
+    """Bit-for-bit comparison of two discrepancy snapshots (scripts/snapshot_discrepancy.py)."""
+    bad = 0
+    for name, key in (("measured", ["fiber_id"]), ("tracks", ["fiber_id", "t"]),
+                      ("batches", ["batch"])):  # fmt: skip
+        da = pd.read_parquet(Path(a) / f"{name}.parquet")
+        db = pd.read_parquet(Path(b) / f"{name}.parquet")
+        if name == "batches":  # rows in batch order, then position in the batch
+            da["pos"] = da.groupby("batch").cumcount()
+            db["pos"] = db.groupby("batch").cumcount()
+            key = ["batch", "pos"]
+        bad += diff_tables(da, db, key, name)
+    va = json.loads((Path(a) / "verdict.json").read_text())
+    vb = json.loads((Path(b) / "verdict.json").read_text())
+    print(f"verdict: A {va['kind']} {va['effects']}, B {vb['kind']} {vb['effects']}: "
+          f"{'identical' if va == vb else 'DIFFERENT'}")  # fmt: skip
+    return bad + (va != vb)
+
+
+def summary(a_dir: str, b_dir: str) -> None:
+    """Class changes and the largest δ difference of runs with the same id."""
+    a, b = read_runs(a_dir), read_runs(b_dir)
     m = a.merge(b, on="id", suffixes=("_a", "_b"))
     print(f"runs: {len(a)} in A, {len(b)} in B, {len(m)} with the same id")
     changed = m[m["class_a"] != m["class_b"]]
@@ -34,6 +113,21 @@ def main() -> None:
     dmax = float(np.max(np.abs(da[both] - db[both]))) if both.any() else 0.0
     print(f"delta: max |A - B| = {dmax:.3g} h_obs over {int(both.sum())} runs; "
           f"NaN in one only: {nan_mismatch}")  # fmt: skip
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("a")
+    ap.add_argument("b")
+    mode = ap.add_mutually_exclusive_group()
+    mode.add_argument("--exact", action="store_true", help="every column, bit for bit")
+    mode.add_argument("--snapshot", action="store_true", help="two discrepancy snapshots")
+    args = ap.parse_args()
+    if args.exact:
+        sys.exit(1 if exact(args.a, args.b) else 0)
+    if args.snapshot:
+        sys.exit(1 if snapshot(args.a, args.b) else 0)
+    summary(args.a, args.b)
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ config errors) exits 2, a failed computation (:class:`FibersweepError`) exits 1.
 
 Layout: :mod:`._app` holds the ``app`` and the shared helpers; one module per
 concept adds its commands to it: :mod:`.flow` (flow), :mod:`.fiber` (simulate),
-:mod:`.sweep` (run, classify, plot-phase), :mod:`.discrepancy` (synth,
+:mod:`.sweep` (run, classify, plot-phase), :mod:`.view` (plot-fractions,
+plot-delta, plot-tracks, animate, explore), :mod:`.discrepancy` (synth,
 discrepancy, power).
 """
 
@@ -26,6 +27,7 @@ from fibersweep.cli._app import (
 from fibersweep.cli import flow
 from fibersweep.cli import fiber
 from fibersweep.cli import sweep
+from fibersweep.cli import view
 from fibersweep.cli import discrepancy
 from fibersweep.cli import array
 from fibersweep.cli import show
@@ -49,4 +51,5 @@ __all__ = [
     "show",
     "main",
     "sweep",
+    "view",
 ]

@@ -23,7 +23,7 @@ app = typer.Typer(
     help="Parameter sweeps of rigid fibers meeting a triangular pillar in a shallow channel.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
-    add_completion=False,
+    add_completion=True,  # --install-completion / --show-completion (bash, zsh, fish, PowerShell)
     # help texts carry units in brackets ([deg], [s]): print them, do not parse them as markup
     rich_markup_mode=None,
 )
@@ -142,57 +142,56 @@ def _setup_logging(verbose: bool) -> None:
     root.setLevel(logging.INFO if verbose else logging.WARNING)
 
 
-def progress_interval() -> float:
-    """Seconds between bar refreshes: live on a terminal, every 10 s into a log file."""
-    import sys
-
-    return 0.2 if sys.stderr.isatty() else 10.0
-
-
 @contextmanager
 def flow_progress() -> Iterator[None]:
     """Show a bar over the LBM steps, with the residual, for any flow solve in the block.
 
-    One bar per grid (the nested solve does the coarser grids first). Nothing is
-    shown when the field comes from the cache.
+    One bar per solve (the nested solve does the coarser grids first), closed on
+    the grid's last report, so whatever the command prints next starts on a line
+    of its own. Nothing is shown when the field comes from the cache. The bar's
+    form follows the output (:func:`fibersweep.progressbar.progress_bar`).
     """
-    from tqdm import tqdm
-
     from fibersweep.flow.progress import SolveProgress, on_progress
+    from fibersweep.progressbar import progress_bar
 
-    bars: dict[float, tqdm] = {}
+    open_: list = []  # the bar of the grid being solved, if any
+
+    def close() -> None:
+        while open_:
+            open_.pop().close()
 
     def show(p: SolveProgress) -> None:
-        bar = bars.get(p.dx)
-        if bar is None:
-            for other in bars.values():
-                other.close()
-            bar = bars[p.dx] = tqdm(
-                desc=f"flow field, dx = {p.dx:g} µm ({p.cells / 1e6:.2g} M cells)",
-                unit=" steps",
-                dynamic_ncols=True,
-                mininterval=progress_interval(),
+        if p.steps == 0 or not open_:  # every solve reports step 0 first
+            close()
+            open_.append(
+                progress_bar(
+                    desc=f"flow field, dx = {p.dx:g} µm ({p.cells / 1e6:.2g} M cells)",
+                    unit=" steps",
+                    postfix="starting (the first solve also compiles the kernels)",
+                )
             )
+        bar = open_[0]
         if p.steps == 0:
-            bar.set_postfix_str("starting (the first solve also compiles the kernels)")
-        else:
-            bar.set_postfix_str(
-                f"residual {p.residual:.1e} (stops at {p.tolerance:.0e})", refresh=False
-            )
-            bar.update(p.steps - bar.n)
+            return
+        bar.set_postfix_str(
+            f"residual {p.residual:.1e} (stops at {p.tolerance:.0e})", refresh=False
+        )
+        bar.update(p.steps - bar.n)
+        if p.finished:
+            close()
 
     try:
         with on_progress(show):
             yield
     finally:
-        for bar in bars.values():
-            bar.close()
+        close()
 
 
 def _load(path: Path, overrides: list[str] | None = None, max_points: int | None = None):
     from fibersweep.config import load_config
+    from fibersweep.sweep.executors import EXECUTORS
 
-    return load_config(path, overrides or (), max_points=max_points)
+    return load_config(path, overrides or (), max_points=max_points, executors=EXECUTORS)
 
 
 def _version(value: bool) -> None:

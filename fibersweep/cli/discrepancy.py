@@ -213,6 +213,13 @@ def power_cmd(
         typer.Option("--effect", help="Library effect to analyse, repeatable (default: all)."),
     ] = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
+    boot: Annotated[
+        int,
+        typer.Option(
+            help="Bootstrap resamples of the simulated starts for each limit's 95 % interval "
+            "(no new runs; 0: none)."
+        ),
+    ] = 30,
     seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
     output: Annotated[Path, typer.Option("--output", "-o", help="Where power.json goes.")] = Path(
         "power"
@@ -263,13 +270,16 @@ def power_cmd(
                 1 + 2 * sum(len(c.probes) for c in cands)), tracks=False,
         ) as sim:  # fmt: skip
             maker = CopyMaker(starts, NoiseModel(), seed, sim)
-            pw = analyse_power(maker, cands, n, obs, rng, n_sim=simulate, alpha=alpha)
+            pw = analyse_power(maker, cands, n, obs, rng, n_sim=simulate, alpha=alpha,
+                               n_boot=boot)  # fmt: skip
         rows = []
         for e in pw.effects:
             real = float(np.copysign(LIBRARY[e.name].realistic, e.probe))
             rows.append(
                 {
                     "effect": e.name, "probe": e.probe, "limit": e.limit, "gamma": e.gamma,
+                    "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
+                    "dispersion_limit": e.dispersion_limit,
                     "realistic": real, "fibers_for_realistic": pw.fibers_needed(e.name, real),
                 }
             )  # fmt: skip
@@ -283,9 +293,14 @@ def power_cmd(
     typer.echo(f"detection limits at N = {n} (power {pw.power:g}, alpha {alpha:g}):")
     for r in rows:
         lim = f"{r['limit']:.3g}" if r["limit"] is not None else "not within its range"
+        if r["limit_ci"] is not None:
+            lo, hi = (f"{x:.3g}" if x is not None else "out of range" for x in r["limit_ci"])
+            lim += f" [{lo}, {hi}]"
+        if r["dispersion_limit"] is not None:
+            lim += f"; dispersion test from {r['dispersion_limit']:.3g}"
         need = r["fibers_for_realistic"]
         typer.echo(
-            f"  {r['effect']:>13} {'+' if r['probe'] > 0 else '-'}  from {lim:>22}"
+            f"  {r['effect']:>13} {'+' if r['probe'] > 0 else '-'}  from {lim:>36}"
             f"   (realistic {r['realistic']:g}: {need if need else '> 100000'} fibers)"
         )
     for a, b, c in pw.lookalikes:

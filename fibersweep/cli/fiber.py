@@ -83,7 +83,10 @@ def simulate(
         if res.status != "ok":
             typer.echo(f"status: failed ({res.reason})")
         typer.echo(f"class: {res.cls or '-'}")
-        typer.echo(f"delta: {f(res.delta, '.4f')}")
+        if math.isfinite(res.delta):
+            typer.echo(f"delta: {res.delta:.4f} h_obs (lateral displacement y_f - y0)")
+        else:
+            typer.echo("delta: none (defined only for a fiber that passes the pillar)")
         if res.contact:
             typer.echo(
                 f"contact: yes, theta_c = {f(res.theta_c, '.2f')}°, y_c/h = {f(res.y_c, '.3f')}, "
@@ -91,11 +94,22 @@ def simulate(
             )
         else:
             typer.echo("contact: no")
+        passed = (
+            f"t_pass: {res.t_pass:.3f} s"
+            if math.isfinite(res.t_pass)
+            else "t_pass: never (the centre of mass did not pass the pillar)"
+        )
         typer.echo(
-            f"t_pass: {f(res.t_pass, '.3f')} s; final x = {f(res.x_f, '.1f')} µm, "
+            f"{passed}; final x = {f(res.x_f, '.1f')} µm, "
             f"y = {f(res.y_f, '.1f')} µm, theta = {f(res.theta_f, '.1f')}°; "
             f"min clearance {f(res.min_clearance, '.3f')} µm"
         )
+        if math.isfinite(res.min_end_to_end):
+            typer.echo(
+                f"deformation: max curvature {res.max_curvature:.4f} 1/µm, min end-to-end "
+                f"{res.min_end_to_end:.3f} of the contour, max tension "
+                f"{res.max_tension:.3g} pN, max wrap {res.max_wrap:.1f}°"
+            )
         typer.echo(f"steps: {res.n_steps} in {res.wall_time:.2f} s")
         if reversible:
             typer.echo(f"reversed flow: returns within {f(back, '.3g')} µm of the start")

@@ -8,16 +8,23 @@ from typing import Annotated
 import typer
 
 from fibersweep.cli._app import _errors, app
+from fibersweep.examples import EXAMPLES
+
+_WRITTEN = ", ".join(name for name in EXAMPLES.values() if name != "fibersweep.yaml")
+INIT_HELP = (
+    "Write fibersweep.yaml (a commented starter) and the shipped examples: "
+    f"{_WRITTEN}. Existing files are kept unless --force."
+)
 
 
-@app.command()
+@app.command(help=INIT_HELP)
 def init(
     directory: Annotated[
         Path, typer.Argument(help="Folder to write the configs into (created if missing).")
     ] = Path("."),
     force: Annotated[bool, typer.Option("--force", help="Overwrite existing files.")] = False,
 ) -> None:
-    """Write fibersweep.yaml (a commented starter) and the quick and paper examples."""
+    """Write the starter config and the examples (help text: ``INIT_HELP``)."""
     with _errors():
         from fibersweep.examples import write_examples
 

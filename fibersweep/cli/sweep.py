@@ -20,11 +20,13 @@ from fibersweep.cli._app import (
     app,
     choices,
     flow_progress,
-    progress_interval,
 )
 from fibersweep.errors import InputError, Terminated
 from fibersweep.plots import FORMATS
 from fibersweep.sweep.executors import EXECUTORS
+
+#: Seconds above which making kernels ready means they were compiled, not loaded.
+COMPILED_S = 5.0
 
 #: Default of the classify thresholds: the sweep's own.
 SWEEP_CLASSIFY = "the sweep's fiber.classify"
@@ -260,16 +262,27 @@ def _estimate_fields(cfg, task, missing) -> tuple[float, float, str]:
     total = 0.0
     per_run = None
     notes = []
+    compile_s = warmup_s = 0.0
     for flow in missing:
         e = estimate_uncached(flow, sub.fiber, start)
         total += e.flow_s
         per_run = e.run_s if per_run is None else per_run
+        compile_s = max(compile_s, e.compile_s)
+        warmup_s = max(warmup_s, e.warmup_s)
         grids = " then ".join(f"{dx:g} µm ({cells / 1e6:.2g} M cells)" for dx, cells in e.grids)
         notes.append(
             f"flow field on {grids}: about {_fmt_s(e.flow_s)} "
             f"({e.mlups:.0f} MLUPS timed over {PROBE_STEPS} steps; typical step counts)"
         )
     note = notes[0] if len(notes) == 1 else f"{len(notes)} flow fields: {'; '.join(notes)}"
+    # This dry run made every kernel the run needs ready: a first use compiled them (and
+    # cached them on disk, so the run only loads them); say what that cost.
+    ready = compile_s + warmup_s
+    if ready > COMPILED_S:
+        note += (
+            f"; first use: this dry run compiled the kernels in {_fmt_s(ready)} (flow "
+            f"{_fmt_s(compile_s)}, fiber {_fmt_s(warmup_s)}); cached now, the run loads them"
+        )
     return total, per_run, note
 
 
@@ -277,8 +290,7 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
     """Run the sweep with a progress bar; True if any run of the table failed."""
     from collections import Counter
 
-    from tqdm import tqdm
-
+    from fibersweep.progressbar import progress_bar
     from fibersweep.sweep.runner import run_sweep
 
     bar = None
@@ -291,13 +303,7 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
         if not plan.todo:
             return
         # On a terminal: a live bar; into a log file: a line every 10 s, not thousands.
-        bar = tqdm(
-            total=len(plan.todo),
-            unit="run",
-            dynamic_ncols=True,
-            smoothing=0.1,
-            mininterval=progress_interval(),
-        )
+        bar = progress_bar(total=len(plan.todo), unit="run", smoothing=0.1)
 
     def progress(row) -> None:
         counts[row["class"] if row["status"] == "ok" else "failed"] += 1
@@ -318,10 +324,7 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
             f"({len(plan.tasks)} points in the sweep so far)"
         )
         if plan.todo:
-            import sys
-
-            every = 0.2 if sys.stderr.isatty() else 10.0
-            bar = tqdm(total=len(plan.todo), unit="run", dynamic_ncols=True, mininterval=every)
+            bar = progress_bar(total=len(plan.todo), unit="run", smoothing=0.1)
 
     line, cached = _fields_line(cfg)
     typer.echo(line if cached else f"{line}; computing into {cfg.run.cache_dir} ...")
@@ -358,6 +361,10 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
     )
     if summary.refinement is not None:
         typer.echo(_refinement_line(summary.refinement, cfg.sweep.refine))
+    if summary.ran:  # rows added under this config's rule to a folder labelled by another
+        from fibersweep.sweep.store import read_runs
+
+        _warn_mixed_rules(read_runs(summary.out), summary.out)
     for line in summary.failures[:10]:
         typer.secho(f"  failed {line}", err=True, fg=typer.colors.RED)
     if summary.failed:
@@ -437,6 +444,15 @@ def classify(
         typer.secho(f"warning: {w}", err=True, fg=typer.colors.YELLOW)
 
 
+def _warn_mixed_rules(runs, results: Path) -> None:
+    """Warn on stderr when the class column of ``results`` mixes pole-vaulting rules."""
+    from fibersweep.sweep.rules import mixed_rules_message
+
+    message = mixed_rules_message(runs, results)
+    if message:
+        typer.secho(f"warning: {message}", err=True, fg=typer.colors.YELLOW)
+
+
 @app.command("plot-phase")
 def plot_phase(
     results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
@@ -485,6 +501,7 @@ def plot_phase(
         paths = plot_all(
             runs, out or results / "figures", Format(fmt).value, separatrix=sep, col=col, row=row
         )
+    _warn_mixed_rules(runs, results)
     for p in paths:
         typer.echo(f"wrote {p}")
 

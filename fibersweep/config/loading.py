@@ -10,7 +10,7 @@ from __future__ import annotations
 import copy
 import difflib
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,7 +22,8 @@ from pydantic import (
 )
 
 from fibersweep.config.errors import ConfigError, FieldError, error_parts
-from fibersweep.config.schema import Config, _unwrap
+from fibersweep.config.schema import Config
+from fibersweep.config.sweep_axes import _unwrap
 
 
 @dataclass(frozen=True)
@@ -125,9 +126,17 @@ def _describe(err: dict, lines: dict[tuple, int]) -> str:
 
 
 def parse_config(
-    data: Any, lines: dict[tuple, int | str] | None = None, source: str = "config"
+    data: Any,
+    lines: dict[tuple, int | str] | None = None,
+    source: str = "config",
+    *,
+    executors: Mapping[str, type] | None = None,
 ) -> Config:
     """Validate a config mapping.
+
+    ``executors`` (name -> executor class, e.g. the sweep's ``EXECUTORS``) checks
+    ``run.executor`` and ``run.options`` against the registry; the config package
+    does not import the sweep, so the caller hands it in.
 
     Raises
     ------
@@ -139,7 +148,8 @@ def parse_config(
     if not isinstance(data, dict):
         raise ConfigError([f"<top level>: expected a mapping, got {type(data).__name__}"], source)
     try:
-        return Config.model_validate(data)
+        context = {"executors": executors} if executors else None
+        return Config.model_validate(data, context=context)
     except ValidationError as exc:
         seen: list[str] = []
         for err in exc.errors():
@@ -220,14 +230,19 @@ def apply_overrides(
 
 
 def load_config(
-    path: str | Path, overrides: Sequence[str] = (), *, max_points: int | None = None
+    path: str | Path,
+    overrides: Sequence[str] = (),
+    *,
+    max_points: int | None = None,
+    executors: Mapping[str, type] | None = None,
 ) -> Config:
     """Read and validate a YAML config file, with command-line overrides.
 
     ``overrides`` are ``KEY=VALUE`` strings (:func:`apply_overrides`), validated by
     the same schema with the same messages. ``max_points`` (the command line's
     ``--max-points``) replaces ``run.max_points`` before validation, so a large
-    sweep can be allowed without editing the file.
+    sweep can be allowed without editing the file. ``executors`` checks the
+    executor's name and options (see :func:`parse_config`).
 
     Raises
     ------
@@ -242,19 +257,25 @@ def load_config(
     try:
         located = _yaml_with_lines(text)
     except yaml.YAMLError as exc:
+        for mark in (getattr(exc, "context_mark", None), getattr(exc, "problem_mark", None)):
+            if mark is not None:  # name the file, not "<unicode string>"
+                mark.name = str(p)
         raise ConfigError([f"invalid YAML: {exc}"], str(p)) from None
     except ConfigError as exc:
         raise ConfigError(exc.problems, str(p)) from None
     data = located.data
-    if overrides:
-        if data is None:
-            data = {}
-        if isinstance(data, dict):
-            try:
-                data = apply_overrides(data, located.lines, overrides)
-            except ConfigError as exc:
-                raise ConfigError(exc.problems, str(p)) from None
+    if data is None:  # an empty file (or only comments) is a mistake, not "all defaults"
+        raise ConfigError(
+            ["the file holds no settings (empty or only comments); `fibersweep init` writes "
+             "a commented starter config"],
+            str(p),
+        )  # fmt: skip
+    if overrides and isinstance(data, dict):
+        try:
+            data = apply_overrides(data, located.lines, overrides)
+        except ConfigError as exc:
+            raise ConfigError(exc.problems, str(p)) from None
     if max_points is not None and isinstance(data, dict):
         run = data.get("run") if isinstance(data.get("run"), dict) else {}
         data = {**data, "run": {**run, "max_points": max_points}}
-    return parse_config(data, located.lines, str(p))
+    return parse_config(data, located.lines, str(p), executors=executors)

@@ -1,398 +1,43 @@
-"""The config schema: the four sections, the sweep over starts and settings, combinations.
+"""The config schema: the four sections of a YAML config and the run section.
 
 A config has four sections, each optional: ``flow`` (:class:`FlowSettings`),
-``fiber`` (:class:`FiberSettings`), ``sweep`` (:class:`SweepSettings`) and
-``run`` (:class:`RunSettings`). Unknown keys are errors.
+``fiber`` (:class:`FiberSettings`), ``sweep`` (:class:`SweepSettings`, in
+:mod:`.sweep_axes` with the sweep-axis algebra) and ``run``
+(:class:`RunSettings`). Unknown keys are errors. The physics checks of the
+start points live in :mod:`.starts`. The config does not import the sweep: the
+executor registry is handed in by the caller (:func:`.loading.load_config`).
 """
 
 from __future__ import annotations
 
-import copy
 import difflib
-import itertools
-import re
-import types
-import typing
-from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-from pydantic import (
-    BaseModel,
-    ConfigDict,
-    Field,
-    ValidationError,
-    field_validator,
-    model_serializer,
-    model_validator,
-)
+from pydantic import Field, ValidationInfo, model_validator
 
-from fibersweep.config.axes import (
-    DEFAULT_MAX_POINTS,
-    Axis,
-    _show,
-    _Strict,
-    axis_count,
-    axis_values,
-    setting_axis_count,
-    setting_axis_values,
+from fibersweep.config.axes import DEFAULT_MAX_POINTS, _Strict
+from fibersweep.config.errors import FieldError
+from fibersweep.config.starts import check_starts
+from fibersweep.config.sweep_axes import (
+    Combination,
+    RefineSettings,
+    SweepSettings,
+    combinations,
+    setting_annotation,
+    setting_column,
 )
-from fibersweep.config.errors import FieldError, error_parts
-from fibersweep.errors import InputError
-from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.settings import FlowSettings
 
-
-class RefineSettings(_Strict):
-    """Adaptive refinement of class boundaries (``sweep.refine``).
-
-    Starting from the grid, each round bisects every pair of neighbouring points
-    (neighbours along one refine axis, every other coordinate and setting equal)
-    whose classes differ, or whose δ differ by more than ``delta_jump``, until
-    every such bracket is at most ``tolerance`` wide on its axis, the budget
-    ``max_runs`` is spent or ``rounds`` rounds have run.
-    """
-
-    axes: list[str] = Field(
-        min_length=1, description="start axes to bisect along (theta0, y0, length)"
-    )
-    tolerance: dict[str, float] = Field(
-        description="largest bracket width per refine axis when a boundary counts as "
-        "located [deg for theta0, h_obs for y0, l_obs for length]"
-    )
-    max_runs: int = Field(ge=1, strict=True, description="most refinement runs (the grid excluded)")
-    rounds: int = Field(
-        12, ge=1, le=60, strict=True, description="most refinement rounds (round 0 is the grid)"
-    )
-    delta_jump: float | None = Field(
-        None,
-        gt=0,
-        description="also bisect neighbours of one class whose δ differ by more than this [h_obs]",
-    )
-
-    @field_validator("axes")
-    @classmethod
-    def _known_axes(cls, axes: list[str]) -> list[str]:
-        for i, a in enumerate(axes):
-            if a not in _START_AXES:
-                close = difflib.get_close_matches(str(a), _START_AXES, n=1, cutoff=0.5)
-                hint = f"did you mean '{close[0]}'? " if close else ""
-                raise FieldError(
-                    (i,),
-                    f"{a!r} cannot be refined; {hint}valid: {', '.join(_START_AXES)} "
-                    "(setting axes are swept on their listed values only)",
-                )
-        if len(set(axes)) != len(axes):
-            raise ValueError(f"an axis is listed twice: {axes}")
-        return axes
-
-    @model_validator(mode="after")
-    def _tolerances(self) -> RefineSettings:
-        for key, tol in self.tolerance.items():
-            if key not in self.axes:
-                raise FieldError(
-                    ("tolerance", key),
-                    f"not a refine axis; refine axes: {', '.join(self.axes)}",
-                )
-            if not (np.isfinite(tol) and tol > 0):
-                raise FieldError(("tolerance", key), f"must be a positive number; got {tol}")
-        missing = [a for a in self.axes if a not in self.tolerance]
-        if missing:
-            raise FieldError(
-                "tolerance",
-                f"no tolerance for {', '.join(missing)}; give one per refine axis, "
-                f"e.g. tolerance: {{{missing[0]}: {_TOL_EXAMPLE.get(missing[0], 0.01)}}}",
-            )
-        return self
-
-
-_TOL_EXAMPLE = {"theta0": 0.5, "y0": 0.005, "length": 0.01}
-
-
-class SweepSettings(_Strict):
-    """Sweep over the start angle, lateral position and length, and any other setting.
-
-    Each start axis is a number, a list, ``{start, stop, step}`` or ``{start, stop, num}``.
-    Any other key is a dotted setting key (``fiber.effects.friction``,
-    ``flow.geometry.pillar_height``) swept as an axis in the same forms, or a list
-    of values of any type (``fiber.contact.pillar: [rough, smooth]``); the setting
-    axes are combined as a product. ``zip`` holds a mapping of setting keys (or a
-    list of such mappings) whose value lists are swept together, one combination
-    per position. Every combination is validated as a whole config
-    (:meth:`Config.combinations`).
-    """
-
-    model_config = ConfigDict(extra="allow", frozen=True)
-
-    theta0: Axis = Field(0.0, description="start angle from +x [degrees]")
-    y0: Axis = Field(0.5, description="start lateral position from the base / h_obs")
-    length: Axis = Field(1.0, description="fiber length / l_obs")
-    zip: Any = Field(
-        None,
-        description="setting keys swept together: a mapping key -> values (same lengths), "
-        "or a list of such mappings",
-    )
-    refine: RefineSettings | None = Field(
-        None, description="adaptive refinement of class boundaries (off when absent)"
-    )
-
-    @field_validator("theta0", "y0", "length")
-    @classmethod
-    def _finite(cls, axis: Axis, info: Any) -> Axis:
-        # A field validator, so the error is reported at the axis's own line.
-        v = axis_values(axis)
-        if len(v) == 0:
-            raise ValueError("no values")
-        bad = v[~np.isfinite(v)]
-        if bad.size:
-            raise ValueError(f"values must be finite; got {_show(bad)}")
-        if info.field_name == "length" and np.any(v <= 0):
-            raise ValueError(f"lengths must be positive; got {_show(v[v <= 0])}")
-        return axis
-
-    @field_validator("zip", mode="before")
-    @classmethod
-    def _zip_shape(cls, value: Any) -> Any:
-        if value is None or (isinstance(value, dict) and value):
-            return value
-        if isinstance(value, list) and value and all(isinstance(g, dict) and g for g in value):
-            return value
-        raise ValueError(
-            "expected a mapping of setting keys to value lists (swept together), "
-            "or a list of such mappings"
-        )
-
-    @model_serializer(mode="wrap")
-    def _without_empty_zip(self, handler: Any) -> dict[str, Any]:
-        data = handler(self)
-        if isinstance(data, dict):
-            for key in ("zip", "refine"):  # written only when used
-                if data.get(key) is None:
-                    data.pop(key, None)
-        return data
-
-    @model_validator(mode="after")
-    def _refine_axes_swept(self) -> SweepSettings:
-        """A refine axis needs at least two grid values to bisect between."""
-        if self.refine is not None:
-            for i, a in enumerate(self.refine.axes):
-                if axis_count(getattr(self, a)) < 2:
-                    raise FieldError(
-                        ("refine", "axes", i),
-                        f"{a} has one value in the grid: nothing to bisect; "
-                        f"sweep {a} over at least two values or drop it from refine.axes",
-                    )
-        return self
-
-    @model_validator(mode="after")
-    def _setting_axes_valid(self) -> SweepSettings:
-        """Keys name settings, values are axis forms, zipped lists are equally long."""
-        seen: dict[str, tuple] = {}
-        for loc, key, raw in self.axis_items():
-            if "." not in key:
-                close = difflib.get_close_matches(key, _START_AXES + ("zip",), n=1, cutoff=0.5)
-                hint = f"; did you mean '{close[0]}'?" if close else "."
-                if key in ("fiber", "flow"):
-                    example = (
-                        "flow.dx: [4, 2]" if key == "flow" else "fiber.contact.chi: [1.1, 1.2]"
-                    )
-                    hint = f"; write a swept setting as one dotted key, e.g. {example}."
-                raise FieldError(
-                    loc,
-                    f"unknown key{hint} Valid keys here: {', '.join(_START_AXES)}, zip, "
-                    "or a dotted setting key such as fiber.effects.friction",
-                )
-            try:
-                setting_annotation(key)
-                values = setting_axis_values(raw)
-            except ValueError as exc:
-                raise FieldError(loc, str(exc)) from None
-            if key in seen:
-                where = ".".join(str(p) for p in ("sweep", *seen[key]))
-                raise FieldError(loc, f"{key} is swept twice (also at {where}); keep one")
-            seen[key] = loc
-            del values
-        for gloc, group in self._zip_groups():
-            sizes = {k: len(setting_axis_values(v)) for k, v in group.items()}
-            if len(set(sizes.values())) > 1:
-                shown = ", ".join(f"{k}: {n}" for k, n in sizes.items())
-                raise FieldError(
-                    gloc, f"zipped keys need value lists of the same length; got {shown}"
-                )
-        return self
-
-    def _zip_groups(self) -> list[tuple[tuple, dict[str, Any]]]:
-        """(location relative to ``sweep``, mapping) of each zip group."""
-        if self.zip is None:
-            return []
-        if isinstance(self.zip, dict):
-            return [(("zip",), self.zip)]
-        return [(("zip", i), g) for i, g in enumerate(self.zip)]
-
-    def axis_items(self) -> list[tuple[tuple, str, Any]]:
-        """Every setting axis as (location relative to ``sweep``, dotted key, raw value).
-
-        Product axes first (in the order written), then each zip group's keys.
-        """
-        out = [((k,), k, v) for k, v in (self.model_extra or {}).items()]
-        for gloc, group in self._zip_groups():
-            out.extend(((*gloc, k), k, v) for k, v in group.items())
-        return out
-
-    @property
-    def setting_keys(self) -> list[str]:
-        """The swept setting keys (dotted), product axes first, then zipped ones."""
-        return [k for _, k, _ in self.axis_items()]
-
-    def assignments(self) -> list[dict[str, Any]]:
-        """Every combination of the setting axes as {dotted key: raw value}.
-
-        The product of the product axes and the zip groups, the first written
-        varying slowest. ``[{}]`` when no setting is swept.
-        """
-        factors: list[list[dict[str, Any]]] = [
-            [{k: v} for v in setting_axis_values(raw)]
-            for k, raw in (self.model_extra or {}).items()
-        ]
-        for _, group in self._zip_groups():
-            cols = {k: setting_axis_values(v) for k, v in group.items()}
-            n = len(next(iter(cols.values()))) if cols else 0
-            factors.append([{k: vals[i] for k, vals in cols.items()} for i in range(n)])
-        out = []
-        for combo in itertools.product(*factors):
-            merged: dict[str, Any] = {}
-            for part in combo:
-                merged.update(part)
-            out.append(merged)
-        return out
-
-    @property
-    def n_combinations(self) -> int:
-        """Number of setting combinations, without making them."""
-        n = 1
-        for raw in (self.model_extra or {}).values():
-            n *= setting_axis_count(raw)
-        for _, group in self._zip_groups():
-            n *= setting_axis_count(next(iter(group.values()))) if group else 1
-        return n
-
-    @property
-    def size(self) -> int:
-        """Number of start points (product of the three start axes), without making them."""
-        return axis_count(self.theta0) * axis_count(self.y0) * axis_count(self.length)
-
-    def grid(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The sweep points as arrays, in the order of :meth:`starts`.
-
-        Returns
-        -------
-        theta0, y0, length : ndarray, shape (size,)
-            θ0 [deg], y0/h_obs, L/l_obs; length varies slowest, theta0 fastest.
-        """
-        L, y, t = np.meshgrid(
-            axis_values(self.length), axis_values(self.y0), axis_values(self.theta0),
-            indexing="ij",
-        )  # fmt: skip
-        return t.ravel(), y.ravel(), L.ravel()
-
-    def starts(self) -> list[FiberStart]:
-        """Cartesian product of the axes, ordered length, y0, theta0."""
-        return [
-            FiberStart(theta0=float(t), y0=float(y), length=float(L))
-            for t, y, L in zip(*self.grid(), strict=True)
-        ]
-
-
-_START_AXES = ("theta0", "y0", "length")
-
-
-def _unwrap(ann: Any) -> Any:
-    """``X | None`` -> X (the other members of a union are kept)."""
-    args = [a for a in typing.get_args(ann) if a is not type(None)]
-    if typing.get_origin(ann) in (typing.Union, types.UnionType) and len(args) == 1:
-        return args[0]
-    return ann
-
-
-def setting_annotation(key: str) -> tuple[Any, Any]:
-    """Type annotation and pydantic field of a dotted setting key that may be swept.
-
-    Walks the config models; inside a mapping setting (``fiber.effects``) the
-    next part is a mapping key and the value type is returned (field None).
-
-    Raises
-    ------
-    ValueError
-        Not a setting that changes results, or an unknown key (did-you-mean).
-    """
-    parts = key.split(".")
-    if any(not p for p in parts):
-        raise ValueError(f"{key!r}: empty part in the dotted key")
-    if parts[0] in ("run", "sweep"):
-        raise ValueError(
-            f"{parts[0]}.* settings do not change a run's result; they cannot be a sweep axis"
-        )
-    if parts[:2] == ["fiber", "classify"]:
-        raise ValueError(
-            "classification thresholds are not part of a run's id: re-label stored runs "
-            "with `fibersweep classify` instead of sweeping them"
-        )
-    model: Any = Config
-    ann: Any = Config
-    field: Any = None
-    for i, part in enumerate(parts):
-        if isinstance(model, type) and issubclass(model, BaseModel):
-            if part not in model.model_fields:
-                here = ".".join(parts[:i]) or "<top level>"
-                close = difflib.get_close_matches(part, list(model.model_fields), n=1, cutoff=0.5)
-                hint = f"; did you mean '{close[0]}'?" if close else ""
-                valid = ", ".join(k for k in model.model_fields if i or k in ("fiber", "flow"))
-                raise ValueError(
-                    f"unknown setting '{part}' in {here}{hint} Valid keys there: {valid}"
-                )
-            field = model.model_fields[part]
-            ann = _unwrap(field.annotation)
-        elif typing.get_origin(model) is dict:
-            ann, field = _unwrap(typing.get_args(model)[1]), None
-        else:
-            here = ".".join(parts[:i])
-            raise ValueError(f"{here} is a value, not a section: no '{part}' inside it")
-        model = ann
-    return ann, field
-
-
-def setting_column(key: str) -> tuple[str, str, str]:
-    """How a swept setting is stored as a runs-table column.
-
-    Returns
-    -------
-    kind : {'float', 'int', 'bool', 'string', 'json'}
-        Column type (``json``: a section or list, stored as its JSON text).
-    unit : str
-        From the ``[unit]`` in the field's description ('' if none).
-    doc : str
-        The field's description.
-    """
-    try:
-        ann, field = setting_annotation(key)
-    except ValueError:
-        return "json", "", f"swept setting {key}"
-    kind = "json"
-    if ann is bool:
-        kind = "bool"
-    elif ann is int:
-        kind = "int"
-    elif ann is float:
-        kind = "float"
-    elif ann is str or typing.get_origin(ann) is typing.Literal:
-        kind = "string"
-    desc = (field.description if field is not None else None) or ""
-    if field is None and key.startswith("fiber.effects."):
-        desc = f"strength of the effect {key.rsplit('.', 1)[1]} (0 = off)"
-    m = re.search(r"\[([^\]]+)\]", desc)
-    unit = m.group(1) if m else ""
-    return kind, unit, f"swept setting {key}: {desc}" if desc else f"swept setting {key}"
+__all__ = [
+    "Combination",
+    "Config",
+    "RefineSettings",
+    "RunSettings",
+    "SweepSettings",
+    "setting_annotation",
+    "setting_column",
+]
 
 
 class RunSettings(_Strict):
@@ -414,6 +59,10 @@ class RunSettings(_Strict):
     retries: int = Field(
         2, ge=0, description="re-runs of a task whose worker died (local pool and Dask)"
     )
+    options: dict[str, Any] = Field(
+        {},
+        description="further options of the executor (its Options model), e.g. chunk_size for dask",
+    )
     compact: bool = Field(True, description="merge part files into one at the end of a sweep")
     max_points: int = Field(
         DEFAULT_MAX_POINTS,
@@ -421,16 +70,30 @@ class RunSettings(_Strict):
         description="refuse sweeps with more points than this (raise it on purpose)",
     )
 
-    @field_validator("executor")
-    @classmethod
-    def _known_executor(cls, name: str) -> str:
-        from fibersweep.sweep.executors import EXECUTORS  # the registry decides
+    @model_validator(mode="after")
+    def _known_executor(self, info: ValidationInfo) -> RunSettings:
+        """Check the executor's name and options against the registry the caller passes.
 
-        if name not in EXECUTORS:
-            close = difflib.get_close_matches(name, list(EXECUTORS), n=1)
+        The config does not import the sweep: ``load_config(..., executors=EXECUTORS)``
+        (the CLI) hands the registry in as validation context; without it, the
+        executor is checked when it is made (:func:`fibersweep.sweep.executors.make_executor`).
+        """
+        executors = (info.context or {}).get("executors")
+        if not executors:
+            return self
+        if self.executor not in executors:
+            close = difflib.get_close_matches(self.executor, list(executors), n=1)
             hint = f"did you mean '{close[0]}'? " if close else ""
-            raise ValueError(f"unknown executor; {hint}valid: {', '.join(EXECUTORS)}")
-        return name
+            raise FieldError("executor", f"unknown executor; {hint}valid: {', '.join(executors)}")
+        known = executors[self.executor].Options.model_fields
+        for key in self.options:
+            if key not in known:
+                raise FieldError(
+                    f"options.{key}",
+                    f"not an option of the {self.executor} executor; valid: "
+                    f"{', '.join(k for k in known if k not in ('retries', 'keep'))}",
+                )
+        return self
 
     @model_validator(mode="after")
     def _scheduler_address(self) -> RunSettings:
@@ -481,8 +144,9 @@ class Config(_Strict):
         """The configs the sweep runs: one per combination of the setting axes.
 
         Each is this config with the combination's values applied and no setting
-        axes left, validated by the same schema (its start points checked with
-        :meth:`_starts_to_check`). Without setting axes: ``[Combination({}, self)]``.
+        axes left, validated by the same schema (its start points checked by
+        :func:`fibersweep.config.starts.check_starts`). Without setting axes:
+        ``[Combination({}, self)]`` (:func:`fibersweep.config.sweep_axes.combinations`).
 
         Raises
         ------
@@ -490,174 +154,13 @@ class Config(_Strict):
             A combination is invalid: at the axis whose value is at fault (its
             value named), or at the field that failed with the combination named.
         """
-        assignments = self.sweep.assignments()
-        if assignments == [{}]:
-            return [Combination({}, self)]
-        locs = {k: ("sweep", *loc) for loc, k, _ in self.sweep.axis_items()}
-        base = self.model_dump(mode="json")
-        base["sweep"] = {k: base["sweep"][k] for k in _START_AXES}  # refine: the sweep's
-        out = []
-        for assignment in assignments:
-            data = copy.deepcopy(base)
-            for key, value in assignment.items():
-                _set_path(data, key.split("."), value)
-            try:
-                cfg = Config.model_validate(data)
-            except ValidationError as exc:
-                raise _combination_error(exc, assignment, locs) from None
-            dumped = cfg.model_dump(mode="json")
-            values = {k: _get_path(dumped, k.split(".")) for k in assignment}
-            off = _check_effects(values, locs)
-            if off:
-                # An effect swept to its baseline is off: left out, so those runs keep the
-                # ids of runs made without it (a folder swept later reuses them).
-                for key in off:
-                    data["fiber"]["effects"].pop(key.split(".", 2)[2])
-                cfg = Config.model_validate(data)
-            out.append(Combination(values, cfg))
-        return out
+        return combinations(self)
 
     @model_validator(mode="after")
     def _starts_fit(self) -> Config:
         """Every sweep point must be a fiber the grid resolves, in the channel, off the pillar.
 
-        Checked here, before any flow field is computed, with the same check a run
-        makes (:func:`fibersweep.fiber.setup.check_start`); effects that move the
-        start (start noise, pillar scale) are applied per run and checked there.
+        Checked here, before any flow field is computed (:func:`check_starts`).
         """
-        if self.sweep.setting_keys:
-            return self  # each setting combination is checked as a config of its own
-        from fibersweep.fiber.contact import make_pillar  # numba-backed: import lazily
-        from fibersweep.fiber.setup import check_start
-
-        geo = self.flow.geometry.to_geometry()
-        pillar = make_pillar(geo, self.fiber.contact, self.fiber.bead_radius, 1.0)
-        bad: dict[str, str] = {}
-        for start in self._starts_to_check(geo, pillar.r_cut):
-            try:
-                check_start(geo, self.flow.dx, self.fiber, start, pillar)
-            except InputError as exc:
-                name, _, msg = str(exc).partition(": ")
-                # x0 is a fiber setting; the other names are sweep axes.
-                path = "fiber.x0" if name == "x0" else f"sweep.{name}"
-                bad.setdefault(path, msg)  # first problem per field is enough to act on
-        if bad:
-            path, msg = next(iter(bad.items()))
-            raise FieldError(path, msg)
+        check_starts(self)
         return self
-
-    def _starts_to_check(self, geo: Any, r_cut: float) -> list[FiberStart]:
-        """The sweep points that could fail :func:`check_start`, in sweep order.
-
-        A point is skipped only when it provably passes: its length was checked on
-        another point (the length rules depend on L alone), and a disc around its
-        centre that holds every bead, with the pillar's cutoff and a grid spacing
-        to spare, lies inside the channel and clear of the pillar's bounding box.
-        So the first failing point per field is the same as checking every point,
-        and a 200 000-point sweep is checked in a fraction of a second.
-        """
-        t, y, L = self.sweep.grid()
-        a = self.fiber.bead_radius
-        x0 = geo.length / 4.0 if self.fiber.x0 is None else float(self.fiber.x0)
-        yc = np.array([geo.y_from_base(v) for v in (0.0, 1.0)])
-        y_abs = yc[0] + y * (yc[1] - yc[0])  # y_from_base is affine in y0
-        reach = L * geo.pillar_base_length / 2.0 + 2.0 * a + self.flow.dx
-        x_lo, y_lo, x_hi, y_hi = geo.shape.bounds
-        lo, hi = (x_lo, y_lo), (x_hi, y_hi)
-        gap_x = np.maximum(np.maximum(lo[0] - x0, x0 - hi[0]), 0.0)
-        gap_y = np.maximum(np.maximum(lo[1] - y_abs, y_abs - hi[1]), 0.0)
-        clear = (
-            (y_abs - reach > 0.0)
-            & (y_abs + reach < geo.width)
-            & (x0 - reach > 0.0)
-            & (x0 + reach < geo.length)
-            & (np.hypot(gap_x, gap_y) > reach + r_cut)
-        )
-        _, first_of_length = np.unique(L, return_index=True)
-        clear[first_of_length] = False
-        idx = np.flatnonzero(~clear)
-        return [FiberStart(theta0=float(t[i]), y0=float(y[i]), length=float(L[i])) for i in idx]
-
-
-@dataclass(frozen=True)
-class Combination:
-    """One combination of the setting axes and the config it makes.
-
-    Attributes
-    ----------
-    values : dict
-        Swept dotted key -> the value as validated (JSON types: ``0.3``, ``"rough"``).
-    config : Config
-        The whole config with these values, no setting axes left.
-    """
-
-    values: dict[str, Any]
-    config: Config
-
-    @property
-    def label(self) -> str:
-        """``key=value, ...`` for messages ('' without setting axes)."""
-        return ", ".join(f"{k}={v}" for k, v in self.values.items())
-
-
-def _set_path(data: dict, parts: list[str], value: Any) -> None:
-    node = data
-    for part in parts[:-1]:
-        child = node.get(part)
-        if not isinstance(child, dict):
-            child = node[part] = {}
-        node = child
-    node[parts[-1]] = value
-
-
-def _get_path(data: Any, parts: list[str]) -> Any:
-    for part in parts:
-        data = data.get(part) if isinstance(data, dict) else None
-    return data
-
-
-def _combination_error(
-    exc: ValidationError, assignment: dict[str, Any], locs: dict[str, tuple]
-) -> FieldError:
-    """The first problem of an invalid combination, at the axis to blame when there is one."""
-    loc, msg, given = error_parts(exc.errors()[0])
-    for key in assignment:
-        path = tuple(key.split("."))
-        n = min(len(path), len(loc))
-        if n and path[:n] == loc[:n]:
-            others = {k: v for k, v in assignment.items() if k != key}
-            with_ = f" (with {_show_assignment(others)})" if others else ""
-            return FieldError(locs[key], f"value {assignment[key]!r}{with_}: {msg}")
-    dotted = ".".join(str(p) for p in loc) or "<top level>"
-    given_s = "" if given is None or isinstance(given, dict) else f"; given {given!r}"
-    first = next(iter(assignment))
-    return FieldError(locs[first], f"with {_show_assignment(assignment)}: {dotted}: {msg}{given_s}")
-
-
-def _check_effects(values: dict[str, Any], locs: dict[str, tuple]) -> list[str]:
-    """Swept effects exist and take the value (the registry checks names and ranges).
-
-    Returns
-    -------
-    list of str
-        The swept effect keys whose value is the effect's baseline (inactive).
-    """
-    keys = [k for k in values if k.startswith("fiber.effects.")]
-    if not keys:
-        return []
-    from fibersweep.fiber.effects import build_effects  # numba-backed: import lazily
-
-    off = []
-    for key in keys:
-        try:
-            made = build_effects({key.split(".", 2)[2]: values[key]})
-        except InputError as exc:
-            msg = str(exc).removeprefix("effects: ")
-            raise FieldError(locs[key], f"value {values[key]!r}: {msg}") from None
-        if not made.effects:
-            off.append(key)
-    return off
-
-
-def _show_assignment(assignment: dict[str, Any]) -> str:
-    return ", ".join(f"{k} = {v!r}" for k, v in assignment.items())

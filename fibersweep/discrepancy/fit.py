@@ -29,6 +29,7 @@ from scipy.optimize import minimize_scalar
 from scipy.stats import t as student_t
 
 from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.dispersion import dispersion_matrix
 from fibersweep.discrepancy.gap import assess_gap, feature_vector, value_matrices
 from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.scores import score_matrix
@@ -41,6 +42,9 @@ __all__ = [
     "combined_loss",
     "per_fiber_loss",
     "score_interval",
+    "slope_estimate",
+    "dispersion_root",
+    "dispersion_interval",
 ]
 
 log = logging.getLogger(__name__)
@@ -85,6 +89,12 @@ class Fit:
     profile : tuple of (value, ndarray (n_fit,))
         Per-fiber loss at every evaluated value (:func:`per_fiber_loss`; its
         mean is the loss), for :func:`score_interval`.
+    dispersion : tuple of (value, ndarray (n_fit,))
+        For a random effect: each fiber's dispersion score of its observation
+        among its copies at every evaluated value
+        (:func:`~fibersweep.discrepancy.dispersion.dispersion_matrix`, column 0;
+        mean 1 where the copies are as spread as the data), for
+        :func:`dispersion_root` and the interval. Empty otherwise.
     """
 
     name: str
@@ -93,6 +103,7 @@ class Fit:
     loss0: float
     evaluations: tuple[tuple[float, float], ...]
     profile: tuple[tuple[float, np.ndarray], ...] = field(default=(), repr=False, compare=False)
+    dispersion: tuple[tuple[float, np.ndarray], ...] = field(default=(), repr=False, compare=False)
 
 
 def combined_loss(values: Mapping[str, np.ndarray], weights: Mapping[str, float]) -> float:
@@ -163,13 +174,26 @@ def score_interval(
         cut there (the value may lie further out). ``(value, value, True, True)``
         with fewer than two evaluated values.
     """
+    if len(fit.dispersion) >= 2:
+        return dispersion_interval(fit, level, grid)
     if len(fit.profile) < 2:
         return (fit.value, fit.value, True, True)
+    lo, hi, open_lo, open_hi = _accepted(fit, level, grid)
+    # never excludes the value it is reported with (see slope_estimate: a fit's value
+    # lies inside by construction; a hand-made Fit may not)
+    return min(lo, fit.value), max(hi, fit.value), open_lo, open_hi
+
+
+def _merged(fit: Fit) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluated values (sorted) and per-fiber losses (k, n), near-duplicates merged.
+
+    Values closer than a twentieth of their range count as one (the lower mean loss
+    kept): a slope over a tiny step is set by the one or two fibers whose class
+    flips there.
+    """
     pts = sorted(fit.profile, key=lambda p: p[0])
     x = np.array([p[0] for p in pts])
     L = np.stack([p[1] for p in pts])  # (k, n)
-    # values closer than a twentieth of the range are one point (the lower loss kept):
-    # a slope over a tiny step is set by the one or two fibers whose class flips there
     keep = [0]
     for j in range(1, len(x)):
         if x[j] - x[keep[-1]] < (x[-1] - x[0]) / 20.0:
@@ -177,29 +201,147 @@ def score_interval(
                 keep[-1] = j
         else:
             keep.append(j)
-    x, L = x[keep], L[keep]
-    if len(x) < 2:
-        return (fit.value, fit.value, True, True)
+    return x[keep], L[keep]
+
+
+def _slope_t(x: np.ndarray, L: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Midpoints, mean per-fiber slope and its t statistic between neighbouring values."""
     n = L.shape[1]
     g = np.diff(L, axis=0) / np.diff(x)[:, None]  # (k-1, n) per-fiber slopes
     mid = 0.5 * (x[1:] + x[:-1])
-    sd = g.std(axis=1, ddof=1)
+    sd = g.std(axis=1, ddof=1) if n > 1 else np.zeros(len(mid))
     mean = g.mean(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         # no spread: a slope of exactly 0 (no fiber's loss changes there) rejects nothing
         flat = np.where(mean == 0, 0.0, np.sign(mean) * np.inf)
         T = np.where(sd > 0, mean / (sd / np.sqrt(n)), flat)
+    return mid, mean, T
+
+
+def _accepted(
+    fit: Fit, level: float, grid: int, centre: float | None = None
+) -> tuple[float, float, bool, bool]:
+    """The stretch where |T| stays below the t quantile nearest ``centre`` (default: the
+    fitted value); ``(centre, centre, False, False)`` when every value is rejected."""
+    centre = fit.value if centre is None else centre
+    x, L = _merged(fit)
+    if len(x) < 2:
+        return (centre, centre, True, True)
+    n = L.shape[1]
+    mid, _, T = _slope_t(x, L)
     crit = float(student_t.ppf(0.5 + level / 2.0, max(n - 1, 1)))
     v = np.linspace(x[0], x[-1], grid)
     # interpolated T (constant beyond the outer midpoints); infinities kept finite
     Tv = np.interp(v, mid, np.clip(T, -1e6, 1e6))
     inside = np.abs(Tv) <= crit
-    # the stretch around the minimiser of the mean loss (the fitted value when it
-    # lies in the evaluated range)
+    if not inside.any():
+        return (centre, centre, False, False)
+    # the accepted stretch nearest the centre (with a noisy loss, the slope's zero
+    # crossing need not be at the best evaluated value)
+    ok = np.flatnonzero(inside)
+    c = int(ok[np.argmin(np.abs(v[ok] - centre))])
+    i0 = c
+    while i0 > 0 and inside[i0 - 1]:
+        i0 -= 1
+    i1 = c
+    while i1 < grid - 1 and inside[i1 + 1]:
+        i1 += 1
+    return float(v[i0]), float(v[i1]), i0 == 0, i1 == grid - 1
+
+
+def slope_estimate(fit: Fit, level: float = 0.95, grid: int = 400) -> float:
+    """The value the score test is most compatible with: the deepest zero of its T.
+
+    The argmin of the evaluated mean losses (the search's best point) is the best
+    of a few noisy, step-like points. With 2 copies per fiber a single fiber
+    whose copies switch between two outcome branches (contact or not, a long
+    dwell or none) changes its loss by tens of times the typical fiber's, so the
+    best point is wherever that fiber's copies happened to match its
+    observation: the pooled refit reported pillar_hydro 0.901 for a truth of
+    0.6, at the top of its own interval, at Brent's second golden-section point
+    (``scripts/diagnose_fit_bias.py``).
+
+    Here the slope between neighbouring evaluated values is read through its t
+    statistic T (mean per-fiber slope over its standard error, as in
+    :func:`score_interval`), which down-weights a step set by one fiber. The
+    estimate minimises the pseudo-loss Λ(v) = ∫ T, the interpolated T
+    integrated from the lowest evaluated value: a zero of T where it turns
+    from negative to positive, the deepest if there are several. For a
+    quadratic per-fiber loss with equal spread of the slopes it is the exact
+    minimiser. It lies in the accepted stretch of the score test, so the
+    interval :func:`score_interval` reports around it holds it. A fit that kept
+    the baseline (value 0) stays at 0.
+
+    Returns
+    -------
+    float
+        The estimate, in the units of the fitted value.
+    """
+    if fit.value == 0.0 or len(fit.profile) < 3:
+        return fit.value
+    x, L = _merged(fit)
+    if len(x) < 3:
+        return fit.value
+    mid, _, T = _slope_t(x, L)
+    v = np.linspace(x[0], x[-1], grid)
+    Tv = np.interp(v, mid, np.clip(T, -1e6, 1e6))
+    lam = np.concatenate([[0.0], np.cumsum(0.5 * (Tv[1:] + Tv[:-1]) * np.diff(v))])
+    return float(v[int(np.argmin(lam))])
+
+
+def _dispersion_t(fit: Fit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Evaluated values, mean dispersion score and its t statistic against 1."""
+    pts = sorted(fit.dispersion, key=lambda p: p[0])
+    x = np.array([p[0] for p in pts])
+    D = np.stack([p[1] for p in pts])  # (k, n)
+    n = np.isfinite(D).sum(axis=1)
+    mean = np.nanmean(D, axis=1)
+    sd = np.nanstd(D, axis=1, ddof=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        T = np.where(sd > 0, (mean - 1.0) / (sd / np.sqrt(np.maximum(n, 1))), 0.0)
+    return x, mean, T
+
+
+def dispersion_root(fit: Fit) -> float:
+    """The value of a random effect at which the data are as spread as its copies.
+
+    A random effect (start noise, Brownian motion) widens the outcomes. Its fair
+    scores against a few copies move little with the value and carry the effect's
+    own Monte Carlo noise: with start_noise = 2.5 hidden in 60 fibers and 8
+    copies, the mean loss was lowest at 2.5, yet no slope between evaluated
+    values was significant (the score interval was the whole range [0, 5]), so a
+    half of 30 fibers could fit 0 (``scripts/diagnose_fit_bias.py``). The
+    dispersion score of each observation among its copies (1 on average exactly
+    when the observation is one more copy, whatever the number of copies) fell
+    steadily over the same values, 1.37 at 0 to 0.72 at 5. This is its
+    crossing of 1, read by linear interpolation between the evaluated values,
+    the first one going up from the lowest; 0 when the data are not more spread
+    than the baseline's copies (a mean of at most 1 at the lowest value), the
+    highest evaluated value when they are more spread than every copy set.
+    """
+    x, mean, _ = _dispersion_t(fit)
+    if mean[0] <= 1.0:
+        return float(x[0])
+    for j in range(len(x) - 1):
+        if mean[j] > 1.0 >= mean[j + 1]:
+            return float(x[j] + (mean[j] - 1.0) / (mean[j] - mean[j + 1]) * (x[j + 1] - x[j]))
+    return float(x[-1])
+
+
+def dispersion_interval(
+    fit: Fit, level: float = 0.95, grid: int = 400
+) -> tuple[float, float, bool, bool]:
+    """Interval of a random effect's value: where the mean dispersion score is not
+    significantly different from 1 (a t test over the fibers at each evaluated
+    value, T interpolated between them), the stretch around the fitted value
+    (widened to hold it). Same return as :func:`score_interval`."""
+    x, _, T = _dispersion_t(fit)
+    n = len(fit.dispersion[0][1])
+    crit = float(student_t.ppf(0.5 + level / 2.0, max(n - 1, 1)))
+    v = np.linspace(x[0], x[-1], grid)
+    inside = np.abs(np.interp(v, x, T)) <= crit
     if not inside.any():
         return (fit.value, fit.value, False, False)
-    # the accepted stretch nearest the fitted value (with a noisy loss, the slope's
-    # zero crossing need not be at the best evaluated value)
     ok = np.flatnonzero(inside)
     c = int(ok[np.argmin(np.abs(v[ok] - fit.value))])
     i0 = c
@@ -208,9 +350,6 @@ def score_interval(
     i1 = c
     while i1 < grid - 1 and inside[i1 + 1]:
         i1 += 1
-    # On a step-like loss the best evaluated value can sit just past the accepted
-    # stretch (the slope into it is significant); the interval is widened to it,
-    # so it never excludes the value it is reported with.
     lo, hi = min(float(v[i0]), fit.value), max(float(v[i1]), fit.value)
     return lo, hi, i0 == 0, i1 == grid - 1
 
@@ -273,6 +412,7 @@ def fit_effect(
     fixed: Mapping[str, float] | None = None,
     stage: str = "fit",
     known: Sequence[float] = (),
+    estimate: bool = False,
 ) -> Fit:
     """Fit the value of one effect on the fit fibers.
 
@@ -300,16 +440,32 @@ def fit_effect(
         values whose runs the copy maker already holds (the pooled refit passes
         the two halves' values: each half was simulated there, one by its fit,
         the other by its cross-fitted copies), so they cost no simulation.
+    estimate : bool
+        Report :func:`slope_estimate` (the zero of the score test's T, smoothed
+        over every evaluated value) instead of the best evaluated value: the
+        value a report quotes (the pooled refit). For a random effect, the value
+        where the data are as spread as its copies (:func:`dispersion_root`).
+        ``loss`` stays the loss at the best evaluated value. The halves' fits keep
+        the best evaluated value, a point their copies were simulated at.
     """
     k_fit = len(base_copies)
     # The signature suggests the sign of a signed effect; one evaluation at a fifth
     # of the other half checks it (a weak signature can point the wrong way).
     check_side = bounds is None and cand.signed and side != 0.0
     limit = max_evals + int(check_side) + len(set(known) - {0.0})
-    per: dict[float, np.ndarray] = {
-        0.0: per_fiber_loss(value_matrices(observed, base_copies, observables), weights)
-    }
+    vals0 = value_matrices(observed, base_copies, observables)
+    per: dict[float, np.ndarray] = {0.0: per_fiber_loss(vals0, weights)}
     seen: dict[float, float] = {0.0: float(np.mean(per[0.0]))}
+    # a random effect: each fiber's dispersion score at every value, with the same
+    # randomisation of the PIT at every value (common random numbers)
+    disp: dict[float, np.ndarray] = {}
+
+    def _disp(vals: Mapping[str, np.ndarray]) -> np.ndarray | None:
+        D = dispersion_matrix(vals, np.random.default_rng(20301))
+        return None if D is None else D[:, 0]
+
+    if cand.random and (d0 := _disp(vals0)) is not None:
+        disp[0.0] = d0
 
     def loss(v: float) -> float:
         v = float(v)
@@ -322,8 +478,11 @@ def fit_effect(
         copies = maker.copies(
             range(k_fit), {**(fixed or {}), cand.name: v}, rows, desc=f"{stage} {cand.name}={v:.4g}"
         )
-        per[v] = per_fiber_loss(value_matrices(observed, copies, observables), weights)
+        vals = value_matrices(observed, copies, observables)
+        per[v] = per_fiber_loss(vals, weights)
         seen[v] = float(np.mean(per[v]))
+        if disp and (dv := _disp(vals)) is not None:
+            disp[v] = dv
         return seen[v]
 
     for v in known:
@@ -347,4 +506,14 @@ def fit_effect(
     evals = tuple(sorted(seen.items()))
     log.info("fit %s: %.4g (loss %.4g vs baseline %.4g)", cand.name, best, seen[best], seen[0.0])
     profile = tuple((float(u), per[u]) for u in sorted(per))
-    return Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]), evals, profile)
+    fit = Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]), evals, profile)
+    if len(disp) >= 2:  # its interval is the dispersion test's (score_interval)
+        fit = replace(fit, dispersion=tuple((float(u), disp[u]) for u in sorted(disp)))
+    if estimate and fit.dispersion:
+        # a random effect: the value at which the data are as spread as the copies
+        fit = replace(fit, value=dispersion_root(fit))
+        log.info("fit %s: dispersion root %.4g (best evaluated %.4g)", cand.name, fit.value, best)
+    elif estimate:
+        fit = replace(fit, value=slope_estimate(fit))
+        log.info("fit %s: estimate %.4g (best evaluated %.4g)", cand.name, fit.value, best)
+    return fit

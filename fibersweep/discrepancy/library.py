@@ -54,14 +54,17 @@ class Candidate:
 LIBRARY: dict[str, Candidate] = {
     c.name: c
     for c in (
-        Candidate("friction", 0.0, 1.0, (0.5,), 0.4, "Coulomb coefficient on the pillar"),
-        Candidate("pillar_hydro", 0.0, 3.0, (1.0,), 0.5, "multiplier on the Faxén pillar drag"),
+        Candidate("friction", 0.0, 1.0, (0.5,), 0.5, "Coulomb coefficient on the pillar"),
+        # k = 1: the first-reflection (Faxén) drag itself; contact dwell +14-36 %. At 0.5
+        # (the source's "about 10 % slower") 60 fibers show only a t_pass shift, which a
+        # 2.5 % slower inlet explains as well (docs/discrepancy.md, the study)
+        Candidate("pillar_hydro", 0.0, 3.0, (1.0,), 1.0, "multiplier on the Faxén pillar drag"),
         Candidate("off_midplane", 0.0, 0.35, (0.25,), 0.15, "offset from the midplane / depth"),
         # 1e3 x kT: rotational diffusion of ~25° over a ~1 s pass, already extreme
         Candidate("brownian", 0.0, 3.0e3, (1.0e3,), 1.0, "multiplier on kT at 295 K", True),
-        Candidate("inlet_speed", -0.3, 0.3, (-0.15, 0.15), 0.1, "relative speed error"),
-        Candidate("start_noise", 0.0, 5.0, (3.0,), 2.0, "start noise / reference noise", True),
-        Candidate("pillar_scale", -0.2, 0.2, (-0.1, 0.1), 0.08, "relative pillar size error"),
+        Candidate("inlet_speed", -0.3, 0.3, (-0.15, 0.15), 0.05, "relative speed error"),
+        Candidate("start_noise", 0.0, 5.0, (3.0,), 3.0, "start noise / reference noise", True),
+        Candidate("pillar_scale", -0.2, 0.2, (-0.1, 0.1), 0.1, "relative pillar size error"),
     )
 }
 

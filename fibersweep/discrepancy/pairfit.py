@@ -184,6 +184,10 @@ def joint_fit(
             # from round 2 on, the current pair was the previous step's best point:
             # its runs are held, so it is a free starting value
             known=[cur[cand.name]] if r > 0 else [],
+            # a pair's quoted values are its folds' values (there is no pooled refit):
+            # the score test's zero, not the best of Brent's golden-section points
+            # (inlet_speed -0.04 in a pair came back as -0.0271, one of those points)
+            estimate=True,
         )
         if on_fit is not None:
             on_fit(fit)

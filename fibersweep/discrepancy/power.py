@@ -43,6 +43,7 @@ import pandas as pd
 from scipy.stats import norm
 
 from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.gap import (
     assess_gap,
     feature_one_sided,
@@ -59,6 +60,7 @@ __all__ = [
     "analyse_power",
     "standardised_values",
     "detect_probability",
+    "limit_intervals",
 ]
 
 log = logging.getLogger(__name__)
@@ -85,6 +87,15 @@ class EffectPower:
         power at ``n`` fibers; None when not within the effect's range.
     one_sided : tuple of bool or None
         Which tests of ``z`` are one-sided (the score tests); None: all two-sided.
+    limit_ci : (float or None, float or None) or None
+        95 % bootstrap interval of ``limit`` over the simulated starts
+        (:func:`limit_intervals`); an end None: beyond the effect's range in
+        more than 2.5 % of the resamples. None: not computed.
+    dispersion_limit : float or None
+        For a random effect: the smallest magnitude the dispersion test alone
+        (:mod:`.dispersion`, one-sided at alpha) detects with the target power
+        at ``n`` fibers, scaled like ``limit``. None: not a random effect, or
+        not within its range.
     """
 
     name: str
@@ -93,6 +104,8 @@ class EffectPower:
     gamma: float
     limit: float | None
     one_sided: tuple[bool, ...] | None = None
+    limit_ci: tuple[float | None, float | None] | None = None
+    dispersion_limit: float | None = None
 
     def detect(self, m: float, n_fibers: int, n_sim: int, z_crit: float) -> float:
         """Detection probability at magnitude m (same sign as the probe) and N fibers."""
@@ -223,6 +236,24 @@ def _cosine(a: np.ndarray, b: np.ndarray) -> float:
     return float(abs(a[ok] @ b[ok]) / (na * nb)) if na > 0 and nb > 0 else 0.0
 
 
+def _z_of(
+    eff: list[pd.DataFrame],
+    base: list[pd.DataFrame],
+    observables: Sequence[str],
+    rng: np.random.Generator,
+    n_perm: int = 499,
+    n_boot: int = 50,
+) -> np.ndarray:
+    """Mean feature vector of copy k with the effect vs the baseline copies j != k."""
+    K = len(base)
+    zs = []
+    for k in range(K):
+        others = [base[j] for j in range(K) if j != k]
+        vals = value_matrices(eff[k], others, observables)
+        zs.append(feature_vector(assess_gap(vals, rng, n_perm=n_perm, n_boot=n_boot)))
+    return np.mean(zs, axis=0)
+
+
 def _z_vector(
     maker: CopyMaker,
     base: list[pd.DataFrame],
@@ -232,14 +263,93 @@ def _z_vector(
     rng: np.random.Generator,
 ) -> tuple[np.ndarray, list[pd.DataFrame]]:
     """Mean feature vector of copy k with the effect vs the baseline copies j != k."""
+    eff = maker.copies(range(len(base)), effect, rows, desc=f"power {next(iter(effect))}")
+    return _z_of(eff, base, observables, rng), eff
+
+
+def _z_dispersion(
+    eff: list[pd.DataFrame],
+    base: list[pd.DataFrame],
+    observables: Sequence[str],
+    rng: np.random.Generator,
+) -> float:
+    """Mean z of the dispersion test, copy k with the effect vs the baseline copies j != k."""
     K = len(base)
-    eff = maker.copies(range(K), effect, rows, desc=f"power {next(iter(effect))}")
     zs = []
     for k in range(K):
-        others = [base[j] for j in range(K) if j != k]
-        vals = value_matrices(eff[k], others, observables)
-        zs.append(feature_vector(assess_gap(vals, rng, n_perm=499, n_boot=50)))
-    return np.mean(zs, axis=0), eff
+        vals = value_matrices(eff[k], [base[j] for j in range(K) if j != k], observables)
+        zs.append(dispersion_test(vals, rng, n_perm=499).z)
+    return float(np.mean(zs))
+
+
+def _gamma(z_full: np.ndarray, z_half: np.ndarray) -> float:
+    """Growth exponent of the strongest test's z with the magnitude (see module docstring)."""
+    j = int(np.argmax(np.abs(z_full)))
+    a, b = abs(z_full[j]), abs(z_half[j])
+    return float(np.clip(math.log2(a / b), 0.5, 3.0)) if a > 3 and b > 0.5 else 1.0
+
+
+def limit_intervals(
+    effects: Sequence[EffectPower],
+    copies: Sequence[tuple[list[pd.DataFrame], list[pd.DataFrame]]],
+    base: list[pd.DataFrame],
+    candidates: Sequence[Candidate],
+    n: int,
+    observables: Sequence[str],
+    z_crit: float,
+    power: float,
+    rng: np.random.Generator,
+    n_boot: int = 40,
+    ens: float = 1.0,
+) -> list[EffectPower]:
+    """Each limit with a 95 % percentile interval from a bootstrap over the simulated starts.
+
+    The limits come from one set of simulated starts, and one set can be far off:
+    on 8 sets of 40 starts the pillar_hydro limit at N = 100 ranged 0.09-0.55.
+    Resampling the simulated fibers with replacement (the same rows for every
+    copy, effect and magnitude, so each resample is one other set of starts
+    drawn from the same ones) and repeating the whole read-out (z-vectors at
+    both magnitudes, exponent, limit) gives the spread of the limit that the
+    choice of starts causes, with no new simulation.
+
+    Parameters
+    ----------
+    effects : sequence of EffectPower
+        As :func:`analyse_power` found them.
+    copies : sequence of (full, half)
+        The copies with the effect at the probe and at half of it, one pair per
+        entry of ``effects``, over the same simulated rows as ``base``.
+    ens : float
+        The ensemble-size factor :func:`analyse_power` applied to the z-vectors.
+    n_boot : int
+        Resamples (40 resolve the 2.5 / 97.5 % points to about one resample).
+
+    Returns
+    -------
+    list of EffectPower
+        ``effects`` with ``limit_ci`` set.
+    """
+    n_sim = len(base[0])
+    by = {c.name: c for c in candidates}
+    lims: list[list[float]] = [[] for _ in effects]
+    for _ in range(n_boot):
+        idx = rng.integers(0, n_sim, n_sim)
+        sub_b = [b.iloc[idx].reset_index(drop=True) for b in base]
+        for i, (e, (full, half)) in enumerate(zip(effects, copies, strict=True)):
+            sub_f = [d.iloc[idx].reset_index(drop=True) for d in full]
+            sub_h = [d.iloc[idx].reset_index(drop=True) for d in half]
+            z_full = _z_of(sub_f, sub_b, observables, rng, n_perm=99, n_boot=1) * ens
+            z_half = _z_of(sub_h, sub_b, observables, rng, n_perm=99, n_boot=1) * ens
+            eb = replace(e, z=tuple(float(x) for x in z_full), gamma=_gamma(z_full, z_half))
+            lim = _limit(eb, by[e.name], n, n_sim, z_crit, power)
+            lims[i].append(math.inf if lim is None else abs(lim))
+    out = []
+    for e, ls in zip(effects, lims, strict=True):
+        lo, hi = np.percentile(ls, [2.5, 97.5]) if ls else (math.inf, math.inf)
+        ci = tuple(None if not math.isfinite(x) else math.copysign(float(x), e.probe)
+                   for x in (lo, hi))  # fmt: skip
+        out.append(replace(e, limit_ci=ci))
+    return out
 
 
 def analyse_power(
@@ -253,6 +363,7 @@ def analyse_power(
     workflow_copies: int = 8,
     alpha: float = 0.05,
     power: float = 0.8,
+    n_boot: int = 0,
 ) -> PowerResult:
     """Detection limits and look-alikes of ``candidates`` (see the module docstring).
 
@@ -270,6 +381,9 @@ def analyse_power(
         Copies the workflow scores against: the z of a test with ``copies - 1``
         ensemble members is scaled by sqrt((1 + 1/(copies-1)) / (1 + 1/workflow_copies)).
     alpha, power : float
+    n_boot : int
+        Bootstrap resamples of the simulated starts for each limit's interval
+        (:func:`limit_intervals`; 0: none). No new simulation.
     """
     if copies < 3:
         raise ValueError(f"copies must be >= 3, got {copies}")
@@ -286,19 +400,35 @@ def analyse_power(
     spread = np.nanstd(np.stack(base_std), axis=(0, 1))
     spread = np.where(spread > 0, spread, np.nan)
     effects: list[EffectPower] = []
+    kept: list[tuple[list[pd.DataFrame], list[pd.DataFrame]]] = []
+    # the dispersion test's own stream: the limits of the gap family stay as they were
+    drng = np.random.default_rng([n_sim, 8101])
     shifts: dict[str, np.ndarray] = {}
     for cand in candidates:
         for mp in cand.probes:
             z_full, eff = _z_vector(maker, base, {cand.name: mp}, rows, observables, rng)
-            z_half, _ = _z_vector(maker, base, {cand.name: mp / 2}, rows, observables, rng)
+            z_half, eff_h = _z_vector(maker, base, {cand.name: mp / 2}, rows, observables, rng)
+            kept.append((eff, eff_h))
             z_full, z_half = z_full * ens, z_half * ens
-            j = int(np.argmax(np.abs(z_full)))
-            a, b = abs(z_full[j]), abs(z_half[j])
-            gamma = float(np.clip(math.log2(a / b), 0.5, 3.0)) if a > 3 and b > 0.5 else 1.0
+            gamma = _gamma(z_full, z_half)
             zt = tuple(float(x) for x in z_full)
             e = EffectPower(cand.name, float(mp), zt, gamma, None, one_sided)
             lim = _limit(e, cand, n, n_sim, z_crit, power)
-            effects.append(replace(e, limit=lim))
+            d_lim = None
+            if cand.random:
+                zd_full = _z_dispersion(eff, base, observables, drng) * ens
+                zd_half = _z_dispersion(eff_h, base, observables, drng) * ens
+                ed = EffectPower(
+                    cand.name,
+                    float(mp),
+                    (zd_full,),
+                    _gamma(np.array([zd_full]), np.array([zd_half])),
+                    None,
+                    (True,),
+                )
+                # one test alone at alpha: its one-sided threshold z_{1-alpha}
+                d_lim = _limit(ed, cand, n, n_sim, float(norm.isf(alpha / 2)), power)
+            effects.append(replace(e, limit=lim, dispersion_limit=d_lim))
             diff = np.stack(standardised_values(eff, observables)) - np.stack(base_std)
             cnt = np.isfinite(diff).sum(axis=0)
             d = np.where(cnt > 0, np.nansum(diff, axis=0) / np.maximum(cnt, 1), np.nan)
@@ -312,6 +442,9 @@ def analyse_power(
     look = sorted(
         ((a, b, c) for (a, b), c in cos.items() if c >= LOOKALIKE_COSINE), key=lambda t: -t[2]
     )
+    if n_boot:
+        effects = limit_intervals(effects, kept, base, candidates, n, observables, z_crit,
+                                  power, rng, n_boot=n_boot, ens=ens)  # fmt: skip
     return PowerResult(
         n=n,
         n_sim=n_sim,

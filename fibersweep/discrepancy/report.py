@@ -28,7 +28,8 @@ import numpy as np
 import yaml
 
 from fibersweep.atomic import atomic_write
-from fibersweep.discrepancy.gap import GapResult
+from fibersweep.discrepancy.dispersion import dispersion_test
+from fibersweep.discrepancy.gap import GapResult, value_matrices
 from fibersweep.discrepancy.library import LIBRARY
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.workflow import DiscrepancyResult
@@ -129,6 +130,8 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
                 "probe": e.probe,
                 "gamma": e.gamma,
                 "limit": e.limit,
+                "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
+                "dispersion_limit": e.dispersion_limit,
                 "realistic": real,
                 "fibers_for_realistic": pw.fibers_needed(e.name, real) if real else None,
             }
@@ -155,6 +158,26 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
         "leading": lead,
         "simulations": pw.simulations,
     }
+
+
+def _dispersion_dict(res: DiscrepancyResult) -> dict[str, Any]:
+    """The dispersion test of the data against the baseline copies, and against the
+    copies of each random effect the workflow simulated on every fiber (its final copies).
+
+    Outside the Holm family of the gap: it names nothing and does not change the
+    verdict; it says whether the outcomes are spread more widely than the model's.
+    """
+    rng = np.random.default_rng([res.settings.seed, 23])
+
+    def one(copies: list) -> dict[str, Any]:
+        t = dispersion_test(value_matrices(res.observed, copies, res.observables), rng, 1999)
+        return {"mean_score": t.statistic, "z": t.z, "p": t.p_value, "n": t.n}
+
+    out = {"baseline": one(res.baseline_copies)}
+    for name, cps in res.effect_copies.items():
+        if name in LIBRARY and LIBRARY[name].random and len(cps[0]) == len(res.observed):
+            out[name] = one(cps)
+    return out
 
 
 def _next_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
@@ -206,6 +229,28 @@ def _advice(s: dict[str, Any]) -> list[str]:
             "to look), a check of the measurement-noise model (a wrong noise level shows as "
             "a gap everywhere), or more fibers (see the power analysis)."
         )
+        nx = s.get("next")
+        if nx and nx.get("fibers_needed") is not None and nx.get("best"):
+            b = nx["best"][0]
+            out.append(
+                f"The measurement that would most reduce the doubt ({nx['reason']}): about "
+                f"{nx['fibers_needed']} more fibers at the starts under 'What to measure "
+                f"next' (best: θ0 {b['theta0']:.1f}°, y0 {b['y0']:.2f}, L {b['length']:.2f}, "
+                f"through {b['observable']}), against "
+                f"{nx.get('fibers_needed_at_measured_starts') or 'many'} at starts like "
+                "the measured ones."
+            )
+    if v["kind"] in ("unexplained", "no significant gap") and s.get("power"):
+        hidden = [
+            f"{e['effect']} ({e['direction']}) up to {e['limit_ci'][1]:.3g}"
+            for e in s["power"]["effects"]
+            if e.get("limit_ci") and e["limit_ci"][1] is not None
+        ]
+        if hidden:
+            out.append(
+                "May be present unseen (the upper end of each detection limit's 95 % "
+                "interval over the simulated starts): " + ", ".join(hidden) + "."
+            )
     return out
 
 
@@ -306,6 +351,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "heldout": ho,
         "sets": sets,
         "power": _power_dict(res),
+        "dispersion": _dispersion_dict(res),
         "power_skipped": res.extra.get("power_skipped"),
         "next": _next_dict(res),
         "next_skipped": res.extra.get("next_skipped"),

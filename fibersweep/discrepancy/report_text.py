@@ -89,6 +89,21 @@ def _gap_table(s: dict[str, Any]) -> list[str]:
             f"| {_f(g['signed_p_holm'], '.2g')} "
             f"| {', '.join(_f(z, '.1f') for z in g['bias_z'])} | {sig or 'no'} |"
         )
+    disp = s.get("dispersion") or {}
+    if disp.get("baseline", {}).get("n"):
+        b = disp["baseline"]
+        after = "; ".join(
+            f"with {k} at its value: {_f(x['mean_score'], '.2f')} (p {_f(x['p'], '.2g')})"
+            for k, x in disp.items()
+            if k != "baseline" and x.get("n")
+        )
+        lines += [
+            "",
+            "Dispersion (where each observation falls among its copies, continuous "
+            f"observables; 1 = as spread as a copy, larger = more widely spread): "
+            f"{_f(b['mean_score'], '.2f')}, p {_f(b['p'], '.2g')} (one-sided, outside the "
+            "Holm family)" + (f"; {after}" if after else "") + ".",
+        ]
     d = s["descriptive"]
     lines += ["", "Descriptive measures (observed vs the model's copies):", ""]
     if "confusion" in d:
@@ -236,17 +251,37 @@ def _power(s: dict[str, Any]) -> list[str]:
         f"{pw['n']} fibers: the smallest magnitude of each effect that the gap tests would "
         f"detect with probability {pw['power']:g} (alpha = {pw['alpha']:g}); an effect "
         "below it may be present without being seen. To *name* an effect takes more: "
-        "half of the fibers fit it, the other half must confirm it.",
+        "half of the fibers fit it, the other half must confirm it. Each limit comes from "
+        "one set of simulated starts; the interval beside it (95 %, a bootstrap over "
+        "those starts) is how far another set of starts could move it, and its upper end "
+        "is the size below which an effect may be present unseen.",
         "",
-        "| effect | direction | detected from | realistic magnitude | fibers to detect it |",
-        "|---|---|---|---|---|",
+        "| effect | direction | detected from | 95 % over the starts "
+        "| realistic magnitude | fibers to detect it |",
+        "|---|---|---|---|---|---|",
     ]
     for e in pw["effects"]:
         lim = _f(e["limit"]) if e["limit"] is not None else "not within its range"
+        ci = e.get("limit_ci")
+        ci_txt = (
+            "–"
+            if ci is None
+            else f"[{_f(ci[0]) if ci[0] is not None else 'out of range'}, "
+            f"{_f(ci[1]) if ci[1] is not None else 'out of range'}]"
+        )
         lines.append(
-            f"| {e['effect']} | {e['direction']} | {lim} | {_f(e['realistic'])} "
+            f"| {e['effect']} | {e['direction']} | {lim} | {ci_txt} | {_f(e['realistic'])} "
             f"| {_f(e['fibers_for_realistic'], 'd') if e['fibers_for_realistic'] else '> 100000'} |"
         )
+    disp = [e for e in pw["effects"] if e.get("dispersion_limit") is not None]
+    if disp:
+        lines += [
+            "",
+            "The dispersion test alone (one-sided at alpha, outside the gap family) would "
+            "detect with the same probability: "
+            + ", ".join(f"{e['effect']} from {_f(e['dispersion_limit'])}" for e in disp)
+            + ".",
+        ]
     if pw["lookalikes"]:
         lines += [
             "",

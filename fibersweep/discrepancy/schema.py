@@ -125,7 +125,11 @@ class MeasuredData:
 
 
 def rows_text(mask: np.ndarray | pd.Series) -> str:
-    idx = np.flatnonzero(np.asarray(mask))
+    """'row 3' or 'rows 1, 4 and 2 more': data rows counted from 1, as a reader counts them.
+
+    Row 1 is the first row of data (the line after a CSV's header).
+    """
+    idx = np.flatnonzero(np.asarray(mask)) + 1
     shown = ", ".join(str(i) for i in idx[:_MAX_ROWS_SHOWN])
     more = f" and {len(idx) - _MAX_ROWS_SHOWN} more" if len(idx) > _MAX_ROWS_SHOWN else ""
     return f"row{'s' if len(idx) > 1 else ''} {shown}{more}"

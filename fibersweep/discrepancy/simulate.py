@@ -1,10 +1,12 @@
-"""Batches of fiber runs for the discrepancy workflow, on the sweep's executors.
+"""Batches of fiber runs for the discrepancy workflow, on the sweep's executors and workers.
 
 The workflow makes many small batches (baseline copies, probes, each step of
 a parameter fit). They go through the same executors as a sweep (the local
 process pool or Dask, :mod:`fibersweep.sweep.executors`), kept open across
-batches (``keep=True``), so the workers get the field and the settings once,
-in their initializer. Every run has its own
+batches (``keep=True``), and run on the sweep's worker
+(:func:`fibersweep.sweep.worker.run_batch`): (start, seed, effects, keep-track)
+batches, the field memory-mapped from its cache entry once per worker process,
+one error policy for every run. Every run has its own
 seed (Brownian noise, start-noise effects), so a batch is reproducible whatever
 the number of workers. A run that raises is recorded as ``status='failed'``
 with the reason, never dropped. The number of runs is counted against a budget.
@@ -18,24 +20,24 @@ without, they are NaN and the runs skip that cost (~9 %).
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
-import traceback
 from collections.abc import Mapping
-from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
 import pandas as pd
-from tqdm.auto import tqdm
 
 from fibersweep.discrepancy.observables import OBSERVABLES
-from fibersweep.discrepancy.tracks import nominal_track, track_values
-from fibersweep.errors import RUN_ERRORS, FibersweepError, InputError, RunBug
-from fibersweep.fiber.result import CLASSES, FiberStart
+from fibersweep.discrepancy.tracks import track_values
+from fibersweep.errors import FibersweepError, InputError
+from fibersweep.fiber.result import CLASSES
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
+from fibersweep.progressbar import finish, progress_bar
+from fibersweep.sweep.executors import EXECUTORS, make_executor
+from fibersweep.sweep.worker import RunBatch, WorkerSpec, init_worker, run_batch, setting_for_field
 from fibersweep.units import Geometry
 
 __all__ = ["OUTCOME_COLUMNS", "TRACK_SAMPLES", "Simulator", "BudgetExhausted", "outcome_row"]
@@ -44,8 +46,6 @@ log = logging.getLogger(__name__)
 
 #: Outcome columns of a batch, one per observable of the registry, in its order.
 OUTCOME_COLUMNS = tuple(OBSERVABLES)
-
-_WORKER: dict[str, Any] = {}
 
 #: Fewest trajectory samples a run keeps for its track observables (a 2 s pass: one
 #: sample per ~2 ms, ~1.2 µm of travel; linear interpolation at a station then errs
@@ -110,58 +110,17 @@ def _failed(reason: str) -> dict[str, Any]:
     return row
 
 
-def _init(field: FlowField, settings: FiberSettings) -> None:
-    _WORKER["field"] = field
-    _WORKER["settings"] = settings
+def batch_outcome(result: Any, field: FlowField, tracks: bool, fps: float | None) -> dict[str, Any]:
+    """What a worker returns per run of a batch: the outcome row, and its track with ``fps``.
 
-
-@dataclass(frozen=True)
-class _Batch:
-    """Runs of one batch sent to a worker together (``key`` names the executor task)."""
-
-    key: str
-    idx: np.ndarray  # (k,) positions in the batch
-    starts: np.ndarray  # (k, 3) theta0 [deg], y0 [/h], length [/l_obs]
-    effects: dict[str, float]
-    seeds: np.ndarray  # (k,) int
-    fps: float | None = None  # frame rate of the tracks to return with the rows [1/s]
-    tracks: bool = False  # keep the trajectory and derive the track observables
-
-
-def _run_chunk(task: _Batch) -> list[tuple[int, dict[str, Any]]]:
-    from fibersweep.fiber.run import simulate
-
-    field: FlowField = _WORKER["field"]
-    base: FiberSettings = _WORKER["settings"]
-    # the batch's effects come on top of those the baseline config already has; the
-    # trajectory is kept for the track observables
-    update: dict[str, Any] = {"effects": {**base.effects, **task.effects}}
-    keep_track = task.tracks or task.fps is not None
-    if keep_track:
-        update["record"] = base.record.model_copy(
-            update={"trajectories": True, "samples": max(base.record.samples, TRACK_SAMPLES)}
-        )
-    settings = base.model_copy(update=update)
-    out = []
-    for i, s, seed in zip(task.idx, task.starts, task.seeds, strict=True):
-        start = FiberStart(theta0=float(s[0]), y0=float(s[1]), length=float(s[2]))
-        try:
-            res = simulate(field, settings, start, rng_seed=int(seed))
-            scale = 1.0 + settings.effects.get("pillar_scale", 0.0)
-            if keep_track and scale != 1.0 and res.trajectory is not None:
-                # pillar_scale runs in units of the real pillar; its tracks in µm are
-                # those units times (1 + ε) about the centroid (the real pillar's)
-                traj = nominal_track(res.trajectory, field.geometry.centroid, scale)
-                res = dataclasses.replace(res, trajectory=traj)
-            row = outcome_row(res, field.geometry if task.tracks else None)
-            if task.fps is not None:
-                row["track"] = frames(res.trajectory, task.fps)
-        except RUN_ERRORS as exc:  # recorded, not dropped: the run failed (or bad start)
-            row = _failed(f"{type(exc).__name__}: {exc}")
-        except Exception as exc:  # a bug, not a failed run: stop the workflow
-            raise RunBug(f"run {start} of {task.key}:\n{traceback.format_exc()}") from exc
-        out.append((int(i), row))
-    return out
+    The ``reduce`` of the workflow's :class:`~fibersweep.sweep.worker.RunBatch`
+    (top-level: it pickles by name). Positions are the effects' own report
+    (``pillar_scale`` rescales the trajectory itself).
+    """
+    row = outcome_row(result, field.geometry if tracks else None)
+    if fps is not None:
+        row["track"] = frames(result.trajectory, fps)
+    return row
 
 
 class Simulator:
@@ -208,8 +167,6 @@ class Simulator:
         planned: int | None = None,
         tracks: bool = False,
     ) -> None:
-        from fibersweep.sweep.executors import make_executor
-
         if workers < 1:
             raise InputError(f"workers must be >= 1, got {workers}")
         self.field = field
@@ -226,11 +183,13 @@ class Simulator:
         self._planned = planned if planned is not None else budget
         self._bar: Any = None
         # retries=0: a run that kills its worker is a failed run here, not re-run
-        self._executor = (
-            None
-            if workers == 1 and executor == "local"
-            else make_executor(executor, workers, scheduler, retries=0, keep=True)
-        )
+        options: dict[str, Any] = {"keep": True}
+        if executor in EXECUTORS and "inline" in EXECUTORS[executor].Options.model_fields:
+            options["inline"] = workers == 1  # no pool to start for one worker
+        self._executor = make_executor(executor, workers, scheduler, retries=0, **options)
+        # the field travels as its cache entry (mapped by each worker) when it has one
+        self._spec = WorkerSpec(settings=(setting_for_field(field, settings),), warm=False)
+        self._initargs = (self._spec, self._executor.parent_handles_ctrl_c)
 
     def __enter__(self) -> Simulator:
         return self
@@ -241,10 +200,9 @@ class Simulator:
     def close(self) -> None:
         """Stop the workers (and close the progress bar)."""
         if self._bar is not None:
-            self._bar.close()
+            finish(self._bar)  # a workflow that stops early ends at its real total
             self._bar = None
-        if self._executor is not None:
-            self._executor.close()
+        self._executor.close()
 
     @property
     def remaining(self) -> float:
@@ -306,32 +264,34 @@ class Simulator:
         n_chunks = max(1, min(n, 4 * self.workers))
         chunks = [c for c in np.array_split(np.arange(n), n_chunks) if len(c)]
         self._batches += 1
+        reduce = partial(batch_outcome, tracks=self.tracks, fps=fps)
+        keep_track = self.tracks or fps is not None
         tasks = {
-            f"b{self._batches}-{k}": _Batch(
-                f"b{self._batches}-{k}", c, starts[c], effects, seeds[c], fps, self.tracks
-            )
+            f"b{self._batches}-{k}": RunBatch(
+                f"b{self._batches}-{k}",
+                c,
+                starts[c],
+                seeds[c],
+                effects,
+                keep_track,
+                TRACK_SAMPLES,
+                reduce,
+            )  # fmt: skip
             for k, c in enumerate(chunks)
         }
         if self._bar is None and self.progress:
-            self._bar = tqdm(total=self._planned, unit="run", dynamic_ncols=True)
+            self._bar = progress_bar(total=self._planned, unit="run")
         bar = self._bar
         if bar is not None:
             if bar.total is not None and bar.n + n > bar.total:
                 bar.total = bar.n + n  # more than planned: grow (the ETA stays honest)
             bar.set_description_str(desc[:40])
-        if self._executor is None:
-            _init(self.field, self.settings)
-            outcomes = ((t.key, _run_chunk(t), "") for t in tasks.values())
-        else:
-            outcomes = (
-                (o.key, o.value, o.error)
-                for o in self._executor.run(
-                    _run_chunk,
-                    list(tasks.values()),
-                    initializer=_init,
-                    initargs=(self.field, self.settings),
-                )
+        outcomes = (
+            (o.key, o.value, o.error)
+            for o in self._executor.run(
+                run_batch, list(tasks.values()), init_worker, self._initargs
             )
+        )
         for key, chunk, error in outcomes:
             if error:  # the worker died (or the task could not run): failed runs
                 chunk = [(int(i), _failed(f"worker: {error}")) for i in tasks[key].idx]

@@ -31,16 +31,15 @@ there (NaN).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
 
-from fibersweep.analysis.trajectory import Trajectory
 from fibersweep.discrepancy.observables import OBSERVABLES, track_observables
 from fibersweep.errors import InputError
+from fibersweep.fiber.effects.pillar_scale import scaled_track
 from fibersweep.units import Geometry
 
 __all__ = [
@@ -158,37 +157,10 @@ def values_of(mapping: Mapping[str, float], names: tuple[str, ...]) -> list[floa
     return [float(mapping.get(n, math.nan)) for n in names]
 
 
-def nominal_track(traj: Trajectory, centre: tuple[float, float], scale: float) -> Trajectory:
-    """Positions of a run in units of a pillar ``scale`` times the nominal one, in µm.
-
-    The ``pillar_scale`` effect runs the nominal flow in units of the real pillar
-    (its centroid in place); a camera sees those positions stretched by ``scale``
-    about the centroid. Times and angles are unchanged.
-
-    Parameters
-    ----------
-    traj : Trajectory
-        Run in the simulation's units [µm].
-    centre : (float, float)
-        Pillar centroid [µm].
-    scale : float
-        Real / nominal pillar size, 1 + ε.
-    """
-    c = np.asarray(centre, dtype=np.float64)
-
-    def s(p: np.ndarray) -> np.ndarray:
-        return c + scale * (p - c)
-
-    return dataclasses.replace(
-        traj,
-        x=c[0] + scale * (traj.x - c[0]),
-        y=c[1] + scale * (traj.y - c[1]),
-        head=s(traj.head),
-        tail=s(traj.tail),
-        head_speed=scale * traj.head_speed,
-        com_speed=scale * traj.com_speed,
-        beads=None if traj.beads is None else s(traj.beads),
-    )
+#: Positions of a ``pillar_scale`` run as a camera sees them; the effect applies it
+#: itself (:meth:`~fibersweep.fiber.effects.pillar_scale.PillarScale.transform_result`),
+#: kept here under its old name.
+nominal_track = scaled_track
 
 
 def measured_track_values(

@@ -10,6 +10,12 @@ baseline and decides; (6) when no single effect explains the gap, it tries
 adding other candidates to the significant one that helped most
 (:mod:`.select`, forward selection). The simulation count is planned up front
 and never exceeds ``budget``.
+
+Each step is a stage function over a frozen :class:`State` that returns a new
+state (:func:`noise_floor`, :func:`rank`, :func:`cross_fit`, :func:`refit`,
+:func:`pairs`); the fixed inputs of a run (settings, plan, folds, the shared
+random generator and the copy maker) are a frozen :class:`Run`. The stages draw
+from the one generator in this order, so a run is reproducible from its seed.
 """
 
 from __future__ import annotations
@@ -61,7 +67,20 @@ from fibersweep.errors import InputError
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 
-__all__ = ["DiscrepancySettings", "DiscrepancyResult", "Plan", "plan_budget", "run_discrepancy"]
+__all__ = [
+    "DiscrepancyResult",
+    "DiscrepancySettings",
+    "Plan",
+    "Run",
+    "State",
+    "cross_fit",
+    "noise_floor",
+    "pairs",
+    "plan_budget",
+    "rank",
+    "refit",
+    "run_discrepancy",
+]
 
 log = logging.getLogger(__name__)
 
@@ -113,6 +132,297 @@ def _subset(dfs: list[pd.DataFrame], rows: np.ndarray) -> list[pd.DataFrame]:
     return [d.iloc[rows].reset_index(drop=True) for d in dfs]
 
 
+@dataclass(frozen=True)
+class Run:
+    """The fixed inputs of one workflow run (the random generator and the copy maker
+    are shared, stateful helpers: every stage draws from them in turn).
+
+    Attributes
+    ----------
+    settings : DiscrepancySettings
+    plan : Plan
+    candidates : list of Candidate
+        The library effects considered.
+    observed : DataFrame
+        Measured fibers, index 0..n-1.
+    observables : tuple of str
+        The measured observables scored.
+    folds : list of ndarray
+        The two halves of the fibers (cross-fitting).
+    rng : numpy.random.Generator
+    maker : CopyMaker
+    """
+
+    settings: DiscrepancySettings
+    plan: Plan
+    candidates: list[Any]
+    observed: pd.DataFrame
+    observables: tuple[str, ...]
+    folds: list[np.ndarray]
+    rng: np.random.Generator
+    maker: CopyMaker
+
+    @property
+    def n(self) -> int:
+        return len(self.observed)
+
+    def candidate(self, name: str) -> Any:
+        return next(c for c in self.candidates if c.name == name)
+
+
+@dataclass(frozen=True)
+class State:
+    """What the stages have found so far; each stage returns a new state.
+
+    Attributes
+    ----------
+    run : Run
+    base : list of DataFrame
+        Baseline copies (the noise floor).
+    values : dict
+        Observed and copy values per observable (:func:`value_matrices`).
+    weights, w_gap : dict of str -> float
+        Observable weights; the same with zero for observables without a gap.
+    gap : GapResult
+    desc : dict
+        Descriptive gap summary.
+    region, by_obs, region_text
+        Where the gap lives (all observables, per flagged observable, as text).
+    signatures, lead
+        Effects ranked by signature; the leading one ('' when none matches).
+    chosen : tuple of Signature
+        The candidates fitted.
+    fits : tuple of Fit
+    fold_values : dict of str -> list of float
+        Each fitted effect's value on each fold.
+    eff_values : dict
+        Held-out values of each fitted effect.
+    heldout : tuple of HeldOut
+    effect_copies : dict of str -> list of DataFrame
+    intervals : dict of str -> (lo, hi, open_lo, open_hi)
+        95 % score-test interval of the pooled refits.
+    sets : tuple of SetHeldOut
+        Pairs tried by forward selection.
+    """
+
+    run: Run
+    base: list[pd.DataFrame]
+    values: dict[str, Any]
+    weights: dict[str, float]
+    gap: GapResult
+    desc: dict[str, Any]
+    w_gap: dict[str, float]
+    region: Region
+    by_obs: dict[str, Region]
+    region_text: str
+    signatures: tuple[Signature, ...] = ()
+    chosen: tuple[Signature, ...] = ()
+    lead: str = ""
+    fits: tuple[Fit, ...] = ()
+    fold_values: dict[str, list[float]] = field(default_factory=dict)
+    eff_values: dict[str, Any] = field(default_factory=dict)
+    heldout: tuple[HeldOut, ...] = ()
+    effect_copies: dict[str, list[pd.DataFrame]] = field(default_factory=dict)
+    intervals: dict[str, tuple[float, float, bool, bool]] = field(default_factory=dict)
+    sets: tuple[SetHeldOut, ...] = ()
+
+
+def noise_floor(run: Run) -> State:
+    """(1) jittered baseline copies, (2) the gap per observable, (3) where it lives."""
+    s, plan, observed = run.settings, run.plan, run.observed
+    base = run.maker.copies(range(plan.copies), None, desc=f"baseline ({plan.copies} copies)")
+    values = value_matrices(observed, base, run.observables)
+    weights = observable_weights(values)
+    gap = assess_gap(values, run.rng, alpha=s.alpha, n_perm=s.n_perm)
+    desc = describe(values)
+    # fits and the held-out decision score the observables with a gap (less noise);
+    # the residual check after an effect still looks at all of them
+    w_gap = {o: (w if o in gap.flagged else 0.0) for o, w in weights.items()}
+    X = _features(observed)
+    region = find_region(X, combined_excess(gap, weights))
+    by_obs = {o: find_region(X, gap.per_fiber[o]) for o in gap.flagged}
+    region_text = by_obs[gap.flagged[0]].describe() if gap.any else region.describe()
+    return State(run, base, values, weights, gap, desc, w_gap, region, by_obs, region_text)
+
+
+def rank(st: State) -> State:
+    """(4) rank the library by signature on fold 0's fit half; keep the best few."""
+    run, plan = st.run, st.run.plan
+    signatures = rank_effects(
+        feature_vector(st.gap),
+        run.candidates,
+        run.maker,
+        _subset(st.base, run.folds[1]),
+        run.folds[1],
+        run.observables,
+        probe_copy=max(plan.copies, plan.random_copies) + 1,
+        rng=run.rng,
+    )
+    chosen = [sg for sg in signatures if sg.cosine > 0][: plan.candidates]
+    lead = chosen[0].name if chosen else ""  # a random lead gets more copies
+    return replace(st, signatures=tuple(signatures), chosen=tuple(chosen), lead=lead)
+
+
+def cross_fit(st: State) -> State:
+    """(5) fit the chosen effects on each fold and score the other fold with that value.
+
+    Every fiber is held out exactly once; each fitted effect's held-out copies are
+    compared with the baseline (:func:`evaluate_heldout`).
+    """
+    run, plan, s = st.run, st.run.plan, st.run.settings
+    fits: list[Fit] = []
+    fold_values: dict[str, list[float]] = {}
+    for f_idx in range(len(run.folds)):
+        train = run.folds[1 - f_idx]
+        obs_tr = run.observed.iloc[train].reset_index(drop=True)
+        for sg in st.chosen:
+            cand = run.candidate(sg.name)
+            fit = fit_effect(
+                cand,
+                run.maker,
+                obs_tr,
+                _subset(st.base[: plan.fit_copies_of(cand, cand.name == st.lead)], train),
+                train,
+                run.observables,
+                st.w_gap,
+                plan.fit_evals,
+                side=float(np.sign(sg.probe)),
+            )
+            fits.append(fit)
+            fold_values.setdefault(sg.name, []).append(fit.value)
+    base_scores = weighted_loss(st.values, st.w_gap)
+    eff_scores, eff_values, residuals, fitted = {}, {}, {}, {}
+    effect_copies: dict[str, list[pd.DataFrame]] = {}
+    kept: dict[str, list[float]] = {}
+    for name, vals in fold_values.items():
+        if all(v == 0.0 for v in vals):
+            continue  # both folds kept the baseline: nothing to add
+        # scored against the 8 baseline copies: both fair scores are unbiased
+        # at any ensemble size, so the two ensembles need not be the same size
+        ncp = plan.copies_of(run.candidate(name), name == st.lead)
+        cps = crossfit_copies(
+            run.maker, run.folds, [{name: v} for v in vals], ncp, f"held-out {name}"
+        )
+        effect_copies[name] = cps
+        v_after = value_matrices(run.observed, cps, run.observables)
+        eff_values[name] = v_after
+        eff_scores[name] = weighted_loss(v_after, st.w_gap)
+        residuals[name] = assess_gap(v_after, run.rng, alpha=s.alpha, n_perm=s.n_perm)
+        fitted[name] = float(np.mean(vals))
+        kept[name] = [float(v) for v in vals]
+    heldout = evaluate_heldout(fitted, base_scores, eff_scores, residuals, run.rng, s.alpha)
+    return replace(
+        st,
+        fits=st.fits + tuple(fits),
+        fold_values=kept,
+        eff_values=eff_values,
+        heldout=tuple(heldout),
+        effect_copies={**st.effect_copies, **effect_copies},
+    )
+
+
+def refit(st: State) -> State:
+    """(6) adequacy: refit the significant candidates on all fibers, near their fold
+    values, and test the gap left with the effect at that value."""
+    run, plan, s = st.run, st.run.plan, st.run.settings
+    sig = sorted((h for h in st.heldout if h.significant), key=lambda h: -h.improvement[0])
+    fits: list[Fit] = []
+    intervals = dict(st.intervals)
+    effect_copies = dict(st.effect_copies)
+    final = {}
+    for h in sig[: plan.refits]:
+        cand = run.candidate(h.name)
+        vals = st.fold_values[h.name]
+        pad = 0.25 * (cand.hi - cand.lo)
+        bounds = (max(cand.lo, min(vals) - pad), min(cand.hi, max(vals) + pad))
+        fit = fit_effect(
+            cand,
+            run.maker,
+            run.observed,
+            st.base[: plan.fit_copies_of(cand, cand.name == st.lead)],
+            np.arange(run.n),
+            run.observables,
+            st.w_gap,
+            plan.refit_evals,
+            bounds=bounds,
+            stage="refit",
+            known=vals,  # both halves' values: their runs are held (no cost)
+            estimate=True,  # the quoted value: the score test's zero (issue 30)
+        )
+        fits.append(fit)
+        intervals[h.name] = score_interval(fit)
+        if fit.value == 0.0:
+            final[h.name] = (0.0, st.gap)
+            continue
+        cps = run.maker.copies(range(plan.copies), {h.name: fit.value}, desc=f"final {h.name}")
+        v_final = value_matrices(run.observed, cps, run.observables)
+        final[h.name] = (fit.value, assess_gap(v_final, run.rng, alpha=s.alpha, n_perm=s.n_perm))
+        effect_copies[h.name] = cps
+    heldout = [
+        replace(
+            h,
+            value=final[h.name][0],
+            final=final[h.name][1],
+            explains=h.significant and adequate(final[h.name][1]),
+        )
+        if h.name in final
+        else replace(h, explains=False)
+        for h in st.heldout
+    ]
+    return replace(
+        st,
+        fits=st.fits + tuple(fits),
+        heldout=tuple(heldout),
+        intervals=intervals,
+        effect_copies=effect_copies,
+    )
+
+
+def pairs(st: State) -> State:
+    """(7) forward selection when the best significant single effect leaves a gap.
+
+    The first effect must be significant alone: started from one that is not, the
+    step named a wrong pair (friction = 0.25 hidden, N = 100: pillar_hydro, p_Holm
+    0.53 alone, + inlet_speed undoing pillar_hydro's slowing).
+    """
+    run, plan, s = st.run, st.run.plan, st.run.settings
+    helped = [h for h in st.heldout if h.significant]
+    best = max(helped, key=lambda h: h.improvement[0]) if helped else None
+    if best is None or best.explains or plan.pairs <= 0:
+        return st
+    first = run.candidate(best.name)
+    # partners ranked by how well their signature matches the gap the best single
+    # effect leaves (not the whole gap, which it dominates)
+    left = best.final or best.residual
+    others = [
+        run.candidate(name)
+        for name in rank_partners(best.name, list(st.signatures), left, plan.pairs)
+    ]
+    inp = SelectionInput(
+        observed=run.observed,
+        folds=run.folds,
+        fold_values=st.fold_values,
+        base_values=st.values,
+        single_values=st.eff_values,
+        weights=pair_weights(st.weights, st.gap, left, s.alpha),
+        observables=run.observables,
+        copies=plan.copies,
+        fit_copies=plan.fit_copies,
+        fit_evals=plan.fit_evals,
+        alpha=s.alpha,
+        n_perm=s.n_perm,
+        rounds=plan.pair_rounds,
+    )
+    fits: list[Fit] = []
+    sets, set_copies = forward_pairs(first, others, inp, run.maker, run.rng, fits.append)
+    return replace(
+        st,
+        fits=st.fits + tuple(fits),
+        sets=tuple(sets),
+        effect_copies={**st.effect_copies, **set_copies},
+    )
+
+
 def run_discrepancy(
     measured: MeasuredData,
     field_: FlowField,
@@ -120,7 +430,7 @@ def run_discrepancy(
     settings: DiscrepancySettings | None = None,
     progress: bool = True,
 ) -> DiscrepancyResult:
-    """Run the whole workflow (see the module docstring).
+    """Run the whole workflow (see the module docstring): the stages in turn, then the verdict.
 
     Parameters
     ----------
@@ -147,9 +457,6 @@ def run_discrepancy(
     rng = np.random.default_rng([s.seed, 11])
     perm = rng.permutation(n)
     folds = [np.sort(perm[: n // 2]), np.sort(perm[n // 2 :])]
-    extra_values: dict[str, list[float]] = {}
-    # 95 % score-test interval of the pooled refits: (lo, hi, open_lo, open_hi)
-    intervals: dict[str, tuple[float, float, bool, bool]] = {}
 
     with Simulator(
         field_, fiber, workers=s.workers, budget=s.budget, progress=progress,
@@ -157,190 +464,41 @@ def run_discrepancy(
         tracks=has_tracks(obs_names),
     ) as sim:  # fmt: skip
         maker = CopyMaker(measured.starts, s.noise, s.seed, sim)
-        # (1) noise floor: jittered baseline copies
-        base = maker.copies(range(plan.copies), None, desc=f"baseline ({plan.copies} copies)")
-        values = value_matrices(observed, base, obs_names)
-        weights = observable_weights(values)
-        # (2) gap per observable
-        gap = assess_gap(values, rng, alpha=s.alpha, n_perm=s.n_perm)
-        desc = describe(values)
-        # fits and the held-out decision score the observables with a gap (less noise);
-        # the residual check after an effect still looks at all of them
-        w_gap = {o: (w if o in gap.flagged else 0.0) for o, w in weights.items()}
-        # (3) where it lives
-        X = _features(observed)
-        region = find_region(X, combined_excess(gap, weights))
-        by_obs = {o: find_region(X, gap.per_fiber[o]) for o in gap.flagged}
-        region_text = by_obs[gap.flagged[0]].describe() if gap.any else region.describe()
-
-        signatures: list[Signature] = []
-        fits: list[Fit] = []
-        heldout: list[HeldOut] = []
-        sets: list[SetHeldOut] = []
-        before_ho: GapResult | None = None
-        effect_copies: dict[str, list[pd.DataFrame]] = {}
-        if gap.any:
-            # (4) rank by signature on fold 0's fit half; fit the best few on each fold
-            base_fit = _subset(base, folds[1])
-            signatures = rank_effects(
-                feature_vector(gap),
-                candidates,
-                maker,
-                base_fit,
-                folds[1],
-                obs_names,
-                probe_copy=max(plan.copies, plan.random_copies) + 1,
-                rng=rng,
-            )
-            chosen = [sg for sg in signatures if sg.cosine > 0][: plan.candidates]
-            lead = chosen[0].name if chosen else ""  # a random lead gets more copies
-            # (5) cross-fitting: fibers of fold f are scored with the value fitted on
-            # the other fold, so every fiber is held out exactly once.
-            fold_values: dict[str, list[float]] = {}
-            for f_idx in range(len(folds)):
-                train = folds[1 - f_idx]
-                obs_tr = observed.iloc[train].reset_index(drop=True)
-                for sg in chosen:
-                    cand = next(c for c in candidates if c.name == sg.name)
-                    fit = fit_effect(
-                        cand,
-                        maker,
-                        obs_tr,
-                        _subset(base[: plan.fit_copies_of(cand, cand.name == lead)], train),
-                        train,
-                        obs_names,
-                        w_gap,
-                        plan.fit_evals,
-                        side=float(np.sign(sg.probe)),
-                    )
-                    fits.append(fit)
-                    fold_values.setdefault(sg.name, []).append(fit.value)
-            before_ho = gap  # every fiber is held out once: the 'before' gap is the full gap
-            base_scores = weighted_loss(values, w_gap)
-            eff_scores, eff_values, residuals, fitted = {}, {}, {}, {}
-            for name, vals in fold_values.items():
-                if all(v == 0.0 for v in vals):
-                    continue  # both folds kept the baseline: nothing to add
-                # scored against the 8 baseline copies: both fair scores are unbiased
-                # at any ensemble size, so the two ensembles need not be the same size
-                ncp = plan.copies_of(next(c for c in candidates if c.name == name), name == lead)
-                cps = crossfit_copies(
-                    maker, folds, [{name: v} for v in vals], ncp, f"held-out {name}"
-                )
-                effect_copies[name] = cps
-                v_after = value_matrices(observed, cps, obs_names)
-                eff_values[name] = v_after
-                eff_scores[name] = weighted_loss(v_after, w_gap)
-                residuals[name] = assess_gap(v_after, rng, alpha=s.alpha, n_perm=s.n_perm)
-                fitted[name] = float(np.mean(vals))
-                extra_values[name] = [float(v) for v in vals]
-            heldout = evaluate_heldout(fitted, base_scores, eff_scores, residuals, rng, s.alpha)
-            # (6) adequacy: refit the significant candidates on all fibers, near their
-            # fold values, and test the gap left with the effect at that value
-            sig = sorted((h for h in heldout if h.significant), key=lambda h: -h.improvement[0])
-            final = {}
-            for h in sig[: plan.refits]:
-                cand = next(c for c in candidates if c.name == h.name)
-                vals = extra_values[h.name]
-                pad = 0.25 * (cand.hi - cand.lo)
-                bounds = (max(cand.lo, min(vals) - pad), min(cand.hi, max(vals) + pad))
-                fit = fit_effect(
-                    cand,
-                    maker,
-                    observed,
-                    base[: plan.fit_copies_of(cand, cand.name == lead)],
-                    np.arange(n),
-                    obs_names,
-                    w_gap,
-                    plan.refit_evals,
-                    bounds=bounds,
-                    stage="refit",
-                    known=vals,  # both halves' values: their runs are held (no cost)
-                )
-                fits.append(fit)
-                intervals[h.name] = score_interval(fit)
-                if fit.value == 0.0:
-                    final[h.name] = (0.0, gap)
-                    continue
-                cps = maker.copies(range(plan.copies), {h.name: fit.value}, desc=f"final {h.name}")
-                v_final = value_matrices(observed, cps, obs_names)
-                final[h.name] = (
-                    fit.value,
-                    assess_gap(v_final, rng, alpha=s.alpha, n_perm=s.n_perm),
-                )
-                effect_copies[h.name] = cps
-            heldout = [
-                replace(
-                    h,
-                    value=final[h.name][0],
-                    final=final[h.name][1],
-                    explains=h.significant and adequate(final[h.name][1]),
-                )
-                if h.name in final
-                else replace(h, explains=False)
-                for h in heldout
-            ]
-            # (7) forward selection: the best significant single effect leaves a gap.
-            # The first effect must be significant alone: started from one that is not,
-            # the step named a wrong pair (friction = 0.25 hidden, N = 100: pillar_hydro,
-            # p_Holm 0.53 alone, + inlet_speed undoing pillar_hydro's slowing).
-            helped = [h for h in heldout if h.significant]
-            best = max(helped, key=lambda h: h.improvement[0]) if helped else None
-            if best is not None and not best.explains and plan.pairs > 0:
-                first = next(c for c in candidates if c.name == best.name)
-                # partners ranked by how well their signature matches the gap the
-                # best single effect leaves (not the whole gap, which it dominates)
-                left = best.final or best.residual
-                others = [
-                    next(c for c in candidates if c.name == name)
-                    for name in rank_partners(best.name, signatures, left, plan.pairs)
-                ]
-                inp = SelectionInput(
-                    observed=observed,
-                    folds=folds,
-                    fold_values=extra_values,
-                    base_values=values,
-                    single_values=eff_values,
-                    weights=pair_weights(weights, gap, left, s.alpha),
-                    observables=obs_names,
-                    copies=plan.copies,
-                    fit_copies=plan.fit_copies,
-                    fit_evals=plan.fit_evals,
-                    alpha=s.alpha,
-                    n_perm=s.n_perm,
-                    rounds=plan.pair_rounds,
-                )
-                sets, set_copies = forward_pairs(first, others, inp, maker, rng, fits.append)
-                effect_copies.update(set_copies)
-        verdict = decide(gap, heldout, region_text, rng, s.alpha, sets)
-        extra = followup(verdict, heldout, extra_values, candidates, maker, sim, plan, s,
-                            obs_names, rng)  # fmt: skip
+        run = Run(s, plan, candidates, observed, obs_names, folds, rng, maker)
+        st = noise_floor(run)
+        if st.gap.any:
+            st = pairs(refit(cross_fit(rank(st))))
+        heldout = list(st.heldout)
+        verdict = decide(st.gap, heldout, st.region_text, rng, s.alpha, list(st.sets))
+        extra = followup(verdict, heldout, st.fold_values, candidates, maker, sim, plan, s,
+                         obs_names, rng)  # fmt: skip
         used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
         extra["runs_by_stage"] = dict(sim.used_by_stage)
         extra["runs_without_reuse"] = maker.runs_without_reuse
 
     return DiscrepancyResult(
         verdict=verdict,
-        gap=gap,
-        descriptive=desc,
-        region=region,
-        region_by_observable=by_obs,
-        signatures=signatures,
-        fits=fits,
+        gap=st.gap,
+        descriptive=st.desc,
+        region=st.region,
+        region_by_observable=st.by_obs,
+        signatures=list(st.signatures),
+        fits=list(st.fits),
         heldout=heldout,
-        sets=sets,
-        heldout_before=before_ho,
+        sets=list(st.sets),
+        # every fiber is held out once: the 'before' gap is the full gap
+        heldout_before=st.gap if st.gap.any else None,
         plan=plan,
         simulations=used,
         failed_runs=failed,
         failed_by_stage=by_stage,
         seconds=time.perf_counter() - t0,
         observed=observed,
-        baseline_copies=base,
-        effect_copies=effect_copies,
+        baseline_copies=st.base,
+        effect_copies=dict(st.effect_copies),
         heldout_rows=np.arange(n),
-        weights=weights,
+        weights=st.weights,
         settings=s,
         observables=obs_names,
-        extra={"fold_values": extra_values, "intervals": intervals, **extra},
+        extra={"fold_values": dict(st.fold_values), "intervals": dict(st.intervals), **extra},
     )

@@ -82,7 +82,9 @@ class Params(NamedTuple):
     Attributes
     ----------
     a, mu : bead radius, viscosity [pN s/µm²]
-    max_disp, contact_disp : largest bead move per step far from / near the pillar (rigid)
+    max_disp, contact_disp : largest bead move per step far from / near the pillar
+        (rigid: step.max_displacement, contact_displacement; bead-spring-ros2: the
+        step.ros2_ ones)
     dt_max : largest step (rigid)
     dt : fixed step (bead-spring; NaN for rigid)
     t_max : give up
@@ -93,6 +95,7 @@ class Params(NamedTuple):
     stopped_implicit : rigid: linearly implicit steps while stopped in contact
     y_lo, y_hi : bead centres must stay between these
     stretch, bend : bead-spring S [pN] and B [pN µm²]
+    tol : bead-spring-ros2: local error allowed per step [µm] (NaN otherwise)
     """
 
     a: float
@@ -112,6 +115,7 @@ class Params(NamedTuple):
     y_hi: float
     stretch: float
     bend: float
+    tol: float = math.nan
 
 
 class Work(NamedTuple):
@@ -203,13 +207,17 @@ def build_kernel(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> Kerne
     a = float(st.bead_radius)
     mu = float(field.fluid.viscosity)
     bead_spring = st.model == "bead-spring"
+    beads = bead_spring or st.model == "bead-spring-ros2"
     dt = st.step.dt if st.step.dt is not None else (DEFAULT_DT if bead_spring else math.nan)
     x_pass = setup.pillar.x_max
+    ros2 = st.model == "bead-spring-ros2"
     params = Params(
         a=a,
         mu=mu,
-        max_disp=float(st.step.max_displacement),
-        contact_disp=float(st.step.contact_displacement),
+        max_disp=float(st.step.ros2_max_displacement if ros2 else st.step.max_displacement),
+        contact_disp=float(
+            st.step.ros2_contact_displacement if ros2 else st.step.contact_displacement
+        ),
         dt_max=st.classify.trap_time / 20.0,
         dt=float(dt),
         t_max=float(st.step.t_max),
@@ -224,6 +232,7 @@ def build_kernel(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> Kerne
         y_hi=geo.width - a,
         stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²
         bend=st.young_modulus * math.pi * a**4 / 4.0,
+        tol=float(st.step.tolerance),
     )
     bm = body_mobility(setup.n, a, mu)
     body = BodyArrays(bm.offsets.copy(), bm.P.copy(), bm.N.copy(), bm.chol.copy(), bm.tip_mobility)
@@ -238,6 +247,6 @@ def build_kernel(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> Kerne
         body,
         params,
         _work(setup.n),
-        _bead_work(setup.n if bead_spring else 0),
+        _bead_work(setup.n if beads else 0),
         setup.kernel_effects + (BASELINE,),
     )

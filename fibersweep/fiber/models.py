@@ -10,6 +10,7 @@ import numpy as np
 from fibersweep.fiber import record as R
 from fibersweep.fiber.beadspring import run_bead_spring
 from fibersweep.fiber.bundles import Kernel
+from fibersweep.fiber.implicit_beadspring import run_bead_spring_ros2
 from fibersweep.fiber.rigid import run_rigid
 
 __all__ = ["MODELS", "FiberModel"]
@@ -51,5 +52,6 @@ MODELS: dict[str, FiberModel] = {
     for m in (
         FiberModel("rigid", run_rigid, fixed_step=False),
         FiberModel("bead-spring", run_bead_spring, fixed_step=True),
+        FiberModel("bead-spring-ros2", run_bead_spring_ros2, fixed_step=False),
     )
 }

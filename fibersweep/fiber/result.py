@@ -3,19 +3,82 @@
 This is the contract between the fiber dynamics (which fills it), the sweep
 (which stores ``RunResult.row()`` in Parquet and the trajectory in a second
 dataset) and the analysis (which re-classifies from the trajectory).
+
+It is also the one schema of the per-run columns: every field of
+:class:`FiberStart` and :class:`RunResult` carries its unit, description and
+Arrow type as dataclass field metadata (:func:`column`), and the results
+table's column types and docs (:data:`fibersweep.sweep.store.RUN_COLUMNS`,
+:data:`~fibersweep.sweep.store.COLUMN_DOCS`) are generated from them
+(:func:`record_columns`). A new per-run quantity is a field here and the line
+of ``fiber/run.py`` that measures it.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
-from typing import Literal
+from dataclasses import MISSING, dataclass, field, fields
+from typing import Any, Literal, NamedTuple
 
 from fibersweep.analysis.trajectory import CLASSES, Trajectory
 
-__all__ = ["FiberStart", "Trajectory", "RunResult", "CLASSES", "STATUSES"]
+__all__ = [
+    "CLASSES",
+    "STATUSES",
+    "Column",
+    "FiberStart",
+    "RunResult",
+    "Trajectory",
+    "column",
+    "record_columns",
+]
 
 STATUSES = ("ok", "failed")
+
+#: Arrow type names a column may declare (``pyarrow.type_for_alias`` names).
+ARROW_TYPES = ("float64", "int64", "bool", "string")
+
+#: Field names of the record whose column is named otherwise in the table.
+COLUMN_NAMES = {"cls": "class"}
+
+
+class Column(NamedTuple):
+    """One per-run column of the results table.
+
+    Attributes
+    ----------
+    name : str
+        Column name.
+    arrow : str
+        Arrow type name ('float64', 'int64', 'bool' or 'string').
+    unit : str
+        Unit ('' for none), e.g. 'µm', 's', 'deg', 'h_obs'.
+    doc : str
+        What the column holds, in its frame.
+    """
+
+    name: str
+    arrow: str
+    unit: str
+    doc: str
+
+
+def column(default: Any, arrow: str, unit: str, doc: str, **kw: Any) -> Any:
+    """A dataclass field that is a results-table column (its unit, doc and Arrow type).
+
+    Parameters
+    ----------
+    default : Any
+        Default value (``dataclasses.MISSING`` for a required field).
+    arrow : str
+        Arrow type name, one of :data:`ARROW_TYPES`.
+    unit, doc : str
+        Unit and description stored with the column (Parquet field metadata).
+    **kw
+        Further ``dataclasses.field`` arguments.
+    """
+    if arrow not in ARROW_TYPES:
+        raise ValueError(f"arrow type {arrow!r}; valid: {', '.join(ARROW_TYPES)}")
+    return field(default=default, metadata={"arrow": arrow, "unit": unit, "doc": doc}, **kw)
 
 
 @dataclass(frozen=True)
@@ -32,9 +95,16 @@ class FiberStart:
         Fiber length L / l_obs.
     """
 
-    theta0: float
-    y0: float
-    length: float
+    theta0: float = column(
+        MISSING, "float64", "deg", "start angle of the tail-to-head vector from +x (flow direction)"
+    )
+    y0: float = column(
+        MISSING,
+        "float64",
+        "h_obs",
+        "start lateral position of the centre of mass, from the pillar base line",
+    )
+    length: float = column(MISSING, "float64", "l_obs", "fiber length over the pillar base length")
 
 
 @dataclass(frozen=True)
@@ -70,28 +140,86 @@ class RunResult:
         Time at the end of the run [s].
     min_clearance : float
         Smallest bead-centre distance to the pillar outline minus a, over the run [µm].
+    max_curvature : float
+        Largest curvature of the fiber over the run [1/µm] (bead-spring models;
+        NaN for rigid; :mod:`fibersweep.fiber.deformation`).
+    min_end_to_end : float
+        Smallest end-to-end distance over contour length over the run (NaN for rigid).
+    max_tension : float
+        Largest stretching-spring tension over the run [pN] (NaN for rigid).
+    max_wrap : float
+        Largest angle the fiber's tangent turns along its beads on the pillar [deg]
+        (NaN for rigid).
     trajectory : Trajectory or None
     """
 
     start: FiberStart
-    status: Literal["ok", "failed"]
-    reason: str = ""
-    cls: str = ""
-    delta: float = math.nan
-    contact: bool = False
-    theta_c: float = math.nan
-    y_c: float = math.nan
-    t_contact: float = math.nan
-    t_pass: float = math.nan
-    x_f: float = math.nan
-    y_f: float = math.nan
-    theta_f: float = math.nan
-    n_steps: int = 0
-    wall_time: float = 0.0
-    model: str = ""
-    n_beads: int = 0
-    t_end: float = math.nan
-    min_clearance: float = math.nan
+    status: Literal["ok", "failed"] = column(MISSING, "string", "", "ok or failed")
+    reason: str = column("", "string", "", "why a run failed")
+    cls: str = column(
+        "", "string", "", "Below, Above, Pole-vaulting or Trapping (empty when failed)"
+    )
+    delta: float = column(
+        math.nan,
+        "float64",
+        "h_obs",
+        "lateral displacement y_f - y0 far downstream (NaN for Trapping)",
+    )
+    contact: bool = column(False, "bool", "", "whether the fiber touched the pillar")
+    theta_c: float = column(
+        math.nan, "float64", "deg", "fiber angle at first contact, in (-90, 90]"
+    )
+    y_c: float = column(
+        math.nan,
+        "float64",
+        "h_obs",
+        "lateral position of the first contact point, from the base line",
+    )
+    t_contact: float = column(math.nan, "float64", "s", "time of first contact")
+    t_pass: float = column(
+        math.nan, "float64", "s", "time the centre of mass passes the pillar's downstream end"
+    )
+    x_f: float = column(
+        math.nan, "float64", "µm", "final centre-of-mass x, channel frame (inlet at 0)"
+    )
+    y_f: float = column(
+        math.nan, "float64", "µm", "final centre-of-mass y, channel frame (wall at 0)"
+    )
+    theta_f: float = column(math.nan, "float64", "deg", "final directed angle, unwrapped")
+    n_steps: int = column(0, "int64", "", "integrator steps")
+    wall_time: float = column(0.0, "float64", "s", "wall-clock time of the run")
+    model: str = column("", "string", "", "fiber model (rigid, bead-spring or bead-spring-ros2)")
+    n_beads: int = column(0, "int64", "", "beads of the fiber (0 when the run did not start)")
+    t_end: float = column(
+        math.nan, "float64", "s", "time at the end of the run (stop or time limit)"
+    )
+    min_clearance: float = column(
+        math.nan,
+        "float64",
+        "µm",
+        "smallest bead-centre distance to the pillar outline minus the bead radius, over the run",
+    )
+    max_curvature: float = column(
+        math.nan, "float64", "1/µm", "largest fiber curvature over the run (NaN for rigid)"
+    )
+    min_end_to_end: float = column(
+        math.nan,
+        "float64",
+        "",
+        "smallest end-to-end distance / contour length over the run (NaN for rigid)",
+    )
+    max_tension: float = column(
+        math.nan,
+        "float64",
+        "pN",
+        "largest stretching-spring tension over the run (NaN for rigid)",
+    )
+    max_wrap: float = column(
+        math.nan,
+        "float64",
+        "deg",
+        "largest turning of the tangent along the beads on the pillar (NaN for rigid)",
+    )
     trajectory: Trajectory | None = field(default=None, compare=False, repr=False)
 
     def row(self) -> dict[str, object]:
@@ -107,3 +235,19 @@ class RunResult:
             "class": d.pop("cls"),
             **d,
         }
+
+
+def record_columns() -> tuple[Column, ...]:
+    """The per-run columns of the record, in table order: the start, then each result field.
+
+    The trajectory (a dataset of its own) is not a column; ``cls`` is named ``class``.
+
+    Returns
+    -------
+    tuple of Column
+    """
+    out = [Column(f.name, **f.metadata) for f in fields(FiberStart)]
+    for f in fields(RunResult):
+        if "arrow" in f.metadata:
+            out.append(Column(COLUMN_NAMES.get(f.name, f.name), **f.metadata))
+    return tuple(out)

@@ -25,6 +25,7 @@ from fibersweep.analysis.observables import (
 from fibersweep.errors import InputError
 from fibersweep.fiber import record as R
 from fibersweep.fiber.bundles import Kernel, build_kernel
+from fibersweep.fiber.deformation import deformation
 from fibersweep.fiber.mobility import fiber_offsets
 from fibersweep.fiber.models import MODELS
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
@@ -73,6 +74,18 @@ def _result(
         theta_f=float(traj.theta[-1]),
         t_end=float(traj.t[-1]),
     )
+    if beads is not None and len(beads):
+        common.update(
+            deformation(
+                beads,
+                rec[:, R.CONTACT],
+                setup.pillar.vertices,
+                setup.pillar.circle,
+                setup.pillar.r_cut,
+                st.bead_radius,
+                st.young_modulus,
+            )
+        )
     k = first_contact_index(traj)
     if k is not None:
         common.update(
@@ -149,7 +162,7 @@ def simulate(
             start=start, status="failed", reason=f"numerical error: {exc}", model=settings.model
         )
     result = _result(setup, k, rec, beads, code, time.perf_counter() - t_wall)
-    return setup.effects.result(result, start)
+    return setup.effects.result(result, start, field.geometry)
 
 
 def simulate_reversible(

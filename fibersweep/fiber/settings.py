@@ -53,6 +53,17 @@ class StepSettings(_Strict):
         description="rigid: while stopped in contact, linearly implicit steps bound by the "
         "displacement (false: explicit steps bound by the contact stiffness)",
     )
+    tolerance: float = Field(
+        0.01, gt=0, description="bead-spring-ros2: local error allowed per step [µm]"
+    )
+    ros2_max_displacement: float = Field(
+        2.0, gt=0, description="bead-spring-ros2: largest bead move per step [µm]"
+    )
+    ros2_contact_displacement: float = Field(
+        0.1,
+        gt=0,
+        description="bead-spring-ros2: smallest step bound approaching the pillar [µm]",
+    )
     x_end: float = Field(
         300.0, gt=0, description="stop when the rearmost bead is this far past the pillar [µm]"
     )
@@ -69,9 +80,11 @@ class RecordSettings(_Strict):
 class FiberSettings(_Strict):
     """One fiber run apart from its start (theta0, y0, L)."""
 
-    model: Literal["rigid", "bead-spring"] = Field("rigid", description="fiber model")
+    model: Literal["rigid", "bead-spring", "bead-spring-ros2"] = Field(
+        "rigid", description="fiber model (docs/flexible.md)"
+    )
     bead_radius: float = Field(2.0, gt=0, description="bead radius a [µm]")
-    young_modulus: float = Field(26e6, gt=0, description="E [Pa] (bead-spring only)")
+    young_modulus: float = Field(26e6, gt=0, description="E [Pa] (bead-spring models only)")
     x0: float | None = Field(None, description="start x of the centre of mass [µm]; None: L_ch/4")
     contact: ContactSettings = ContactSettings()
     step: StepSettings = StepSettings()

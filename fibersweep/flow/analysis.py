@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fibersweep.flow.field import FlowField
+from fibersweep.flow.schemes import get_wall_scheme
 
 __all__ = [
     "Separatrix",
@@ -63,7 +64,7 @@ def flux_below_pillar(field: FlowField) -> np.ndarray:
 def subgrid_wall(field: FlowField) -> bool:
     """True if the field was solved with the pillar wall at its exact sub-grid position."""
     settings = field.meta.get("settings", {}) if field.meta else {}
-    return settings.get("pillar_boundary", "staircase") != "staircase"
+    return get_wall_scheme(settings.get("pillar_boundary", "staircase")).sub_grid
 
 
 @dataclass(frozen=True)

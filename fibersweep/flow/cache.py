@@ -27,6 +27,7 @@ import numpy as np
 
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.ghost import GHOST_METHOD, extend_into_wall
+from fibersweep.flow.schemes import get_wall_scheme
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.solver import SOLVER_VERSION, solve_flow
 
@@ -171,7 +172,8 @@ def load_entry(
     except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
         raise CorruptCacheError(f"{path}: unreadable cache entry ({exc})") from exc
     geometry = settings.geometry.to_geometry()
-    if settings.pillar_boundary != "staircase" and meta.get("wall_ghosts") != GHOST_METHOD:
+    sub_grid = get_wall_scheme(settings.pillar_boundary).sub_grid
+    if sub_grid and meta.get("wall_ghosts") != GHOST_METHOD:
         # entry written before ghost values were stored: derive them (in memory)
         ux, uy = extend_into_wall(ux, uy, solid, geometry.shape, float(settings.dx))
         meta = {**meta, "wall_ghosts": GHOST_METHOD}

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fibersweep.flow.lattice import Grid
+from fibersweep.flow.schemes import WALL_SCHEMES, get_wall_scheme
 from fibersweep.geometry import ConvexPolygon, as_shape
 
 __all__ = [
@@ -158,21 +159,21 @@ def polygon_cuts(grid: Grid, vertices: np.ndarray, scheme: str = "trt") -> Cuts:
     return shape_cuts(grid, ConvexPolygon(np.asarray(vertices, dtype=np.float64)), scheme)
 
 
-PILLAR_SCHEMES = {"interpolated": "trt", "bfl": "bfl"}
+#: Link interpolation of each sub-grid wall scheme (from :data:`WALL_SCHEMES`).
+PILLAR_SCHEMES = {n: w.links for n, w in WALL_SCHEMES.items() if w.links is not None}
 
 
 def pillar_cuts(grid: Grid, shape, kind: str) -> Cuts | None:
-    """Cuts of the pillar for ``kind`` "interpolated" or "bfl"; None for "staircase".
+    """Cuts of the pillar for the wall scheme ``kind``; None for a staircase wall.
 
     ``shape``: a :mod:`fibersweep.geometry` shape or convex polygon vertices (n, 2) [µm].
+    ``kind``: a name of :data:`fibersweep.flow.schemes.WALL_SCHEMES` (unknown: ValueError
+    listing the valid ones).
     """
-    if kind == "staircase":
+    scheme = get_wall_scheme(kind)
+    if scheme.links is None:
         return None
-    if kind not in PILLAR_SCHEMES:
-        raise ValueError(
-            f"unknown pillar boundary {kind!r}; valid: {[*PILLAR_SCHEMES, 'staircase']}"
-        )
-    return shape_cuts(grid, shape, PILLAR_SCHEMES[kind])
+    return shape_cuts(grid, shape, scheme.links)
 
 
 def slab_cuts(grid: Grid, y_low: float, y_high: float, scheme: str = "trt") -> Cuts:

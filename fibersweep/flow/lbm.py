@@ -23,6 +23,7 @@ from fibersweep.flow.cuts import Cuts, pillar_cuts
 from fibersweep.flow.initial import duct_guess, hele_shaw_guess, velocity_gradient
 from fibersweep.flow.lattice import Grid, make_grid
 from fibersweep.flow.prolong import prolong
+from fibersweep.flow.schemes import get_collision, get_wall_scheme
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.steppers import make_stepper
 
@@ -117,7 +118,7 @@ def lattice_of(settings: FlowSettings, pillar: bool = True) -> Grid:
         settings.dx,
         settings.symmetry,
         pillar=pillar,
-        closed=settings.pillar_boundary != "staircase",
+        closed=get_wall_scheme(settings.pillar_boundary).sub_grid,
     )
 
 
@@ -142,11 +143,7 @@ def _rates(settings: FlowSettings, grid: Grid) -> tuple[float, float, float, flo
     tau = settings.tau if settings.tau is not None else choose_tau(grid)
     nu = (tau - 0.5) / 3.0
     fx = U_LATTICE / duct_center_velocity(grid.ny, grid.nz_full, 1.0) * nu
-    omega_p = 1.0 / tau
-    if settings.collision == "bgk":
-        return tau, omega_p, omega_p, fx
-    # Λ = (1/ω+ − 1/2)(1/ω− − 1/2)
-    omega_m = 1.0 / (settings.magic / (tau - 0.5) + 0.5)
+    omega_p, omega_m = get_collision(settings.collision).rates(tau, settings.magic)
     return tau, omega_p, omega_m, fx
 
 

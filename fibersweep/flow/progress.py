@@ -48,6 +48,15 @@ class SolveProgress:
     tolerance: float
     cells: int
 
+    @property
+    def finished(self) -> bool:
+        """True on the last report of this grid: converged, or ``max_steps`` reached.
+
+        The solver stops right after such a report (or raises on divergence), so a
+        bar can close here instead of when the whole command ends.
+        """
+        return self.steps > 0 and (self.residual < self.tolerance or self.steps >= self.max_steps)
+
 
 _CALLBACK: ContextVar[Callable[[SolveProgress], None] | None] = ContextVar(
     "fibersweep_flow_progress", default=None

@@ -32,6 +32,7 @@ from fibersweep.flow.midplane import (
     midplane_centre_speed,
     midplane_weights,
 )
+from fibersweep.flow.schemes import get_wall_scheme
 from fibersweep.flow.settings import FlowSettings
 
 __all__ = [
@@ -87,7 +88,7 @@ def field_from_solution(settings: FlowSettings, sol: LatticeSolution) -> FlowFie
         raise SolverError(f"centreline speed far from the pillar is {u_ref!r}; cannot scale")
     scale = fluid.u_center / u_ref
     ux, uy = midplane_average(sol.u, grid) * scale
-    ghosts = settings.pillar_boundary != "staircase"
+    ghosts = get_wall_scheme(settings.pillar_boundary).sub_grid
     if ghosts:  # sub-grid wall: solid nodes near it get mirrored values (ghost.py)
         ux, uy = extend_into_wall(ux, uy, grid.solid, geom.shape, grid.dx)
     meta = {

@@ -20,11 +20,13 @@ from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.colors import Normalize  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
 
 from fibersweep.errors import InputError  # noqa: E402
 from fibersweep.fiber.result import CLASSES  # noqa: E402
 from fibersweep.plots import FORMATS  # noqa: E402
+from fibersweep.plots.density import boundary_segments, column_cells, is_dense  # noqa: E402
 from fibersweep.plots.style import (  # noqa: E402
     CLASS_STYLE,
     FAILED_STYLE,
@@ -170,36 +172,59 @@ def _sizes(panel: pd.DataFrame, s: float) -> np.ndarray | float:
     return np.where(panel["round"].fillna(0).to_numpy() > 0, 0.3 * s, s)
 
 
-#: Look of the located class boundaries.
+#: Look of the located class boundaries, and their legend entry.
 BOUNDARY_STYLE = {"color": "0.1", "lw": 1.0}
+BOUNDARY_LABEL = "boundary between runs"
 
 
 def draw_boundaries(ax: Axes, panel: pd.DataFrame) -> bool:
-    """Draw the class boundaries of a refined panel; True if any was drawn.
+    """Draw the class boundaries that a refined panel's runs support; True if any.
 
-    The lines are the edges of the nearest-neighbour class map of the panel's
-    runs (:func:`fibersweep.analysis.boundaries.class_map`): along a refined
-    axis they pass between the closest runs of different classes, to the
-    refinement's tolerance; between grid columns they step half-way, which is
-    all the runs say there.
+    Only where two neighbouring runs of different class bracket a boundary
+    (:func:`fibersweep.plots.density.boundary_segments`): a tick across the
+    column at the bracket's midpoint and a thin line over the bracket. Nothing
+    is drawn between columns, where no run was made.
     """
-    from fibersweep.analysis.boundaries import class_map
+    from matplotlib.collections import LineCollection
 
-    drawn = False
-    for _, g in panel.groupby(["settings", "length"] if "settings" in panel else ["length"]):
-        xs, ys, labels, names = class_map(g)
-        for k in range(len(names) if len(names) > 1 else 0):
-            # the 0.5 level of each class's indicator: the map's edges, corners cut
-            cs = ax.contour(
-                xs, ys, (labels == k).astype(float), levels=[0.5], zorder=4,
-                colors=BOUNDARY_STYLE["color"], linewidths=BOUNDARY_STYLE["lw"],
-            )  # fmt: skip
-            cs.sticky_edges.x.clear()  # keep the panel's margins around the points
-            cs.sticky_edges.y.clear()
-            drawn = True
-    if drawn:
+    ticks, spans, _ = boundary_segments(panel)
+    if not len(ticks):
+        return False
+    ax.add_collection(LineCollection(spans, colors=BOUNDARY_STYLE["color"], linewidths=0.5,
+                                     zorder=2))  # fmt: skip
+    ax.add_collection(LineCollection(ticks, colors=BOUNDARY_STYLE["color"], zorder=4,
+                                     linewidths=BOUNDARY_STYLE["lw"] * 1.3))  # fmt: skip
+    ax.autoscale_view()
+    return True
+
+
+def _draw_cells(ax: Axes, good: pd.DataFrame, by: str, norm: Normalize) -> object:
+    """A dense panel as a class map of its columns (one cell per run); the δ mappable or None."""
+    from matplotlib.collections import PolyCollection
+
+    rects, runs = column_cells(good)
+    if not len(rects):
+        return None
+    if by == "class":
+        colors = [_style(c)["color"] if c in CLASS_STYLE else UNCLASSIFIED_STYLE["color"]
+                  for c in runs["class"]]  # fmt: skip
+        ax.add_collection(PolyCollection(rects, facecolors=colors, edgecolors="none", zorder=2))
         ax.autoscale_view()
-    return drawn
+        return None
+    d = runs["delta"].to_numpy(dtype=float)
+    fin = np.isfinite(d)
+    pc = PolyCollection(rects[fin], array=d[fin], cmap="RdBu_r", norm=norm, edgecolors="none",
+                        zorder=2)  # fmt: skip
+    ax.add_collection(pc)
+    if (~fin).any():
+        ax.add_collection(PolyCollection(rects[~fin], facecolors=DENSE_NO_DELTA, zorder=2,
+                                         edgecolors="none"))  # fmt: skip
+    ax.autoscale_view()
+    return pc
+
+
+#: Fill of a dense δ map's cells without δ (trapped runs).
+DENSE_NO_DELTA = "0.15"
 
 
 def _label_axes(axes: np.ndarray, n: int) -> None:
@@ -232,11 +257,15 @@ def _of_class(df: pd.DataFrame, cls: str) -> pd.DataFrame:
     return df[~df["class"].isin(CLASSES)] if cls == "unclassified" else df[df["class"] == cls]
 
 
-def _legend_handles(present: list[str], sep: float | None, failed: bool) -> list[Line2D]:
-    hs = [
+def _legend_handles(
+    present: list[str], sep: float | None, failed: bool, dense: bool = False
+) -> list:
+    hs: list = [
         Line2D([], [], ls="", markersize=6, label=c, **_style(c))  # type: ignore[arg-type]
         for c in present
     ]
+    if dense:  # some panel drawn as cells: their fill, beside the markers
+        hs = [Patch(fc=_style(c)["color"], label=c) for c in present]
     if failed:
         hs.append(Line2D([], [], ls="", markersize=6, label="failed", **FAILED_STYLE))
     if sep is not None:
@@ -292,6 +321,7 @@ def phase_figure(
     present = _present(runs)
     seps: set[float] = set()
     boundaries = False
+    dense = False
     for ax, cv, rv in cells:
         p = _select(_select(runs, col, cv), row, rv)
         s = min(_marker_size(p), _spacing_limit(p, runs, ax)) if len(p) else 10.0
@@ -300,7 +330,10 @@ def phase_figure(
             seps.add(round(sep, 6))
         _separatrix(ax, sep)
         good = p[p["status"] == "ok"]
-        if by == "class":
+        if len(p) and is_dense(p, math.sqrt(s)):
+            dense = True
+            sc = _draw_cells(ax, good, by, norm) or sc
+        elif by == "class":
             for c in present:
                 q = _of_class(good, c)
                 if len(q):
@@ -323,12 +356,15 @@ def phase_figure(
                 )  # fmt: skip
         bad = p[p["status"] != "ok"]
         if len(bad):
-            ax.scatter(bad["theta0"], bad["y0"], s=s, lw=1.0, **FAILED_STYLE)
+            ax.scatter(bad["theta0"], bad["y0"], s=max(s, 9.0), lw=1.0, zorder=5, **FAILED_STYLE)
         title = [f"{_label(k)} = {_fmt(v)}" for k, v in ((col, cv), (row, rv)) if k is not None]
         if title and (len(cols) > 1 or len(rows) > 1):
             ax.set_title(", ".join(title), fontsize=7 if len(title) > 1 else None)
         elif n_panels == 1:
-            ax.set_title(_single_length(runs))
+            ax.set_title(_fixed_title(runs, col, row))
+    # settings fixed over a faceted figure head its legend (a suptitle would collide with it)
+    fixed = _fixed_title(runs, col, row) if n_panels > 1 else ""
+    legend_kw = {"title": fixed, "title_fontsize": "medium"} if fixed else {}
     thetas = np.unique(runs["theta0"].to_numpy(dtype=float))
     if 1 < thetas.size <= 9:  # few start angles: a tick at each
         for ax, _, _ in cells:
@@ -343,13 +379,13 @@ def phase_figure(
     failed = bool((~ok).any())
     legend_sep = next(iter(seps)) if len(seps) == 1 else None
     if by == "class":
-        hs = _legend_handles(present, legend_sep, failed)
+        hs = _legend_handles(present, legend_sep, failed, dense)
         if boundaries:
-            hs.append(Line2D([], [], label="located boundary", **BOUNDARY_STYLE))  # type: ignore[arg-type]
+            hs.append(Line2D([], [], label=BOUNDARY_LABEL, **BOUNDARY_STYLE))  # type: ignore[arg-type]
         if len(seps) > 1:
             hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label="separatrix (per field)"))
         fig.legend(handles=hs, loc="outside upper center", ncol=_legend_columns(hs, n_panels),
-                   frameon=False)  # fmt: skip
+                   frameon=False, **legend_kw)  # fmt: skip
     else:
         visible = [a for a in axes.flat if a.get_visible()]
         cb = fig.colorbar(sc, ax=visible, shrink=0.9, extend="both")
@@ -357,7 +393,9 @@ def phase_figure(
         hs = []
         if (runs.loc[ok, "class"] == "Trapping").any():
             hs.append(
-                Line2D([], [], ls="", marker="D", mfc="none", mec="k", label="Trapping (no δ)")
+                Patch(fc=DENSE_NO_DELTA, label="Trapping (no δ)")
+                if dense
+                else Line2D([], [], ls="", marker="D", mfc="none", mec="k", label="Trapping (no δ)")
             )
         if failed:
             hs.append(Line2D([], [], ls="", markersize=6, label="failed", **FAILED_STYLE))
@@ -365,8 +403,21 @@ def phase_figure(
             hs.append(Line2D([], [], color="0.2", ls="--", lw=1.0, label=_sep_label(legend_sep)))
         if hs:
             fig.legend(handles=hs, loc="outside upper center", ncol=_legend_columns(hs, n_panels),
-                   frameon=False)  # fmt: skip
+                   frameon=False, **legend_kw)  # fmt: skip
+        elif fixed:
+            fig.suptitle(fixed, fontsize="medium")
     return fig
+
+
+def _fixed_title(runs: pd.DataFrame, col: str | None, row: str | None) -> str:
+    """Settings that are one value over the figure and no facet: length, then swept keys."""
+    keys = [k for k in ("length", *swept_keys(runs)) if k in runs and k not in (col, row)]
+    parts = []
+    for k in keys:
+        v = runs[k].dropna().unique()
+        if len(v) == 1:
+            parts.append(f"{_label(k)} = {_fmt(v[0].item() if hasattr(v[0], 'item') else v[0])}")
+    return ", ".join(parts)
 
 
 def _single_length(runs: pd.DataFrame) -> str:
@@ -415,7 +466,7 @@ def _panel_separatrix(
 
 def contact_figure(runs: pd.DataFrame) -> Figure:
     """Contact map: fiber angle θ_c and contact point y_c/h at first contact, by class."""
-    fig, ax = subplots(figsize=(5.2, 3.2))
+    fig, ax = subplots(figsize=(5.2, 3.4))
     c = runs[(runs["status"] == "ok") & runs["contact"].fillna(False).astype(bool)]
     c = c[np.isfinite(c["theta_c"].to_numpy(dtype=float))]
     for k in _present(c):
@@ -424,17 +475,19 @@ def contact_figure(runs: pd.DataFrame) -> Figure:
             ax.scatter(q["theta_c"], q["y_c"], s=16, lw=0.4, edgecolor="k", label=k, **_style(k))
     # y/h is quoted from the pillar's lowest point for every shape and rotation; only the
     # unrotated triangle has its apex at 1, so the upper line is named by its height
-    for y, what in ((0.0, "base line"), (1.0, r"base line + $h_{obs}$")):
+    # the two lines are named in the right margin, where no marker can cover the name
+    for y, what in ((0.0, "base line"), (1.0, "base line\n" r"+ $h_{obs}$")):
         ax.axhline(y, color="0.6", lw=0.8, ls=":")
-        ax.annotate(what, (1.0, y), xycoords=("axes fraction", "data"), ha="right", va="bottom",
-                    fontsize=7, color="0.4")  # fmt: skip
+        ax.annotate(what, (1.0, y), xycoords=("axes fraction", "data"), ha="left", va="center",
+                    xytext=(3, 0), textcoords="offset points", fontsize=7, color="0.4",
+                    annotation_clip=False)  # fmt: skip
     ax.set_xlabel(r"$\theta_c$ at first contact [deg]")
     ax.set_ylabel(r"$y_c/h_{obs}$ at first contact")
     nl = runs["length"].nunique()
     lens = f", {_single_length(runs)}" if nl == 1 else f", {nl} lengths"
     ax.set_title(f"{len(c)} runs with contact{lens}")
     if len(c):
-        ax.legend(frameon=False, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        fig.legend(frameon=False, loc="outside upper center", ncol=4)
     else:
         ax.text(0.5, 0.5, "no run touched the pillar", ha="center", transform=ax.transAxes)
     return fig
@@ -461,14 +514,15 @@ def delta_hist_figure(runs: pd.DataFrame) -> Figure:
         if x.size:
             ax.hist(x, bins=bins, histtype="step", lw=1.5, color=color,
                     label=f"{label}: n = {x.size}, sd = {np.std(x):.4f}")  # fmt: skip
-    # log counts, from 0.5 so that a bin holding a single run stands clear of the axis
+    # log counts, from 0.5 so that a bin holding a single run stands clear of the axis;
+    # the legend goes above the axes, so the bars use the whole height
     ax.set_yscale("log")
-    ax.set_ylim(0.5, 4.0 * ax.get_ylim()[1])  # room above the bars for the legend
+    ax.set_ylim(0.5, 1.5 * ax.get_ylim()[1])
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel(r"$\delta = (y_f - y_0)/h_{obs}$")
     ax.set_ylabel("runs per bin")
-    ax.legend(frameon=False, loc="upper right")
+    fig.legend(frameon=False, loc="outside upper center", ncol=1)
     n_trap = int((ok["class"] == "Trapping").sum())
     notes = [t for t in (_single_length(runs),) if t]
     if n_trap:

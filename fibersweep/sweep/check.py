@@ -9,6 +9,7 @@ from fibersweep.atomic import TMP_GLOB
 from fibersweep.errors import InputError
 from fibersweep.sweep.lock import LockHolder, lock_holder
 from fibersweep.sweep.manifest import read_manifest
+from fibersweep.sweep.rules import mixed_rules_message
 from fibersweep.sweep.store import (
     RUNS_DIR,
     TRAJ_DIR,
@@ -45,6 +46,8 @@ class FolderReport:
         Temporary files a killed writer left (removed by the next ``run``).
     quarantined : list of Path
         ``quarantine-*`` folders holding parts moved aside earlier.
+    mixed_rules : str or None
+        A warning when the class column mixes pole-vaulting rules (still healthy).
     """
 
     out: Path
@@ -59,6 +62,7 @@ class FolderReport:
     missing_trajectories: int = 0
     temporaries: int = 0
     quarantined: list[Path] = field(default_factory=list)
+    mixed_rules: str | None = None
 
     @property
     def healthy(self) -> bool:
@@ -88,6 +92,8 @@ class FolderReport:
             out.append(f"  {self.temporaries} temporary file(s) of an interrupted write")
         for q in self.quarantined:
             out.append(f"  parts moved aside earlier: {q}")
+        if self.mixed_rules:  # readable and complete, but not comparable run by run
+            out.append(f"  warning: {self.mixed_rules}")
         out.append("  ok" if self.healthy else "  NOT ok")
         return out
 
@@ -133,4 +139,5 @@ def check_folder(out: Path) -> FolderReport:
         missing_trajectories=missing,
         temporaries=temporaries,
         quarantined=sorted(out.glob("quarantine-*")),
+        mixed_rules=mixed_rules_message(runs, out),
     )

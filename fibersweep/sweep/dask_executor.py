@@ -28,8 +28,11 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
+from pydantic import Field
+
 from fibersweep.errors import InputError, RunBug
 from fibersweep.sweep.executor_base import (
+    ExecutorOptions,
     Outcome,
     WorkerSetupError,
     _describe,
@@ -38,7 +41,14 @@ from fibersweep.sweep.executor_base import (
     guarded_call,
 )
 
-__all__ = ["CHUNKS_PER_SLOT", "MAX_CHUNK", "DaskExecutor", "chunk_sizes", "run_chunk"]
+__all__ = [
+    "CHUNKS_PER_SLOT",
+    "MAX_CHUNK",
+    "DaskExecutor",
+    "DaskOptions",
+    "chunk_sizes",
+    "run_chunk",
+]
 
 log = logging.getLogger(__name__)
 
@@ -279,6 +289,17 @@ def local_cluster(workers: int) -> Any:
         )
 
 
+class DaskOptions(ExecutorOptions):
+    """Options of the Dask executor (see :class:`DaskExecutor`)."""
+
+    scheduler: str | None = Field(
+        None, description="address of a running scheduler, e.g. tcp://10.0.0.5:8786"
+    )
+    chunk_size: int | None = Field(
+        None, ge=1, description="runs per Dask task (None: chosen from the runs and threads)"
+    )
+
+
 class DaskExecutor:
     """Runs tasks on a Dask cluster: an existing one, or a loopback LocalCluster.
 
@@ -331,8 +352,11 @@ class DaskExecutor:
         self._plugin_ident: tuple | None = None
 
     name = "dask"
+    Options = DaskOptions
     #: Options :func:`~fibersweep.sweep.executors.make_executor` may pass.
-    OPTIONS = frozenset({"retries", "keep", "scheduler", "chunk_size"})
+    OPTIONS = frozenset(DaskOptions.model_fields)
+    #: Dask workers keep their own signal handling; the client only stops waiting.
+    parent_handles_ctrl_c = False
 
     def __enter__(self) -> DaskExecutor:
         return self

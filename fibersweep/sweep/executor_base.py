@@ -20,12 +20,15 @@ import socket
 import traceback
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol
+
+from pydantic import BaseModel, ConfigDict, Field
 
 from fibersweep.errors import RunBug, SolverError
 
 __all__ = [
     "Executor",
+    "ExecutorOptions",
     "Outcome",
     "WorkerSetupError",
     "guarded_call",
@@ -60,9 +63,39 @@ class Outcome:
     attempts: int = 1
 
 
-class Executor(Protocol):
-    """Runs ``fn(task)`` for every task, yielding outcomes as they finish."""
+class ExecutorOptions(BaseModel):
+    """Options every executor takes; an executor's own options model extends it.
 
+    :func:`~fibersweep.sweep.executors.make_executor` validates what it is given
+    against the chosen executor's model (an unknown option fails naming the
+    executors that take it), so a new option is one field here or in the
+    executor's module, and the config's ``run.options`` passes it through.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    retries: int = Field(2, ge=0, description="re-runs of a task whose worker died")
+    keep: bool = Field(
+        False, description="keep the workers between run() calls (close() stops them)"
+    )
+
+
+class Executor(Protocol):
+    """Runs ``fn(task)`` for every task, yielding outcomes as they finish.
+
+    An executor declares what the callers need to know instead of being told
+    apart by name:
+
+    * ``name``: its key in :data:`~fibersweep.sweep.executors.EXECUTORS`;
+    * ``Options``: its options model (an :class:`ExecutorOptions`);
+    * ``parent_handles_ctrl_c``: True when the calling process handles Ctrl-C
+      and stops the workers (the workers should then ignore SIGINT, as the
+      local pool's do); False when the workers keep their own handling (Dask's).
+    """
+
+    name: ClassVar[str]
+    Options: ClassVar[type[ExecutorOptions]]
+    parent_handles_ctrl_c: ClassVar[bool]
     workers: int
 
     def run(

@@ -38,25 +38,34 @@ The pieces live in their own modules; every public name is importable from here:
 
 from __future__ import annotations
 
+from typing import Any
+
+from pydantic import ValidationError
+
 from fibersweep.errors import InputError
-from fibersweep.sweep.dask_executor import DaskExecutor, chunk_sizes, run_chunk
+from fibersweep.sweep.dask_executor import DaskExecutor, DaskOptions, chunk_sizes, run_chunk
 from fibersweep.sweep.executor_base import (
     Executor,
+    ExecutorOptions,
     Outcome,
     WorkerSetupError,
     guarded_call,
     guarded_init,
 )
-from fibersweep.sweep.local_executor import LocalExecutor
+from fibersweep.sweep.local_executor import LocalExecutor, LocalOptions
 
 __all__ = [
     "EXECUTORS",
     "DaskExecutor",
+    "DaskOptions",
     "Executor",
+    "ExecutorOptions",
     "LocalExecutor",
+    "LocalOptions",
     "Outcome",
     "WorkerSetupError",
     "chunk_sizes",
+    "executor_for_run",
     "guarded_call",
     "guarded_init",
     "make_executor",
@@ -64,17 +73,21 @@ __all__ = [
 ]
 
 
-#: Executor classes by name. Each declares ``name`` and the ``OPTIONS`` it takes;
+#: Executor classes by name. Each declares ``name``, its ``Options`` model and
+#: ``parent_handles_ctrl_c`` (:class:`~fibersweep.sweep.executor_base.Executor`);
 #: a new executor is one module and one entry here.
 EXECUTORS: dict[str, type] = {cls.name: cls for cls in (LocalExecutor, DaskExecutor)}
 
-# How each option is spelled on the command line / in the config, for messages.
+# How some options are spelled on the command line / in the config, for messages
+# (any other option is spelled run.options.NAME).
 _OPTION_NAMES = {
     "scheduler": "--scheduler (run.scheduler)",
-    "chunk_size": "chunk_size",
     "retries": "run.retries",
-    "keep": "keep",
 }
+
+
+def _spelled(key: str) -> str:
+    return _OPTION_NAMES.get(key, key)
 
 
 def make_executor(
@@ -82,15 +95,13 @@ def make_executor(
     workers: int,
     scheduler: str | None = None,
     retries: int = 2,
-    *,
-    chunk_size: int | None = None,
-    keep: bool = False,
+    **options: Any,
 ) -> Executor:
-    """Executor by name from :data:`EXECUTORS`, with the options it declares.
+    """Executor by name from :data:`EXECUTORS`, with options checked by its ``Options`` model.
 
-    Options left at None (or ``keep`` False) are not passed. An unknown name
-    fails listing the valid ones; an option the executor does not take fails
-    naming the executors that do.
+    Options left at None or False are not passed (the model's default holds). An
+    unknown name fails listing the valid ones; an option the executor does not take
+    fails naming the executors that do; a bad value fails naming the option.
 
     Raises
     ------
@@ -99,16 +110,33 @@ def make_executor(
     if name not in EXECUTORS:
         raise InputError(f"unknown executor {name!r}; valid: {', '.join(EXECUTORS)}")
     cls = EXECUTORS[name]
-    given = {"scheduler": scheduler, "chunk_size": chunk_size, "keep": keep or None}
-    options: dict[str, object] = {"retries": retries}
-    for key, value in given.items():
-        if value is None:
-            continue
-        if key not in cls.OPTIONS:
-            takers = [n for n, c in EXECUTORS.items() if key in c.OPTIONS]
-            raise InputError(
-                f"{_OPTION_NAMES[key]} applies to the {' or '.join(takers)} executor only, "
-                f"not {name!r}"
-            )
-        options[key] = value
-    return cls(workers, **options)
+    given = {"retries": retries, "scheduler": scheduler, **options}
+    given = {k: v for k, v in given.items() if v is not None and v is not False}
+    for key in given:
+        if key not in cls.Options.model_fields:
+            takers = [n for n, c in EXECUTORS.items() if key in c.Options.model_fields]
+            where = f"the {' or '.join(takers)} executor only" if takers else "no executor"
+            raise InputError(f"{_spelled(key)} applies to {where}, not {name!r}")
+    try:
+        opts = cls.Options(**given)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        key = ".".join(str(p) for p in err["loc"])
+        raise InputError(f"{_spelled(key)}: {err['msg']} (executor {name!r})") from None
+    return cls(workers, **opts.model_dump())
+
+
+def executor_for_run(run: Any, workers: int | None = None, **options: Any) -> Executor:
+    """The executor a config's ``run`` section asks for, with extra ``options`` on top.
+
+    Parameters
+    ----------
+    run : RunSettings
+        ``executor``, ``workers``, ``scheduler``, ``retries`` and ``options``.
+    workers : int, optional
+        Replaces ``run.workers``.
+    **options
+        Options the caller sets (e.g. ``keep``); they win over ``run.options``.
+    """
+    merged = {**run.options, **options}
+    return make_executor(run.executor, workers or run.workers, run.scheduler, run.retries, **merged)

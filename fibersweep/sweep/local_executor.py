@@ -18,8 +18,11 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
+from pydantic import Field
+
 from fibersweep.errors import InputError, SolverError
 from fibersweep.sweep.executor_base import (
+    ExecutorOptions,
     Outcome,
     _describe,
     _Keyed,
@@ -29,7 +32,7 @@ from fibersweep.sweep.executor_base import (
 )
 from fibersweep.sweep.lifeline import tie_to_parent
 
-__all__ = ["LocalExecutor"]
+__all__ = ["LocalExecutor", "LocalOptions"]
 
 log = logging.getLogger(__name__)
 
@@ -41,6 +44,16 @@ def _pool_init(parent_pid: int, initializer: Callable[..., None] | None, initarg
     """Worker start: end with the parent (even on SIGKILL), then the guarded set-up."""
     tie_to_parent(parent_pid)
     guarded_init(initializer, initargs)
+
+
+class LocalOptions(ExecutorOptions):
+    """Options of the local pool (see :class:`LocalExecutor`)."""
+
+    inline: bool = Field(
+        False,
+        description="with one worker, run the tasks in this process (no pool to start, no "
+        "crash isolation)",
+    )
 
 
 class LocalExecutor:
@@ -58,18 +71,32 @@ class LocalExecutor:
         Keep the pool between :meth:`run` calls with the same initializer and
         arguments (many small batches pay the worker start-up once); call
         :meth:`close`, or use the executor as a context manager.
+    inline : bool
+        With one worker, run the tasks in this process: the initializer once per
+        distinct set-up, then each task (no pool to start; a run that kills the
+        process kills the caller).
     """
 
     name = "local"
+    Options = LocalOptions
     #: Options :func:`~fibersweep.sweep.executors.make_executor` may pass.
-    OPTIONS = frozenset({"retries", "keep"})
+    OPTIONS = frozenset(LocalOptions.model_fields)
+    #: The parent stops the pool on Ctrl-C; workers ignore SIGINT.
+    parent_handles_ctrl_c = True
 
     def __init__(
-        self, workers: int = 2, retries: int = 2, inflight_per_worker: int = 2, keep: bool = False
+        self,
+        workers: int = 2,
+        retries: int = 2,
+        inflight_per_worker: int = 2,
+        keep: bool = False,
+        inline: bool = False,
     ) -> None:
         if workers < 1:
             raise InputError(f"workers must be >= 1, got {workers}")
         self.workers = workers
+        self.inline = inline and workers == 1
+        self._inline_ident: tuple | None = None
         self.retries = retries
         self.cap = max(1, inflight_per_worker) * workers
         self.keep = keep
@@ -115,6 +142,26 @@ class LocalExecutor:
             initargs=(os.getpid(), initializer, initargs),
         )
 
+    def _run_inline(
+        self,
+        fn: Callable[[Any], Any],
+        tasks: Sequence[_Keyed],
+        initializer: Callable[..., None] | None,
+        initargs: tuple,
+    ) -> Iterator[Outcome]:
+        """Run the tasks in this process, in order; a task's exception stops the caller."""
+        ident = (initializer, tuple(id(a) for a in initargs))
+        if initializer is not None and ident != self._inline_ident:
+            initializer(*initargs)
+            self._inline_ident = ident
+        for t in tasks:
+            try:
+                value = fn(t)
+            except Exception as exc:
+                _setup_failed(exc)  # a bug in a run stops the caller, as in the pool
+                raise
+            yield Outcome(t.key, value)
+
     @staticmethod
     def _stop(pool: ProcessPoolExecutor) -> None:
         """Stop ``pool`` now: cancel what waits, end its workers, let its manager thread finish.
@@ -151,6 +198,9 @@ class LocalExecutor:
         initargs: tuple = (),
     ) -> Iterator[Outcome]:
         """Yield one :class:`Outcome` per task, in completion order."""
+        if self.inline:
+            yield from self._run_inline(fn, tasks, initializer, initargs)
+            return
         fresh: deque = deque(tasks)
         suspects: deque = deque()  # in flight when a worker died: re-run alone
         strikes: dict[str, int] = defaultdict(int)

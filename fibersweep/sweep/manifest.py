@@ -16,6 +16,7 @@ from fibersweep.atomic import atomic_write
 
 __all__ = [
     "MANIFEST",
+    "build_revision",
     "git_revision",
     "library_versions",
     "provenance",
@@ -71,13 +72,50 @@ def git_revision(src: Path | None = None) -> str | None:
     return rev + ("+dirty" if dirty else "") if rev else None
 
 
+def build_revision() -> str | None:
+    """Commit an installed copy was built from (``+dirty`` if its tree was modified), or None.
+
+    setuptools-scm writes ``fibersweep/_version.py`` when the package is built
+    (``pip install``, editable or not): the version derived from git and the
+    commit (``__commit_id__``, ``g`` + short hash). A modified tree shows in the
+    version's local part as a date (``+gHASH.dYYYYMMDD``). A source tree that was
+    never built has no such file.
+    """
+    try:
+        from fibersweep import _version  # type: ignore[attr-defined]
+    except ImportError:
+        return None
+    node = getattr(_version, "__commit_id__", None)
+    if not node:
+        return None
+    rev = node[1:] if node.startswith("g") else node
+    local = str(getattr(_version, "__version__", "")).partition("+")[2]
+    dirty = any(p[:1] == "d" and p[1:].isdigit() for p in local.split("."))
+    return rev + ("+dirty" if dirty else "")
+
+
+def revision() -> tuple[str | None, str | None]:
+    """fibersweep's own revision and where it comes from: ``checkout`` or ``build``.
+
+    A git checkout of fibersweep (an editable install) knows its current commit;
+    an installed copy knows the commit it was built from; else ``(None, None)``.
+    """
+    rev = git_revision()
+    if rev is not None:
+        return rev, "checkout"
+    rev = build_revision()
+    return (rev, "build") if rev is not None else (None, None)
+
+
 def provenance(flow_key: str) -> dict[str, Any]:
     """Package version, git revision, flow-field hash, library versions, host and time."""
     from fibersweep import __version__
 
+    rev, source = revision()
     return {
         "fibersweep": __version__,
-        "git": git_revision(),
+        "git": rev,
+        "git_from": source,
         "flow_key": flow_key,
         "libraries": library_versions(),
         "host": platform.node(),

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import json
 import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
+import pyarrow.parquet as pq
 from pydantic import ValidationError
 
 from fibersweep.atomic import atomic_path
@@ -16,9 +19,11 @@ from fibersweep.errors import InputError
 from fibersweep.fiber.result import CLASSES, Trajectory
 from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.flow.settings import FlowSettings
+from fibersweep.sweep.coldocs import rule_column
 from fibersweep.sweep.lock import output_lock
 from fibersweep.sweep.manifest import read_manifest, write_manifest
 from fibersweep.sweep.store import (
+    META_KEY,
     RUNS_DIR,
     list_parts,
     part_name,
@@ -153,9 +158,38 @@ def class_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFram
     return df
 
 
-def rule_column(rule: str) -> str:
-    """Runs-table column holding the class under a rule (``head-speed`` -> ``class_head_speed``)."""
-    return "class_" + rule.replace("-", "_")
+def classified_meta(parts: list[Path], man: dict, thresholds: ClassifySettings) -> dict[str, Any]:
+    """Schema metadata of a re-classified part: the sweep's provenance kept, the rule added.
+
+    The version, revision and config of the sweep come from its newest part (the
+    manifest's provenance if no part has them); ``classify`` holds the thresholds
+    and ``rule`` the rule that labelled the rows, with the version and revision of
+    the fibersweep that re-labelled them.
+    """
+    from fibersweep import __version__
+    from fibersweep.sweep.manifest import revision
+
+    old: dict[str, Any] = {}
+    for p in reversed(parts):
+        raw = (pq.read_schema(p).metadata or {}).get(META_KEY)
+        if raw:
+            old = json.loads(raw)
+            break
+    prov = man.get("provenance", {})
+    base = {
+        "fibersweep": prov.get("fibersweep"),
+        "git": prov.get("git"),
+        "flow_key": prov.get("flow_key"),
+        "config": man.get("config"),
+    }
+    rev, source = revision()
+    return {
+        **base,
+        **old,
+        "classify": thresholds.model_dump(),
+        "rule": thresholds.rule,
+        "classified_by": {"fibersweep": __version__, "git": rev, "git_from": source},
+    }
 
 
 def reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
@@ -248,16 +282,17 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     if missing:
         log.warning("%d ok runs have no stored trajectory and keep their class", missing)
     changed = int((new_cls != runs["class"]).sum())
+    # the rule behind each row's 'class': this one where it was re-labelled
+    labelled = pd.Series(by_rule[thresholds.rule] != "", index=runs.index)
+    rule_col = runs["class_rule"] if "class_rule" in runs else pd.Series([None] * len(runs))
+    rule_col = rule_col.astype(object).where(~labelled.to_numpy(), thresholds.rule)
     runs = runs.assign(
-        **{"class": new_cls},
+        **{"class": new_cls, "class_rule": rule_col.to_numpy()},
         **{rule_column(name): col.to_numpy() for name, col in by_rule.items()},
     )
     runs.loc[runs["class"] == "Trapping", "delta"] = math.nan
     old_parts = list_parts(out / RUNS_DIR)
-    meta = {
-        "flow_key": man.get("provenance", {}).get("flow_key"),
-        "classify": thresholds.model_dump(),
-    }
+    meta = classified_meta(old_parts, man, thresholds)
     write_table_atomic(
         runs_table(runs.to_dict("records"), meta),
         out / RUNS_DIR / part_name("-classified"),

@@ -18,7 +18,7 @@ from typing import Any
 from fibersweep.config import Config
 from fibersweep.errors import ResultsError
 from fibersweep.fiber.result import CLASSES
-from fibersweep.sweep.executors import EXECUTORS, make_executor
+from fibersweep.sweep.executors import executor_for_run
 from fibersweep.sweep.fields import (
     combinations_entry,
     prepare,
@@ -180,6 +180,7 @@ def _run_locked(
     meta = {
         "fibersweep": prov["fibersweep"],
         "git": prov["git"],
+        "git_from": prov["git_from"],
         "flow_key": info.key,
         "flow_keys": list(fields),
         "swept": plan.columns,
@@ -203,13 +204,11 @@ def _run_locked(
             if st.id in needed
         ),
     )
-    keep = refine is not None and "keep" in EXECUTORS[cfg.run.executor].OPTIONS
-    # rounds reuse the workers when the executor can keep them
-    ex = make_executor(
-        cfg.run.executor, cfg.run.workers, cfg.run.scheduler, cfg.run.retries, keep=keep
-    )
-    # Dask workers keep their own signal handling; pool workers leave Ctrl-C to us.
-    initargs = (spec, cfg.run.executor == "local")
+    # rounds reuse the workers (every executor can keep them)
+    keep = refine is not None
+    ex = executor_for_run(cfg.run, keep=keep)
+    # workers leave Ctrl-C to us when the executor says we handle it (the local pool)
+    initargs = (spec, ex.parent_handles_ctrl_c)
     keep_traj = cfg.fiber.record.trajectories
     t0 = time.perf_counter()
     state = "stopped"

@@ -33,11 +33,14 @@ import pyarrow.parquet as pq
 
 from fibersweep.atomic import TMP_GLOB, atomic_path
 from fibersweep.errors import ResultsError
+from fibersweep.fiber.result import Column, record_columns
+from fibersweep.sweep.coldocs import RUN_EXTRA_DOCS, TRAJ_COLUMN_DOCS, docs_for, with_docs
 
 __all__ = [
     "COLUMN_DOCS",
     "RUN_COLUMNS",
     "RUNS_DIR",
+    "SWEEP_COLUMNS",
     "TRAJ_DIR",
     "PartWriter",
     "clean_temporaries",
@@ -61,65 +64,40 @@ RUNS_DIR = "runs"
 TRAJ_DIR = "trajectories"
 META_KEY = b"fibersweep"
 
-#: Column types of the runs table; extra keys of ``RunResult.row()`` are kept with
-#: inferred types.
-RUN_COLUMNS: dict[str, pa.DataType] = {
-    "id": pa.string(),
-    "theta0": pa.float64(),
-    "y0": pa.float64(),
-    "length": pa.float64(),
-    "class": pa.string(),
-    "status": pa.string(),
-    "reason": pa.string(),
-    "delta": pa.float64(),
-    "contact": pa.bool_(),
-    "theta_c": pa.float64(),
-    "y_c": pa.float64(),
-    "t_contact": pa.float64(),
-    "t_pass": pa.float64(),
-    "x_f": pa.float64(),
-    "y_f": pa.float64(),
-    "theta_f": pa.float64(),
-    "n_steps": pa.int64(),
-    "wall_time": pa.float64(),
-    "cpu_time": pa.float64(),
-    "model": pa.string(),
-    "settings": pa.string(),
-    "worker": pa.string(),
-    "attempts": pa.int64(),
-    "finished_at": pa.float64(),
-    "round": pa.int64(),
-}
+#: Columns the sweep adds to each run's record (bookkeeping, not physics).
+SWEEP_COLUMNS: tuple[Column, ...] = (
+    Column("cpu_time", "float64", "s", "CPU time of the run in its worker"),
+    Column(
+        "settings", "string", "", "id of the run's settings (hash of fiber settings and flow field)"
+    ),
+    Column("worker", "string", "", "host:pid of the worker that ran it"),
+    Column("attempts", "int64", "", "times the run was started (worker crashes re-run it)"),
+    Column("finished_at", "float64", "s", "Unix time the run finished"),
+    Column(
+        "round",
+        "int64",
+        "",
+        "refinement round that first ran the run (0: the grid; see sweep.refine)",
+    ),
+)
+
+_ID = Column(
+    "id", "string", "", "content id of the run (hash of start, fiber settings and flow field)"
+)
+_COLUMNS = (_ID, *record_columns(), *SWEEP_COLUMNS)
+
+#: Column types of the runs table, generated from the run record
+#: (:func:`fibersweep.fiber.result.record_columns`) and :data:`SWEEP_COLUMNS`; extra keys
+#: of a row (the swept settings) are kept with their schema type or an inferred one.
+RUN_COLUMNS: dict[str, pa.DataType] = {c.name: pa.type_for_alias(c.arrow) for c in _COLUMNS}
 
 #: Unit and frame of the runs-table columns, stored as Parquet field metadata
 #: (``unit`` and ``doc``), so a table read outside fibersweep says what it holds.
-COLUMN_DOCS: dict[str, tuple[str, str]] = {
-    "id": ("", "content id of the run (hash of start, fiber settings and flow field)"),
-    "theta0": ("deg", "start angle of the tail-to-head vector from +x (flow direction)"),
-    "y0": ("h_obs", "start lateral position of the centre of mass, from the pillar base line"),
-    "length": ("l_obs", "fiber length over the pillar base length"),
-    "class": ("", "Below, Above, Pole-vaulting or Trapping (empty when failed)"),
-    "status": ("", "ok or failed"),
-    "reason": ("", "why a run failed"),
-    "delta": ("h_obs", "lateral displacement y_f - y0 far downstream (NaN for Trapping)"),
-    "contact": ("", "whether the fiber touched the pillar"),
-    "theta_c": ("deg", "fiber angle at first contact, in (-90, 90]"),
-    "y_c": ("h_obs", "lateral position of the first contact point, from the base line"),
-    "t_contact": ("s", "time of first contact"),
-    "t_pass": ("s", "time the centre of mass passes the pillar's downstream end"),
-    "x_f": ("µm", "final centre-of-mass x, channel frame (inlet at 0)"),
-    "y_f": ("µm", "final centre-of-mass y, channel frame (wall at 0)"),
-    "theta_f": ("deg", "final directed angle, unwrapped"),
-    "n_steps": ("", "integrator steps"),
-    "wall_time": ("s", "wall-clock time of the run"),
-    "cpu_time": ("s", "CPU time of the run in its worker"),
-    "model": ("", "fiber model (rigid or bead-spring)"),
-    "settings": ("", "id of the run's settings (hash of fiber settings and flow field)"),
-    "worker": ("", "host:pid of the worker that ran it"),
-    "attempts": ("", "times the run was started (worker crashes re-run it)"),
-    "finished_at": ("s", "Unix time the run finished"),
-    "round": ("", "refinement round that first ran the run (0: the grid; see sweep.refine)"),
-}
+COLUMN_DOCS: dict[str, tuple[str, str]] = {c.name: (c.unit, c.doc) for c in _COLUMNS}
+
+#: Columns written only when some row of the part has a non-zero value; read as 0
+#: where a part lacks them.
+ONLY_WHEN_SET = ("round",)
 
 _seq = 0
 
@@ -170,6 +148,8 @@ def runs_table(
     df = pd.DataFrame(list(rows))
     fields, arrays = [], []
     for name, typ in RUN_COLUMNS.items():
+        if name in ONLY_WHEN_SET and not (name in df and (df[name].fillna(0) != 0).any()):
+            continue  # e.g. no 'round' column in a sweep that was never refined
         col = df[name] if name in df else pd.Series([None] * len(df), dtype=object)
         unit, doc = COLUMN_DOCS[name]
         fields.append(pa.field(name, typ, metadata={"unit": unit, "doc": doc}))
@@ -181,7 +161,7 @@ def runs_table(
             f, arr = _setting_field(name, df[name].tolist())
         else:
             arr = pa.array(df[name].tolist(), from_pandas=True)
-            f = pa.field(name, arr.type)
+            f = pa.field(name, arr.type, metadata=docs_for(name, RUN_EXTRA_DOCS))
         fields.append(f)
         arrays.append(arr)
     return _with_meta(pa.Table.from_arrays(arrays, schema=pa.schema(fields)), meta)
@@ -226,7 +206,7 @@ def _traj_table(run_id: str, cols: Mapping[str, np.ndarray]) -> pa.Table:
             data[k] = pa.array(arr)
         else:  # e.g. beads, shape (m, n_beads, 2): one list per sample
             data[k] = pa.array([a.ravel().tolist() for a in arr], type=pa.list_(pa.float64()))
-    return pa.table(data)
+    return with_docs(pa.table(data), TRAJ_COLUMN_DOCS)
 
 
 def _read_part(path: Path, **kw: Any) -> pa.Table:
@@ -313,6 +293,9 @@ def read_runs(out: Path, skip: Sequence[Path] = ()) -> pd.DataFrame:
     if t is None:
         return runs_table([]).to_pandas()
     df = t.to_pandas()
+    for name in ONLY_WHEN_SET:  # parts written before the first non-zero value lack it
+        if name in df:
+            df[name] = df[name].fillna(0).astype(np.int64)
     df = df.drop_duplicates(subset="id", keep="last")
     return df.sort_values(["length", "y0", "theta0", "id"], kind="stable").reset_index(drop=True)
 
@@ -510,7 +493,7 @@ def compact(out: Path, meta: Mapping[str, Any] | None = None) -> None:
     traj_parts = list_parts(out / TRAJ_DIR)
     if len(traj_parts) > 1:
         df = read_trajectories(out)
-        t = pa.Table.from_pandas(df, preserve_index=False)
+        t = with_docs(pa.Table.from_pandas(df, preserve_index=False), TRAJ_COLUMN_DOCS)
         write_table_atomic(_with_meta(t, meta), out / TRAJ_DIR / part_name("-merged"))
         for p in traj_parts:
             p.unlink(missing_ok=True)

@@ -1,28 +1,64 @@
-"""What runs inside a worker process: open each field once, then run fibers.
+"""What runs inside a worker process, for every batch: the sweep's runs and the
+discrepancy workflow's copies.
 
 :func:`init_worker` is the process-pool initializer and the body of the Dask
-worker plugin: it opens the cached flow field memory-mapped (every worker on a
-machine shares the same pages; a sweep over flow settings has several fields,
-each mapped the first time a task needs it and kept) and runs one short fiber so Numba compiles (or
-loads its on-disk cache) once per worker, not once per run. :func:`run_task`
-then runs one fiber and returns plain, picklable data. Any exception in a run
-becomes a failed row with its reason: one bad run never stops a sweep.
+worker plugin. It keeps one per-process cache of flow fields by cache key
+(:func:`field_for`): a field is opened memory-mapped from its cache entry the
+first time a task needs it (every worker on a machine shares the same pages)
+and kept across tasks, batches and worker specs; a field that has no cache entry
+(built in memory) travels once in the spec. It then runs one short fiber so Numba
+compiles (or loads its on-disk cache) once per worker, not once per run.
+
+Two task kinds run on it, with one error policy (:func:`run_fiber`): a run
+that fails physically (bad input after effects, a numerical failure:
+``RUN_ERRORS``) is a failed record with its reason; any other exception is a
+bug and stops the caller (:class:`~fibersweep.errors.RunBug`).
+
+* :func:`run_task` (:class:`SweepTask`): one sweep run; returns its row and
+  trajectory as plain, picklable data.
+* :func:`run_batch` (:class:`RunBatch`): several runs at given starts and seeds
+  with extra effects, optionally keeping their trajectories; each record goes
+  through the batch's ``reduce`` function (top-level, so it pickles by name)
+  and the batch returns ``(position, value)`` pairs.
 """
 
 from __future__ import annotations
 
 import logging
+import multiprocessing as mp
 import os
 import signal
 import socket
 import time
 import traceback
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from dataclasses import field as _field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from fibersweep.errors import RUN_ERRORS, RunBug
 
-__all__ = ["SettingSpec", "SweepTask", "WorkerSpec", "init_worker", "run_task", "failed_row"]
+if TYPE_CHECKING:  # pragma: no cover
+    from fibersweep.fiber.result import FiberStart, RunResult
+    from fibersweep.fiber.settings import FiberSettings
+    from fibersweep.flow.field import FlowField
+
+__all__ = [
+    "RunBatch",
+    "SettingSpec",
+    "SweepTask",
+    "WorkerSpec",
+    "failed_row",
+    "field_for",
+    "init_worker",
+    "run_batch",
+    "run_fiber",
+    "run_task",
+    "setting_for_field",
+]
 
 log = logging.getLogger(__name__)
 
@@ -80,6 +116,9 @@ class SettingSpec:
         workers can read; opened memory-mapped, never recomputed by a worker.
     fiber_json : str
         ``FiberSettings`` as JSON.
+    field : FlowField or None
+        The field itself, for a field that has no cache entry to map (built in
+        memory); ``field_path`` is then ''.
     """
 
     settings: str
@@ -87,6 +126,7 @@ class SettingSpec:
     flow_json: str
     field_path: str
     fiber_json: str
+    field: Any = _field(default=None, compare=False, repr=False)
 
 
 @dataclass(frozen=True)
@@ -127,32 +167,114 @@ class WorkerSpec:
         return {"": single}
 
 
-_STATE: dict[str, Any] = {}
+@dataclass(frozen=True)
+class RunBatch:
+    """Several runs sent to a worker together (picklable; ``key`` names the executor task).
+
+    Attributes
+    ----------
+    key : str
+        Task name, unique within one executor run.
+    idx : ndarray, shape (k,), int
+        Positions of the runs in the caller's batch (returned with each value).
+    starts : ndarray, shape (k, 3)
+        theta0 [deg], y0 [/h_obs], length [/l_obs].
+    seeds : ndarray, shape (k,), int
+        Seed of each run (start noise, Brownian motion).
+    effects : dict of str -> float
+        Effects switched on in addition to the setting's own (a batch value wins).
+    keep_track : bool
+        Record each run's trajectory with at least ``samples`` samples (it changes
+        no other outcome).
+    samples : int
+        Fewest trajectory samples kept with ``keep_track``.
+    reduce : callable (RunResult, FlowField) -> Any, optional
+        Turns each record into what the batch returns (top-level, so it pickles by
+        name); None returns ``RunResult.row()``.
+    settings : str
+        Settings id of the :class:`WorkerSpec` the runs use ('' for its single one).
+    """
+
+    key: str
+    idx: np.ndarray
+    starts: np.ndarray
+    seeds: np.ndarray
+    effects: dict[str, float]
+    keep_track: bool = False
+    samples: int = 0
+    reduce: Callable[[Any, Any], Any] | None = None
+    settings: str = ""
+
+
+#: The worker's set-up: its spec, that spec's settings and parsed fiber settings.
+_SETUP: dict[str, Any] = {}
+#: Per-process flow-field cache, by cache key: mapped once, kept across specs.
+_FIELDS: dict[str, Any] = {}
 
 
 def _worker_name() -> str:
     return f"{socket.gethostname()}:{os.getpid()}"
 
 
-def init_worker(spec: WorkerSpec, ignore_sigint: bool = True) -> None:
-    """Map the first cached field, parse the fiber settings and warm Numba, once per process.
+def setting_for_field(field: FlowField, fiber: FiberSettings, settings: str = "") -> SettingSpec:
+    """A :class:`SettingSpec` for a field the caller holds.
 
-    Other fields are mapped when a task first needs them (:func:`_setting`).
+    A field opened memory-mapped from a cache entry is sent as that entry's path
+    and key (the workers map it); any other field travels itself, once per worker.
+    """
+    ux = field.ux
+    path = Path(ux.filename).parent if isinstance(ux, np.memmap) and ux.filename else None
+    meta = field.meta or {}
+    if path is not None and (path / "meta.json").is_file() and "settings" in meta:
+        from fibersweep.flow.settings import FlowSettings
+
+        flow = FlowSettings.model_validate(meta["settings"])
+        key = str(meta.get("cache_key") or path.name)
+        return SettingSpec(
+            settings, key, flow.model_dump_json(), str(path), fiber.model_dump_json()
+        )
+    return SettingSpec(
+        settings, f"memory-{id(field):x}", "", "", fiber.model_dump_json(), field=field
+    )
+
+
+def field_for(spec: SettingSpec) -> FlowField:
+    """The flow field of a setting from this process's cache, mapped on first use."""
+    if spec.flow_key not in _FIELDS:
+        if spec.field is not None:
+            _FIELDS[spec.flow_key] = spec.field
+        else:
+            from fibersweep.flow.cache import load_entry
+            from fibersweep.flow.settings import FlowSettings
+
+            flow = FlowSettings.model_validate_json(spec.flow_json)
+            # The parent verified the entry's checksums; workers only map it.
+            _FIELDS[spec.flow_key] = load_entry(spec.field_path, flow, mmap=True, verify=False)
+            log.debug("worker %s mapped field %s", _worker_name(), spec.flow_key)
+    return _FIELDS[spec.flow_key]
+
+
+def init_worker(spec: WorkerSpec, ignore_sigint: bool = True) -> None:
+    """Map the first field, parse the fiber settings and warm Numba, once per process.
+
+    Other fields are mapped when a task first needs them (:func:`field_for`).
 
     Parameters
     ----------
     spec : WorkerSpec
     ignore_sigint : bool
-        Leave Ctrl-C to the parent, which stops the pool cleanly.
+        Leave Ctrl-C to the parent, which stops the workers cleanly (the
+        executor's ``parent_handles_ctrl_c``).
     """
-    if ignore_sigint:
+    child = mp.parent_process() is not None  # not the caller's own process (inline runs)
+    if ignore_sigint and child:
         try:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
         except ValueError:  # not the main thread (e.g. a Dask worker thread)
             pass
-    if _STATE.get("spec") == spec:
+    if _SETUP.get("spec") == spec:
         return
-    if not logging.getLogger().handlers:  # a fresh spawned process: log like the parent
+    if child and not logging.getLogger().handlers:  # a fresh spawned process: log like the parent
         logging.basicConfig(
             level=spec.log_level,
             format="%(asctime)s %(name)s[%(process)d] %(levelname)s: %(message)s",
@@ -162,11 +284,10 @@ def init_worker(spec: WorkerSpec, ignore_sigint: bool = True) -> None:
     t0 = time.perf_counter()
     specs = spec.all_settings()
     fibers = {sid: FiberSettings.model_validate_json(s.fiber_json) for sid, s in specs.items()}
-    _STATE.clear()
-    _STATE.update(spec=spec, specs=specs, fibers=fibers, fields={}, n_tasks=0)
+    _SETUP.clear()
+    _SETUP.update(spec=spec, specs=specs, fibers=fibers)
     first = next(iter(specs))
     field, fiber = _setting(first)
-    _STATE.update(field=field, fiber=fiber)
     t1 = time.perf_counter()
     if spec.warm:
         warmed: set[str] = set()
@@ -183,23 +304,13 @@ def init_worker(spec: WorkerSpec, ignore_sigint: bool = True) -> None:
 
 
 def _setting(sid: str) -> tuple[Any, Any]:
-    """(flow field, fiber settings) of a settings id; the field mapped once per worker."""
-    if "specs" not in _STATE:  # set up by hand (tests): the single field and fiber
-        return _STATE["field"], _STATE["fiber"]
-    specs = _STATE["specs"]
+    """(flow field, fiber settings) of a settings id; the field mapped once per process."""
+    if "specs" not in _SETUP:
+        raise RuntimeError("worker not initialised: init_worker was not called")
+    specs = _SETUP["specs"]
     if sid not in specs and len(specs) == 1:  # a single-setting spec runs every task
         sid = next(iter(specs))
-    spec = specs[sid]
-    fields = _STATE["fields"]
-    if spec.flow_key not in fields:
-        from fibersweep.flow.cache import load_entry
-        from fibersweep.flow.settings import FlowSettings
-
-        flow = FlowSettings.model_validate_json(spec.flow_json)
-        # The parent verified the entry's checksums; workers only map it.
-        fields[spec.flow_key] = load_entry(spec.field_path, flow, mmap=True, verify=False)
-        log.debug("worker %s mapped field %s", _worker_name(), spec.flow_key)
-    return fields[spec.flow_key], _STATE["fibers"][sid]
+    return field_for(specs[sid]), _SETUP["fibers"][sid]
 
 
 def _warm(field: Any, fiber: Any) -> None:
@@ -217,18 +328,13 @@ def _warm(field: Any, fiber: Any) -> None:
 
 
 def failed_row(task: SweepTask, reason: str, attempts: int = 1) -> dict[str, Any]:
-    """The row recorded for a run that did not finish."""
+    """The row recorded for a run that did not finish: the run record's defaults."""
+    from fibersweep.fiber.result import FiberStart, RunResult
+
+    start = FiberStart(theta0=task.theta0, y0=task.y0, length=task.length)
     return {
         "id": task.key,
-        "theta0": task.theta0,
-        "y0": task.y0,
-        "length": task.length,
-        "class": "",
-        "status": "failed",
-        "reason": reason,
-        "contact": False,
-        "n_steps": 0,
-        "wall_time": 0.0,
+        **RunResult(start=start, status="failed", reason=reason).row(),
         "worker": "",
         "attempts": attempts,
         "finished_at": time.time(),
@@ -236,33 +342,54 @@ def failed_row(task: SweepTask, reason: str, attempts: int = 1) -> dict[str, Any
     }
 
 
+def run_fiber(
+    field: FlowField,
+    fiber: FiberSettings,
+    start: FiberStart,
+    name: str,
+    rng_seed: int | None = None,
+) -> RunResult:
+    """One run under the one error policy of every batch.
+
+    Returns
+    -------
+    RunResult
+        The run's record; a failed record (``reason`` 'exception NAME: message')
+        when it raised one of ``RUN_ERRORS`` (bad input, a failed computation).
+
+    Raises
+    ------
+    RunBug
+        Any other exception: a bug, not a failed run (names ``name`` and the start).
+    """
+    from fibersweep.fiber.result import RunResult
+    from fibersweep.fiber.run import simulate
+
+    try:
+        return simulate(field, fiber, start, rng_seed=rng_seed)
+    except RUN_ERRORS as exc:  # bad input or a failed computation: a failed run
+        log.warning("run %s raised: %s", name, traceback.format_exc(limit=3))
+        reason = f"exception {type(exc).__name__}: {exc}"
+        return RunResult(start=start, status="failed", reason=reason, model=fiber.model)
+    except Exception as exc:  # anything else is a bug: stop the caller, say where
+        raise RunBug(f"run {name} ({start}):\n{traceback.format_exc()}") from exc
+
+
 def run_task(task: SweepTask) -> dict[str, Any]:
-    """Run one fiber in this worker.
+    """Run one sweep fiber in this worker.
 
     Returns
     -------
     dict
         ``{"row": dict of scalars, "trajectory": dict of arrays or None}``.
     """
-    if not _STATE:
-        raise RuntimeError("worker not initialised: init_worker was not called")
     from fibersweep.fiber.result import FiberStart
-    from fibersweep.fiber.run import simulate
 
     start = FiberStart(theta0=task.theta0, y0=task.y0, length=task.length)
     field, fiber = _setting(task.settings)
     t0 = time.perf_counter()
     c0 = time.process_time()
-    try:
-        res = simulate(field, fiber, start)
-    except RUN_ERRORS as exc:  # bad input or a failed computation: a failed run
-        log.warning("run %s raised: %s", task.key, traceback.format_exc(limit=3))
-        row = failed_row(task, f"exception {type(exc).__name__}: {exc}")
-        row.update(wall_time=time.perf_counter() - t0, worker=_worker_name())
-        return {"row": row, "trajectory": None}
-    except Exception as exc:  # anything else is a bug: stop the sweep, say where
-        raise RunBug(f"run {task.key} ({start}):\n{traceback.format_exc()}") from exc
-    _STATE["n_tasks"] += 1
+    res = run_fiber(field, fiber, start, task.key)
     row = res.row()
     row.update(
         id=task.key,
@@ -272,9 +399,36 @@ def run_task(task: SweepTask) -> dict[str, Any]:
         finished_at=time.time(),
         # CPU seconds of this run: with wall_time, shows whether the machine was shared.
         cpu_time=time.process_time() - c0,
+        class_rule=fiber.classify.rule,  # which rule labelled 'class' (mixed folders)
         **task.columns(),
     )
     traj = res.trajectory.columns() if res.trajectory is not None else None
     if traj is not None and res.trajectory.beads is not None:
         traj = {**traj, "beads": res.trajectory.beads}
     return {"row": row, "trajectory": traj}
+
+
+def batch_settings(
+    base: FiberSettings, effects: dict[str, float], keep_track: bool, samples: int
+) -> FiberSettings:
+    """``base`` with a batch's effects on top, recording trajectories when asked."""
+    update: dict[str, Any] = {"effects": {**base.effects, **effects}}
+    if keep_track:
+        update["record"] = base.record.model_copy(
+            update={"trajectories": True, "samples": max(base.record.samples, samples)}
+        )
+    return base.model_copy(update=update)
+
+
+def run_batch(task: RunBatch) -> list[tuple[int, Any]]:
+    """Run a :class:`RunBatch` in this worker: ``(position, reduce(record, field))`` per run."""
+    from fibersweep.fiber.result import FiberStart
+
+    field, base = _setting(task.settings)
+    fiber = batch_settings(base, task.effects, task.keep_track, task.samples)
+    out = []
+    for i, s, seed in zip(task.idx, task.starts, task.seeds, strict=True):
+        start = FiberStart(theta0=float(s[0]), y0=float(s[1]), length=float(s[2]))
+        res = run_fiber(field, fiber, start, task.key, rng_seed=int(seed))
+        out.append((int(i), task.reduce(res, field) if task.reduce else res.row()))
+    return out

@@ -128,6 +128,7 @@ def test_fiber_that_does_not_fit_the_channel_length_names_fiber_x0(tmp_path):
 def test_prefiltered_start_check_keeps_every_failing_point():
     """Points skipped by the fast pre-check provably pass; every failing one is checked."""
     from fibersweep.config import Config, SweepSettings
+    from fibersweep.config.starts import starts_to_check
     from fibersweep.errors import InputError
     from fibersweep.fiber.contact import make_pillar
     from fibersweep.fiber.settings import FiberSettings
@@ -159,7 +160,7 @@ def test_prefiltered_start_check_keeps_every_failing_point():
 
     every = first_problems(cfg.sweep.starts())
     assert set(every) == {"length", "y0", "y0 pillar"}
-    kept = cfg._starts_to_check(geo, pillar.r_cut)
+    kept = starts_to_check(cfg, geo, pillar.r_cut)
     assert first_problems(kept) == every  # the same first problem of each kind
     # Position problems can fail anywhere, so every such point must be kept; the
     # length rule depends on L alone, so one point per length is enough.
@@ -170,13 +171,24 @@ def test_prefiltered_start_check_keeps_every_failing_point():
 
 
 def test_executor_names_come_from_the_registry(tmp_path):
+    """The config does not import the sweep: the caller (the CLI) hands the registry in."""
+    from fibersweep.sweep.executors import EXECUTORS
+
     with pytest.raises(ConfigError) as ei:
-        load_config(_write(tmp_path, "run:\n  executor: dsak\n"))
+        load_config(_write(tmp_path, "run:\n  executor: dsak\n"), executors=EXECUTORS)
     assert (
         "run.executor (line 2): unknown executor; did you mean 'dask'? valid: local, dask"
         in str(ei.value)
     )
-    assert load_config(_write(tmp_path, "run:\n  executor: dask\n")).run.executor == "dask"
+    p = _write(tmp_path, "run:\n  executor: dask\n")
+    assert load_config(p, executors=EXECUTORS).run.executor == "dask"
+    # an executor's own option, checked against its options model
+    p = _write(tmp_path, "run:\n  executor: local\n  options:\n    chunk_size: 4\n")
+    with pytest.raises(ConfigError) as ei:
+        load_config(p, executors=EXECUTORS)
+    assert "run.options.chunk_size (line 4): not an option of the local executor" in str(ei.value)
+    p = _write(tmp_path, "run:\n  executor: dask\n  options:\n    chunk_size: 4\n")
+    assert load_config(p, executors=EXECUTORS).run.options == {"chunk_size": 4}
 
 
 def test_cross_field_checks_report_at_their_field(tmp_path):
@@ -185,3 +197,17 @@ def test_cross_field_checks_report_at_their_field(tmp_path):
     with pytest.raises(ConfigError) as ei:
         load_config(p)
     assert "run.scheduler (line 3): expected an address like tcp://HOST:PORT" in str(ei.value)
+
+
+def test_the_config_does_not_import_the_sweep():
+    """Layering: config -> fiber/flow settings, never back into the sweep."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, fibersweep.config as c\n"
+        "c.load_config\n"
+        "print(sorted(m for m in sys.modules if m.startswith('fibersweep.sweep')))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]", out.stdout

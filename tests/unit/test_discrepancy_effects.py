@@ -10,6 +10,7 @@ import pytest
 from fibersweep.errors import InputError
 from fibersweep.fiber.effects import build_effects
 from fibersweep.fiber.result import FiberStart, RunResult
+from fibersweep.flow.settings import FlowSettings
 
 
 def test_start_noise_has_the_stated_spread():
@@ -37,7 +38,8 @@ def test_pillar_scale_is_a_change_of_units_about_the_centroid():
     # which also reports the start that was asked for
     asked = FiberStart(0.0, 0.8, 1.1)
     res = RunResult(start=s, status="ok", cls="Above", delta=0.2, contact=True, y_c=s.y0)
-    back = eff.transform_result(res, asked)
+    geometry = FlowSettings().geometry.to_geometry()
+    back = eff.transform_result(res, asked, geometry)
     assert back.y_c == pytest.approx(0.8)
     assert back.delta == pytest.approx(0.2 * (1 + eps))
     assert back.start == asked
@@ -45,16 +47,25 @@ def test_pillar_scale_is_a_change_of_units_about_the_centroid():
 
 def test_simulate_reports_pillar_scale_runs_in_nominal_units(small_field):
     # a run with pillar_scale = ε is the nominal run at the transformed start, its δ
-    # rescaled by 1 + ε; simulate() itself returns the nominal start (round-off)
+    # rescaled by 1 + ε and its positions [µm] stretched by 1 + ε about the pillar
+    # centroid (the effect owns every unit change); simulate() returns the nominal start
     from fibersweep.fiber.run import simulate
-    from fibersweep.fiber.settings import FiberSettings
+    from fibersweep.fiber.settings import FiberSettings, RecordSettings
 
     eps, asked = 0.1, FiberStart(2.0, 0.9, 0.8)
-    scaled = simulate(small_field, FiberSettings(effects={"pillar_scale": eps}), asked)
+    rec = RecordSettings(trajectories=True, samples=50)
+    scaled = simulate(small_field, FiberSettings(effects={"pillar_scale": eps}, record=rec), asked)
     moved = build_effects({"pillar_scale": eps}).effects[0].transform_start(asked, None)
-    plain = simulate(small_field, FiberSettings(), moved)
+    plain = simulate(small_field, FiberSettings(record=rec), moved)
     assert scaled.start == asked and plain.start == moved
     assert scaled.delta == pytest.approx(plain.delta * (1 + eps), rel=1e-12)
+    cx, cy = small_field.geometry.centroid
+    # same arithmetic on the same numbers: exact
+    assert scaled.x_f == cx + (1 + eps) * (plain.x_f - cx)
+    assert scaled.y_f == cy + (1 + eps) * (plain.y_f - cy)
+    np.testing.assert_array_equal(scaled.trajectory.y, cy + (1 + eps) * (plain.trajectory.y - cy))
+    np.testing.assert_array_equal(scaled.trajectory.t, plain.trajectory.t)
+    np.testing.assert_array_equal(scaled.trajectory.theta, plain.trajectory.theta)
 
 
 def test_out_of_range_values_name_the_effect():

@@ -204,3 +204,103 @@ def test_score_interval_accepts_a_flat_stretch_where_no_fiber_changes():
     prof = tuple((float(v), w * (max(0.2 - v, 0.0, v - 0.4) * 10) ** 2) for v in grid)
     lo, hi, open_lo, open_hi = score_interval(Fit("friction", 0.3, 0.0, 0.0, (), prof))
     assert 0.15 < lo <= 0.25 and 0.35 <= hi < 0.45 and not open_lo and not open_hi
+
+
+def test_slope_estimate_of_a_quadratic_profile_is_its_minimiser():
+    # per-fiber loss (v - mu_i)^2: the mean slope between evaluated values is linear in
+    # the midpoint with the same spread everywhere, so the zero of T is mean(mu) exactly,
+    # whatever the evaluated values. Tolerance: the read-out grid's step (0.6 / 400).
+    from fibersweep.discrepancy.fit import slope_estimate
+
+    rng = np.random.default_rng(3)
+    mu = rng.normal(0.3, 0.1, 50)
+    for grid in (np.linspace(0.0, 0.6, 5), np.array([0.0, 0.1, 0.22, 0.41, 0.6])):
+        fit = _quadratic_fit(mu, grid)
+        fit = type(fit)(fit.name, 0.41, 0.0, 0.0, (), fit.profile)
+        assert slope_estimate(fit) == pytest.approx(mu.mean(), abs=0.6 / 400)
+
+
+def _lucky_profile(rng: np.random.Generator, truth: float, xs: np.ndarray, n: int = 60):
+    """Quadratic per-fiber losses around ``truth`` (spread 0.5), plus the step of one fiber
+    whose two copies switch branch (contact or not): its loss drops by 40 past 0.85,
+    30 times a typical fiber's change, so the best evaluated value is the one past it."""
+    from fibersweep.discrepancy.fit import Fit
+
+    mu = rng.normal(truth, 0.5, n)
+    L = (xs[:, None] - mu[None, :]) ** 2
+    L[:, 0] -= 40.0 * (xs > 0.85)
+    best = float(xs[np.argmin(L.mean(axis=1))])
+    return Fit("pillar_hydro", best, 0.0, 0.0, (), tuple(zip(xs, L, strict=True)))
+
+
+def test_slope_estimate_is_not_pulled_to_one_fibers_lucky_step():
+    # The pooled refit's evaluated values in the issue's case (pillar_hydro 0.6: the
+    # halves 0.64, 0.71 and Brent's golden-section points of [0, 1.46]); one fiber's step
+    # makes 0.902 the best evaluated value, the value reported before. The estimate
+    # stays within 0.1 of the truth on average over 200 data sets (measured bias +0.07;
+    # the best evaluated value: 0.30) and inside the interval reported with it.
+    from fibersweep.discrepancy.fit import score_interval, slope_estimate
+
+    rng = np.random.default_rng(11)
+    xs = np.array([0.0, 0.558, 0.64, 0.71, 0.902, 1.2])
+    best, est = [], []
+    for _ in range(200):
+        fit = _lucky_profile(rng, 0.6, xs)
+        e = slope_estimate(fit)
+        lo, hi, _, _ = score_interval(type(fit)(fit.name, e, 0.0, 0.0, (), fit.profile))
+        assert lo <= e <= hi
+        best.append(fit.value)
+        est.append(e)
+    assert abs(np.mean(est) - 0.6) < 0.1
+    assert np.mean(best) - 0.6 > 0.2  # the argmin's bias this stand-in reproduces
+
+
+def test_slope_estimate_keeps_a_baseline_fit_at_zero():
+    from fibersweep.discrepancy.fit import Fit, slope_estimate
+
+    prof = tuple((v, np.full(10, 1.0 + v)) for v in (0.0, 0.2, 0.4))
+    assert slope_estimate(Fit("friction", 0.0, 1.0, 1.0, (), prof)) == 0.0
+
+
+class _Spread:
+    """A random effect on δ: copy k of fiber i = x_i + 0.02 sqrt(1 + v^2) z_ik (start noise
+    widening the outcome; common random numbers: the same z_ik at every value v)."""
+
+    def __init__(self, x: np.ndarray, rng: np.random.Generator, m: int = 8):
+        self.x = x
+        self.z = rng.standard_normal((m, len(x)))
+
+    def copies(self, ks, effects=None, rows=None, desc=""):
+        return [self.copy(k, effects, rows, desc) for k in ks]
+
+    def copy(self, k, effects=None, rows=None, desc=""):
+        v = float((effects or {}).get("start_noise", 0.0))
+        idx = np.arange(len(self.x)) if rows is None else rows
+        return pd.DataFrame({"delta": self.x[idx] + 0.02 * np.sqrt(1 + v**2) * self.z[k, idx]})
+
+
+def test_random_effect_is_fitted_where_the_data_are_as_spread_as_its_copies():
+    # start_noise = 2.5 on the stand-in: 60 data sets of 60 fibers, 8 copies, 5 Brent
+    # steps, as the workflow fits a random lead. The quoted value is the crossing of 1 by
+    # the mean dispersion score (exact for any number of copies at the truth); its
+    # interval from the t test of that score. Stated: mean within 0.3 of 2.5 (measured
+    # 2.53, sd 0.45), coverage of the 95 % interval 0.85-1.0 (measured 57 of 60;
+    # binomial 3 sd of 60 draws at 0.95 is 0.08), no fit at 0.
+    from fibersweep.discrepancy.fit import score_interval
+
+    rng = np.random.default_rng(21)
+    vals, hits = [], 0
+    for _ in range(60):
+        x = rng.uniform(0.0, 0.5, 60)
+        model = _Spread(x, rng)
+        observed = pd.DataFrame({"delta": x + 0.02 * np.sqrt(1 + 2.5**2) * rng.standard_normal(60)})
+        base = [model.copy(k) for k in range(8)]
+        fit = fit_effect(LIBRARY["start_noise"], model, observed, base, np.arange(60),
+                         ["delta"], {"delta": 1.0}, max_evals=5, estimate=True)  # fmt: skip
+        lo, hi, _, _ = score_interval(fit)
+        assert lo <= fit.value <= hi
+        vals.append(fit.value)
+        hits += lo <= 2.5 <= hi
+    assert abs(np.mean(vals) - 2.5) < 0.3
+    assert 0.85 <= hits / 60 <= 1.0
+    assert min(vals) > 0.0

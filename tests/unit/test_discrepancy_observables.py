@@ -147,7 +147,7 @@ def test_range_check_names_the_observable_and_its_unit(name):
     with pytest.raises(InputError) as exc:
         validate_measured(table)
     msg = str(exc.value)
-    assert f"{name}: out of range" in msg and f"row {row}" in msg and o.unit_hint in msg
+    assert f"{name}: out of range" in msg and f"row {row + 1}" in msg and o.unit_hint in msg
 
 
 @pytest.mark.parametrize("name", [n for n in table_columns() if OBSERVABLES[n].defined])
@@ -158,13 +158,13 @@ def test_nan_rule(name):
     where = int(np.flatnonzero(np.isfinite(v))[0])
     bad = table.copy()
     bad.loc[where, name] = np.nan  # missing where the quantity exists
-    with pytest.raises(InputError, match=rf"{name}: missing/NaN value in row {where}"):
+    with pytest.raises(InputError, match=rf"{name}: missing/NaN value in row {where + 1}"):
         validate_measured(bad)
     if o.strict:
         undefined = int(np.flatnonzero(~np.isfinite(v))[0])
         bad = table.copy()
         bad.loc[undefined, name] = float(np.nanmedian(v))  # given where it does not exist
-        with pytest.raises(InputError, match=rf"{name}: given for .* in row {undefined}"):
+        with pytest.raises(InputError, match=rf"{name}: given for .* in row {undefined + 1}"):
             validate_measured(bad)
 
 

@@ -62,13 +62,13 @@ def test_radians_are_caught_and_angle_unit_converts():
 
 def test_out_of_range_and_non_finite_name_rows():
     df = _table()
-    df.loc[2, "y0"] = 30.0  # µm instead of h_obs
+    df.loc[2, "y0"] = 30.0  # µm instead of h_obs (messages count data rows from 1)
     df.loc[4, "length"] = np.inf
     with pytest.raises(InputError) as exc:
         validate_measured(df)
     msg = str(exc.value)
-    assert "y0: out of range" in msg and "row 2" in msg and "h_obs" in msg
-    assert "length: infinite value in row 4" in msg
+    assert "y0: out of range" in msg and "row 3" in msg and "h_obs" in msg
+    assert "length: infinite value in row 5" in msg
 
 
 def test_nan_only_where_undefined():
@@ -79,9 +79,9 @@ def test_nan_only_where_undefined():
     with pytest.raises(InputError) as exc:
         validate_measured(df)
     msg = str(exc.value)
-    assert "delta: missing/NaN value in row 0" in msg
-    assert "theta_c: missing/NaN value in row 1" in msg
-    assert "theta_c: given for a fiber without contact in row 0" in msg
+    assert "delta: missing/NaN value in row 1" in msg
+    assert "theta_c: missing/NaN value in row 2" in msg
+    assert "theta_c: given for a fiber without contact in row 1" in msg
 
 
 def test_bad_class_and_inconsistent_contact():
@@ -92,8 +92,8 @@ def test_bad_class_and_inconsistent_contact():
     with pytest.raises(InputError) as exc:
         validate_measured(df)
     msg = str(exc.value)
-    assert "class: unknown value in row 1" in msg and "Pole-vaulting" in msg
-    assert "contact: false for a Trapping or Pole-vaulting fiber in row 2" in msg
+    assert "class: unknown value in row 2" in msg and "Pole-vaulting" in msg
+    assert "contact: false for a Trapping or Pole-vaulting fiber in row 3" in msg
 
 
 def test_class_names_are_case_insensitive_and_optional_columns_optional():
@@ -151,3 +151,16 @@ def test_trajectory_angles_in_radians_are_caught(tmp_path):
     write_table(rad, tmp_path / "t_rad.csv")
     with pytest.raises(InputError, match="trajectories.theta: the first sample .* radians"):
         load_measured(p, tmp_path / "t_rad.csv", geometry=geo)
+
+
+def test_rows_in_messages_count_data_rows_from_one_as_in_the_csv(tmp_path):
+    """The first data row of a CSV (the line after the header) is 'row 1'."""
+    df = _table()
+    df.loc[0, "y0"] = 30.0
+    path = tmp_path / "measured.csv"
+    df.to_csv(path, index=False)
+    with pytest.raises(InputError) as exc:
+        load_measured(path)
+    msg = str(exc.value)
+    assert "y0: out of range" in msg and "in row 1 " in msg, msg
+    assert path.read_text().splitlines()[1].split(",")[1] == "30.0"  # line 2: data row 1

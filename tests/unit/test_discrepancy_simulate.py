@@ -98,3 +98,31 @@ def test_several_copies_are_one_batch_and_equal_copy_by_copy(uniform_field):
         want = [fresh.copy(k, eff, rows) for k in range(3)]
     for g, w in zip(got, want, strict=True):
         assert g.equals(w)
+
+
+def test_a_cached_field_travels_as_its_entry_and_an_in_memory_one_as_itself(
+    uniform_field, coarse_field
+):
+    """One run path: the workflow's workers map a cached field by its key, like a sweep's;
+    a field built in memory (no entry to map) is sent once in the worker spec."""
+    from fibersweep.sweep import worker
+
+    cached = worker.setting_for_field(coarse_field, FiberSettings())
+    assert cached.field is None and cached.field_path.endswith(cached.flow_key)
+    mapped = worker.field_for(cached)
+    assert isinstance(mapped.ux, np.memmap) and mapped.geometry == coarse_field.geometry
+    assert np.array_equal(mapped.ux, coarse_field.ux) and mapped.dx == coarse_field.dx
+    assert worker.field_for(cached) is mapped, "one mapping per process, by cache key"
+    memory = worker.setting_for_field(uniform_field, FiberSettings())
+    assert memory.field is uniform_field and memory.field_path == ""
+
+
+def test_a_workflow_that_stops_early_ends_its_bar_at_the_runs_it_used(uniform_field, capsys):
+    """Planned 1150 runs, 2 used: the bar (plain lines into a captured stderr) ends at 2/2."""
+    starts = np.array([[0.0, -2.0, 1.0], [5.0, -1.5, 0.8]])
+    with Simulator(uniform_field, FiberSettings(), workers=1, budget=1150) as sim:
+        sim.run(starts, {}, np.arange(2), desc="screen effects")
+    err = capsys.readouterr().err
+    lines = err.splitlines()
+    assert "\r" not in err and "0/1150" in lines[0]
+    assert lines[-1].startswith("screen effects") and "2/2" in lines[-1], lines

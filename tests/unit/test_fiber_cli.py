@@ -59,3 +59,25 @@ def test_help_texts_keep_their_units():
     assert "Start angle from +x [deg]." in sim.output
     assert "stopped this long [s]" in cls.output
     assert "(default: all)" in dis.output
+
+
+def test_simulate_prints_units_and_says_never_for_a_missing_pass(
+    tmp_path, flow_cache_dir, coarse_field
+):
+    cfg = _config(tmp_path, flow_cache_dir)
+    below = CliRunner().invoke(
+        app, ["simulate", cfg, "--theta0", "0", "--y0", "0.2", "--length", "1"]
+    )
+    assert below.exit_code == 0, below.output
+    assert "class: Below" in below.output
+    line = next(ln for ln in below.output.splitlines() if ln.startswith("delta:"))
+    assert line.split()[2] == "h_obs", line  # 'delta: -0.0123 h_obs (...)'
+    assert "t_pass: " in below.output and "t_pass: never" not in below.output
+    # trapped on this grid (tests/regression/test_sweep_e2e.py): no pass, no displacement
+    trapped = CliRunner().invoke(
+        app, ["simulate", cfg, "--theta0", "8", "--y0", "0.30", "--length", "1"]
+    )
+    assert trapped.exit_code == 0, trapped.output
+    assert "class: Trapping" in trapped.output
+    assert "t_pass: never" in trapped.output and "- s" not in trapped.output
+    assert "delta: none" in trapped.output

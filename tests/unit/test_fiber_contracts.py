@@ -22,12 +22,13 @@ PROBES = (-1e9, -1.0, -0.6, 0.6, 1.0, 1e9)
 # A fiber that meets the pillar apex within the first 0.05 s (x0 close to the pillar).
 CONTACT_START = FiberStart(8.0, 0.351, 0.5)
 STAGE_MODELS = {
-    "background": {"rigid", "bead-spring"},
+    "background": {"rigid", "bead-spring", "bead-spring-ros2"},
     "rigid_mobility": {"rigid"},
     "rigid_contact": {"rigid"},
     "rigid_noise": {"rigid"},
-    "bead_forces": {"bead-spring"},
-    "bead_mobility": {"bead-spring"},
+    # bead-spring-ros2 evaluates f(q) with the bead-spring model's bead_velocity
+    "bead_forces": {"bead-spring", "bead-spring-ros2"},
+    "bead_mobility": {"bead-spring", "bead-spring-ros2"},
 }
 
 

@@ -36,3 +36,17 @@ def test_no_callback_outside_the_block():
         pass
     solve_lattice(DUCT, pillar=False)
     assert seen == []
+
+
+def test_finished_marks_the_last_report_of_a_solve():
+    """A bar closes on ``finished``: true on the solver's final report only (converged or
+    out of steps), never on the first (step 0) one."""
+    seen = []
+    with on_progress(seen.append):
+        solve_lattice(DUCT, pillar=False)
+    assert [p.finished for p in seen] == [False] * (len(seen) - 1) + [True]
+    capped = DUCT.model_copy(update={"max_steps": 200, "check_every": 100})
+    seen = []
+    with on_progress(seen.append):
+        solve_lattice(capped, pillar=False)
+    assert seen[-1].steps == 200 and seen[-1].finished and not seen[-2].finished

@@ -2,18 +2,19 @@
 
 A synthetic refined table (the tilted boundary y_b = 0.3 + 0.01 θ0 of
 tests/unit/test_sweep_refine.py, refined along y0 to 0.005 h_obs) goes through the
-real figure code; the drawn lines must cross every grid column within one
-tolerance plus one map pixel of the truth. A table without refinement runs gets no lines.
+real figure code; each grid column gets one boundary tick, at the midpoint of a
+bracket no wider than the tolerance, so within half a tolerance of the truth.
+A table without refinement runs gets no ticks.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from matplotlib.contour import ContourSet
+from matplotlib.collections import LineCollection
 
 from fibersweep.config import RefineSettings
-from fibersweep.plots.phase import phase_figure
+from fibersweep.plots.phase import BOUNDARY_LABEL, phase_figure
 
 TOL = 0.005
 THETA = np.arange(-10.0, 10.001, 2.0)
@@ -39,31 +40,32 @@ def _refined_table() -> pd.DataFrame:
     return pts.assign(id=[f"r{i}" for i in range(len(pts))], settings="s").reset_index(drop=True)
 
 
-def _line_vertices(fig) -> np.ndarray:
-    """Vertices of every contour line drawn in the first panel, shape (n, 2)."""
-    paths = [p for c in fig.axes[0].collections if isinstance(c, ContourSet) for p in c.get_paths()]
-    verts = [p.vertices for p in paths if len(p.vertices)]
-    return np.concatenate(verts) if verts else np.zeros((0, 2))
+def _ticks(fig) -> np.ndarray:
+    """Boundary ticks drawn in the first panel (the top layer of lines), shape (n, 2, 2)."""
+    lines = [c for c in fig.axes[0].collections if isinstance(c, LineCollection)]
+    segs = [np.asarray(s) for c in lines if c.get_zorder() == 4 for s in c.get_segments()]
+    return np.asarray(segs) if segs else np.zeros((0, 2, 2))
 
 
 def test_refined_table_gets_its_boundary_drawn_at_the_truth():
     runs = _refined_table()
     assert (runs["round"] > 0).any()
     fig = phase_figure(runs, None, "class", col=None)
-    v = _line_vertices(fig)
-    assert len(v) > 0
-    pixel = (runs["y0"].max() - runs["y0"].min()) / 399  # the class map's row spacing
+    ticks = _ticks(fig)
+    assert len(ticks) == len(THETA)  # one boundary per column, nothing between columns
     for t in THETA:
-        at = v[np.isclose(v[:, 0], t, atol=0.05)]
-        assert len(at), t
-        assert np.abs(at[:, 1] - (0.3 + 0.01 * t)).min() <= TOL + pixel, t
+        at = ticks[np.isclose(ticks[:, :, 0].mean(axis=1), t, atol=1e-9)]
+        assert len(at) == 1, t
+        assert at[0, 0, 1] == at[0, 1, 1]  # horizontal, across the column only
+        assert np.ptp(at[0, :, 0]) < np.diff(THETA).min()
+        assert abs(at[0, 0, 1] - (0.3 + 0.01 * t)) <= TOL / 2 + 1e-12, t
     labels = [t.get_text() for t in fig.legends[0].get_texts()]
-    assert "located boundary" in labels
+    assert BOUNDARY_LABEL in labels
 
 
 def test_grid_without_refinement_gets_no_boundary_lines():
     runs = _refined_table()
     runs = runs[runs["round"] == 0]
     fig = phase_figure(runs, None, "class", col=None)
-    assert len(_line_vertices(fig)) == 0
-    assert "located boundary" not in [t.get_text() for t in fig.legends[0].get_texts()]
+    assert len(_ticks(fig)) == 0
+    assert BOUNDARY_LABEL not in [t.get_text() for t in fig.legends[0].get_texts()]

@@ -47,6 +47,6 @@ def test_delta_histogram_keeps_single_counts_visible_and_same_precision():
         fig = phase.delta_hist_figure(runs)
     ax = fig.axes[0]
     assert ax.get_yscale() == "log" and ax.get_ylim()[0] < 1.0  # a count of 1 is above the axis
-    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
     decimals = {lab.split("sd = ")[1].split(".")[1].__len__() for lab in labels}
     assert len(labels) == 2 and len(decimals) == 1

@@ -169,10 +169,14 @@ def test_worker_records_failed_runs_and_raises_bugs(monkeypatch):
     import fibersweep.fiber.run as run_module
     from fibersweep.errors import RunBug
     from fibersweep.errors import SolverError as Solver
+    from fibersweep.fiber.settings import FiberSettings
     from fibersweep.sweep import worker
 
-    monkeypatch.setitem(worker._STATE, "field", None)
-    monkeypatch.setitem(worker._STATE, "fiber", None)
+    # a worker set up with a field that travels itself (no cache entry), no warm-up
+    setting = worker.SettingSpec("", "test-field", "", "", FiberSettings().model_dump_json(), "F")
+    monkeypatch.setattr(worker, "_SETUP", {})
+    monkeypatch.setattr(worker, "_FIELDS", {})
+    worker.init_worker(worker.WorkerSpec(settings=(setting,), warm=False))
     task = worker.SweepTask("id1", 0.0, 0.5, 1.0)
     for exc in (InputError("y0: overlaps the pillar"), Solver("NaN"), ZeroDivisionError()):
 
@@ -193,8 +197,21 @@ def test_worker_records_failed_runs_and_raises_bugs(monkeypatch):
 
 @pytest.mark.parametrize("name", sorted(EXECUTORS))
 def test_every_executor_declares_its_options_and_name(name):
+    """Callers read what an executor does from its declarations, never from its name."""
+    from fibersweep.sweep.executor_base import ExecutorOptions
+
     cls = EXECUTORS[name]
     assert cls.name == name and "retries" in cls.OPTIONS and "keep" in cls.OPTIONS
+    assert issubclass(cls.Options, ExecutorOptions)
+    assert set(cls.OPTIONS) == set(cls.Options.model_fields)
+    assert isinstance(cls.parent_handles_ctrl_c, bool)
+    # make_executor passes every declared option (at a non-default value) through
+    ex = make_executor(name, 1, retries=0)
+    assert ex.retries == 0 and ex.parent_handles_ctrl_c is cls.parent_handles_ctrl_c
+    with pytest.raises(InputError, match=r"retries: .*greater than or equal to 0"):
+        make_executor(name, 1, retries=-1)
+    with pytest.raises(InputError, match=rf"queue applies to no executor, not '{name}'"):
+        make_executor(name, 1, queue="gpu")
 
 
 @pytest.mark.parametrize("name", sorted(EXECUTORS))

@@ -137,3 +137,29 @@ def test_batched_run_ids_equal_the_documented_hash():
         for p in pts
     ]
     assert got == want
+
+
+def test_every_column_of_a_run_is_typed_and_documented(tmp_path):
+    """The runs table's columns are the run record's (one schema): each stored with its
+    Arrow type, unit and description; a run's row and a failed row fill the same columns."""
+    from fibersweep.fiber.result import RunResult, record_columns
+    from fibersweep.sweep.store import COLUMN_DOCS, RUN_COLUMNS, SWEEP_COLUMNS
+
+    record = {c.name for c in record_columns()}
+    row = RunResult(FiberStart(1.0, 0.3, 0.8), "ok", cls="Below", n_beads=5).row()
+    assert set(row) == record, "row() and the record's columns must agree"
+    assert set(RUN_COLUMNS) == {"id", *record, *(c.name for c in SWEEP_COLUMNS)}
+    assert {"n_beads", "min_clearance", "t_end"} <= set(COLUMN_DOCS)
+    assert all(doc for _, doc in COLUMN_DOCS.values()), "every column says what it holds"
+    task = SweepTask("x", 1.0, 0.3, 0.5)
+    with PartWriter(tmp_path) as w:
+        w.add({**row, "id": "a", "settings": "", "round": 1}, None)  # round > 0: written
+        w.add(failed_row(task, "worker process died"), None)
+    schema = pq.read_schema(list_parts(tmp_path / RUNS_DIR)[0])
+    for name, typ in RUN_COLUMNS.items():
+        f = schema.field(name)
+        assert f.type == typ, name
+        assert f.metadata[b"doc"].decode() == COLUMN_DOCS[name][1], name
+        assert f.metadata[b"unit"].decode() == COLUMN_DOCS[name][0], name
+    df = read_runs(tmp_path).set_index("id").loc[["a", "x"]]
+    assert list(df["n_beads"]) == [5, 0] and df["min_clearance"].isna().all()

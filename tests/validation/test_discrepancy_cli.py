@@ -124,3 +124,5 @@ def test_power_command_writes_limits(tmp_path, config):
     # 3 copies of the baseline and of each of 2 probes at 2 magnitudes, 8 fibers each
     assert p["simulations"] == 3 * 8 * (1 + 2 * 2)
     assert "detection limits at N = 100" in r.output
+    # each limit with its 95 % interval over the simulated starts (--boot 30 by default)
+    assert all(len(e["limit_ci"]) == 2 for e in p["effects"])

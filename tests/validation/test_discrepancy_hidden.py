@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from fibersweep.config import Config, load_config
+from fibersweep.discrepancy.library import LIBRARY
 from fibersweep.discrepancy.report import write_report
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.synth import synthesize
@@ -75,16 +76,9 @@ def test_hidden_inlet_speed_is_named_recovered_and_closes_the_gap(coarse_field, 
 # ----------------------------------------------------------------------------- slow
 
 
-REALISTIC = {
-    "friction": 0.5,
-    "inlet_speed": 0.05,
-    "start_noise": 3.0,
-    "pillar_scale": 0.1,
-    # k = 1: the first-reflection (Faxén) drag itself; contact dwell +14-36 %. At k = 0.5
-    # (the source's "about 10 % slower") 60 fibers show only a t_pass shift, which a
-    # 2.5 % slower inlet explains as well: "ambiguous" (README, study).
-    "pillar_hydro": 1.0,
-}
+#: Effects recovered at their realistic magnitude (LIBRARY[name].realistic, the one
+#: source of these magnitudes; brownian and off_midplane have tests of their own below).
+NAMED = ("friction", "inlet_speed", "start_noise", "pillar_scale", "pillar_hydro")
 # Stated recovery tolerances (relative to the truth), from the fit resolution of
 # 30 fibers x 2 copies per fold: speed scales are read off every fiber's time,
 # contact effects only off the ~40 % of fibers that touch the pillar.
@@ -112,27 +106,25 @@ def _gap_shrink(res, name: str) -> tuple[float, float]:
     return before, after
 
 
-# Known shortfall (seed 21): pillar_scale is named, 0.107 for 0.1, but one fold fits
-# 0.076 and under-corrects its half, so the cross-fitted y_c gap only shrinks to 0.60
-# of the baseline's (0.369 of 0.617); at seed 1 (study) it goes to -0.11.
-_SHRINK = pytest.mark.xfail(
-    reason="pillar_scale seed 21: held-out y_c gap shrinks to 0.60, not 0.5", strict=False
-)
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    "name", [pytest.param(n, marks=_SHRINK) if n == "pillar_scale" else n for n in REALISTIC]
-)
+@pytest.mark.parametrize("name", NAMED)
 def test_library_effect_is_named_and_recovered(coarse_field, name):
-    value = REALISTIC[name]
+    value = LIBRARY[name].realistic
     res = _run(coarse_field, {name: value}, 60, seed=21)
     assert res.verdict.kind == "named", res.verdict.text
     assert list(res.verdict.effects) == [name]
     assert res.verdict.effects[name] == pytest.approx(value, rel=TOLERANCE[name])
     # the out-of-sample gap over the observables that had one shrinks by at least half
     before, after = _gap_shrink(res, name)
-    assert after <= 0.5 * before, (before, after)
+    if name == "pillar_scale":
+        # Known shortfall (seed 21): pillar_scale is named, 0.107 for 0.1, but one fold
+        # fits 0.076 and under-corrects its half, so the cross-fitted y_c gap only shrinks
+        # to 0.60 of the baseline's (0.369 of 0.617); at seed 1 (study) it goes to -0.11.
+        # Checked both ways: it still shrinks, and this branch fails once it halves.
+        assert 0 < after < before, (before, after)
+        assert after > 0.5 * before, "the pillar_scale gap now halves: drop this exception"
+    else:
+        assert after <= 0.5 * before, (before, after)
 
 
 @pytest.mark.slow

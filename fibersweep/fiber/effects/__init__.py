@@ -17,7 +17,8 @@ Interface (see :class:`Effect`): override only the hooks you need.
   implements the kernel stages for that record type
   (:mod:`fibersweep.fiber.hooks`), so the force or mobility change lives here,
   next to its parameter, and is compiled in only when the effect is on.
-- ``transform_result(RunResult, FiberStart) -> RunResult``: the report.
+- ``transform_result(RunResult, FiberStart, Geometry) -> RunResult``: the report;
+  an effect that changes units changes every reported quantity back here.
 - ``validate()``: range checks; raise InputError naming ``effects.<name>``.
 
 Built-in dynamic effects: ``friction``, ``pillar_hydro``, ``off_midplane``,

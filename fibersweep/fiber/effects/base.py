@@ -13,6 +13,7 @@ from fibersweep.errors import InputError
 if TYPE_CHECKING:  # pragma: no cover
     from fibersweep.fiber.result import FiberStart, RunResult
     from fibersweep.flow.field import FlowField
+    from fibersweep.units import Geometry
 
 __all__ = ["DynamicsContext", "Effect"]
 
@@ -73,7 +74,7 @@ class Effect:
     name: ClassVar[str] = ""
     unit: ClassVar[str] = ""
     #: Fiber models the effect works in (its kernel stages exist for them).
-    models: ClassVar[tuple[str, ...]] = ("rigid", "bead-spring")
+    models: ClassVar[tuple[str, ...]] = ("rigid", "bead-spring", "bead-spring-ros2")
     #: True when its kernel stages draw from Numba's random generator (seeded per run).
     random: ClassVar[bool] = False
 
@@ -105,5 +106,8 @@ class Effect:
     def kernel(self, ctx: DynamicsContext) -> NamedTuple | None:
         return None
 
-    def transform_result(self, result: RunResult, start: FiberStart) -> RunResult:
+    def transform_result(
+        self, result: RunResult, start: FiberStart, geometry: Geometry
+    ) -> RunResult:
+        """The report in the units the user asked in (``geometry``: the run's channel)."""
         return result

@@ -15,6 +15,7 @@ from fibersweep.fiber.effects.base import DynamicsContext, Effect
 if TYPE_CHECKING:  # pragma: no cover
     from fibersweep.fiber.result import FiberStart, RunResult
     from fibersweep.flow.field import FlowField
+    from fibersweep.units import Geometry
 
 __all__ = ["EFFECTS", "EffectSet", "build_effects", "get_effect", "register"]
 
@@ -58,9 +59,10 @@ class EffectSet:
             start = e.transform_start(start, rng)
         return start
 
-    def result(self, result: RunResult, start: FiberStart) -> RunResult:
+    def result(self, result: RunResult, start: FiberStart, geometry: Geometry) -> RunResult:
+        """The effects' report hooks, last effect first (``geometry``: the run's channel)."""
         for e in reversed(self.effects):
-            result = e.transform_result(result, start)
+            result = e.transform_result(result, start, geometry)
         return result
 
     def kernel(self, ctx: DynamicsContext) -> tuple:

@@ -1,0 +1,258 @@
+"""Views of a results folder beyond the phase diagram (issue 29).
+
+``plot-fractions`` (class fractions against a setting), ``plot-delta`` (δ against
+a setting), ``plot-tracks`` (trajectories of a chosen subset), ``animate`` (one
+run) and ``explore`` (one self-contained HTML page).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from fibersweep.cli._app import Verbose, _errors, _setup_logging, app, choices
+from fibersweep.errors import InputError
+from fibersweep.plots import FORMATS
+
+Results = Annotated[Path, typer.Argument(help="Output directory of a sweep.", show_default=False)]
+Where = Annotated[
+    str | None,
+    typer.Option(
+        "--where",
+        help="Only runs for which this holds: a pandas query over the runs table, e.g. "
+        "'y0 > 0.3 and class == \"Trapping\"' (columns as the table names them).",
+    ),
+]
+Format = choices("Format", FORMATS)
+
+#: Most trajectory points written into an explorer page (about 7 numbers each).
+MAX_PAGE_POINTS = 1_500_000
+
+
+def _runs(results: Path, where: str | None = None):
+    """The runs table of ``results`` (only those ``where`` selects); InputError if none."""
+    from fibersweep.plots.subset import select_runs
+    from fibersweep.sweep.store import read_runs
+
+    runs = read_runs(results)
+    if runs.empty:
+        raise InputError(f"{results}: no runs (expected {results}/runs/part-*.parquet)")
+    return select_runs(runs, where)
+
+
+def _geometries(results: Path, runs) -> dict:
+    """Geometry of each settings id of ``runs``, from the folder's manifest."""
+    from fibersweep.flow.settings import FlowSettings
+    from fibersweep.sweep.manifest import read_manifest
+
+    man = read_manifest(results) or {}
+    combos = man.get("combinations") or {}
+    default = (man.get("config") or {}).get("flow")
+    out = {}
+    for sid in runs["settings"].astype(str).unique():
+        flow = (combos.get(sid) or {}).get("flow") or default
+        if flow is None:
+            raise InputError(f"{results}: the manifest does not record the flow of settings {sid}")
+        out[sid] = FlowSettings.model_validate(flow).geometry.to_geometry()
+    return out
+
+
+def _safe(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.=+-]", "_", name)
+
+
+def _save(fig, path: Path) -> Path:
+    from fibersweep.plots.style import save_figure
+
+    return save_figure(fig, path)
+
+
+@app.command("plot-fractions")
+def plot_fractions(
+    results: Results,
+    by: Annotated[
+        str, typer.Option("--by", help="Setting of the horizontal axis: length, a swept key...")
+    ] = "length",
+    level: Annotated[
+        float, typer.Option("--level", help="Confidence level of the Wilson intervals.")
+    ] = 0.95,
+    where: Where = None,
+    out: Annotated[
+        Path | None,
+        typer.Option("--output", "-o", help="Figure file.", show_default="RESULTS/figures/…"),
+    ] = None,
+    verbose: Verbose = False,
+) -> None:
+    """Fraction of runs in each class against one setting, with binomial (Wilson) intervals."""
+    _setup_logging(verbose)
+    with _errors():
+        from fibersweep.plots.fractions import class_fractions, fractions_figure
+        from fibersweep.plots.style import paper_style
+
+        if not 0.0 < level < 1.0:
+            raise InputError(f"--level {level}: expected a number between 0 and 1")
+        runs = _runs(results, where)
+        with paper_style():
+            path = _save(
+                fractions_figure(runs, by, level),
+                out or results / "figures" / f"fractions-{_safe(by)}.png",
+            )
+        table = class_fractions(runs, by, level)
+    for r in table.itertuples(index=False):
+        typer.echo(f"{by} = {r[0]}: {r[1]} {r.k}/{r.n} = {r.fraction:.2f} [{r.lo:.2f}, {r.hi:.2f}]")
+    typer.echo(f"wrote {path}")
+
+
+@app.command("plot-delta")
+def plot_delta(
+    results: Results,
+    by: Annotated[str, typer.Option("--by", help="Setting of the horizontal axis.")] = "length",
+    where: Where = None,
+    out: Annotated[
+        Path | None,
+        typer.Option("--output", "-o", help="Figure file.", show_default="RESULTS/figures/…"),
+    ] = None,
+    verbose: Verbose = False,
+) -> None:
+    """Lateral displacement δ against one setting: every run, median, quartiles, 5–95 %."""
+    _setup_logging(verbose)
+    with _errors():
+        from fibersweep.plots.fractions import delta_by_figure, delta_spread
+        from fibersweep.plots.style import paper_style
+
+        runs = _runs(results, where)
+        with paper_style():
+            path = _save(
+                delta_by_figure(runs, by), out or results / "figures" / f"delta-{_safe(by)}.png"
+            )
+        sp = delta_spread(runs, by)
+    for r in sp.itertuples(index=False):
+        typer.echo(
+            f"{by} = {r[0]}: n = {r.n}, median δ = {r.median:.4f}, "
+            f"quartiles [{r.q25:.4f}, {r.q75:.4f}], sd {r.sd:.4f} (h_obs)"
+        )
+    typer.echo(f"wrote {path}")
+
+
+@app.command("plot-tracks")
+def plot_tracks(
+    results: Results,
+    where: Where = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--output", "-o", help="Figure file.", show_default="RESULTS/figures/tracks.png"
+        ),
+    ] = None,
+    verbose: Verbose = False,
+) -> None:
+    """Centre-of-mass paths of the runs --where selects (all by default), by class."""
+    _setup_logging(verbose)
+    with _errors():
+        from fibersweep.plots.style import paper_style
+        from fibersweep.plots.tracks import overlay_figure
+        from fibersweep.sweep.store import read_trajectories
+
+        runs = _runs(results, where)
+        samples = read_trajectories(results, runs["id"].tolist())
+        with paper_style():
+            fig = overlay_figure(runs, samples, _geometries(results, runs), title=where or "")
+            path = _save(fig, out or results / "figures" / "tracks.png")
+    typer.echo(f"wrote {path}")
+
+
+@app.command()
+def animate(
+    results: Results,
+    run_id: Annotated[
+        str | None,
+        typer.Argument(help="Id of the run (or a unique start of it).", show_default=False),
+    ] = None,
+    where: Where = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--output",
+            "-o",
+            help=".gif (Pillow, always there) or .mp4 (needs ffmpeg).",
+            show_default="RESULTS/figures/run-ID.gif",
+        ),
+    ] = None,
+    frames: Annotated[int, typer.Option("--frames", min=2, help="Frames.")] = 120,
+    fps: Annotated[int, typer.Option("--fps", min=1, help="Frames per second.")] = 20,
+    verbose: Verbose = False,
+) -> None:
+    """Animate one run of a sweep: the fiber moving past the pillar.
+
+    The run is RUN_ID, or the first run --where selects. A .gif is written with
+    matplotlib's PillowWriter (Pillow comes with matplotlib); an .mp4 needs ffmpeg.
+    """
+    _setup_logging(verbose)
+    with _errors():
+        from fibersweep.plots.style import paper_style
+        from fibersweep.plots.tracks import animate_run
+        from fibersweep.sweep.store import read_trajectories
+
+        if (run_id is None) == (where is None):
+            raise InputError("name the run: a RUN_ID or --where (one of them)")
+        runs = _runs(results, where)
+        if run_id is not None:
+            runs = runs[runs["id"].astype(str).str.startswith(run_id)]
+            if len(runs) != 1:
+                what = "no such run" if runs.empty else f"{len(runs)} runs match"
+                raise InputError(f"run {run_id!r}: {what}")
+        elif len(runs) > 1:
+            typer.echo(f"{len(runs)} runs match --where; animating the first, {runs['id'].iloc[0]}")
+        hit = runs.iloc[:1]
+        run = hit.iloc[0]
+        samples = read_trajectories(results, [run["id"]])
+        geometry = _geometries(results, hit)[str(run["settings"])]
+        with paper_style():
+            path = animate_run(
+                run, samples, geometry, out or results / "figures" / f"run-{run['id']}.gif",
+                frames=frames, fps=fps,
+            )  # fmt: skip
+    typer.echo(f"wrote {path}")
+
+
+@app.command()
+def explore(
+    results: Results,
+    out: Annotated[
+        Path | None,
+        typer.Option("--output", "-o", help="HTML file.", show_default="RESULTS/explore.html"),
+    ] = None,
+    samples: Annotated[
+        int, typer.Option("--samples", min=2, help="Trajectory points kept per run.")
+    ] = 150,
+    verbose: Verbose = False,
+) -> None:
+    """Write one self-contained HTML page to explore a sweep in a browser (works offline).
+
+    Hover a run of the phase diagram for its settings and outcome, filter by any
+    column, click a run to see its trajectory.
+    """
+    _setup_logging(verbose)
+    with _errors():
+        from fibersweep.plots.explore import explorer_html
+        from fibersweep.sweep.manifest import read_manifest
+        from fibersweep.sweep.store import read_trajectories
+
+        runs = _runs(results)
+        traj = read_trajectories(results)
+        n_tracks = max(1, traj["id"].nunique()) if len(traj) else 1
+        if samples * n_tracks > MAX_PAGE_POINTS:  # keep the page a size a browser opens
+            samples = max(10, MAX_PAGE_POINTS // n_tracks)
+            typer.echo(f"{n_tracks} trajectories: keeping {samples} points of each (--samples)")
+        sep = (read_manifest(results) or {}).get("separatrix")
+        html = explorer_html(
+            runs, traj, _geometries(results, runs), title=str(results), separatrix=sep,
+            samples_per_run=samples,
+        )  # fmt: skip
+        from fibersweep.atomic import atomic_write
+
+        path = atomic_write(out or results / "explore.html", html)
+    typer.echo(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB, {len(runs)} runs)")

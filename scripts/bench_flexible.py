@@ -1,0 +1,135 @@
+"""Time the adaptive ROS2 bead-spring model against the fixed-step one over E and L; print ratios.
+
+Usage: python scripts/bench_flexible.py [--dx 4] [--cache .fibersweep-cache]
+       [--moduli 26e6 5e6 1e6 0.1e6] [--lengths 0.5 1.0] [--y0 0.45]
+       [--reference-dt 1e-6] [--reference-moduli 26e6] [--reference-lengths 1.0]
+
+For every (E, L) on the grid, one run from (theta0 = 0, y0/h) is timed with
+``bead-spring`` (fixed Δt = 5e-5 s, today's default) and with
+``bead-spring-ros2`` (adaptive), in the same process after the Numba kernels
+are compiled; the ratio of the two wall times is printed with both δ. For the
+(E, L) named by ``--reference-moduli`` x ``--reference-lengths``, a reference
+run of ``bead-spring`` at Δt = ``--reference-dt`` (1e-6 s; minutes per run)
+gives the error of both models: |Δδ| (δ = (y_f - y0)/h_obs) and the largest
+distance between the final bead positions at the reference's end time [µm]
+(``simulate_for`` to the same time). ``--reference-dt 0`` skips the references.
+``--equal-accuracy`` instead times both models at matched δ errors (L = l_obs,
+E = 26 MPa): fixed Δt = 2e-4 and 1e-4 s against ROS2 at tighter tolerances, the
+errors taken against the Δt = 5e-5 s δ (within 1e-6 of Δt = 1e-6 s).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+
+from fibersweep.fiber.result import FiberStart
+from fibersweep.fiber.run import simulate, simulate_for
+from fibersweep.fiber.settings import FiberSettings, StepSettings
+from fibersweep.flow.cache import get_flow_field
+from fibersweep.flow.settings import FlowSettings
+
+
+def _run(field, model, E, start, dt=None):
+    st = FiberSettings(model=model, young_modulus=E, step=StepSettings(dt=dt))
+    t0 = time.perf_counter()
+    r = simulate(field, st, start)
+    return time.perf_counter() - t0, r
+
+
+def _beads_at(field, model, E, start, t_end, dt=None):
+    """Bead positions (n, 2) [µm] at time t_end [s]."""
+    st = FiberSettings(model=model, young_modulus=E, step=StepSettings(dt=dt))
+    traj, _ = simulate_for(field, st, start, t_end)
+    return traj.beads[-1]
+
+
+ACCURACY_RUNS = (
+    ("fixed dt = 2e-4 s", "bead-spring", {"dt": 2e-4}),
+    ("ros2 tol 1e-3, disp 1.0/0.05", "bead-spring-ros2",
+     {"tolerance": 1e-3, "ros2_max_displacement": 1.0, "ros2_contact_displacement": 0.05}),
+    ("fixed dt = 1e-4 s", "bead-spring", {"dt": 1e-4}),
+    ("ros2 tol 3e-4, disp 0.5/0.02", "bead-spring-ros2",
+     {"tolerance": 3e-4, "ros2_max_displacement": 0.5, "ros2_contact_displacement": 0.02}),
+)  # fmt: skip
+
+
+def equal_accuracy(field, y0: float) -> None:
+    """Print wall time, steps and |Δδ| of ACCURACY_RUNS (L = l_obs, E = 26 MPa)."""
+    start = FiberStart(0.0, y0, 1.0)
+    _, ref = _run(field, "bead-spring", 26e6, start)
+    print(f"reference: fixed dt = 5e-5 s, delta {ref.delta:+.7f}")
+    for label, model, step in ACCURACY_RUNS:
+        st = FiberSettings(model=model, step=StepSettings(**step))
+        t0 = time.perf_counter()
+        r = simulate(field, st, start)
+        dt = time.perf_counter() - t0
+        print(f"  {label:30s} {dt:7.3f} s {r.n_steps:7d} steps  |d delta| "
+              f"{abs(r.delta - ref.delta):.1e}", flush=True)  # fmt: skip
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dx", type=float, default=4.0)
+    ap.add_argument("--cache", default=".fibersweep-cache")
+    ap.add_argument("--moduli", type=float, nargs="+", default=[26e6, 5e6, 1e6, 0.1e6])
+    ap.add_argument("--lengths", type=float, nargs="+", default=[0.5, 1.0])
+    ap.add_argument("--y0", type=float, default=0.45, help="start y0/h_obs (theta0 = 0)")
+    ap.add_argument("--reference-dt", type=float, default=1e-6)
+    ap.add_argument("--reference-moduli", type=float, nargs="*", default=[26e6])
+    ap.add_argument("--reference-lengths", type=float, nargs="*", default=[1.0])
+    ap.add_argument("--equal-accuracy", action="store_true", help="only the matched-error table")
+    args = ap.parse_args()
+    field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
+    warm = FiberStart(0.0, 0.8, 0.5)
+    for m in ("bead-spring", "bead-spring-ros2"):
+        _run(field, m, 26e6, warm)
+    if args.equal_accuracy:
+        equal_accuracy(field, args.y0)
+        return
+    print(
+        f"flow field dx = {args.dx} µm; start theta0 = 0, y0/h = {args.y0}; compiled before timing"
+    )
+    print(f"{'E [MPa]':>8} {'L/l':>5} {'fixed [s]':>10} {'ros2 [s]':>9} {'ratio':>6} "
+          f"{'steps f/r':>13} {'delta fixed':>12} {'delta ros2':>11} class")  # fmt: skip
+    ratios = []
+    for E in args.moduli:
+        for L in args.lengths:
+            start = FiberStart(0.0, args.y0, L)
+            tb, rb = _run(field, "bead-spring", E, start)
+            tr, rr = _run(field, "bead-spring-ros2", E, start)
+            ratios.append(tb / tr)
+            print(f"{E / 1e6:8.2f} {L:5.2f} {tb:10.3f} {tr:9.3f} {tb / tr:6.1f} "
+                  f"{rb.n_steps:6d}/{rr.n_steps:<6d} {rb.delta:+12.5f} {rr.delta:+11.5f} "
+                  f"{rb.cls}/{rr.cls}", flush=True)  # fmt: skip
+    print(f"speed-up fixed/ros2: min {min(ratios):.1f}, median {float(np.median(ratios)):.1f}")
+    if args.reference_dt <= 0:
+        return
+    print(f"\nerrors against bead-spring at dt = {args.reference_dt:g} s")
+    print(f"{'E [MPa]':>8} {'L/l':>5} {'ref [s]':>8} {'|d delta| fixed':>16} {'ros2':>9} "
+          f"{'bead err fixed [um]':>20} {'ros2':>8}")  # fmt: skip
+    for E in args.reference_moduli:
+        for L in args.reference_lengths:
+            start = FiberStart(0.0, args.y0, L)
+            t_ref, ref = _run(field, "bead-spring", E, start, dt=args.reference_dt)
+            _, rb = _run(field, "bead-spring", E, start)
+            _, rr = _run(field, "bead-spring-ros2", E, start)
+            # Beads at a time within the pass (half the reference's end time).
+            t_cmp = 0.5 * ref.t_end
+            b_ref = _beads_at(field, "bead-spring", E, start, t_cmp, dt=args.reference_dt)
+            b_fix = _beads_at(field, "bead-spring", E, start, t_cmp)
+            b_ros = _beads_at(field, "bead-spring-ros2", E, start, t_cmp)
+            e_fix = float(np.max(np.hypot(*(b_fix - b_ref).T)))
+            e_ros = float(np.max(np.hypot(*(b_ros - b_ref).T)))
+            d_fix = abs(rb.delta - ref.delta) if math.isfinite(ref.delta) else math.nan
+            d_ros = abs(rr.delta - ref.delta) if math.isfinite(ref.delta) else math.nan
+            print(f"{E / 1e6:8.2f} {L:5.2f} {t_ref:8.0f} {d_fix:16.2e} {d_ros:9.2e} "
+                  f"{e_fix:20.3f} {e_ros:8.3f}   (ref delta {ref.delta:+.5f} {ref.cls})",
+                  flush=True)  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,42 @@
+"""The report's power table and advice with each limit's interval (no simulations)."""
+
+from __future__ import annotations
+
+from fibersweep.discrepancy.report import _advice
+from fibersweep.discrepancy.report_text import _power
+
+
+def _summary(kind: str) -> dict:
+    effects = [
+        {"effect": "friction", "direction": "+", "limit": 0.11, "limit_ci": [0.08, 0.2],
+         "realistic": 0.4, "fibers_for_realistic": 12},
+        {"effect": "pillar_hydro", "direction": "+", "limit": 0.3, "limit_ci": [0.1, None],
+         "realistic": 0.5, "fibers_for_realistic": 80},
+        {"effect": "start_noise", "direction": "+", "limit": 1.6, "limit_ci": None,
+         "realistic": 2.0, "fibers_for_realistic": 60, "dispersion_limit": 1.3},
+    ]  # fmt: skip
+    power = {"n": 100, "n_simulated": 40, "alpha": 0.05, "power": 0.8, "effects": effects,
+             "lookalikes": [], "leading": None, "simulations": 1}  # fmt: skip
+    nxt = {"reason": "the gap is unexplained; friction = 0.2 helped most", "fibers_needed": 23,
+           "fibers_needed_at_measured_starts": 140,
+           "best": [{"theta0": 4.0, "y0": 0.3, "length": 1.1, "observable": "class"}]}  # fmt: skip
+    return {"verdict": {"kind": kind}, "heldout": [], "sets": [], "power": power, "next": nxt}
+
+
+def test_power_table_shows_each_limit_with_its_interval():
+    text = "\n".join(_power(_summary("unexplained")))
+    assert "| friction | + | 0.11 | [0.08, 0.2] |" in text
+    # an upper end beyond the effect's range in more than 2.5 % of the resamples
+    assert "| pillar_hydro | + | 0.3 | [0.1, out of range] |" in text
+    assert "| start_noise | + | 1.6 | – |" in text
+    assert "dispersion test alone" in text and "start_noise from 1.3" in text
+
+
+def test_advice_of_an_unexplained_gap_names_the_next_measurement_and_the_unseen_sizes():
+    adv = " ".join(_advice(_summary("unexplained")))
+    assert "about 23 more fibers" in adv and "against 140" in adv
+    assert "friction (+) up to 0.2" in adv
+    assert "pillar_hydro" not in adv.split("May be present unseen")[1]  # no upper end
+    # no gap: only the unseen sizes, no next measurement
+    adv = " ".join(_advice(_summary("no significant gap")))
+    assert "May be present unseen" in adv and "more fibers at" not in adv
