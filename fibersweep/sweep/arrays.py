@@ -172,6 +172,12 @@ class ArrayConfig(_Strict):
     def _combinations(self) -> ArrayConfig:
         if self.fiber.model != "rigid":
             raise FieldError("fiber.model", "array runs use the rigid model for now")
+        from fibersweep.fiber.rows import check_array_effects
+
+        try:
+            check_array_effects(self.fiber)
+        except InputError as exc:
+            raise FieldError("fiber.effects", str(exc)) from None
         for label, s in settings_grid(self):
             try:
                 arr = ArraySettings.model_validate(s).to_array()
@@ -321,42 +327,38 @@ def _init_worker(cfg_json: str, fields: dict) -> None:
     _WORKER["fields"] = fields
 
 
-def prepare_run(cfg: ArrayConfig, field, length: float):
-    """Kernel inputs of one length in one cell field: (cell, pillar, body, params)."""
-    from fibersweep.fiber.contact import make_pillar
-    from fibersweep.fiber.mobility import body_mobility
-    from fibersweep.fiber.rows import CellArrays, RowParams
+def prepare_run(cfg: ArrayConfig, field, length: float, x_end: float | None = None):
+    """The kernel of one length in one cell field (:func:`fibersweep.fiber.rows.array_kernel`).
 
-    array = field.array
-    a = cfg.fiber.bead_radius
-    mu = cfg.flow.viscosity
-    f_ref = cfg.fiber.contact.f_ref or 6.0 * math.pi * mu * a * cfg.flow.u_center
-    pillar = make_pillar(array.cell_geometry, cfg.fiber.contact, a, f_ref)
-    pad = 3
-    ux, uy = field.extended(pad)
-    cell = CellArrays(ux, uy, field.dx, pad, array.period_x, array.period_y,
-                      array.lateral_shift, np.array(array.shape.bounds))  # fmt: skip
-    body = body_mobility(_n_beads(length, a), a, mu)
-    u = cfg.flow.u_center
-    st = cfg.fiber.step
-    x_end = _start_x(array) + cfg.sweep.rows * array.period_x
-    params = RowParams(
-        st.max_displacement, st.contact_displacement, 1.0, st.t_max, x_end,
-        cfg.fiber.classify.trap_speed * u, cfg.fiber.classify.trap_time,
-    )  # fmt: skip
-    return cell, pillar, body, params
+    ``x_end`` [µm]: where the run passes (default: ``sweep.rows`` rows after the start).
+    """
+    from fibersweep.fiber.rows import array_kernel
+
+    if x_end is None:
+        x_end = _start_x(field.array) + cfg.sweep.rows * field.array.period_x
+    return array_kernel(
+        field,
+        cfg.fiber,
+        _n_beads(length, cfg.fiber.bead_radius),
+        mu=cfg.flow.viscosity,
+        u_center=cfg.flow.u_center,
+        x_end=x_end,
+    )
 
 
 def run_one(cfg: ArrayConfig, field, length: float, y0: float, theta0: float) -> dict:
     """One run: its summary and thinned trajectory (a row of the store, without indices)."""
     from fibersweep.analysis.modes import ModeSettings, summarise_rows
-    from fibersweep.fiber.rows import COLS, DONE, TIMEOUT, TRAPPED, run_rows
+    from fibersweep.fiber import record as R
+    from fibersweep.fiber.rows import run_array_fiber
 
-    cell, pillar, body, params = prepare_run(cfg, field, length)
+    k = prepare_run(cfg, field, length)
     x0 = _start_x(field.array)
-    rec, code = run_rows(cell, pillar.arrays(), body, params, x0, y0, math.radians(theta0))
-    status = {DONE: "done", TRAPPED: "trapped", TIMEOUT: "timeout"}.get(code, "failed")
-    t, contact, npil = rec[:, 0], rec[:, 4], rec[:, 5]
+    rec, code = run_array_fiber(k, cfg.fiber.model, x0, y0, math.radians(theta0))
+    status = {R.PASSED: "done", R.TRAPPED: "trapped", R.TIME_LIMIT: "timeout"}.get(code, "failed")
+    t = rec[:, R.T]
+    npil = rec[:, R.CONTACT]  # pillars in contact
+    contact = (npil > 0.5).astype(np.float64)
     rising = int(np.sum(np.diff(np.concatenate([[0.0], contact])) > 0.5))
     on = float(np.sum(np.diff(t) * contact[:-1])) if t.size > 1 else 0.0
     keep = cfg.sweep.samples_per_row * cfg.sweep.rows
@@ -364,13 +366,15 @@ def run_one(cfg: ArrayConfig, field, length: float, y0: float, theta0: float) ->
         np.linspace(0, rec.shape[0] - 1, min(keep, rec.shape[0])).astype(int),
         np.flatnonzero(np.diff(contact) != 0), np.flatnonzero(np.diff(contact) != 0) + 1,
     ]))  # fmt: skip
-    traj = {c: rec[idx, k] for k, c in enumerate(COLS)}
+    cols = {"t": R.T, "xc": R.XC, "yc": R.YC, "th": R.TH, "speed": R.COM_SPEED}
+    traj = {c: rec[idx, j] for c, j in cols.items()}
+    traj["contact"] = contact[idx]
     arr = field.array
     summ = summarise_rows(traj, arr.period_x, arr.lateral_shift,
-                          ModeSettings(trap_speed=params.trap_speed))  # fmt: skip
+                          ModeSettings(trap_speed=k.params.trap_speed))  # fmt: skip
     return {
-        "length": length, "n_beads": body.n, "y0": y0, "theta0": theta0, "status": status,
-        "rows": summ.rows, "shift_per_row": summ.shift_per_row,
+        "length": length, "n_beads": int(k.body.s.shape[0]), "y0": y0, "theta0": theta0,
+        "status": status, "rows": summ.rows, "shift_per_row": summ.shift_per_row,
         "migration_angle": summ.angle_deg, "fraction": summ.fraction, "mode": summ.mode,
         "wraps": summ.wraps, "contacts": rising, "bridging": int(np.sum(npil >= 2)),
         "time_on_pillars": on, "t_end": float(t[-1]),

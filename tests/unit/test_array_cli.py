@@ -17,6 +17,8 @@ from fibersweep.cli import app
         (["array.pillar_shape=triangel"], "array.pillar_shape"),
         (["sweep.axes={shift: [0.1, 0.13]}"], "sweep.axes.shift"),
         (["sweep.axes={gap: [1]}"], "sweep.axes.gap"),
+        (["fiber.effects={inlet_speed: 0.1}"], "fiber.effects"),  # a channel-only effect
+        (["fiber.effects={frictoin: 0.1}"], "fiber.effects"),  # unknown effect
     ],
 )
 def test_bad_array_input_exits_2_naming_the_field(override, named):

@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 
 from fibersweep.analysis.modes import row_crossings
+from fibersweep.fiber import record as R
+from fibersweep.fiber.frame import frame_velocity
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.rows import TRAPPED, cell_velocity, run_rows
+from fibersweep.fiber.rows import run_array_fiber
 from fibersweep.fiber.run import simulate
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cell import field_of, first_streamline_width, solve_cell
@@ -32,17 +34,17 @@ def test_velocity_is_the_same_at_every_periodic_image(small):
     """Bead positions moved by any lattice vector (r λx, r ε λy + c λy) see the same
     velocity (fold + padded cell field; tolerance: rounding, 1e-9 µm/s)."""
     cfg, field = small
-    cell, _, _, _ = prepare_run(cfg, field, 20.0)
+    k = prepare_run(cfg, field, 20.0)
     rng = np.random.default_rng(1)
     x = rng.uniform(0, 80, 50)
     y = rng.uniform(0, 80, 50)
     ref = np.zeros((50, 2))
-    tmp = np.zeros(50), np.zeros(50)
-    cell_velocity(cell, x, y, *tmp, ref)
+    frame = k.frame._replace(xs=np.zeros(50), ys=np.zeros(50))  # scratch for 50 points
+    frame_velocity(frame, k.flow, x, y, ref)
     assert np.abs(ref).max() > 100.0
     for r, c in [(1, 0), (-3, 2), (7, -1), (25, 4)]:
         out = np.zeros((50, 2))
-        cell_velocity(cell, x + r * 80.0, y + r * 8.0 + c * 80.0, *tmp, out)
+        frame_velocity(frame, k.flow, x + r * 80.0, y + r * 8.0 + c * 80.0, out)
         assert np.abs(out - ref).max() < 1e-9
 
 
@@ -50,11 +52,30 @@ def test_long_fiber_across_a_gap_bridges_two_pillars_and_is_trapped(small):
     """A rigid fiber longer than λy held across the flow hits two pillars at once."""
     cfg, field = small
     arr = field.array
-    cell, pillar, body, params = prepare_run(cfg, field, 120.0)
+    k = prepare_run(cfg, field, 120.0)
     x0 = arr.shape.bounds[0] - 10.0  # just upstream of the row-0 pillar
-    rec, code = run_rows(cell, pillar.arrays(), body, params, x0, 40.0, math.pi / 2)
-    assert code == TRAPPED
-    assert rec[-1, 5] >= 2  # in contact with two pillars when it stops
+    rec, code = run_array_fiber(k, "rigid", x0, 40.0, math.pi / 2)
+    assert code == R.TRAPPED
+    assert rec[-1, R.CONTACT] >= 2  # in contact with two pillars when it stops
+
+
+def test_friction_acts_in_the_array(small):
+    """The array runs the channel's integrator with its effects: Coulomb friction on the
+    pillars slows a 40 µm fiber sliding past them, so crossing 3 rows takes longer as the
+    coefficient grows (0, 0.3, 1), for two entries that touch pillars and pass. (The
+    integrator of the first array version had no effects: equal times.)"""
+    cfg, field = small
+    x0 = field.array.shape.bounds[0] - 0.5 * field.array.row_gap
+    for y0 in (45.0, 60.0):
+        ends = []
+        for mu in (0.0, 0.3, 1.0):
+            fiber = cfg.fiber.model_copy(update={"effects": {"friction": mu}})
+            k = prepare_run(cfg.model_copy(update={"fiber": fiber}), field, 40.0,
+                            x_end=x0 + 3 * field.array.period_x)  # fmt: skip
+            rec, code = run_array_fiber(k, "rigid", x0, y0, 0.0)
+            assert code == R.PASSED and rec[:, R.CONTACT].max() >= 1
+            ends.append(rec[-1, R.T])
+        assert ends[0] < ends[1] < ends[2], (y0, ends)
 
 
 @pytest.mark.slow
@@ -84,12 +105,10 @@ def test_one_pillar_of_a_sparse_array_as_the_channel_integrator():
     for y0, th0 in [(0.3, -5.0), (0.45, 5.0), (0.38, 0.0)]:  # all touch the pillar
         res = simulate(ff, settings, FiberStart(th0, y0, length / geo.pillar_base_length))
         tr = res.trajectory
-        cell, pillar, body, params = prepare_run(cfg, cf, length)
-        params = params._replace(x_end=float(tr.x[-1]))
-        rec, _ = run_rows(cell, pillar.arrays(), body, params, 40.0,
-                          geo.y_from_base(y0), math.radians(th0))  # fmt: skip
-        y_end = np.interp(tr.x[-1], rec[:, 1], rec[:, 2])
-        th_end = np.interp(tr.x[-1], rec[:, 1], rec[:, 3])
+        k = prepare_run(cfg, cf, length, x_end=float(tr.x[-1]))
+        rec, _ = run_array_fiber(k, "rigid", 40.0, geo.y_from_base(y0), math.radians(th0))
+        y_end = np.interp(tr.x[-1], rec[:, R.XC], rec[:, R.YC])
+        th_end = np.interp(tr.x[-1], rec[:, R.XC], rec[:, R.TH])
         assert res.trajectory.contact.any()  # each start touches the pillar
         assert y_end == pytest.approx(tr.y[-1], abs=1e-6)
         assert math.degrees(th_end) == pytest.approx(tr.theta[-1], abs=1e-6)
@@ -119,11 +138,10 @@ def test_one_bead_fiber_is_a_steric_sphere():
     for scale, zigzag in ((0.8, True), (1.2, False)):
         a = 0.5 * scale * d_c
         c = ArrayConfig.model_validate({**base, "fiber": {"bead_radius": a}})
-        cell, pillar, body, params = prepare_run(c, field, 2 * a)
         x0 = 0.5 * (arr.shape.bounds[0] + arr.shape.bounds[2] - arr.period_x)
-        params = params._replace(x_end=x0 + 20 * arr.period_x)
+        k = prepare_run(c, field, 2 * a, x_end=x0 + 20 * arr.period_x)
         for y0 in (5.0, 25.0, 55.0, 75.0):
-            rec, _ = run_rows(cell, pillar.arrays(), body, params, x0, y0, 0.0)
-            yc = row_crossings(rec[:, 1], rec[:, 2], arr.period_x)
+            rec, _ = run_array_fiber(k, "rigid", x0, y0, 0.0)
+            yc = row_crossings(rec[:, R.XC], rec[:, R.YC], arr.period_x)
             f = (yc[20] - yc[10]) / (10 * arr.lateral_shift)
             assert (abs(f) < 0.25) if zigzag else (f > 0.75), (scale, y0, f)
