@@ -47,10 +47,10 @@ def _set(k, beads, i):
 
 @nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_velocity(k, beads):
-    flow, pillar, body, p, w, bw, effects = k
+    flow, pillar, body, p, w, bw, effects, frame = k
     for i in range(beads.shape[0]):
         _set(k, beads, i)
-        bead_velocity(flow, pillar, body, p, w, bw, effects)
+        bead_velocity(frame, flow, pillar, body, p, w, bw, effects)
 
 
 @nb.njit  # not cached: a cache here would not see edits of the package kernels
@@ -69,24 +69,24 @@ def _t_set(k, beads):
 
 @nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_jacobian(k, beads, fd):
-    flow, pillar, body, p, w, bw, effects = k
+    flow, pillar, body, p, w, bw, effects, frame = k
     for i in range(beads.shape[0]):
         _set(k, beads, i)
         # the contact stiffness w.st of this configuration (which beads are in contact)
-        bead_velocity(flow, pillar, body, p, w, bw, effects)
+        bead_velocity(frame, flow, pillar, body, p, w, bw, effects)
         if fd:
-            force_jacobian_fd(pillar, p, w, bw)
+            force_jacobian_fd(frame, pillar, p, w, bw)
         else:
-            force_jacobian(pillar, p, w, bw)
+            force_jacobian(frame, pillar, p, w, bw)
 
 
 @nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_wmatrix(k, beads):
-    flow, pillar, body, p, w, bw, effects = k
+    flow, pillar, body, p, w, bw, effects, frame = k
     for i in range(beads.shape[0]):
         _set(k, beads, i)
-        bead_velocity(flow, pillar, body, p, w, bw, effects)
-        force_jacobian(pillar, p, w, bw)
+        bead_velocity(frame, flow, pillar, body, p, w, bw, effects)
+        force_jacobian(frame, pillar, p, w, bw)
         I.w_matrix(bw)
 
 
@@ -180,8 +180,8 @@ def main() -> None:
     t_j = _per_config(_t_jacobian, k, beads, False) - t_f - t_set
     t_jfd = _per_config(_t_jacobian, k, beads, True) - t_f - t_set
     t_w = _per_config(_t_wmatrix, k, beads) - t_j - t_f - t_set
-    bead_velocity(*k)
-    force_jacobian(k.pillar, k.params, k.work, k.bead)
+    bead_velocity(k.frame, k.flow, k.pillar, k.body, k.params, k.work, k.bead, k.effects)
+    force_jacobian(k.frame, k.pillar, k.params, k.work, k.bead)
     I.w_matrix(k.bead)
     t_lu = _time(_t_factor, k, piv)
     t_sol = _time(_t_solve, k, piv, b)

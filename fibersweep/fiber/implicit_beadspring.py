@@ -49,13 +49,13 @@ CHUNK = 20_000
 
 
 @nb.njit(cache=True)
-def _velocity(flow, pillar, body, p, w, bw, effects, q, fext, has_ext, out):
+def _velocity(frame, flow, pillar, body, p, w, bw, effects, q, fext, has_ext, out):
     """f(q) (+ M fext if ``has_ext``) into ``out`` (2n); returns (any_contact, cx, cy, min_d)."""
     n = q.shape[0] // 2
     for i in range(n):
         w.x[i] = q[2 * i]
         w.y[i] = q[2 * i + 1]
-    any_c, cx, cy = bead_velocity(flow, pillar, body, p, w, bw, effects)
+    any_c, cx, cy = bead_velocity(frame, flow, pillar, body, p, w, bw, effects)
     for r in range(2 * n):
         out[r] = bw.f[r]
     if has_ext:
@@ -124,7 +124,7 @@ def integrate_ros2(q, state, k, rec, brec, f0, k1, k2, qn, fext):
     -------
     (rows, code)
     """
-    flow, pillar, body, p, w, bw, effects = k
+    flow, pillar, body, p, w, bw, effects, frame = k
     n2 = q.shape[0]
     n = n2 // 2
     t = state[0]
@@ -143,7 +143,7 @@ def integrate_ros2(q, state, k, rec, brec, f0, k1, k2, qn, fext):
     code = np.int64(R.CHUNK_FULL)
     while rows < cap:
         any_c, cx, cy, min_d = _velocity(
-            flow, pillar, body, p, w, bw, effects, q, fext, has_ext, f0
+            frame, flow, pillar, body, p, w, bw, effects, q, fext, has_ext, f0
         )
         hx = q[2 * n - 2]
         hy = q[2 * n - 1]
@@ -195,7 +195,7 @@ def integrate_ros2(q, state, k, rec, brec, f0, k1, k2, qn, fext):
         h_cap = min(disp / (vmax + 1e-12), p.dt_max)
         # W = M(q) J(q), from M(q) left in bw.mob by the top of the loop and the contact
         # stiffness of q in w.st; one LU of I − γhW serves both stages of a try.
-        force_jacobian(pillar, p, w, bw)
+        force_jacobian(frame, pillar, p, w, bw)
         w_matrix(bw)
         while True:
             h = min(h, h_cap)
@@ -208,7 +208,7 @@ def integrate_ros2(q, state, k, rec, brec, f0, k1, k2, qn, fext):
                 lu_solve(bw.lhs, piv, k1)
                 for r in range(n2):
                     qn[r] = q[r] + h * k1[r]
-                _velocity(flow, pillar, body, p, w, bw, effects, qn, fext, has_ext, k2)
+                _velocity(frame, flow, pillar, body, p, w, bw, effects, qn, fext, has_ext, k2)
                 for r in range(n2):
                     k2[r] -= 2.0 * k1[r]
                 lu_solve(bw.lhs, piv, k2)
