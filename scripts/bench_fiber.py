@@ -8,15 +8,27 @@ Numba kernels (compilation is excluded; it is paid once per process), and for
 the rigid model both the median and the minimum over ``--repeat`` runs (the
 minimum is the steadier figure on a loaded machine). The rigid model is also
 timed with the dynamic effects on (``--effects``), each set compiled before timing.
-To compare two versions of the code, run this same script against each
-(``PYTHONPATH=...``) one after the other.
+
+With ``--against TREE`` (a checkout of another version, e.g. the commit before a
+change), it times the rigid runs (the starts below, and with each effect set)
+in this tree and in TREE alternately, ``--rounds`` times each in fresh
+processes (Numba compiled beforehand in each), so the machine's load hits both
+alike, and prints the ratio this/other of the median over rounds of each
+round's minimum run time.
+
+Usage: python scripts/bench_fiber.py --against /tmp/before [--rounds 5] [--repeat 20]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import statistics
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
@@ -48,13 +60,65 @@ def _time(field, settings, start, repeat):
     return statistics.median(out), min(out), res
 
 
+def child(args: argparse.Namespace) -> None:
+    """Rigid timings of the tree on PYTHONPATH, as JSON {case: minimum seconds}."""
+    field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
+    warm = FiberStart(0.0, 0.8, 0.5)
+    out = {}
+    for name, eff in {"no effect": {}, **EFFECT_SETS}.items():
+        st = FiberSettings().model_copy(update={"effects": eff})
+        simulate(field, st, warm)  # compile this effect set
+        for label, start in STARTS.items():
+            _, t_min, res = _time(field, st, start, args.repeat)
+            out[f"{name}, {label.split(' (')[0]}"] = (t_min, res.n_steps)
+    print(json.dumps(out))
+
+
+def against(args: argparse.Namespace) -> None:
+    """This tree and ``args.against``, alternately in fresh processes: ratios this/other."""
+    here = Path(__file__).resolve().parent.parent
+    trees = {"this": here, "other": args.against.resolve()}
+    cache = str(Path(args.cache).resolve())
+    argv = [sys.executable, str(Path(__file__).resolve()), "--child", "--dx", str(args.dx),
+            "--cache", cache, "--repeat", str(args.repeat)]  # fmt: skip
+    times: dict[tuple[str, str], list[float]] = {}
+    steps: dict[tuple[str, str], int] = {}
+    for rnd in range(args.rounds):
+        for name, tree in trees.items():
+            env = {**os.environ, "PYTHONPATH": str(tree)}
+            run = subprocess.run(argv, cwd=tree, env=env, capture_output=True, text=True)
+            if run.returncode != 0:
+                raise SystemExit(f"{tree}: {run.stderr}")
+            for case, (t, n) in json.loads(run.stdout.strip().splitlines()[-1]).items():
+                times.setdefault((case, name), []).append(t)
+                steps[(case, name)] = n
+            print(f"round {rnd} {name} done", flush=True)
+    print(f"this: {trees['this']}\nother: {trees['other']}\n{args.rounds} rounds, "
+          f"each the minimum of {args.repeat} runs; ratio of the medians over rounds")  # fmt: skip
+    for case in dict.fromkeys(c for c, _ in times):
+        a = statistics.median(times[(case, "this")])
+        b = statistics.median(times[(case, "other")])
+        same = "same" if steps[(case, "this")] == steps[(case, "other")] else "DIFFERENT"
+        print(f"  {case:<48} this {a * 1e3:8.2f} ms  other {b * 1e3:8.2f} ms  "
+              f"ratio {a / b:.3f}  ({same} steps)")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dx", type=float, default=4.0)
     ap.add_argument("--cache", default=".fibersweep-cache")
     ap.add_argument("--repeat", type=int, default=20, help="rigid repetitions (median, min)")
     ap.add_argument("--no-effects", action="store_true", help="skip the rigid runs with effects on")
+    ap.add_argument("--against", type=Path, help="another checkout: before/after ratios")
+    ap.add_argument("--rounds", type=int, default=5, help="rounds per tree (--against)")
+    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.child:
+        child(args)
+        return
+    if args.against is not None:
+        against(args)
+        return
     field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
     rigid = FiberSettings()
     beads = FiberSettings(model="bead-spring")

@@ -13,9 +13,11 @@ run of ``bead-spring`` at Δt = ``--reference-dt`` (1e-6 s; minutes per run)
 gives the error of both models: |Δδ| (δ = (y_f - y0)/h_obs) and the largest
 distance between the final bead positions at the reference's end time [µm]
 (``simulate_for`` to the same time). ``--reference-dt 0`` skips the references.
-``--equal-accuracy`` instead times both models at matched δ errors (L = l_obs,
-E = 26 MPa): fixed Δt = 2e-4 and 1e-4 s against ROS2 at tighter tolerances, the
-errors taken against the Δt = 5e-5 s δ (within 1e-6 of Δt = 1e-6 s).
+``--equal-accuracy`` instead times both models at matched δ errors for every
+(E, L) of the grid (e.g. ``--moduli 26e6 --lengths 1.0``): fixed Δt = 2e-4 and
+1e-4 s against ROS2 at tighter tolerances, the errors taken against the
+Δt = 5e-5 s δ (at 26 MPa, l_obs within 1e-6 of Δt = 1e-6 s), and prints the
+ratio of each pair's wall times, measured in the same run.
 """
 
 from __future__ import annotations
@@ -47,28 +49,42 @@ def _beads_at(field, model, E, start, t_end, dt=None):
     return traj.beads[-1]
 
 
-ACCURACY_RUNS = (
-    ("fixed dt = 2e-4 s", "bead-spring", {"dt": 2e-4}),
-    ("ros2 tol 1e-3, disp 1.0/0.05", "bead-spring-ros2",
-     {"tolerance": 1e-3, "ros2_max_displacement": 1.0, "ros2_contact_displacement": 0.05}),
-    ("fixed dt = 1e-4 s", "bead-spring", {"dt": 1e-4}),
-    ("ros2 tol 3e-4, disp 0.5/0.02", "bead-spring-ros2",
-     {"tolerance": 3e-4, "ros2_max_displacement": 0.5, "ros2_contact_displacement": 0.02}),
+ACCURACY_PAIRS = (
+    (("fixed dt = 2e-4 s", "bead-spring", {"dt": 2e-4}),
+     ("ros2 tol 3e-4", "bead-spring-ros2", {"tolerance": 3e-4})),
+    (("fixed dt = 1e-4 s", "bead-spring", {"dt": 1e-4}),
+     ("ros2 tol 1e-4", "bead-spring-ros2", {"tolerance": 1e-4})),
+    (("fixed dt = 2e-4 s", "bead-spring", {"dt": 2e-4}),
+     ("ros2 tol 1e-3, disp 1.0/0.05", "bead-spring-ros2",
+      {"tolerance": 1e-3, "ros2_max_displacement": 1.0, "ros2_contact_displacement": 0.05})),
 )  # fmt: skip
 
 
-def equal_accuracy(field, y0: float) -> None:
-    """Print wall time, steps and |Δδ| of ACCURACY_RUNS (L = l_obs, E = 26 MPa)."""
-    start = FiberStart(0.0, y0, 1.0)
-    _, ref = _run(field, "bead-spring", 26e6, start)
-    print(f"reference: fixed dt = 5e-5 s, delta {ref.delta:+.7f}")
-    for label, model, step in ACCURACY_RUNS:
-        st = FiberSettings(model=model, step=StepSettings(**step))
-        t0 = time.perf_counter()
-        r = simulate(field, st, start)
-        dt = time.perf_counter() - t0
-        print(f"  {label:30s} {dt:7.3f} s {r.n_steps:7d} steps  |d delta| "
-              f"{abs(r.delta - ref.delta):.1e}", flush=True)  # fmt: skip
+def equal_accuracy(field, y0: float, moduli, lengths) -> None:
+    """Print wall time, steps, |Δδ| and the wall-time ratio of each pair of ACCURACY_PAIRS.
+
+    For every (E, L) of the grid; errors against the Δt = 5e-5 s δ of that (E, L).
+    A pair is at equal accuracy when the ROS2 |Δδ| is at most the fixed-step one
+    (the line says so).
+    """
+    for E in moduli:
+        for L in lengths:
+            start = FiberStart(0.0, y0, L)
+            _, ref = _run(field, "bead-spring", E, start)
+            print(f"E = {E / 1e6:g} MPa, L/l = {L:g}; reference: fixed dt = 5e-5 s, "
+                  f"delta {ref.delta:+.7f}")  # fmt: skip
+            for pair in ACCURACY_PAIRS:
+                walls, errs = [], []
+                for label, model, step in pair:
+                    st = FiberSettings(model=model, young_modulus=E, step=StepSettings(**step))
+                    t0 = time.perf_counter()
+                    r = simulate(field, st, start)
+                    walls.append(time.perf_counter() - t0)
+                    errs.append(abs(r.delta - ref.delta))
+                    print(f"  {label:30s} {walls[-1]:7.3f} s {r.n_steps:7d} steps  |d delta| "
+                          f"{errs[-1]:.1e}", flush=True)  # fmt: skip
+                same = "ros2 as accurate or more" if errs[1] <= errs[0] else "ros2 LESS accurate"
+                print(f"  -> speed-up fixed/ros2 {walls[0] / walls[1]:.1f} ({same})")
 
 
 def main() -> None:
@@ -88,7 +104,7 @@ def main() -> None:
     for m in ("bead-spring", "bead-spring-ros2"):
         _run(field, m, 26e6, warm)
     if args.equal_accuracy:
-        equal_accuracy(field, args.y0)
+        equal_accuracy(field, args.y0, args.moduli, args.lengths)
         return
     print(
         f"flow field dx = {args.dx} µm; start theta0 = 0, y0/h = {args.y0}; compiled before timing"

@@ -29,6 +29,7 @@ from fibersweep.cli import fiber
 from fibersweep.cli import sweep
 from fibersweep.cli import view
 from fibersweep.cli import discrepancy
+from fibersweep.cli import array
 from fibersweep.cli import show
 from fibersweep.cli import init
 
@@ -36,6 +37,7 @@ from fibersweep.cli import init
 
 __all__ = [
     "ConfigArg",
+    "array",
     "Verbose",
     "_errors",
     "_load",

@@ -80,7 +80,15 @@ def _report(settings, cache_dir: str, force: bool, plot: Path | None, pad: str) 
     nx, ny, nz, nz_full = info.grid
     depth = f"half depth, {nz} of {nz_full} nodes + symmetry plane" if nz < nz_full else "full"
     typer.echo(f"{pad}cache: {'hit' if info.hit else 'miss (computed)'}  {info.path}")
-    typer.echo(f"{pad}grid: {nx} x {ny} x {nz} nodes ({depth}), dx = {settings.dx:g} µm")
+    if settings.patch is None:
+        typer.echo(f"{pad}grid: {nx} x {ny} x {nz} nodes ({depth}), dx = {settings.dx:g} µm")
+    else:
+        box = field.meta["patch"]
+        typer.echo(
+            f"{pad}patch: {nx} x {ny} x {nz} nodes ({depth}), dx = {settings.patch.dx:g} µm, "
+            f"from x = {box['x0_um']:g}, y = {box['y0_um']:g} µm, nested in the channel "
+            f"at dx = {settings.dx:g} µm ({box['channel_report']['steps']} steps)"
+        )
     conv = "converged" if info.converged else "NOT converged (max_steps reached)"
     coarse = f" (after {info.coarse_steps} on coarser grids)" if info.coarse_steps else ""
     typer.echo(

@@ -20,17 +20,18 @@ import numba as nb
 import numpy as np
 from numba import literal_unroll
 
+from fibersweep.fiber import frame as F
 from fibersweep.fiber import hooks as H
 from fibersweep.fiber import record as R
 from fibersweep.fiber.bundles import DEFAULT_DT, Kernel
-from fibersweep.fiber.contact import pillar_forces
-from fibersweep.fiber.elastic import elastic_forces
+from fibersweep.fiber.elastic import elastic_forces, elastic_jacobian
 from fibersweep.fiber.mobility import fiber_offsets, rpy_fill
-from fibersweep.flow.field import interpolate_ib
 
 __all__ = [
     "DEFAULT_DT",
     "bead_velocity",
+    "force_jacobian",
+    "force_jacobian_fd",
     "integrate_bead_spring",
     "run_bead_spring",
 ]
@@ -39,7 +40,7 @@ CHUNK = 20_000
 
 
 @nb.njit(cache=True)
-def bead_velocity(flow, pillar, body, p, w, bw, effects):
+def bead_velocity(frame, flow, pillar, body, p, w, bw, effects):
     """f(q) = u + M F at the beads ``w.x, w.y`` into ``bw.f`` (2n); M into ``bw.mob``.
 
     Elastic and contact forces, the background flow, then the effects' stages:
@@ -57,9 +58,10 @@ def bead_velocity(flow, pillar, body, p, w, bw, effects):
     f = bw.f
     mob = bw.mob
     n = x.shape[0]
-    interpolate_ib(flow.ux, flow.uy, flow.dx, x, y, u)
+    F.velocity(frame, flow, x, y, u)
     elastic_forces(x, y, p.a, p.stretch, p.bend, fx, fy)
-    any_c, cx, cy = pillar_forces(pillar, x, y, cfx, cfy, w.st, w.dist)
+    n_c, cx, cy = F.contact(frame, pillar, x, y, cfx, cfy, w.st, w.dist)
+    any_c = n_c > 0
     for i in range(n):
         fx[i] += cfx[i]
         fy[i] += cfy[i]
@@ -82,13 +84,66 @@ def bead_velocity(flow, pillar, body, p, w, bw, effects):
 
 
 @nb.njit(cache=True)
-def _jacobian(pillar, p, w, bw):
-    """J = ∂F/∂q (2n, 2n) into ``bw.jac`` by central differences, banded.
+def _contact_jacobian(frame, pillar, h, w, bw):
+    """Add the contact forces' 2x2 diagonal blocks to ``bw.jac`` by central differences.
+
+    The contact force on a bead depends on that bead only; only beads with a
+    non-zero contact stiffness ``w.st`` are differenced (step h [µm]).
+    """
+    x = w.x
+    y = w.y
+    jac = bw.jac
+    one_x = np.empty(1)
+    one_y = np.empty(1)
+    c1 = np.empty(1)
+    c2 = np.empty(1)
+    c3 = np.empty(1)
+    c4 = np.empty(1)
+    d1 = np.empty(1)
+    d2 = np.empty(1)
+    for j in range(x.shape[0]):
+        if w.st[j] <= 0.0:
+            continue
+        for comp in range(2):
+            col = 2 * j + comp
+            one_x[0] = x[j] + (h if comp == 0 else 0.0)
+            one_y[0] = y[j] + (h if comp == 1 else 0.0)
+            F.contact(frame, pillar, one_x, one_y, c1, c2, d1, d2)
+            one_x[0] = x[j] - (h if comp == 0 else 0.0)
+            one_y[0] = y[j] - (h if comp == 1 else 0.0)
+            F.contact(frame, pillar, one_x, one_y, c3, c4, d1, d2)
+            jac[2 * j, col] += (c1[0] - c3[0]) / (2.0 * h)
+            jac[2 * j + 1, col] += (c2[0] - c4[0]) / (2.0 * h)
+
+
+@nb.njit(cache=True)
+def force_jacobian(frame, pillar, p, w, bw):
+    """J = ∂F/∂q (2n, 2n) [pN/µm] of the elastic and contact forces at ``w.x, w.y`` into ``bw.jac``.
+
+    The elastic part is analytic (:func:`~fibersweep.fiber.elastic.elastic_jacobian`,
+    block pentadiagonal); the contact part, a 2x2 block per bead in contact
+    (``w.st`` > 0, as left by the last :func:`bead_velocity`), by central
+    differences with step 1e-6 a. Used by ``bead-spring-ros2``;
+    :func:`force_jacobian_fd` is the all-differences version of the fixed-step model.
+    """
+    jac = bw.jac
+    n2 = jac.shape[0]
+    for i in range(n2):
+        for j in range(n2):
+            jac[i, j] = 0.0
+    elastic_jacobian(w.x, w.y, p.a, p.stretch, p.bend, jac)
+    _contact_jacobian(frame, pillar, 1e-6 * p.a, w, bw)
+
+
+@nb.njit(cache=True)
+def force_jacobian_fd(frame, pillar, p, w, bw):
+    """J = ∂F/∂q (2n, 2n) [pN/µm] into ``bw.jac`` by central differences, banded.
 
     Elastic forces couple a bead to its two neighbours on each side; the contact
     force on a bead depends on that bead only (a 2x2 diagonal block, computed
     only for beads with a non-zero contact stiffness ``w.st``). Uses
-    ``bw.gx, gy, cfx, cfy`` as scratch.
+    ``bw.gx, gy, cfx, cfy`` as scratch. The fixed-step model's Jacobian (kept, so
+    that its results stay those of the reference); see :func:`force_jacobian`.
     """
     x = w.x
     y = w.y
@@ -137,10 +192,10 @@ def _jacobian(pillar, p, w, bw):
             if st[j] > 0.0:
                 one_x[0] = x[j] + (h if comp == 0 else 0.0)
                 one_y[0] = y[j] + (h if comp == 1 else 0.0)
-                pillar_forces(pillar, one_x, one_y, c1, c2, d1, d2)
+                F.contact(frame, pillar, one_x, one_y, c1, c2, d1, d2)
                 one_x[0] = x[j] - (h if comp == 0 else 0.0)
                 one_y[0] = y[j] - (h if comp == 1 else 0.0)
-                pillar_forces(pillar, one_x, one_y, c3, c4, d1, d2)
+                F.contact(frame, pillar, one_x, one_y, c3, c4, d1, d2)
                 jac[2 * j, col] += (c1[0] - c3[0]) / (2.0 * h)
                 jac[2 * j + 1, col] += (c2[0] - c4[0]) / (2.0 * h)
 
@@ -167,7 +222,7 @@ def integrate_bead_spring(q, qprev, state, k, stride, rec, brec):
     -------
     (rows, code)
     """
-    flow, pillar, body, p, w, bw, effects = k
+    flow, pillar, body, p, w, bw, effects, frame = k
     n2 = q.shape[0]
     n = n2 // 2
     dt = p.dt
@@ -200,7 +255,7 @@ def integrate_bead_spring(q, qprev, state, k, stride, rec, brec):
         for i in range(n):
             x[i] = qs[2 * i]
             y[i] = qs[2 * i + 1]
-        any_c, cx, cy = bead_velocity(flow, pillar, body, p, w, bw, effects)
+        any_c, cx, cy = bead_velocity(frame, flow, pillar, body, p, w, bw, effects)
         min_d = 1e300
         for i in range(n):
             min_d = min(min_d, dist[i])
@@ -260,7 +315,7 @@ def integrate_bead_spring(q, qprev, state, k, stride, rec, brec):
         if code != R.CHUNK_FULL:
             break
         # Linearly implicit step.
-        _jacobian(pillar, p, w, bw)
+        force_jacobian_fd(frame, pillar, p, w, bw)
         c = 2.0 * dt / 3.0 if have_prev else dt
         for i2 in range(n2):
             for j2 in range(n2):

@@ -18,7 +18,13 @@ velocity made the rigid kernel ~15 % slower (measured with a contact run).
   kernels never allocate (BeadWork is empty for the rigid model);
 - ``effects``: the kernel records of the run's active dynamic effects
   (see :mod:`fibersweep.fiber.hooks`), sorted by effect name and ending with
-  :data:`~fibersweep.fiber.hooks.BASELINE`.
+  :data:`~fibersweep.fiber.hooks.BASELINE`;
+- ``frame``: where copies of the pillar stand and how the field is read
+  (:mod:`fibersweep.fiber.frame`: the channel's single pillar, or an array).
+
+:func:`build_kernel` assembles a channel run from its :class:`Setup`; an
+array run (:mod:`fibersweep.fiber.rows`) uses the same :func:`make_params` and
+:func:`assemble` with its own field, bounds and frame.
 """
 
 from __future__ import annotations
@@ -29,8 +35,10 @@ from typing import NamedTuple
 import numpy as np
 
 from fibersweep.fiber.contact import PillarArrays
+from fibersweep.fiber.frame import CHANNEL
 from fibersweep.fiber.hooks import BASELINE
 from fibersweep.fiber.mobility import body_mobility
+from fibersweep.fiber.settings import FiberSettings
 from fibersweep.fiber.setup import Setup
 
 __all__ = [
@@ -42,7 +50,9 @@ __all__ = [
     "Params",
     "PillarArrays",
     "Work",
+    "assemble",
     "build_kernel",
+    "make_params",
 ]
 
 DEFAULT_DT = 5e-5  # s; bead-spring default step (see tests/validation/test_fiber_beadspring.py)
@@ -159,7 +169,7 @@ class BeadWork(NamedTuple):
 
 
 class Kernel(NamedTuple):
-    """All inputs of an integrator for one run."""
+    """All inputs of an integrator for one run (``frame``: a :mod:`.frame` record)."""
 
     flow: FlowArrays
     pillar: PillarArrays
@@ -168,6 +178,7 @@ class Kernel(NamedTuple):
     work: Work
     bead: BeadWork
     effects: tuple
+    frame: tuple = CHANNEL
 
 
 def _work(n: int) -> Work:
@@ -189,8 +200,92 @@ def _bead_work(n: int) -> BeadWork:
     )
 
 
+def make_params(
+    st: FiberSettings,
+    *,
+    mu: float,
+    u_center: float,
+    x_stop: float,
+    y_lo: float,
+    y_hi: float,
+    random: bool,
+    mode: int = 0,
+    t_stop: float = math.nan,
+) -> Params:
+    """The scalars of a run from its settings and what its geometry fixes.
+
+    Parameters
+    ----------
+    st : FiberSettings
+    mu : float
+        Viscosity [pN s/µm²].
+    u_center : float
+        Signed centreline speed of the field [µm/s] (sets the trap speed).
+    x_stop : float
+        Mode 0 stops when the rearmost end passes this x [µm].
+    y_lo, y_hi : float
+        Bead centres must stay between these [µm] (±inf: no side walls).
+    random : bool
+        Whether an effect draws random increments (no implicit stopped steps then).
+    mode, t_stop : int, float
+        See :func:`build_kernel`.
+    """
+    a = float(st.bead_radius)
+    bead_spring = st.model == "bead-spring"
+    dt = st.step.dt if st.step.dt is not None else (DEFAULT_DT if bead_spring else math.nan)
+    ros2 = st.model == "bead-spring-ros2"
+    return Params(
+        a=a,
+        mu=mu,
+        max_disp=float(st.step.ros2_max_displacement if ros2 else st.step.max_displacement),
+        contact_disp=float(
+            st.step.ros2_contact_displacement if ros2 else st.step.contact_displacement
+        ),
+        dt_max=st.classify.trap_time / 20.0,
+        dt=float(dt),
+        t_max=float(st.step.t_max),
+        x_stop=x_stop,
+        t_stop=float(t_stop),
+        mode=int(mode),
+        trap_speed=st.classify.trap_speed * abs(u_center),
+        trap_time=float(st.classify.trap_time),
+        # Brownian increments scale with the step: keep the short explicit steps then
+        stopped_implicit=bool(st.step.stopped_implicit and not random),
+        y_lo=y_lo,
+        y_hi=y_hi,
+        stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²
+        bend=st.young_modulus * math.pi * a**4 / 4.0,
+        tol=float(st.step.tolerance),
+    )
+
+
+def assemble(
+    st: FiberSettings,
+    n: int,
+    flow: FlowArrays,
+    pillar: PillarArrays,
+    params: Params,
+    kernel_effects: tuple,
+    frame: tuple = CHANNEL,
+) -> Kernel:
+    """A Kernel of ``n`` beads: body mobility, work buffers and the effects' tuple added."""
+    bm = body_mobility(n, params.a, params.mu)
+    body = BodyArrays(bm.offsets.copy(), bm.P.copy(), bm.N.copy(), bm.chol.copy(), bm.tip_mobility)
+    beads = st.model in ("bead-spring", "bead-spring-ros2")
+    return Kernel(
+        flow,
+        pillar,
+        body,
+        params,
+        _work(n),
+        _bead_work(n if beads else 0),
+        kernel_effects + (BASELINE,),
+        frame,
+    )
+
+
 def build_kernel(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> Kernel:
-    """Every kernel input of a run: the one place they are assembled.
+    """Every kernel input of a channel run: the one place they are assembled.
 
     Parameters
     ----------
@@ -205,48 +300,20 @@ def build_kernel(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> Kerne
     field = setup.field
     geo = field.geometry
     a = float(st.bead_radius)
-    mu = float(field.fluid.viscosity)
-    bead_spring = st.model == "bead-spring"
-    beads = bead_spring or st.model == "bead-spring-ros2"
-    dt = st.step.dt if st.step.dt is not None else (DEFAULT_DT if bead_spring else math.nan)
-    x_pass = setup.pillar.x_max
-    ros2 = st.model == "bead-spring-ros2"
-    params = Params(
-        a=a,
-        mu=mu,
-        max_disp=float(st.step.ros2_max_displacement if ros2 else st.step.max_displacement),
-        contact_disp=float(
-            st.step.ros2_contact_displacement if ros2 else st.step.contact_displacement
-        ),
-        dt_max=st.classify.trap_time / 20.0,
-        dt=float(dt),
-        t_max=float(st.step.t_max),
-        x_stop=x_pass + st.step.x_end,
-        t_stop=float(t_stop),
-        mode=int(mode),
-        trap_speed=st.classify.trap_speed * abs(setup.u_center),
-        trap_time=float(st.classify.trap_time),
-        # Brownian increments scale with the step: keep the short explicit steps then
-        stopped_implicit=bool(st.step.stopped_implicit and not setup.effects.random),
+    params = make_params(
+        st,
+        mu=float(field.fluid.viscosity),
+        u_center=setup.u_center,
+        x_stop=setup.pillar.x_max + st.step.x_end,
         y_lo=a,
         y_hi=geo.width - a,
-        stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²
-        bend=st.young_modulus * math.pi * a**4 / 4.0,
-        tol=float(st.step.tolerance),
+        random=setup.effects.random,
+        mode=mode,
+        t_stop=t_stop,
     )
-    bm = body_mobility(setup.n, a, mu)
-    body = BodyArrays(bm.offsets.copy(), bm.P.copy(), bm.N.copy(), bm.chol.copy(), bm.tip_mobility)
     flow = FlowArrays(
         np.ascontiguousarray(field.ux, dtype=np.float64),
         np.ascontiguousarray(field.uy, dtype=np.float64),
         float(field.dx),
     )
-    return Kernel(
-        flow,
-        setup.pillar.arrays(),
-        body,
-        params,
-        _work(setup.n),
-        _bead_work(setup.n if beads else 0),
-        setup.kernel_effects + (BASELINE,),
-    )
+    return assemble(st, setup.n, flow, setup.pillar.arrays(), params, setup.kernel_effects)

@@ -40,11 +40,10 @@ import numba as nb
 import numpy as np
 from numba import literal_unroll
 
+from fibersweep.fiber import frame as F
 from fibersweep.fiber import hooks as H
 from fibersweep.fiber import record as R
-from fibersweep.fiber.contact import pillar_forces
 from fibersweep.fiber.mobility import body_velocity
-from fibersweep.flow.field import interpolate_ib
 
 __all__ = ["CHUNK", "integrate_rigid", "rigid_velocity", "ros2_step", "run_rigid", "seed_numba"]
 
@@ -60,11 +59,13 @@ def seed_numba(seed: int) -> None:
 
 
 @nb.njit(cache=True)
-def rigid_velocity(flow, pillar, body, w, effects, xc, yc, th):
+def rigid_velocity(frame, flow, pillar, body, w, effects, xc, yc, th):
     """Lab-frame body velocity of a rigid fiber at (xc, yc, th).
 
     Parameters
     ----------
+    frame : a :mod:`fibersweep.fiber.frame` record
+        Where the pillars stand and how the field is read (channel or array).
     flow, pillar, body : bundles.FlowArrays, contact.PillarArrays, bundles.BodyArrays
     w : bundles.Work
         Receives the bead positions, background velocities, contact forces,
@@ -76,9 +77,9 @@ def rigid_velocity(flow, pillar, body, w, effects, xc, yc, th):
 
     Returns
     -------
-    (vx, vy, om, any_contact, cx, cy, min_dist, stiff_sum)
-        Velocity [µm/s, rad/s], contact flag and point [µm], smallest distance to
-        the pillar [µm], summed contact stiffness [pN/µm].
+    (vx, vy, om, n_pillars, cx, cy, min_dist, stiff_sum)
+        Velocity [µm/s, rad/s], pillars in contact (int) and the contact point
+        [µm], smallest distance to a pillar [µm], summed contact stiffness [pN/µm].
     """
     # Bind the arrays once (each read of a bundle's field costs a reference count).
     s = body.s
@@ -95,8 +96,9 @@ def rigid_velocity(flow, pillar, body, w, effects, xc, yc, th):
     for i in range(n):
         x[i] = xc + s[i] * c
         y[i] = yc + s[i] * sn
-    interpolate_ib(flow.ux, flow.uy, flow.dx, x, y, u)
-    any_c, cx, cy = pillar_forces(pillar, x, y, fx, fy, st, dist)
+    F.velocity(frame, flow, x, y, u)
+    n_c, cx, cy = F.contact(frame, pillar, x, y, fx, fy, st, dist)
+    any_c = n_c > 0
     for e in literal_unroll(effects):
         H.background(e, u)
     min_d = 1e300
@@ -114,7 +116,7 @@ def rigid_velocity(flow, pillar, body, w, effects, xc, yc, th):
         vbx, vby, om = H.rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff)
     vx = c * vbx - sn * vby
     vy = sn * vbx + c * vby
-    return vx, vy, om, any_c, cx, cy, min_d, stiff
+    return vx, vy, om, n_c, cx, cy, min_d, stiff
 
 
 @nb.njit(cache=True)
@@ -134,7 +136,7 @@ def _solve3(a, b0, b1, b2):
 
 
 @nb.njit(cache=True)
-def ros2_step(flow, pillar, body, w, effects, xc, yc, th, vx, vy, om, dt, dth):
+def ros2_step(frame, flow, pillar, body, w, effects, xc, yc, th, vx, vy, om, dt, dth):
     """One linearly implicit Rosenbrock step (ROS2) of the rigid fiber.
 
     (I − γΔt J) k₁ = f(q),  (I − γΔt J) k₂ = f(q + Δt k₁) − 2k₁,
@@ -144,7 +146,7 @@ def ros2_step(flow, pillar, body, w, effects, xc, yc, th, vx, vy, om, dt, dth):
 
     Parameters
     ----------
-    flow, pillar, body, w, effects : as :func:`rigid_velocity`
+    frame, flow, pillar, body, w, effects : as :func:`rigid_velocity`
     xc, yc, th : float
         State [µm, µm, rad].
     vx, vy, om : float
@@ -164,7 +166,9 @@ def ros2_step(flow, pillar, body, w, effects, xc, yc, th, vx, vy, om, dt, dth):
         qx = xc + (h if j == 0 else 0.0)
         qy = yc + (h if j == 1 else 0.0)
         qt = th + (h if j == 2 else 0.0)
-        fx, fy, fo, _, _, _, _, _ = rigid_velocity(flow, pillar, body, w, effects, qx, qy, qt)
+        fx, fy, fo, _, _, _, _, _ = rigid_velocity(
+            frame, flow, pillar, body, w, effects, qx, qy, qt
+        )
         g = ROS2_GAMMA * dt / h
         a[0, j] = -g * (fx - vx)
         a[1, j] = -g * (fy - vy)
@@ -173,7 +177,7 @@ def ros2_step(flow, pillar, body, w, effects, xc, yc, th, vx, vy, om, dt, dth):
         a[j, j] += 1.0
     k0, k1, k2 = _solve3(a, vx, vy, om)
     f0, f1, f2, _, _, _, _, _ = rigid_velocity(
-        flow, pillar, body, w, effects, xc + dt * k0, yc + dt * k1, th + dt * k2
+        frame, flow, pillar, body, w, effects, xc + dt * k0, yc + dt * k1, th + dt * k2
     )
     m0, m1, m2 = _solve3(a, f0 - 2.0 * k0, f1 - 2.0 * k1, f2 - 2.0 * k2)
     return (xc + dt * (1.5 * k0 + 0.5 * m0), yc + dt * (1.5 * k1 + 0.5 * m1),
@@ -199,7 +203,7 @@ def integrate_rigid(state, k, rec):
     (rows, code) : (int, int)
         Rows written and the stop code (record.CHUNK_FULL when ``rec`` filled up).
     """
-    flow, pillar, body, p, w, _, effects = k
+    flow, pillar, body, p, w, _, effects, frame = k
     s = body.s
     n = s.shape[0]
     t = state[0]
@@ -210,6 +214,8 @@ def integrate_rigid(state, k, rec):
     r_cut = pillar.r_cut
     tip_m = body.tip_m
     half = 0.5 * (s[n - 1] - s[0])
+    # finite-difference angle step (a one-bead fiber, a sphere in an array: no arm)
+    dth = FD_STEP / max(half, FD_STEP)
     sh = s[n - 1]
     st_ = s[0]
     rows = 0
@@ -219,11 +225,11 @@ def integrate_rigid(state, k, rec):
     have_f = False
     shrink = 1.0  # implicit steps are shortened after a rejected one
     vx = vy = om = cx = cy = min_d = stiff = 0.0
-    any_c = False
+    n_c = np.int64(0)
     while rows < cap:
         if not have_f:
-            vx, vy, om, any_c, cx, cy, min_d, stiff = rigid_velocity(
-                flow, pillar, body, w, effects, xc, yc, th
+            vx, vy, om, n_c, cx, cy, min_d, stiff = rigid_velocity(
+                frame, flow, pillar, body, w, effects, xc, yc, th
             )
         have_f = False
         c = math.cos(th)
@@ -234,7 +240,7 @@ def integrate_rigid(state, k, rec):
         hx = xc + sh * c
         tx = xc + st_ * c
         R.write_row(
-            rec[rows], t, xc, yc, th, vx, vy, om, 1.0 if any_c else 0.0, cx, cy, min_d,
+            rec[rows], t, xc, yc, th, vx, vy, om, float(n_c), cx, cy, min_d,
             math.sqrt(hvx * hvx + hvy * hvy), com_speed, hx, yc + sh * sn, tx, yc + st_ * sn,
         )  # fmt: skip
         rows += 1
@@ -246,7 +252,7 @@ def integrate_rigid(state, k, rec):
             min_d,
             yc - half * abs(sn),
             yc + half * abs(sn),
-            any_c and com_speed < p.trap_speed,
+            n_c > 0 and com_speed < p.trap_speed,
             stopped_since,
             min(hx, tx),
             0.0,
@@ -263,13 +269,13 @@ def integrate_rigid(state, k, rec):
         if p.stopped_implicit and math.isfinite(stopped_since):
             # land on the end of the trap time, not past it
             dti = max(min(dt * shrink, stopped_since + p.trap_time - t), 1e-12)
-            xi, yi, ti = ros2_step(flow, pillar, body, w, effects, xc, yc, th, vx, vy, om, dti,
-                                   FD_STEP / half)  # fmt: skip
-            fi = rigid_velocity(flow, pillar, body, w, effects, xi, yi, ti)
+            xi, yi, ti = ros2_step(frame, flow, pillar, body, w, effects, xc, yc, th, vx, vy, om,
+                                   dti, dth)  # fmt: skip
+            fi = rigid_velocity(frame, flow, pillar, body, w, effects, xi, yi, ti)
             # Accepted only if the fiber is still stopped: leaving the stop (stick-slip
             # under friction, a slow slide off the pillar) is left to the explicit step.
-            if fi[3] and math.sqrt(fi[0] * fi[0] + fi[1] * fi[1]) < p.trap_speed:
-                vx, vy, om, any_c, cx, cy, min_d, stiff = fi
+            if fi[3] > 0 and math.sqrt(fi[0] * fi[0] + fi[1] * fi[1]) < p.trap_speed:
+                vx, vy, om, n_c, cx, cy, min_d, stiff = fi
                 have_f = True
                 xc = xi
                 yc = yi
@@ -286,7 +292,9 @@ def integrate_rigid(state, k, rec):
         xm = xc + 0.5 * dt * vx
         ym = yc + 0.5 * dt * vy
         thm = th + 0.5 * dt * om
-        vx2, vy2, om2, _, _, _, _, _ = rigid_velocity(flow, pillar, body, w, effects, xm, ym, thm)
+        vx2, vy2, om2, _, _, _, _, _ = rigid_velocity(
+            frame, flow, pillar, body, w, effects, xm, ym, thm
+        )
         xc += dt * vx2
         yc += dt * vy2
         th += dt * om2

@@ -82,7 +82,7 @@ class CacheInfo:
 # computed before they existed: at that value they stay out of the key, so those
 # fields keep their keys (and stored sweeps compare equal, see key_settings).
 GEOMETRY_ADDED = {"pillar_shape": "triangle", "pillar_rotation": 0.0, "pillar_vertices": None}
-FLOW_ADDED = {"precision": "float32"}
+FLOW_ADDED = {"precision": "float32", "patch": None}
 
 
 def key_settings(flow: dict[str, Any]) -> dict[str, Any]:
@@ -113,6 +113,10 @@ def cache_key(settings: FlowSettings) -> str:
     that reproduces those fields (:func:`key_settings`), so they keep their keys.
     """
     payload = {"settings": key_settings(settings.model_dump(mode="json")), "solver": SOLVER_VERSION}
+    if settings.patch is not None:  # the nesting's version (a field without a patch: no key)
+        from fibersweep.flow.patch import PATCH_METHOD
+
+        payload["patch_method"] = PATCH_METHOD
     blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
     return hashlib.sha256(blob).hexdigest()[:24]
 
@@ -175,12 +179,12 @@ def load_entry(
     sub_grid = get_wall_scheme(settings.pillar_boundary).sub_grid
     if sub_grid and meta.get("wall_ghosts") != GHOST_METHOD:
         # entry written before ghost values were stored: derive them (in memory)
-        ux, uy = extend_into_wall(ux, uy, solid, geometry.shape, float(settings.dx))
+        ux, uy = extend_into_wall(ux, uy, solid, geometry.shape, float(settings.field_dx))
         meta = {**meta, "wall_ghosts": GHOST_METHOD}
     return FlowField(
         ux=ux,
         uy=uy,
-        dx=float(settings.dx),
+        dx=float(settings.field_dx),
         geometry=geometry,
         fluid=settings.fluid.to_fluid(),
         solid=solid,

@@ -14,6 +14,7 @@ __all__ = [
     "GeometrySettings",
     "FluidSettings",
     "FlowSettings",
+    "PatchSettings",
     "MIN_DEPTH_NODES",
     "FLOAT32_MIN_TOLERANCE",
 ]
@@ -111,6 +112,20 @@ class FluidSettings(_Strict):
         return Fluid(**self.model_dump())
 
 
+class PatchSettings(_Strict):
+    """A finer grid around the pillar nested in the channel's solution (docs/fidelity.md)."""
+
+    dx: float = Field(gt=0, description="lattice spacing of the patch [µm]; dx / patch.dx whole")
+    margin: float = Field(
+        160.0,
+        gt=0,
+        description=(
+            "distance from the pillar's bounding box to the patch edge [µm], rounded up to "
+            "whole channel cells (default from the patch-size study in docs/fidelity.md)"
+        ),
+    )
+
+
 class FlowSettings(_Strict):
     """Everything that changes the steady field (all of it enters the cache key)."""
 
@@ -145,6 +160,13 @@ class FlowSettings(_Strict):
             "reference, twice the memory and memory traffic: docs/precision.md)"
         ),
     )
+    patch: PatchSettings | None = Field(
+        None,
+        description=(
+            "a finer grid around the pillar, nested in this channel solution; the field is "
+            "then stored at patch.dx (docs/fidelity.md, 'Fine patch'); None: one grid"
+        ),
+    )
 
     @field_validator("dx")
     @classmethod
@@ -177,6 +199,31 @@ class FlowSettings(_Strict):
                 f"(depth/dx = {geom.depth / dx:g}); use symmetry: false or another dx"
             )
         return symmetry
+
+    @property
+    def field_dx(self) -> float:
+        """Spacing of the stored midplane field [µm]: ``patch.dx`` with a patch, else ``dx``."""
+        return self.dx if self.patch is None else self.patch.dx
+
+    @model_validator(mode="after")
+    def _patch_grid(self) -> FlowSettings:
+        if self.patch is None:
+            return self
+        if self.keep_3d:
+            raise ValueError("keep_3d: true is not available with a patch (patch: null)")
+        ratio = self.dx / self.patch.dx
+        if ratio < 2 - 1e-9 or abs(ratio - round(ratio)) > 1e-9:
+            raise ValueError(
+                f"patch.dx = {self.patch.dx} µm must divide dx = {self.dx} µm a whole number "
+                "of times (2 or more)"
+            )
+        n = self.geometry.depth / self.patch.dx
+        if abs(n - round(n)) > 1e-9 or (self.symmetry and round(n) % 2):
+            raise ValueError(
+                f"patch.dx = {self.patch.dx} µm must give a whole (even with symmetry) "
+                f"number of nodes across the depth {self.geometry.depth} µm"
+            )
+        return self
 
     @model_validator(mode="after")
     def _reachable_tolerance(self) -> FlowSettings:

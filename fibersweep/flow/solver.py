@@ -74,6 +74,10 @@ def solve_flow(settings: FlowSettings, threads: int | None = None) -> FlowField:
         the interpolated field vanish on the exact wall, see
         :mod:`fibersweep.flow.ghost`); ``meta`` holds the solver report and settings.
     """
+    if settings.patch is not None:  # a finer grid around the pillar (flow/patch.py)
+        from fibersweep.flow.patch import solve_patched
+
+        return solve_patched(settings, threads=threads)
     return field_from_solution(settings, solve_nested(settings, threads=threads))
 
 

@@ -78,15 +78,25 @@ def other_level(
 ) -> tuple[FlowSettings, FlowField] | None:
     """A cached field of the same problem at 2 Δx or Δx/2 (finer preferred); None if neither.
 
+    With a patch the levels are the patch's spacing halved or doubled in the same
+    channel (doubled up to the channel's own spacing, which is the channel alone).
+
     Only loads (never solves).
     """
     from fibersweep.flow.cache import CorruptCacheError, cache_key, load_entry
 
     for factor in (0.5, 2.0):
         try:
-            other = FlowSettings.model_validate(
-                {**settings.model_dump(), "dx": settings.dx * factor}
-            )
+            dump = settings.model_dump()
+            if settings.patch is None:
+                dump["dx"] = settings.dx * factor
+            elif settings.patch.dx * factor >= settings.dx - 1e-9:
+                dump["patch"] = None  # the patch's coarser level is the channel itself
+            else:  # the patch levels: the same channel, the patch at 2 or 1/2 its spacing
+                dump["patch"] = {**dump["patch"], "dx": settings.patch.dx * factor}
+            other = FlowSettings.model_validate(dump)
+            if other.field_dx != settings.field_dx * factor:
+                continue
         except ValueError:
             continue
         path = Path(cache_dir) / f"flow-{cache_key(other)}"

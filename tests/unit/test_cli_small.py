@@ -61,7 +61,13 @@ def _complete(words: str) -> list[str]:
 
 
 def test_shell_completion_completes_commands_options_and_choices():
-    assert _complete("fibersweep plot") == ["plot-phase"]
+    assert sorted(_complete("fibersweep plot")) == [
+        "plot-delta",
+        "plot-fractions",
+        "plot-phase",
+        "plot-tracks",
+    ]
+    assert _complete("fibersweep plot-p") == ["plot-phase"]
     assert "--executor" in _complete("fibersweep run c.yaml --exe")
     assert _complete("fibersweep classify r --rule ") == ["head-speed", "pivot", "switch"]
     res = runner.invoke(app, ["--help"])

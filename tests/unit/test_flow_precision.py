@@ -22,9 +22,10 @@ TINY = FlowSettings(
 
 
 def _key_without_precision(settings: FlowSettings) -> str:
-    """The key as computed before ``precision`` (and the pillar shapes) existed."""
+    """The key as computed before ``precision`` (and the pillar shapes, and the patch) existed."""
     dump = settings.model_dump(mode="json")
     dump.pop("precision")
+    dump.pop("patch")
     for name in ("pillar_shape", "pillar_rotation", "pillar_vertices"):  # default triangle
         dump["geometry"].pop(name)
     blob = json.dumps({"settings": dump, "solver": SOLVER_VERSION}, sort_keys=True,

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from fibersweep.fiber import record as R
-from fibersweep.fiber.beadspring import _jacobian, bead_velocity
+from fibersweep.fiber.beadspring import bead_velocity, force_jacobian
 from fibersweep.fiber.bundles import FlowArrays, build_kernel
 from fibersweep.fiber.effects import registry
 from fibersweep.fiber.implicit_beadspring import integrate_ros2
@@ -46,7 +46,7 @@ def _integrate(k, q0, fext=None, h0=1e-6):
     q = q0.reshape(-1).copy()
     n = q0.shape[0]
     fext = np.zeros(2 * n) if fext is None else fext.reshape(-1).copy()
-    state = np.array([0.0, math.nan, 0.0, h0])
+    state = np.array([0.0, math.nan, 0.0, h0, 0.0])
     scratch = [np.zeros(2 * n) for _ in range(4)]
     recs, brecs = [], []
     while True:
@@ -102,12 +102,12 @@ def test_uniform_load_bends_as_euler_bernoulli(coarse_field):
 
 def _slowest_bending_mode(k, q0):
     """(σ [1/s], v (2n)) of the slowest non-zero mode of the linearised q̇ = M F(q)."""
-    flow, pillar, body, p, w, bw, effects = k
+    flow, pillar, body, p, w, bw, effects, frame = k
     n = q0.shape[0]
     w.x[:] = q0[:, 0]
     w.y[:] = q0[:, 1]
-    bead_velocity(flow, pillar, body, p, w, bw, effects)
-    _jacobian(pillar, p, w, bw)
+    bead_velocity(frame, flow, pillar, body, p, w, bw, effects)
+    force_jacobian(frame, pillar, p, w, bw)
     lam, vec = np.linalg.eig(bw.mob @ bw.jac)
     lam = -lam.real
     order = np.argsort(lam)

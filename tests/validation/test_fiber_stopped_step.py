@@ -71,13 +71,13 @@ def _kernel(field, start: FiberStart):
 
 
 def _f(k, q):
-    return np.array(rigid_velocity(k.flow, k.pillar, k.body, k.work, k.effects, *q)[:3])
+    return np.array(rigid_velocity(k.frame, k.flow, k.pillar, k.body, k.work, k.effects, *q)[:3])
 
 
 def _ros2(k, q, dt, half):
     f = _f(k, q)
     return np.array(
-        ros2_step(k.flow, k.pillar, k.body, k.work, k.effects, *q, *f, dt, FD_STEP / half)
+        ros2_step(k.frame, k.flow, k.pillar, k.body, k.work, k.effects, *q, *f, dt, FD_STEP / half)
     )
 
 

@@ -1,0 +1,80 @@
+"""Speed of the pillar-array pieces against the issue's targets (prints ratios).
+
+1. Unit-cell field at dx = 2 µm (100 µm periods, 40 µm deep, triangle 50 µm, ε = 0.1):
+   target under 60 s on 2 cores (Numba compiled beforehand on a coarse cell).
+2. One rigid fiber (L = 80 µm) through 50 rows: target under 2 s (compiled beforehand).
+3. A sweep of --starts starts over 10 lengths on 2 workers, rows 20, field included,
+   extrapolated linearly to 1000 starts: target under 600 s.
+
+    python3 scripts/bench_array.py [--starts 40]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import tempfile
+import time
+
+import numba
+
+from fibersweep.fiber.rows import run_array_fiber
+from fibersweep.flow.cell import field_of, solve_cell
+from fibersweep.sweep.arrays import ArrayConfig, prepare_run, run_array_sweep
+
+ARRAY = {"pillar_size": 50.0, "period_x": 100.0, "period_y": 100.0, "shift": 0.1, "depth": 40.0}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--starts", type=int, default=40, help="starts of the reduced sweep")
+    args = ap.parse_args()
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cpus, "
+          f"numba threads {numba.get_num_threads()}")  # fmt: skip
+    cfg = ArrayConfig.model_validate({"array": ARRAY, "flow": {"dx": 2.0},
+                                      "run": {"cache_dir": ""}})  # fmt: skip
+    arr = cfg.array.to_array()
+    solve_cell(arr, 5.0, tolerance=1e-3)  # compile the kernels on a coarse cell
+    t0 = time.perf_counter()
+    sol = solve_cell(arr, 2.0)
+    t_field = time.perf_counter() - t0
+    g = sol.grid
+    print(f"1. unit cell {g.nx}x{g.ny}x{g.nz} (half depth), {sol.steps} steps (both solves), "
+          f"{t_field:.1f} s -> {t_field / 60.0:.2f} of the 60 s target")  # fmt: skip
+    field = field_of(arr, sol, 600.0, "interpolated")
+    cfg50 = cfg.model_copy(update={"sweep": cfg.sweep.model_copy(update={"rows": 50})})
+    x0 = 0.5 * (arr.shape.bounds[0] + arr.shape.bounds[2] - arr.period_x)
+    warm = prepare_run(cfg50, field, 80.0, x_end=x0 + 100.0)
+    run_array_fiber(warm, "rigid", x0, 30.0, 0.0)  # compile
+    k = prepare_run(cfg50, field, 80.0)
+    times = []
+    for y0 in (10.0, 30.0, 50.0, 70.0, 90.0):
+        t0 = time.perf_counter()
+        rec, code = run_array_fiber(k, "rigid", x0, y0, math.radians(3.0))
+        times.append(time.perf_counter() - t0)
+        print(f"   y0 = {y0:4.0f} µm: {rec.shape[0]} steps, code {code}, {times[-1]:.2f} s")
+    worst = max(times)
+    print(f"2. 50 rows, L = 80 µm: worst {worst:.2f} s, mean {sum(times) / len(times):.2f} s "
+          f"-> {worst / 2.0:.2f} of the 2 s target")  # fmt: skip
+    with tempfile.TemporaryDirectory() as tmp:
+        lengths = [8.0 * k for k in range(1, 11)]
+        per = max(1, args.starts // 10)
+        sweep = cfg.model_copy(update={
+            "sweep": cfg.sweep.model_copy(update={"length": tuple(lengths), "starts": per}),
+            "run": cfg.run.model_copy(update={"output": tmp, "cache_dir": tmp}),
+        })  # fmt: skip
+        t0 = time.perf_counter()
+        df = run_array_sweep(sweep, workers=2)
+        t_sweep = time.perf_counter() - t0
+    n = len(df)
+    est = t_field + (t_sweep - t_field) * 1000.0 / n
+    print(
+        f"3. {n} starts over 10 lengths, 2 workers, field included: {t_sweep:.1f} s; "
+        f"1000 starts extrapolated: {est:.0f} s -> {est / 600.0:.2f} of the 600 s target"
+    )
+
+
+if __name__ == "__main__":
+    main()
