@@ -16,7 +16,12 @@ Rules (docs/model.md; thresholds in :class:`ClassifySettings`):
      the head travels less than ``pivot_fraction``·L: the fiber turns about its
      head instead of sliding past;
    * ``switch``: the fiber touched the pillar (front and rear switch after a
-     contact, whatever the head did).
+     contact, whatever the head did);
+   * ``corner``: the head stays within ``corner_fraction``·L of one pillar
+     corner while the fiber turns through ``corner_turn`` degrees, with a
+     contact on the way: the fiber swings about its head held at the corner
+     (a circle has no corner: there the head is held near one point of the
+     outline).
 3. Otherwise **Above** / **Below**: the side of the pillar centroid on which
    the centre of mass is when it crosses the centroid's x (first crossing in
    the flow direction).
@@ -36,6 +41,7 @@ import numpy as np
 
 from fibersweep.analysis.settings import ClassifySettings
 from fibersweep.analysis.trajectory import Trajectory
+from fibersweep.geometry import ConvexPolygon
 from fibersweep.units import Geometry
 
 __all__ = [
@@ -43,8 +49,10 @@ __all__ = [
     "Rule",
     "classify",
     "classify_all",
+    "held_turn",
     "longest_run",
     "pass_crossing",
+    "pivot_points",
     "stopped_mask",
 ]
 
@@ -104,6 +112,76 @@ def _touched(tr: Trajectory, u_center: float, th: ClassifySettings) -> bool:
     return bool(np.any(np.asarray(tr.contact, dtype=bool)))
 
 
+def pivot_points(geometry: Geometry, head: np.ndarray, contact: np.ndarray) -> np.ndarray:
+    """Points of the pillar a head can be held at, shape (k, 2) [µm].
+
+    The corners of a polygon pillar; a circle has none, so there every point of
+    its outline nearest to the head at a sample in contact is a candidate.
+
+    Parameters
+    ----------
+    geometry : Geometry
+    head : ndarray, shape (m, 2)
+        Head positions [µm].
+    contact : ndarray, shape (m,), bool
+    """
+    shape = geometry.shape
+    if isinstance(shape, ConvexPolygon):
+        return np.asarray(shape.vertices, dtype=np.float64)
+    near, _, _ = shape.nearest(head[contact, 0], head[contact, 1])
+    return near.reshape(-1, 2)
+
+
+def held_turn(
+    head: np.ndarray, theta: np.ndarray, contact: np.ndarray, point: np.ndarray, radius: float
+) -> float:
+    """Largest turn [deg] of the fiber while its head stays within ``radius`` of ``point``.
+
+    Over each stretch of consecutive samples with the head within ``radius`` [µm]
+    of ``point`` that includes a contact, the turn is the range (max − min) of the
+    unwrapped angle; the largest over the stretches, 0 if there is none.
+
+    Parameters
+    ----------
+    head : ndarray, shape (m, 2)
+        Head positions [µm].
+    theta : ndarray, shape (m,)
+        Unwrapped tail-to-head angle [deg].
+    contact : ndarray, shape (m,), bool
+    point : ndarray, shape (2,)
+        The pivot [µm].
+    radius : float
+        [µm].
+    """
+    near = np.hypot(head[:, 0] - point[0], head[:, 1] - point[1]) <= radius
+    if not np.any(near & contact):
+        return 0.0
+    m = np.concatenate([[False], near, [False]])
+    starts = np.flatnonzero(~m[:-1] & m[1:])
+    ends = np.flatnonzero(m[:-1] & ~m[1:])
+    best = 0.0
+    for a, b in zip(starts, ends, strict=True):
+        if np.any(contact[a:b]):
+            best = max(best, float(np.max(theta[a:b]) - np.min(theta[a:b])))
+    return best
+
+
+def _corner_vault(
+    tr: Trajectory, u_center: float, th: ClassifySettings, geometry: Geometry
+) -> bool:
+    head = np.asarray(tr.head, dtype=np.float64)
+    contact = np.asarray(tr.contact, dtype=bool)
+    if not np.any(contact):
+        return False
+    theta = np.asarray(tr.theta, dtype=np.float64)
+    length = float(np.hypot(*(head[0] - np.asarray(tr.tail[0], dtype=np.float64))))
+    radius = th.corner_fraction * length
+    return any(
+        held_turn(head, theta, contact, p, radius) >= th.corner_turn
+        for p in pivot_points(geometry, head, contact)
+    )
+
+
 @dataclass(frozen=True)
 class Rule:
     """A pole-vaulting rule: given that head and tail swapped, was it a vault?
@@ -114,12 +192,24 @@ class Rule:
     description : str
     vaulted : callable
         ``(trajectory, u_center [µm/s], thresholds) -> bool``; a pure function of
-        the stored trajectory.
+        the stored trajectory. With ``needs_geometry`` it takes the pillar's
+        :class:`Geometry` as a fourth argument.
+    needs_geometry : bool
+        The rule looks at where the pillar is (its corners).
     """
 
     name: str
     description: str
-    vaulted: Callable[[Trajectory, float, ClassifySettings], bool]
+    vaulted: Callable[..., bool]
+    needs_geometry: bool = False
+
+    def applies(
+        self, trajectory: Trajectory, geometry: Geometry, u_center: float, th: ClassifySettings
+    ) -> bool:
+        """Whether the rule calls this swap a vault (``vaulted`` with what it needs)."""
+        if self.needs_geometry:
+            return bool(self.vaulted(trajectory, u_center, th, geometry))
+        return bool(self.vaulted(trajectory, u_center, th))
 
 
 #: Pole-vaulting rules by name; ``head-speed`` is the source's and the default.
@@ -129,6 +219,13 @@ RULES: dict[str, Rule] = {
         Rule("head-speed", "head blocked (speed < head_blocked_speed U) in contact", _head_blocked),
         Rule("pivot", "head travels < pivot_fraction L while turning 90° after contact", _pivots),
         Rule("switch", "front and rear switch after a contact", _touched),
+        Rule(
+            "corner",
+            "head held within corner_fraction L of a pillar corner while the fiber turns "
+            "corner_turn degrees",
+            _corner_vault,
+            needs_geometry=True,
+        ),
     )
 }
 
@@ -159,7 +256,7 @@ def classify(
     KeyError
         Unknown rule (the config and the CLI check names against :data:`RULES`).
     """
-    vaulted = RULES[rule or thresholds.rule].vaulted
+    chosen = RULES[rule or thresholds.rule]
     tr = trajectory
     if len(tr.t) < 2:
         return ""
@@ -169,7 +266,7 @@ def classify(
     y_cross = pass_crossing(tr, geometry, u_center)
     if np.isnan(y_cross):
         return ""
-    if swapped and vaulted(tr, u_center, thresholds):
+    if swapped and chosen.applies(tr, geometry, u_center, thresholds):
         return "Pole-vaulting"
     return "Above" if y_cross > geometry.centroid[1] else "Below"
 

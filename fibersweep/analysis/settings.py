@@ -25,10 +25,19 @@ class ClassifySettings(_Strict):
     )
     rule: str = Field(
         "head-speed",
-        description="pole-vaulting rule: head-speed (the source's), pivot or switch",
+        description="pole-vaulting rule: head-speed (the source's), pivot, switch or corner",
     )
     pivot_fraction: float = Field(
         0.5, gt=0, description="pivot rule: the head moves less than this x L while turning 90°"
+    )
+    corner_fraction: float = Field(
+        0.3,
+        gt=0,
+        le=1,
+        description="corner rule: the head stays within this x L of a pillar corner ...",
+    )
+    corner_turn: float = Field(
+        90.0, gt=0, le=180, description="corner rule: ... while the fiber turns this much [deg]"
     )
 
     @field_validator("rule")

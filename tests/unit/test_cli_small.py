@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
+from fibersweep.analysis.classify import RULES
 from fibersweep.cli import app
 from fibersweep.config import load_config
 from fibersweep.config.errors import ConfigError
@@ -69,6 +70,6 @@ def test_shell_completion_completes_commands_options_and_choices():
     ]
     assert _complete("fibersweep plot-p") == ["plot-phase"]
     assert "--executor" in _complete("fibersweep run c.yaml --exe")
-    assert _complete("fibersweep classify r --rule ") == ["head-speed", "pivot", "switch"]
+    assert sorted(_complete("fibersweep classify r --rule ")) == sorted(RULES)
     res = runner.invoke(app, ["--help"])
     assert "--install-completion" in res.output and "--show-completion" in res.output

@@ -131,6 +131,7 @@ def _turning(head_path: str, m: int = 401, length: float = 100.0):
         ("head-speed", "Pole-vaulting", "Above"),  # the sliding head never stops
         ("pivot", "Pole-vaulting", "Above"),  # head travel 0 vs about 2.4 L while turning
         ("switch", "Pole-vaulting", "Pole-vaulting"),  # any swap after contact
+        ("corner", "Pole-vaulting", "Above"),  # head 22 µm (< 0.3 L) from the apex vs sliding
     ],
 )
 def test_every_rule_on_a_pivot_and_on_a_sliding_flip(rule, pivot, slide):
@@ -146,6 +147,6 @@ def test_every_rule_is_tested_and_unknown_rules_are_refused():
 
     from fibersweep.analysis.classify import RULES
 
-    assert set(RULES) == {"head-speed", "pivot", "switch"}  # extend the table above
-    with pytest.raises(ValidationError, match="unknown rule; valid: head-speed, pivot, switch"):
+    assert set(RULES) == {"head-speed", "pivot", "switch", "corner"}  # extend the table above
+    with pytest.raises(ValidationError, match="unknown rule; valid: head-speed, pivot, switch, co"):
         ClassifySettings(rule="wobble")
