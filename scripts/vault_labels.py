@@ -27,6 +27,8 @@ Usage::
     python scripts/vault_labels.py select results/band-dx4 > starts.csv   # one-off
     python scripts/vault_labels.py simulate [--config configs/quick.yaml]
     python scripts/vault_labels.py pictures
+    python scripts/vault_labels.py pictures --set holdout --out docs/figures/vault-labels/holdout \
+        --zoom --grid 2x3 --dpi 110 --snapshots 18
     python scripts/vault_labels.py compare
 """
 
@@ -236,6 +238,14 @@ def compare(starts: pd.DataFrame, config: Path) -> None:
     done = starts[starts["label"].isin(CLASSES)]
     print(f"{len(done)} labelled runs ({(done['label'].value_counts()).to_dict()})")
     got = rule_labels(done, trajs, geometry, u, th, RULES)
+    print("agreement per set (the default was chosen on 'design', confirmed on 'holdout'):")
+    for name in RULES:
+        cells = [
+            f"{s} {int((got[name][m] == done['label'][m]).sum())}/{int(m.sum())}"
+            for s in done["set"].unique()
+            for m in [done["set"] == s]
+        ]
+        print(f"  {name:12s} " + ", ".join(cells))
     for name in RULES:
         agree = int((got[name] == done["label"]).sum())
         print(f"\n{name}: {agree} of {len(done)} agree ({agree / len(done):.1%})")
@@ -277,6 +287,7 @@ def main() -> None:
         if name == "pictures":
             p.add_argument("--out", type=Path, default=SHEETS, help="folder of the sheets")
             p.add_argument("--ids", default="", help="only these label ids (comma-separated)")
+            p.add_argument("--set", default="", help="only the runs of this set (design, holdout)")
             p.add_argument("--grid", default="3x3", help="panels per sheet, ROWSxCOLUMNS")
             p.add_argument("--snapshots", type=int, default=22, help="fibers drawn per run")
             p.add_argument("--dpi", type=int, default=90)
@@ -298,6 +309,8 @@ def main() -> None:
         field, _ = field_and_settings(args.config)
         if args.ids:
             starts = starts[starts["id"].isin([int(i) for i in args.ids.split(",")])]
+        if args.set:
+            starts = starts[starts["set"] == args.set]
         grid = tuple(int(v) for v in args.grid.split("x"))
         sheets = contact_sheets(
             starts,

@@ -9,14 +9,15 @@ Rules (docs/model.md; thresholds in :class:`ClassifySettings`):
    more than 90° between the first and last sample) and the turn is a vault by
    the chosen rule (:data:`RULES`, ``ClassifySettings.rule``):
 
-   * ``head-speed`` (default; the source's rule): while in contact the head
+   * ``head-speed`` (the source's rule): while in contact the head
      (the bead that leads at the start) is blocked, speed below
      ``head_blocked_speed``·|U_center|, at some sample;
    * ``pivot``: from the first contact until the fiber has turned through 90°,
      the head travels less than ``pivot_fraction``·L: the fiber turns about its
      head instead of sliding past;
-   * ``switch``: the fiber touched the pillar (front and rear switch after a
-     contact, whatever the head did);
+   * ``switch`` (default: it agrees best with runs labelled by eye,
+     docs/fidelity.md): the fiber touched the pillar (front and rear switch
+     after a contact, whatever the head did);
    * ``corner``: the head stays within ``corner_fraction``·L of one pillar
      corner while the fiber turns through ``corner_turn`` degrees, with a
      contact on the way: the fiber swings about its head held at the corner
@@ -212,7 +213,7 @@ class Rule:
         return bool(self.vaulted(trajectory, u_center, th))
 
 
-#: Pole-vaulting rules by name; ``head-speed`` is the source's and the default.
+#: Pole-vaulting rules by name; ``switch`` is the default, ``head-speed`` the source's.
 RULES: dict[str, Rule] = {
     r.name: r
     for r in (

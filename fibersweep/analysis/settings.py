@@ -24,8 +24,11 @@ class ClassifySettings(_Strict):
         0.01, gt=0, description="'stopped' means COM speed below this fraction of U_center"
     )
     rule: str = Field(
-        "head-speed",
-        description="pole-vaulting rule: head-speed (the source's), pivot, switch or corner",
+        "switch",
+        description=(
+            "pole-vaulting rule: switch (default: agrees best with a person's eye, "
+            "docs/fidelity.md), head-speed (the source's), pivot or corner"
+        ),
     )
     pivot_fraction: float = Field(
         0.5, gt=0, description="pivot rule: the head moves less than this x L while turning 90°"

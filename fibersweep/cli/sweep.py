@@ -401,7 +401,7 @@ def classify(
     rule: Annotated[
         Rule | None,
         typer.Option(
-            help="Pole-vaulting rule: head-speed (the source's), pivot or switch.",
+            help="Pole-vaulting rule: switch (default), head-speed (the source's), pivot, corner.",
             show_default=SWEEP_CLASSIFY,
         ),
     ] = None,

@@ -366,9 +366,11 @@ def phase_figure(
     fixed = _fixed_title(runs, col, row) if n_panels > 1 else ""
     legend_kw = {"title": fixed, "title_fontsize": "medium"} if fixed else {}
     thetas = np.unique(runs["theta0"].to_numpy(dtype=float))
-    if 1 < thetas.size <= 9:  # few start angles: a tick at each
+    if 1 < thetas.size <= 9:  # few start angles: a tick at each, or at every other
+        every = 1 if thetas.size * axes.shape[1] <= 18 else 2  # side by side, labels collide
         for ax, _, _ in cells:
-            ax.set_xticks(thetas)
+            ax.set_xticks(thetas[::every])
+            ax.xaxis.set_major_formatter("{x:g}")
     if row is None:
         _label_axes(axes, n_panels)
     else:

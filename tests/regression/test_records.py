@@ -79,8 +79,8 @@ def test_classify_keeps_provenance_and_records_the_rule(swept, tmp_path):
     out = tmp_path / "copy"
     shutil.copytree(src, out)
     before = _meta(list_parts(out / RUNS_DIR)[-1])
-    assert before["config"]["fiber"]["classify"]["rule"] == "head-speed"
-    assert (read_runs(out)["class_rule"] == "head-speed").all()
+    assert before["config"]["fiber"]["classify"]["rule"] == "switch"
+    assert (read_runs(out)["class_rule"] == "switch").all()
     res, text = _invoke("classify", out, "--rule", "pivot")
     assert res.exit_code == 0, text
     parts = list_parts(out / RUNS_DIR)
@@ -108,12 +108,12 @@ def test_a_folder_that_mixes_rules_is_flagged_everywhere_until_relabelled(
     shutil.copytree(src, out)
     res, text = _invoke("classify", out, "--rule", "pivot")
     assert res.exit_code == 0, text
-    # the README's order: classify --rule pivot, then an axis run adds head-speed rows
+    # the README's order: classify --rule pivot, then an axis run adds rows by the default rule
     res, text = _invoke("run", _config(tmp_path, flow_cache_dir, "[0.39, 0.9, 0.2]"))
     assert res.exit_code == 0, text
-    assert "mixes pole-vaulting rules (4 by pivot, 2 by head-speed runs)" in text, text
+    assert "mixes pole-vaulting rules (4 by pivot, 2 by switch runs)" in text, text
     runs = read_runs(out)
-    assert sorted(runs["class_rule"]) == ["head-speed"] * 2 + ["pivot"] * 4
+    assert sorted(runs["class_rule"]) == ["pivot"] * 4 + ["switch"] * 2
     res, text = _invoke("check", out)
     assert res.exit_code == 0 and "warning:" in text and "--rule pivot" in text, text
     res, text = _invoke("plot-phase", out, "-o", tmp_path / "fig")
@@ -132,7 +132,7 @@ def test_load_returns_runs_trajectories_settings_and_units(swept):
     res = fibersweep.load(out)
     assert len(res.runs) == 4 and set(res.trajectories["id"]) == set(res.runs["id"])
     assert res.settings["sweep"]["y0"] == [0.39, 0.9]
-    assert res.settings["fiber"]["classify"]["rule"] == "head-speed"
+    assert res.settings["fiber"]["classify"]["rule"] == "switch"
     assert res.units["y0"] == "h_obs" and res.units["delta"] == "h_obs"
     assert res.units["x"] == "µm" and res.units["t"] == "s"
     assert res.runs.attrs["units"]["theta0"] == "deg"

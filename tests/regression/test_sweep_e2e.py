@@ -326,11 +326,11 @@ def test_classify_uses_the_speed_the_runs_moved_in(
 
     assert len(seen) == len(RULES) * len(before) and set(seen) == {man["u_center_effective"]}
     after = read_runs(out)  # one class column per rule, 'class' the default rule's
-    assert (after["class"] == after[rule_column("head-speed")]).all()
+    assert (after["class"] == after[rule_column("switch")]).all()
     assert {rule_column(r) for r in RULES} <= set(after.columns)
-    res, text = _invoke("classify", out, "--rule", "switch")
-    assert res.exit_code == 0 and "rule='switch'" in text, text
-    assert (read_runs(out)["class"] == after[rule_column("switch")]).all()
+    res, text = _invoke("classify", out, "--rule", "head-speed")
+    assert res.exit_code == 0 and "rule='head-speed'" in text, text
+    assert (read_runs(out)["class"] == after[rule_column("head-speed")]).all()
 
 
 def test_run_with_overrides_records_them(tmp_path, coarse_field, flow_cache_dir):

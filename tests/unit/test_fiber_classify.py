@@ -50,16 +50,25 @@ def test_above_below_by_side_of_centroid():
     assert classify(rev, GEO, -U, TH) == "Above"
 
 
-def test_pole_vault_needs_blocked_head_and_swap():
-    assert classify(_passing(40, 180, head_min=1.0, contact=True), GEO, U, TH) == "Pole-vaulting"
+def test_head_speed_vault_needs_blocked_head_and_swap():
+    hs = ClassifySettings(rule="head-speed")  # the source's rule
+    assert classify(_passing(40, 180, head_min=1.0, contact=True), GEO, U, hs) == "Pole-vaulting"
     # head not blocked (above 0.01 U = 6 µm/s): the side decides
-    assert classify(_passing(40, 180, head_min=50.0, contact=True), GEO, U, TH) == "Above"
+    assert classify(_passing(40, 180, head_min=50.0, contact=True), GEO, U, hs) == "Above"
     # ... unless the threshold is raised: re-classification without simulating
-    loose = ClassifySettings(head_blocked_speed=0.1)
+    loose = ClassifySettings(rule="head-speed", head_blocked_speed=0.1)
     assert classify(_passing(40, 180, head_min=50.0, contact=True), GEO, U, loose) == (
         "Pole-vaulting"
     )
     # blocked but no swap
+    assert classify(_passing(-40, 30, head_min=1.0, contact=True), GEO, U, hs) == "Below"
+
+
+def test_default_rule_is_switch_a_swap_after_contact():
+    """The default (docs/fidelity.md: best agreement with the eye) needs a swap and a contact."""
+    assert TH.rule == "switch"
+    assert classify(_passing(40, 180, head_min=50.0, contact=True), GEO, U, TH) == "Pole-vaulting"
+    assert classify(_passing(40, 180, head_min=50.0, contact=False), GEO, U, TH) == "Above"
     assert classify(_passing(-40, 30, head_min=1.0, contact=True), GEO, U, TH) == "Below"
 
 
