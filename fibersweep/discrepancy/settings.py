@@ -167,10 +167,12 @@ class Plan:
     def refit_evals(self) -> int:
         """Brent steps of a pooled refit: two fewer than a half's fit.
 
-        The refit starts from the two halves' values, whose runs are already held
-        (one half by its fit, the other by its cross-fitted copies), and searches a
-        narrowed interval around them: the same number of evaluated values as a
-        half's fit, two of them without new runs.
+        The refit starts from the two halves' values and searches a narrowed
+        interval around them: the same number of evaluated values as a half's fit.
+        At a half's value the fibers it scores hold their cross-fitted copies; the
+        other half's fibers are simulated (a half's value is the score test's zero,
+        in general not a point its fit simulated: :mod:`.crossfit`), so the two
+        starting values cost one evaluation on all fibers (:meth:`cost`).
         """
         return max(1, self.fit_evals - 2)
 
@@ -183,7 +185,8 @@ class Plan:
             # + 1: the side check of a signed effect (fit.fit_effect)
             "fits": 2 * self.candidates * (self.fit_evals + 1) * self.fit_copies * half,
             "heldout": self.candidates * self.copies * n,
-            "refits": self.refits * (self.refit_evals * self.fit_copies + self.copies) * n,
+            # + 1: the halves' values on the fibers their cross-fitted copies did not cover
+            "refits": self.refits * ((self.refit_evals + 1) * self.fit_copies + self.copies) * n,
             # per pair: joint fits on both folds, pair_rounds 1D fits each (+1: side
             # check; + the other member alone), cross-fitted copies, final copies
             "pairs": self.pairs
@@ -196,7 +199,7 @@ class Plan:
             * (
                 2 * (self.fit_evals + 1) * (self.random_fit_copies - self.fit_copies) * half
                 + (self.random_copies - self.copies) * n
-                + self.refit_evals * (self.random_fit_copies - self.fit_copies) * n
+                + (self.refit_evals + 1) * (self.random_fit_copies - self.fit_copies) * n
             ),
         }
 

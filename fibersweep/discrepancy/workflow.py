@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.crossfit import fold_fits, pooled_refit
 from fibersweep.discrepancy.decide import (
     HeldOut,
     SetHeldOut,
@@ -40,7 +41,6 @@ from fibersweep.discrepancy.decide import (
 from fibersweep.discrepancy.fit import (
     Fit,
     Signature,
-    fit_effect,
     rank_effects,
     score_interval,
 )
@@ -272,24 +272,22 @@ def cross_fit(st: State) -> State:
     run, plan, s = st.run, st.run.plan, st.run.settings
     fits: list[Fit] = []
     fold_values: dict[str, list[float]] = {}
-    for f_idx in range(len(run.folds)):
-        train = run.folds[1 - f_idx]
-        obs_tr = run.observed.iloc[train].reset_index(drop=True)
-        for sg in st.chosen:
-            cand = run.candidate(sg.name)
-            fit = fit_effect(
-                cand,
-                run.maker,
-                obs_tr,
-                _subset(st.base[: plan.fit_copies_of(cand, cand.name == st.lead)], train),
-                train,
-                run.observables,
-                st.w_gap,
-                plan.fit_evals,
-                side=float(np.sign(sg.probe)),
-            )
-            fits.append(fit)
-            fold_values.setdefault(sg.name, []).append(fit.value)
+    for sg in st.chosen:
+        cand = run.candidate(sg.name)
+        # each half's value is the score test's zero, as the pooled refit's (crossfit.py)
+        per_fold = fold_fits(
+            cand,
+            run.maker,
+            run.observed,
+            st.base[: plan.fit_copies_of(cand, cand.name == st.lead)],
+            run.folds,
+            run.observables,
+            st.w_gap,
+            plan.fit_evals,
+            side=float(np.sign(sg.probe)),
+        )
+        fits += per_fold
+        fold_values[sg.name] = [f.value for f in per_fold]
     base_scores = weighted_loss(st.values, st.w_gap)
     eff_scores, eff_values, residuals, fitted = {}, {}, {}, {}
     effect_copies: dict[str, list[pd.DataFrame]] = {}
@@ -332,22 +330,15 @@ def refit(st: State) -> State:
     final = {}
     for h in sig[: plan.refits]:
         cand = run.candidate(h.name)
-        vals = st.fold_values[h.name]
-        pad = 0.25 * (cand.hi - cand.lo)
-        bounds = (max(cand.lo, min(vals) - pad), min(cand.hi, max(vals) + pad))
-        fit = fit_effect(
+        fit = pooled_refit(
             cand,
             run.maker,
             run.observed,
             st.base[: plan.fit_copies_of(cand, cand.name == st.lead)],
-            np.arange(run.n),
+            st.fold_values[h.name],  # both halves' values: the first evaluated
             run.observables,
             st.w_gap,
             plan.refit_evals,
-            bounds=bounds,
-            stage="refit",
-            known=vals,  # both halves' values: their runs are held (no cost)
-            estimate=True,  # the quoted value: the score test's zero (issue 30)
         )
         fits.append(fit)
         intervals[h.name] = score_interval(fit)
