@@ -235,6 +235,14 @@ def _before_after(s: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _fibers_ci(ci: Any) -> str:
+    """' (95 % over the simulated starts: lo–hi)', or '' when not computed."""
+    if not ci:
+        return ""
+    lo, hi = (_f(x, "d") if x is not None else "> 100000" for x in ci)
+    return f" (95 % over the simulated starts: {lo}–{hi})"
+
+
 def _power(s: dict[str, Any]) -> list[str]:
     pw = s["power"]
     if pw is None:
@@ -295,7 +303,8 @@ def _power(s: dict[str, Any]) -> list[str]:
         lines += [
             "",
             f"Leading candidate {lead['effect']} = {lead['value']:.3g}: about "
-            f"{_f(lead['fibers_to_detect'], 'd')} fibers would detect a gap of this size; "
+            f"{_f(lead['fibers_to_detect'], 'd')} fibers would detect a gap of this size"
+            f"{_fibers_ci(lead.get('fibers_to_detect_ci'))}; "
             f"about {_f(lead['fibers_to_name'], 'd')} would make its held-out improvement "
             "significant (from the spread of the per-fiber improvement measured here).",
         ]
