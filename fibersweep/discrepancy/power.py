@@ -211,16 +211,19 @@ def percentile_interval(
 ) -> tuple[float | None, float | None]:
     """Percentile interval of bootstrap values that may be infinite (never reached).
 
-    The order statistics at (1 - level)/2 and (1 + level)/2 (``inverted_cdf``: no
-    interpolation, so an end between a finite and an infinite value, or between two
-    infinite ones, is one of them, never NaN). An infinite end is None.
+    The order statistics at (1 - level)/2 and (1 + level)/2 of the empirical
+    distribution (the k-th smallest of n values with k = ceil(n q); no
+    interpolation, so an end between a finite and an infinite value, or between
+    two infinite ones, is one of them, never NaN). An infinite end is None.
     """
-    if len(values) == 0:
+    v = np.sort(np.asarray(values, dtype=np.float64))
+    if len(v) == 0:
         return (None, None)
-    q = np.quantile(np.asarray(values, dtype=np.float64), [(1 - level) / 2, (1 + level) / 2],
-                    method="inverted_cdf")  # fmt: skip
-    lo, hi = (float(x) if math.isfinite(x) else None for x in q)
-    return lo, hi
+    a = (1.0 - level) / 2.0
+    # 1e-9: n q is an integer in exact arithmetic where float rounding would step over it
+    k = [math.ceil(len(v) * q - 1e-9) - 1 for q in (a, 1.0 - a)]
+    lo, hi = (float(v[min(max(i, 0), len(v) - 1)]) for i in k)
+    return (lo if math.isfinite(lo) else None, hi if math.isfinite(hi) else None)
 
 
 def detect_probability(
