@@ -30,7 +30,7 @@ def _range(ci: Any) -> str:
     if not ci:
         return ""
     lo, hi = ci
-    return f" (95 % over the simulated starts: {_n(lo)}–{_n(hi)})"
+    return f" (95 % over the simulated starts: {_n(lo)} to {_n(hi)})"
 
 
 def next_measurement(s: dict[str, Any]) -> list[str]:

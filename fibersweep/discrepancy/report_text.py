@@ -236,11 +236,11 @@ def _before_after(s: dict[str, Any]) -> list[str]:
 
 
 def _fibers_ci(ci: Any) -> str:
-    """' (95 % over the simulated starts: lo–hi)', or '' when not computed."""
+    """' (95 % over the simulated starts: lo to hi)', or '' when not computed."""
     if not ci:
         return ""
-    lo, hi = (_f(x, "d") if x is not None else "> 100000" for x in ci)
-    return f" (95 % over the simulated starts: {lo}–{hi})"
+    lo, hi = (_f(x, "d") if x is not None else "more than 100000" for x in ci)
+    return f" (95 % over the simulated starts: {lo} to {hi})"
 
 
 def _power(s: dict[str, Any]) -> list[str]:
