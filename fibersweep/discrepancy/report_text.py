@@ -159,7 +159,9 @@ def _fits(s: dict[str, Any]) -> list[str]:
         "",
         "## Fits per half and the out-of-sample decision",
         "",
-        "Each half is scored with the value fitted on the other half. Final: the value "
+        "Each half is scored with the value fitted on the other half. Every value is the one "
+        "the fit's score test is most compatible with (the zero of its mean loss slope; for a "
+        "random effect, where the data are as spread as its copies). Final: the value "
         "refitted on all fibers (significant candidates), with its 95 % interval: the values "
         "where the fibers' mean loss slope is not significantly different from zero (a score "
         "test over the fibers; it includes the copies' Monte Carlo noise). '≤' / '≥' mark an "
