@@ -29,7 +29,13 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.crossfit import fold_fits, pooled_refit
+from fibersweep.discrepancy.crossfit import (
+    fold_fits,
+    pooled_refit,
+    shared_fold_fits,
+    shared_pooled_refit,
+    shared_values,
+)
 from fibersweep.discrepancy.decide import (
     HeldOut,
     SetHeldOut,
@@ -193,6 +199,8 @@ class State:
     chosen : tuple of Signature
         The candidates fitted.
     fits : tuple of Fit
+    fold_fits : dict of str -> tuple of Fit
+        Each fitted effect's two halves' fits (fold 0's value first).
     fold_values : dict of str -> list of float
         Each fitted effect's value on each fold.
     eff_values : dict
@@ -219,6 +227,7 @@ class State:
     chosen: tuple[Signature, ...] = ()
     lead: str = ""
     fits: tuple[Fit, ...] = ()
+    fold_fits: dict[str, tuple[Fit, ...]] = field(default_factory=dict)
     fold_values: dict[str, list[float]] = field(default_factory=dict)
     eff_values: dict[str, Any] = field(default_factory=dict)
     heldout: tuple[HeldOut, ...] = ()
@@ -272,21 +281,21 @@ def cross_fit(st: State) -> State:
     run, plan, s = st.run, st.run.plan, st.run.settings
     fits: list[Fit] = []
     fold_values: dict[str, list[float]] = {}
+    by_name: dict[str, tuple[Fit, ...]] = {}
     for sg in st.chosen:
         cand = run.candidate(sg.name)
+        base = st.base[: plan.fit_copies_of(cand, cand.name == st.lead)]
         # each half's value is the score test's zero, as the pooled refit's (crossfit.py)
-        per_fold = fold_fits(
-            cand,
-            run.maker,
-            run.observed,
-            st.base[: plan.fit_copies_of(cand, cand.name == st.lead)],
-            run.folds,
-            run.observables,
-            st.w_gap,
-            plan.fit_evals,
-            side=float(np.sign(sg.probe)),
-        )
+        if s.fit_grid:
+            vals = shared_values(cand, float(np.sign(sg.probe)), plan.fit_evals + 1)
+            per_fold = shared_fold_fits(cand, run.maker, run.observed, base, run.folds,
+                                        run.observables, st.w_gap, vals)  # fmt: skip
+        else:
+            per_fold = fold_fits(cand, run.maker, run.observed, base, run.folds,
+                                 run.observables, st.w_gap, plan.fit_evals,
+                                 side=float(np.sign(sg.probe)))  # fmt: skip
         fits += per_fold
+        by_name[sg.name] = tuple(per_fold)
         fold_values[sg.name] = [f.value for f in per_fold]
     base_scores = weighted_loss(st.values, st.w_gap)
     eff_scores, eff_values, residuals, fitted = {}, {}, {}, {}
@@ -312,6 +321,7 @@ def cross_fit(st: State) -> State:
     return replace(
         st,
         fits=st.fits + tuple(fits),
+        fold_fits=by_name,
         fold_values=kept,
         eff_values=eff_values,
         heldout=tuple(heldout),
@@ -330,16 +340,14 @@ def refit(st: State) -> State:
     final = {}
     for h in sig[: plan.refits]:
         cand = run.candidate(h.name)
-        fit = pooled_refit(
-            cand,
-            run.maker,
-            run.observed,
-            st.base[: plan.fit_copies_of(cand, cand.name == st.lead)],
-            st.fold_values[h.name],  # both halves' values: the first evaluated
-            run.observables,
-            st.w_gap,
-            plan.refit_evals,
-        )
+        base = st.base[: plan.fit_copies_of(cand, cand.name == st.lead)]
+        if s.fit_grid:  # the halves' profiles side by side, refined around their estimate
+            halves = st.fold_fits[h.name]
+            fit = shared_pooled_refit(cand, run.maker, run.observed, base, halves, run.folds,
+                                      run.observables, st.w_gap, plan.refit_evals)  # fmt: skip
+        else:  # both halves' values evaluated first, then a search around them
+            fit = pooled_refit(cand, run.maker, run.observed, base, st.fold_values[h.name],
+                               run.observables, st.w_gap, plan.refit_evals)  # fmt: skip
         fits.append(fit)
         intervals[h.name] = score_interval(fit)
         if fit.value == 0.0:
