@@ -463,6 +463,9 @@ def main() -> None:
     ap.add_argument("--candidates", type=int, default=3)
     ap.add_argument("--fit-evals", type=int, default=5)
     ap.add_argument("--refits", type=int, default=2)
+    ap.add_argument("--fit-grid", action="store_true",
+                    help="fit both halves at shared values fixed before the data "
+                         "(DiscrepancySettings.fit_grid; off: Brent searches)")  # fmt: skip
     ap.add_argument("--pairs", type=int, default=2)
     ap.add_argument("--power-fibers", type=int, default=40,
                     help="fibers simulated by the power analyses (0: none)")  # fmt: skip
@@ -491,7 +494,7 @@ def main() -> None:
         copies=args.copies, fit_copies=args.fit_copies, candidates=args.candidates,
         random_fit_copies=args.random_fit_copies, random_copies=args.random_copies,
         fit_evals=args.fit_evals, refits=args.refits, pairs=args.pairs,
-        power_fibers=args.power_fibers,
+        power_fibers=args.power_fibers, fit_grid=args.fit_grid,
     )  # fmt: skip
     field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
     out = Path(args.out)
