@@ -263,9 +263,12 @@ def shared_pooled_refit(
     """The pooled refit of halves fitted at shared values (:func:`shared_fold_fits`).
 
     Its profile at the shared values is the two halves' side by side (no
-    simulation); its estimate there is refined by ``max_evals`` Brent steps on all
-    fibers between the shared values on either side of it, and the value quoted
-    is the score test's zero over all of these values.
+    simulation); its estimate there is refined by ``max_evals`` evenly spaced
+    values on all fibers across two grid intervals around it (from the grid value
+    below its insertion point to the one after the next), and the value quoted is
+    the score test's zero over all of these values. Evenly spaced, not a Brent
+    search: on the smooth stand-in, golden-section points there biased the value
+    (-0.026 for a truth of 0.6) and cut the interval's coverage to 0.71.
     """
     n = len(observed)
     prof = _side_by_side([h.profile for h in halves], folds, n)
