@@ -320,3 +320,17 @@ def test_shared_values_of_a_random_effect_quote_the_dispersion_root():
         hits += lo <= 2.5 <= hi
     assert abs(np.mean(vals) - 2.5) < 0.3
     assert hits / 40 >= 0.80
+
+
+def test_plan_counts_the_refits_starting_values_unless_the_fit_values_are_shared():
+    from fibersweep.discrepancy.library import get_candidates
+    from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
+
+    cands = get_candidates(["friction", "inlet_speed"])
+    searched = plan_budget(100, DiscrepancySettings(), cands)
+    shared = plan_budget(100, DiscrepancySettings(fit_grid=True), cands)
+    # 2 refits x ((3 Brent steps + 1 for the halves' values) x 2 fit copies + 8 copies)
+    # x 100 fibers; shared values: the halves' profiles are the pooled refit's
+    assert searched.cost(100)["refits"] == 2 * ((3 + 1) * 2 + 8) * 100
+    assert shared.cost(100)["refits"] == 2 * (3 * 2 + 8) * 100
+    assert searched.cost(100)["fits"] == shared.cost(100)["fits"]
