@@ -424,7 +424,8 @@ def fit_effect(
         The baseline copies 0..fit_copies-1 restricted to ``rows`` (the value 0).
     max_evals : int
         Simulated evaluations allowed (each is len(rows) x fit_copies runs); one
-        more for the side check of a signed effect.
+        more for the side check of a signed effect. 0: no search, only the
+        baseline and the ``known`` values are evaluated.
     side : float
         For a signed effect, the sign of the best-matching probe (0: search both).
     bounds : (lo, hi), optional
@@ -496,12 +497,13 @@ def fit_effect(
         if loss(0.2 * (cand.lo if side > 0 else cand.hi)) < seen[0.0]:
             side = -side
         lo, hi = (0.0, cand.hi) if side > 0 else (cand.lo, 0.0)
-    minimize_scalar(
-        loss,
-        bounds=(lo, hi),
-        method="bounded",
-        options={"maxiter": max_evals, "xatol": 1e-3 * (cand.hi - cand.lo)},
-    )
+    if max_evals > 0:  # 0: only the known values (a fixed design, crossfit.shared_values)
+        minimize_scalar(
+            loss,
+            bounds=(lo, hi),
+            method="bounded",
+            options={"maxiter": max_evals, "xatol": 1e-3 * (cand.hi - cand.lo)},
+        )
     best = min(seen, key=lambda p: (seen[p], abs(p)))
     evals = tuple(sorted(seen.items()))
     log.info("fit %s: %.4g (loss %.4g vs baseline %.4g)", cand.name, best, seen[best], seen[0.0])

@@ -36,7 +36,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -61,6 +61,7 @@ __all__ = [
     "standardised_values",
     "detect_probability",
     "limit_intervals",
+    "percentile_interval",
 ]
 
 log = logging.getLogger(__name__)
@@ -96,6 +97,10 @@ class EffectPower:
         (:mod:`.dispersion`, one-sided at alpha) detects with the target power
         at ``n`` fibers, scaled like ``limit``. None: not a random effect, or
         not within its range.
+    boot : tuple of (z, gamma)
+        The read-out of each bootstrap resample of the simulated starts
+        (:func:`limit_intervals`), for the intervals of derived numbers
+        (:meth:`fibers_needed_ci`). Empty: not computed.
     """
 
     name: str
@@ -106,6 +111,7 @@ class EffectPower:
     one_sided: tuple[bool, ...] | None = None
     limit_ci: tuple[float | None, float | None] | None = None
     dispersion_limit: float | None = None
+    boot: tuple[tuple[tuple[float, ...], float], ...] = field(default=(), repr=False)
 
     def detect(self, m: float, n_fibers: int, n_sim: int, z_crit: float) -> float:
         """Detection probability at magnitude m (same sign as the probe) and N fibers."""
@@ -128,6 +134,25 @@ class EffectPower:
             else:
                 lo = mid + 1
         return lo
+
+    def fibers_needed_ci(
+        self, m: float, n_sim: int, z_crit: float, power: float, level: float = 0.95
+    ) -> tuple[int | None, int | None] | None:
+        """Interval of :meth:`fibers_needed` over the bootstrap resamples of the starts.
+
+        Each resample's read-out (z-vector and exponent, :attr:`boot`) gives its own
+        number of fibers; the interval is their percentile interval at ``level``
+        (:func:`percentile_interval`). An end None: more than ``most`` fibers (or
+        never) in more than (1 - level)/2 of the resamples. None without resamples.
+        """
+        if not self.boot:
+            return None
+        ns = []
+        for z, gamma in self.boot:
+            k = replace(self, z=z, gamma=gamma, boot=()).fibers_needed(m, n_sim, z_crit, power)
+            ns.append(math.inf if k is None else float(k))
+        lo, hi = percentile_interval(ns, level)
+        return (None if lo is None else int(lo), None if hi is None else int(hi))
 
 
 @dataclass(frozen=True)
@@ -173,6 +198,32 @@ class PowerResult:
         """Fibers that detect ``name`` at magnitude m with the target power."""
         e = self.get(name, m)
         return None if e is None else e.fibers_needed(m, self.n_sim, self.z_crit, self.power)
+
+    def fibers_needed_ci(self, name: str, m: float) -> tuple[int | None, int | None] | None:
+        """95 % interval of :meth:`fibers_needed` over the simulated starts (None: not
+        computed; an end None: beyond 100 000 fibers)."""
+        e = self.get(name, m)
+        return None if e is None else e.fibers_needed_ci(m, self.n_sim, self.z_crit, self.power)
+
+
+def percentile_interval(
+    values: Sequence[float], level: float = 0.95
+) -> tuple[float | None, float | None]:
+    """Percentile interval of bootstrap values that may be infinite (never reached).
+
+    The order statistics at (1 - level)/2 and (1 + level)/2 of the empirical
+    distribution (the k-th smallest of n values with k = ceil(n q); no
+    interpolation, so an end between a finite and an infinite value, or between
+    two infinite ones, is one of them, never NaN). An infinite end is None.
+    """
+    v = np.sort(np.asarray(values, dtype=np.float64))
+    if len(v) == 0:
+        return (None, None)
+    a = (1.0 - level) / 2.0
+    # 1e-9: n q is an integer in exact arithmetic where float rounding would step over it
+    k = [math.ceil(len(v) * q - 1e-9) - 1 for q in (a, 1.0 - a)]
+    lo, hi = (float(v[min(max(i, 0), len(v) - 1)]) for i in k)
+    return (lo if math.isfinite(lo) else None, hi if math.isfinite(hi) else None)
 
 
 def detect_probability(
@@ -332,6 +383,7 @@ def limit_intervals(
     n_sim = len(base[0])
     by = {c.name: c for c in candidates}
     lims: list[list[float]] = [[] for _ in effects]
+    reads: list[list[tuple[tuple[float, ...], float]]] = [[] for _ in effects]
     for _ in range(n_boot):
         idx = rng.integers(0, n_sim, n_sim)
         sub_b = [b.iloc[idx].reset_index(drop=True) for b in base]
@@ -343,12 +395,12 @@ def limit_intervals(
             eb = replace(e, z=tuple(float(x) for x in z_full), gamma=_gamma(z_full, z_half))
             lim = _limit(eb, by[e.name], n, n_sim, z_crit, power)
             lims[i].append(math.inf if lim is None else abs(lim))
+            reads[i].append((eb.z, eb.gamma))
     out = []
-    for e, ls in zip(effects, lims, strict=True):
-        lo, hi = np.percentile(ls, [2.5, 97.5]) if ls else (math.inf, math.inf)
-        ci = tuple(None if not math.isfinite(x) else math.copysign(float(x), e.probe)
-                   for x in (lo, hi))  # fmt: skip
-        out.append(replace(e, limit_ci=ci))
+    for e, ls, rd in zip(effects, lims, reads, strict=True):
+        ci = tuple(None if x is None else math.copysign(x, e.probe)
+                   for x in percentile_interval(ls))  # fmt: skip
+        out.append(replace(e, limit_ci=ci, boot=tuple(rd)))
     return out
 
 

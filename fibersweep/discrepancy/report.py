@@ -28,6 +28,7 @@ import numpy as np
 import yaml
 
 from fibersweep.atomic import atomic_write
+from fibersweep.discrepancy.advice import next_measurement
 from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.gap import GapResult, value_matrices
 from fibersweep.discrepancy.library import LIBRARY
@@ -144,6 +145,7 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
                 "effect": h.name,
                 "value": h.value,
                 "fibers_to_detect": pw.fibers_needed(h.name, h.value),
+                "fibers_to_detect_ci": pw.fibers_needed_ci(h.name, h.value),
                 "fibers_to_name": fibers_to_name(
                     h.per_fiber, len(res.heldout), res.settings.alpha, pw.power
                 ),
@@ -229,17 +231,7 @@ def _advice(s: dict[str, Any]) -> list[str]:
             "to look), a check of the measurement-noise model (a wrong noise level shows as "
             "a gap everywhere), or more fibers (see the power analysis)."
         )
-        nx = s.get("next")
-        if nx and nx.get("fibers_needed") is not None and nx.get("best"):
-            b = nx["best"][0]
-            out.append(
-                f"The measurement that would most reduce the doubt ({nx['reason']}): about "
-                f"{nx['fibers_needed']} more fibers at the starts under 'What to measure "
-                f"next' (best: θ0 {b['theta0']:.1f}°, y0 {b['y0']:.2f}, L {b['length']:.2f}, "
-                f"through {b['observable']}), against "
-                f"{nx.get('fibers_needed_at_measured_starts') or 'many'} at starts like "
-                "the measured ones."
-            )
+        out += next_measurement(s)
     if v["kind"] in ("unexplained", "no significant gap") and s.get("power"):
         hidden = [
             f"{e['effect']} ({e['direction']}) up to {e['limit_ci'][1]:.3g}"

@@ -159,7 +159,9 @@ def _fits(s: dict[str, Any]) -> list[str]:
         "",
         "## Fits per half and the out-of-sample decision",
         "",
-        "Each half is scored with the value fitted on the other half. Final: the value "
+        "Each half is scored with the value fitted on the other half. Every value is the one "
+        "the fit's score test is most compatible with (the zero of its mean loss slope; for a "
+        "random effect, where the data are as spread as its copies). Final: the value "
         "refitted on all fibers (significant candidates), with its 95 % interval: the values "
         "where the fibers' mean loss slope is not significantly different from zero (a score "
         "test over the fibers; it includes the copies' Monte Carlo noise). '≤' / '≥' mark an "
@@ -235,6 +237,14 @@ def _before_after(s: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _fibers_ci(ci: Any) -> str:
+    """' (95 % over the simulated starts: lo to hi)', or '' when not computed."""
+    if not ci:
+        return ""
+    lo, hi = (_f(x, "d") if x is not None else "more than 100000" for x in ci)
+    return f" (95 % over the simulated starts: {lo} to {hi})"
+
+
 def _power(s: dict[str, Any]) -> list[str]:
     pw = s["power"]
     if pw is None:
@@ -295,7 +305,8 @@ def _power(s: dict[str, Any]) -> list[str]:
         lines += [
             "",
             f"Leading candidate {lead['effect']} = {lead['value']:.3g}: about "
-            f"{_f(lead['fibers_to_detect'], 'd')} fibers would detect a gap of this size; "
+            f"{_f(lead['fibers_to_detect'], 'd')} fibers would detect a gap of this size"
+            f"{_fibers_ci(lead.get('fibers_to_detect_ci'))}; "
             f"about {_f(lead['fibers_to_name'], 'd')} would make its held-out improvement "
             "significant (from the spread of the per-fiber improvement measured here).",
         ]

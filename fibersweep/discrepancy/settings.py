@@ -70,6 +70,13 @@ class DiscrepancySettings:
     noise : NoiseModel
     n_perm : int
         Permutations per gap test.
+    fit_grid : bool
+        Fit each half at the same ``fit_evals + 1`` values, fixed before the data
+        (:func:`crossfit.shared_values`), instead of a Brent search, and refit on
+        all fibers from the two halves' profiles side by side plus ``refit_evals``
+        values around their estimate (:func:`crossfit.shared_pooled_refit`). Off by
+        default: measured on stand-ins only (docs/discrepancy.md, *Fit
+        uncertainty*), not yet on the simulator.
     """
 
     copies: int = 8
@@ -91,6 +98,7 @@ class DiscrepancySettings:
     effects: tuple[str, ...] | None = None
     noise: NoiseModel = field(default_factory=NoiseModel)
     n_perm: int = 4999
+    fit_grid: bool = False
 
     @property
     def n_random_fit_copies(self) -> int:
@@ -140,7 +148,8 @@ class Plan:
     it keeps the usual copies: Brownian runs are the costliest of the library,
     and fitted with the extra copies as the third candidate of a hidden
     inlet_speed (signature cosine 0.12) they took an N = 100 analysis from
-    about 5 to 25 minutes.
+    about 5 to 25 minutes. ``shared``: the halves are fitted at shared values
+    (``DiscrepancySettings.fit_grid``), so a refit's starting values cost nothing.
     """
 
     copies: int
@@ -154,6 +163,7 @@ class Plan:
     random: int = 0
     random_fit_copies: int = 2
     random_copies: int = 8
+    shared: bool = False
 
     def fit_copies_of(self, cand: Candidate, lead: bool) -> int:
         """Copies per fiber per fit evaluation of ``cand`` (``lead``: best signature)."""
@@ -167,12 +177,19 @@ class Plan:
     def refit_evals(self) -> int:
         """Brent steps of a pooled refit: two fewer than a half's fit.
 
-        The refit starts from the two halves' values, whose runs are already held
-        (one half by its fit, the other by its cross-fitted copies), and searches a
-        narrowed interval around them: the same number of evaluated values as a
-        half's fit, two of them without new runs.
+        The refit starts from the two halves' values and searches a narrowed
+        interval around them: the same number of evaluated values as a half's fit.
+        At a half's value the fibers it scores hold their cross-fitted copies; the
+        other half's fibers are simulated (a half's value is the score test's zero,
+        in general not a point its fit simulated: :mod:`.crossfit`), so the two
+        starting values cost one evaluation on all fibers (:meth:`cost`).
         """
         return max(1, self.fit_evals - 2)
+
+    @property
+    def _starts(self) -> int:
+        """Evaluations on all fibers a refit's starting values cost (see :meth:`cost`)."""
+        return 0 if self.shared else 1
 
     def cost(self, n: int) -> dict[str, int]:
         """Most runs per step for n fibers (two folds of n/2 for the fits)."""
@@ -183,7 +200,10 @@ class Plan:
             # + 1: the side check of a signed effect (fit.fit_effect)
             "fits": 2 * self.candidates * (self.fit_evals + 1) * self.fit_copies * half,
             "heldout": self.candidates * self.copies * n,
-            "refits": self.refits * (self.refit_evals * self.fit_copies + self.copies) * n,
+            # + 1: the halves' values on the fibers their cross-fitted copies did not cover
+            # (shared values: the halves' profiles are the pooled one's, no such runs)
+            "refits": self.refits * ((self.refit_evals + self._starts) * self.fit_copies
+                                     + self.copies) * n,  # fmt: skip
             # per pair: joint fits on both folds, pair_rounds 1D fits each (+1: side
             # check; + the other member alone), cross-fitted copies, final copies
             "pairs": self.pairs
@@ -196,7 +216,7 @@ class Plan:
             * (
                 2 * (self.fit_evals + 1) * (self.random_fit_copies - self.fit_copies) * half
                 + (self.random_copies - self.copies) * n
-                + self.refit_evals * (self.random_fit_copies - self.fit_copies) * n
+                + (self.refit_evals + self._starts) * (self.random_fit_copies - self.fit_copies) * n
             ),
         }
 
@@ -218,6 +238,7 @@ def plan_budget(n: int, s: DiscrepancySettings, candidates: list[Candidate]) -> 
         s.copies, s.fit_copies, n_cand, s.fit_evals, probes, s.refits,
         min(s.pairs, max(n_cand - 1, 0)), random=int(any(c.random for c in candidates)),
         random_fit_copies=s.n_random_fit_copies, random_copies=s.n_random_copies,
+        shared=s.fit_grid,
     )  # fmt: skip
     if s.budget is None:
         return plan

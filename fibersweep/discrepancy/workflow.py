@@ -29,6 +29,13 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.crossfit import (
+    fold_fits,
+    pooled_refit,
+    shared_fold_fits,
+    shared_pooled_refit,
+    shared_values,
+)
 from fibersweep.discrepancy.decide import (
     HeldOut,
     SetHeldOut,
@@ -40,7 +47,6 @@ from fibersweep.discrepancy.decide import (
 from fibersweep.discrepancy.fit import (
     Fit,
     Signature,
-    fit_effect,
     rank_effects,
     score_interval,
 )
@@ -193,6 +199,8 @@ class State:
     chosen : tuple of Signature
         The candidates fitted.
     fits : tuple of Fit
+    fold_fits : dict of str -> tuple of Fit
+        Each fitted effect's two halves' fits (fold 0's value first).
     fold_values : dict of str -> list of float
         Each fitted effect's value on each fold.
     eff_values : dict
@@ -219,6 +227,7 @@ class State:
     chosen: tuple[Signature, ...] = ()
     lead: str = ""
     fits: tuple[Fit, ...] = ()
+    fold_fits: dict[str, tuple[Fit, ...]] = field(default_factory=dict)
     fold_values: dict[str, list[float]] = field(default_factory=dict)
     eff_values: dict[str, Any] = field(default_factory=dict)
     heldout: tuple[HeldOut, ...] = ()
@@ -272,24 +281,22 @@ def cross_fit(st: State) -> State:
     run, plan, s = st.run, st.run.plan, st.run.settings
     fits: list[Fit] = []
     fold_values: dict[str, list[float]] = {}
-    for f_idx in range(len(run.folds)):
-        train = run.folds[1 - f_idx]
-        obs_tr = run.observed.iloc[train].reset_index(drop=True)
-        for sg in st.chosen:
-            cand = run.candidate(sg.name)
-            fit = fit_effect(
-                cand,
-                run.maker,
-                obs_tr,
-                _subset(st.base[: plan.fit_copies_of(cand, cand.name == st.lead)], train),
-                train,
-                run.observables,
-                st.w_gap,
-                plan.fit_evals,
-                side=float(np.sign(sg.probe)),
-            )
-            fits.append(fit)
-            fold_values.setdefault(sg.name, []).append(fit.value)
+    by_name: dict[str, tuple[Fit, ...]] = {}
+    for sg in st.chosen:
+        cand = run.candidate(sg.name)
+        base = st.base[: plan.fit_copies_of(cand, cand.name == st.lead)]
+        # each half's value is the score test's zero, as the pooled refit's (crossfit.py)
+        if s.fit_grid:
+            vals = shared_values(cand, float(np.sign(sg.probe)), plan.fit_evals + 1)
+            per_fold = shared_fold_fits(cand, run.maker, run.observed, base, run.folds,
+                                        run.observables, st.w_gap, vals)  # fmt: skip
+        else:
+            per_fold = fold_fits(cand, run.maker, run.observed, base, run.folds,
+                                 run.observables, st.w_gap, plan.fit_evals,
+                                 side=float(np.sign(sg.probe)))  # fmt: skip
+        fits += per_fold
+        by_name[sg.name] = tuple(per_fold)
+        fold_values[sg.name] = [f.value for f in per_fold]
     base_scores = weighted_loss(st.values, st.w_gap)
     eff_scores, eff_values, residuals, fitted = {}, {}, {}, {}
     effect_copies: dict[str, list[pd.DataFrame]] = {}
@@ -314,6 +321,7 @@ def cross_fit(st: State) -> State:
     return replace(
         st,
         fits=st.fits + tuple(fits),
+        fold_fits=by_name,
         fold_values=kept,
         eff_values=eff_values,
         heldout=tuple(heldout),
@@ -332,23 +340,14 @@ def refit(st: State) -> State:
     final = {}
     for h in sig[: plan.refits]:
         cand = run.candidate(h.name)
-        vals = st.fold_values[h.name]
-        pad = 0.25 * (cand.hi - cand.lo)
-        bounds = (max(cand.lo, min(vals) - pad), min(cand.hi, max(vals) + pad))
-        fit = fit_effect(
-            cand,
-            run.maker,
-            run.observed,
-            st.base[: plan.fit_copies_of(cand, cand.name == st.lead)],
-            np.arange(run.n),
-            run.observables,
-            st.w_gap,
-            plan.refit_evals,
-            bounds=bounds,
-            stage="refit",
-            known=vals,  # both halves' values: their runs are held (no cost)
-            estimate=True,  # the quoted value: the score test's zero (issue 30)
-        )
+        base = st.base[: plan.fit_copies_of(cand, cand.name == st.lead)]
+        if s.fit_grid:  # the halves' profiles side by side, refined around their estimate
+            halves = st.fold_fits[h.name]
+            fit = shared_pooled_refit(cand, run.maker, run.observed, base, halves, run.folds,
+                                      run.observables, st.w_gap, plan.refit_evals)  # fmt: skip
+        else:  # both halves' values evaluated first, then a search around them
+            fit = pooled_refit(cand, run.maker, run.observed, base, st.fold_values[h.name],
+                               run.observables, st.w_gap, plan.refit_evals)  # fmt: skip
         fits.append(fit)
         intervals[h.name] = score_interval(fit)
         if fit.value == 0.0:

@@ -40,3 +40,35 @@ def test_advice_of_an_unexplained_gap_names_the_next_measurement_and_the_unseen_
     # no gap: only the unseen sizes, no next measurement
     adv = " ".join(_advice(_summary("no significant gap")))
     assert "May be present unseen" in adv and "more fibers at" not in adv
+
+
+def test_unexplained_without_a_candidate_sends_the_fibers_where_the_gap_is_largest():
+    from fibersweep.discrepancy.advice import next_measurement
+
+    s = _summary("unexplained")
+    s.update(next=None, n_fibers=100,
+             region={"where": "y0 > 0.31 and θ0 <= 4.5", "n": 22, "share": 0.61})  # fmt: skip
+    adv = " ".join(next_measurement(s))
+    assert "more fibers where the gap is largest, y0 > 0.31 and θ0 <= 4.5" in adv
+    assert "(22 of the 100 fibers, 61 % of the gap)" in adv
+    assert next_measurement(_summary("named")) == []
+
+
+def test_power_curve_numbers_for_the_leading_candidate_carry_their_interval():
+    from fibersweep.discrepancy.advice import next_measurement
+    from fibersweep.discrepancy.report_text import _power
+
+    s = _summary("unexplained")
+    s["n_fibers"] = 100
+    s["power"]["leading"] = {"effect": "friction", "value": 0.21, "fibers_to_detect": 140,
+                             "fibers_to_detect_ci": [90, None], "fibers_to_name": 260}  # fmt: skip
+    adv = " ".join(next_measurement(s))
+    assert "about 23 more fibers at the starts" in adv  # the next-measure starts first
+    assert "for friction = 0.21: about 140 fibers would detect a gap of its size" in adv
+    assert "(95 % over the simulated starts: 90 to more than 100000)" in adv
+    assert "about 260 would name it (held-out improvement significant, 160 more than the 100" in adv
+    text = "\n".join(_power(s))
+    assert (
+        "about 140 fibers would detect a gap of this size (95 % over the simulated "
+        "starts: 90 to more than 100000)" in text
+    )

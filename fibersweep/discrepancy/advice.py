@@ -1,0 +1,96 @@
+"""For an unexplained gap: the measurement that would most reduce the doubt.
+
+Pure functions of the report's JSON summary (:func:`report.summary`). The doubt of
+an "unexplained" verdict is whether the candidate that helped most out of sample
+is there. Two numbers answer *how many more fibers* and one table *which starts*:
+
+- at the starts where its prediction and the model's part most (what to measure
+  next, :mod:`.nextmeasure`), the fibers that would confirm or rule it out;
+- at starts like the measured ones, from the power curve (:mod:`.power`), the
+  fibers that would detect a gap of its size, with the 95 % interval over the
+  simulated starts, and the fibers that would make its held-out improvement
+  significant (from the spread of the per-fiber improvement measured).
+
+Without a candidate that moved the predictions (nothing helped out of sample),
+the starts are where the gap is largest (the localisation).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["next_measurement"]
+
+
+def _n(x: Any) -> str:
+    return "more than 100000" if x is None else f"{int(x)}"
+
+
+def _range(ci: Any) -> str:
+    if not ci:
+        return ""
+    lo, hi = ci
+    return f" (95 % over the simulated starts: {_n(lo)} to {_n(hi)})"
+
+
+def next_measurement(s: dict[str, Any]) -> list[str]:
+    """Advice lines naming the starts and the number of fibers (see the module docstring).
+
+    Parameters
+    ----------
+    s : dict
+        The summary; uses ``verdict``, ``n_fibers``, ``region``, ``next`` and
+        ``power`` (its ``leading`` entry).
+
+    Returns
+    -------
+    list of str
+        Empty unless the verdict is "unexplained".
+    """
+    if s["verdict"]["kind"] != "unexplained":
+        return []
+    out = []
+    n = int(s.get("n_fibers") or 0)
+    nx = s.get("next")
+    if nx and nx.get("fibers_needed") is not None and nx.get("best"):
+        b = nx["best"][0]
+        out.append(
+            f"The measurement that would most reduce the doubt ({nx['reason']}): about "
+            f"{nx['fibers_needed']} more fibers at the starts under 'What to measure "
+            f"next' (best: θ0 {b['theta0']:.1f}°, y0 {b['y0']:.2f}, L {b['length']:.2f}, "
+            f"through {b['observable']}), against "
+            f"{nx.get('fibers_needed_at_measured_starts') or 'many'} at starts like "
+            "the measured ones."
+        )
+    else:
+        r = s.get("region") or {}
+        share = r.get("share")
+        where = r.get("where") or "the region of the gap table"
+        out.append(
+            "No candidate's prediction was compared with the model's there (none helped "
+            "out of sample or the budget was spent): the measurement that would most reduce "
+            f"the doubt is more fibers where the gap is largest, {where}"
+            + (
+                f" ({r.get('n')} of the {n} fibers, {100 * share:.0f} % of the gap)"
+                if share is not None and r.get("n") is not None
+                else ""
+            )
+            + "."
+        )
+    lead = (s.get("power") or {}).get("leading")
+    if lead:
+        det, name = lead.get("fibers_to_detect"), lead.get("fibers_to_name")
+        parts = [
+            f"about {_n(det)} fibers would detect a gap of its size"
+            + _range(lead.get("fibers_to_detect_ci"))
+        ]
+        if name is not None:
+            more = f", {max(int(name) - n, 0)} more than the {n} measured" if n else ""
+            parts.append(
+                f"about {int(name)} would name it (held-out improvement significant{more})"
+            )
+        out.append(
+            f"From the power curve, at starts like the measured ones, for {lead['effect']} = "
+            f"{lead['value']:.3g}: " + "; ".join(parts) + "."
+        )
+    return out
