@@ -33,6 +33,11 @@ def check_starts(cfg: Any) -> None:
     """
     if cfg.sweep.setting_keys:
         return  # each setting combination is checked as a config of its own
+    if cfg.flow.array is not None:  # a pillar array: its own units and checks
+        from fibersweep.config.array_starts import check_array_config
+
+        check_array_config(cfg)
+        return
     from fibersweep.fiber.contact import make_pillar  # numba-backed: import lazily
     from fibersweep.fiber.setup import check_start
 

@@ -122,6 +122,16 @@ class CellField:
         s = int(self.meta["shift_cells"])
         return (_pad(self.ux, pad, s), _pad(self.uy, pad, s))
 
+    @property
+    def u_center(self) -> float:
+        """Midplane speed of the same flux in an empty channel [µm/s] (the field's scale)."""
+        return float(self.meta["settings"]["fluid"]["u_center"])
+
+    @property
+    def viscosity(self) -> float:
+        """Dynamic viscosity [Pa s = pN s/µm²]."""
+        return float(self.meta["settings"]["fluid"]["viscosity"])
+
 
 def _pad(a: np.ndarray, pad: int, s: int) -> np.ndarray:
     nx, ny = a.shape
