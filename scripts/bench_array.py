@@ -20,9 +20,11 @@ import time
 
 import numba
 
+from fibersweep.config import parse_config
+from fibersweep.fiber.array_run import array_run_kernel, start_x
 from fibersweep.fiber.rows import run_array_fiber
 from fibersweep.flow.cell import field_of, solve_cell
-from fibersweep.sweep.arrays import ArrayConfig, prepare_run, run_array_sweep
+from fibersweep.sweep.runner import run_sweep
 
 ARRAY = {"pillar_size": 50.0, "period_x": 100.0, "period_y": 100.0, "shift": 0.1, "depth": 40.0}
 
@@ -33,9 +35,8 @@ def main() -> None:
     args = ap.parse_args()
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cpus, "
           f"numba threads {numba.get_num_threads()}")  # fmt: skip
-    cfg = ArrayConfig.model_validate({"array": ARRAY, "flow": {"dx": 2.0},
-                                      "run": {"cache_dir": ""}})  # fmt: skip
-    arr = cfg.array.to_array()
+    cfg = parse_config({"flow": {"dx": 2.0, "array": ARRAY}, "fiber": {"array_rows": 50}})
+    arr = cfg.flow.array.to_array()
     solve_cell(arr, 5.0, tolerance=1e-3)  # compile the kernels on a coarse cell
     t0 = time.perf_counter()
     sol = solve_cell(arr, 2.0)
@@ -44,11 +45,10 @@ def main() -> None:
     print(f"1. unit cell {g.nx}x{g.ny}x{g.nz} (half depth), {sol.steps} steps (both solves), "
           f"{t_field:.1f} s -> {t_field / 60.0:.2f} of the 60 s target")  # fmt: skip
     field = field_of(arr, sol, 600.0, "interpolated")
-    cfg50 = cfg.model_copy(update={"sweep": cfg.sweep.model_copy(update={"rows": 50})})
-    x0 = 0.5 * (arr.shape.bounds[0] + arr.shape.bounds[2] - arr.period_x)
-    warm = prepare_run(cfg50, field, 80.0, x_end=x0 + 100.0)
+    x0 = start_x(arr)
+    warm = array_run_kernel(field, cfg.fiber, 80.0, x_end=x0 + 100.0)
     run_array_fiber(warm, "rigid", x0, 30.0, 0.0)  # compile
-    k = prepare_run(cfg50, field, 80.0)
+    k = array_run_kernel(field, cfg.fiber, 80.0)  # 50 rows (fiber.array_rows)
     times = []
     for y0 in (10.0, 30.0, 50.0, 70.0, 90.0):
         t0 = time.perf_counter()
@@ -61,14 +61,16 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         lengths = [8.0 * k for k in range(1, 11)]
         per = max(1, args.starts // 10)
-        sweep = cfg.model_copy(update={
-            "sweep": cfg.sweep.model_copy(update={"length": tuple(lengths), "starts": per}),
-            "run": cfg.run.model_copy(update={"output": tmp, "cache_dir": tmp}),
+        sweep = parse_config({
+            "flow": {"dx": 2.0, "array": ARRAY},
+            "sweep": {"length": lengths, "theta0": [-10.0, 10.0], "y0": [0.0, 1.0],
+                      "random": {"count": per, "seed": 0}},
+            "run": {"output": tmp, "cache_dir": tmp, "workers": 2},
         })  # fmt: skip
         t0 = time.perf_counter()
-        df = run_array_sweep(sweep, workers=2)
+        summary = run_sweep(sweep)
         t_sweep = time.perf_counter() - t0
-    n = len(df)
+    n = summary.ran
     est = t_field + (t_sweep - t_field) * 1000.0 / n
     print(
         f"3. {n} starts over 10 lengths, 2 workers, field included: {t_sweep:.1f} s; "

@@ -31,7 +31,7 @@ from fibersweep.fiber import record as R
 from fibersweep.fiber.models import MODELS
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
 
-__all__ = ["n_beads_of", "simulate_array", "start_clear", "start_x"]
+__all__ = ["array_run_kernel", "n_beads_of", "simulate_array", "start_clear", "start_x"]
 
 log = logging.getLogger(__name__)
 
@@ -59,6 +59,28 @@ def start_clear(array, pillar, n_beads: int, bead_radius: float, y0: float, thet
     return all(
         float(np.min(sh.signed_distance(bx, by))) > pillar.r_cut
         for _, _, sh in array.images(bx.min(), by.min(), bx.max(), by.max(), pillar.r_cut)
+    )
+
+
+def array_run_kernel(field, settings, length: float, x_end: float | None = None):
+    """The kernel of one fiber of length L [µm] in the array of ``field``
+    (:func:`fibersweep.fiber.rows.array_kernel`, the field's viscosity and U_center).
+
+    ``x_end`` [µm]: where the run passes (default: ``settings.array_rows`` periods
+    downstream of :func:`start_x`).
+    """
+    from fibersweep.fiber.rows import array_kernel
+
+    array = field.array
+    if x_end is None:
+        x_end = start_x(array) + settings.array_rows * array.period_x
+    return array_kernel(
+        field,
+        settings,
+        n_beads_of(length, settings.bead_radius),
+        mu=field.viscosity,
+        u_center=field.u_center,
+        x_end=x_end,
     )
 
 
@@ -104,7 +126,7 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
     """
     from fibersweep.analysis.modes import summarise_trajectory
     from fibersweep.fiber.rigid import seed_numba
-    from fibersweep.fiber.rows import array_kernel, check_array_effects
+    from fibersweep.fiber.rows import check_array_effects
 
     t_wall = time.perf_counter()
     array = field.array
@@ -123,14 +145,7 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
     if effects.random:
         seed_numba(int(np.random.default_rng(rng_seed).integers(0, 2**31 - 1)))
     x0 = start_x(array)
-    k = array_kernel(
-        field,
-        settings,
-        n,
-        mu=field.viscosity,
-        u_center=field.u_center,
-        x_end=x0 + settings.array_rows * array.period_x,
-    )
+    k = array_run_kernel(field, settings, start.length)
     from fibersweep.fiber.rows import array_pillar
 
     pillar = array_pillar(array, settings, field.viscosity, field.u_center)

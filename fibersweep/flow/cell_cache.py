@@ -84,7 +84,14 @@ def get_cell_field(settings, cache_dir: str | Path, key: str, *, force: bool = F
         mean_flow=settings.array.mean_flow,
     )
     meta_settings = settings.model_dump(mode="json")
-    field = field_of(array, sol, settings.fluid.u_center, settings.pillar_boundary, meta_settings)
+    field = field_of(
+        array,
+        sol,
+        settings.fluid.u_center,
+        settings.pillar_boundary,
+        meta_settings,
+        viscosity=settings.fluid.viscosity,
+    )
     field.meta["cache_key"] = key
     save_cell_field(field, path)
     log.info("cell cache miss: solved and stored %s", path)
