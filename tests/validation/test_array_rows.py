@@ -147,3 +147,45 @@ def test_one_bead_fiber_is_a_steric_sphere():
             yc = row_crossings(rec[:, R.XC], rec[:, R.YC], arr.period_x)
             f = (yc[20] - yc[10]) / (10 * arr.lateral_shift)
             assert (abs(f) < 0.25) if zigzag else (f > 0.75), (scale, y0, f)
+
+
+def test_simulate_on_a_cell_field_is_the_array_run(small):
+    """``simulate`` dispatches on the field: on a unit cell it runs the array kernel
+    from y0 = fraction of period_y in the gap upstream of row 0, for fiber.array_rows
+    rows, and its record's array columns are the trajectory's summary. Checked
+    against the kernel run directly from the same start: the same end (exact: the same
+    arithmetic), and the summary of the stored (thinned) trajectory equal to the
+    record's columns (exact: the same function)."""
+    from fibersweep.analysis.modes import summarise_trajectory
+    from fibersweep.fiber.array_run import start_x
+
+    fiber, field = small
+    fiber = fiber.model_copy(update={"array_rows": 4})
+    arr = field.array
+    res = simulate(field, fiber, FiberStart(theta0=3.0, y0=0.7, length=40.0))
+    assert res.status == "ok" and res.cls == ""
+    k = prepare_run(fiber, field, 40.0)
+    rec, code = run_array_fiber(k, "rigid", start_x(arr), 0.7 * arr.period_y, math.radians(3.0))
+    assert code == R.PASSED
+    assert res.x_f == rec[-1, R.XC] and res.y_f == rec[-1, R.YC]
+    assert res.rows >= 4 and res.n_beads == 10
+    s = summarise_trajectory(res.trajectory, arr, k.params.trap_speed)
+    assert (s.rows, s.mode, s.wraps) == (res.rows, res.mode, res.wraps)
+    assert s.fraction == res.fraction and s.angle_deg == res.migration_angle
+    assert res.contacts >= 0 and res.time_on_pillars >= 0.0
+
+
+def test_a_start_on_a_pillar_or_outside_the_cell_is_bad_input(small):
+    """Bad starts raise InputError naming y0 (a sweep records them as failed runs)."""
+    from fibersweep.errors import InputError
+    from fibersweep.fiber.array_run import start_x
+
+    fiber, field = small
+    arr = field.array
+    _, cy = arr.shape.centroid  # row 0's pillar, at the start's height
+    with pytest.raises(InputError, match="^y0"):
+        simulate(field, fiber, FiberStart(theta0=90.0, y0=1.5, length=20.0))
+    # an 80 µm fiber along the flow, centred in the row gap, reaches into row 0's pillar
+    assert start_x(arr) + 40.0 > arr.shape.bounds[0]
+    with pytest.raises(InputError, match="touches a pillar"):
+        simulate(field, fiber, FiberStart(theta0=0.0, y0=cy / arr.period_y, length=80.0))
