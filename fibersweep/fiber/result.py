@@ -105,9 +105,10 @@ class FiberStart:
     theta0 : float
         Angle from +x, counter-clockwise [degrees].
     y0 : float
-        Centre-of-mass lateral position from the pillar base / h_obs.
+        Centre-of-mass lateral position from the pillar base / h_obs (a pillar
+        array: fraction of period_y in the gap upstream of row 0, 0..1).
     length : float
-        Fiber length L / l_obs.
+        Fiber length L / l_obs (a pillar array: L in µm).
     """
 
     theta0: float = column(
