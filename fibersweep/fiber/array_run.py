@@ -126,7 +126,7 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
     """
     from fibersweep.analysis.modes import summarise_trajectory
     from fibersweep.fiber.rigid import seed_numba
-    from fibersweep.fiber.rows import check_array_effects
+    from fibersweep.fiber.rows import array_pillar, check_array_effects
 
     t_wall = time.perf_counter()
     array = field.array
@@ -142,19 +142,17 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
         )
     n = n_beads_of(start.length, a)
     effects = check_array_effects(settings)
-    if effects.random:
-        seed_numba(int(np.random.default_rng(rng_seed).integers(0, 2**31 - 1)))
-    x0 = start_x(array)
-    k = array_run_kernel(field, settings, start.length)
-    from fibersweep.fiber.rows import array_pillar
-
     pillar = array_pillar(array, settings, field.viscosity, field.u_center)
     if not start_clear(array, pillar, n, a, start.y0, start.theta0):
         raise InputError(
             f"y0: the fiber at y0 = {start.y0} (fraction of period_y), theta0 = {start.theta0} "
             "deg touches a pillar at the start"
         )
+    if effects.random:
+        seed_numba(int(np.random.default_rng(rng_seed).integers(0, 2**31 - 1)))
+    x0 = start_x(array)
     y0 = start.y0 * array.period_y
+    k = array_run_kernel(field, settings, start.length)
     try:
         rec, _, code = MODELS[settings.model].integrate(k, x0, y0, math.radians(start.theta0), None)
     except (FloatingPointError, np.linalg.LinAlgError, ZeroDivisionError) as exc:
