@@ -36,6 +36,10 @@ def test_run_classify_and_sort_report_with_a_shift_axis(tmp_path):
     assert set(read_trajectories(out)["id"]) == set(runs["id"])  # always kept
     man = read_manifest(out)
     assert sorted(e["flow"]["array"]["shift"] for e in man["combinations"].values()) == [0.1, 0.2]
+    # `fibersweep flow` reports the cached unit cells, no separatrix
+    fl = CliRunner().invoke(app, ["flow", *args[1:]])
+    assert fl.exit_code == 0, fl.output
+    assert fl.output.count("cache: hit") == 2 and "unit cell of the pillar array" in fl.output
     # resume: nothing left to run
     again = CliRunner().invoke(app, [*args, f"run.output={out}"])
     assert again.exit_code == 0 and "nothing to run" in again.output, again.output
