@@ -19,10 +19,11 @@ import tempfile
 import time
 
 import numba
+import numpy as np
 
 from fibersweep.config import parse_config
-from fibersweep.fiber.array_run import array_run_kernel, start_x
-from fibersweep.fiber.rows import run_array_fiber
+from fibersweep.fiber.array_run import array_run_kernel, n_beads_of, start_clear, start_x
+from fibersweep.fiber.rows import array_pillar, run_array_fiber
 from fibersweep.flow.cell import field_of, solve_cell
 from fibersweep.sweep.runner import run_sweep
 
@@ -35,7 +36,11 @@ def main() -> None:
     args = ap.parse_args()
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cpus, "
           f"numba threads {numba.get_num_threads()}")  # fmt: skip
-    cfg = parse_config({"flow": {"dx": 2.0, "array": ARRAY}, "fiber": {"array_rows": 50}})
+    cfg = parse_config({
+        "flow": {"dx": 2.0, "array": ARRAY}, "fiber": {"array_rows": 50},
+        "sweep": {"length": [80.0], "theta0": [-10.0, 10.0], "y0": [0.0, 1.0],
+                  "random": {"count": 1}},
+    })  # fmt: skip
     arr = cfg.flow.array.to_array()
     solve_cell(arr, 5.0, tolerance=1e-3)  # compile the kernels on a coarse cell
     t0 = time.perf_counter()
@@ -47,10 +52,13 @@ def main() -> None:
     field = field_of(arr, sol, 600.0, "interpolated")
     x0 = start_x(arr)
     warm = array_run_kernel(field, cfg.fiber, 80.0, x_end=x0 + 100.0)
-    run_array_fiber(warm, "rigid", x0, 30.0, 0.0)  # compile
+    run_array_fiber(warm, "rigid", x0, 0.0, 0.0)  # compile
     k = array_run_kernel(field, cfg.fiber, 80.0)  # 50 rows (fiber.array_rows)
     times = []
-    for y0 in (10.0, 30.0, 50.0, 70.0, 90.0):
+    pillar = array_pillar(arr, cfg.fiber, field.viscosity, field.u_center)
+    clear = [y for y in np.linspace(0.0, arr.period_y, 41)[:-1]
+             if start_clear(arr, pillar, n_beads_of(80.0, 2.0), 2.0, y / arr.period_y, 3.0)]  # fmt: skip
+    for y0 in [clear[int(i)] for i in np.linspace(0, len(clear) - 1, 5)]:  # 5 clear starts
         t0 = time.perf_counter()
         rec, code = run_array_fiber(k, "rigid", x0, y0, math.radians(3.0))
         times.append(time.perf_counter() - t0)
