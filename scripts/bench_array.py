@@ -56,8 +56,9 @@ def main() -> None:
     k = array_run_kernel(field, cfg.fiber, 80.0)  # 50 rows (fiber.array_rows)
     times = []
     pillar = array_pillar(arr, cfg.fiber, field.viscosity, field.u_center)
+    n = n_beads_of(80.0, 2.0)
     clear = [y for y in np.linspace(0.0, arr.period_y, 41)[:-1]
-             if start_clear(arr, pillar, n_beads_of(80.0, 2.0), 2.0, y / arr.period_y, 3.0)]  # fmt: skip
+             if start_clear(arr, pillar, n, 2.0, y / arr.period_y, 3.0)]  # fmt: skip
     for y0 in [clear[int(i)] for i in np.linspace(0, len(clear) - 1, 5)]:  # 5 clear starts
         t0 = time.perf_counter()
         rec, code = run_array_fiber(k, "rigid", x0, y0, math.radians(3.0))
