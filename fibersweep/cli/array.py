@@ -69,6 +69,13 @@ def sort_report(
                 f"critical length(s) of {lab} (mean fraction 0.5): "
                 + (", ".join(f"{c:.1f} µm" for c in crit) or "none in the swept range")
             )
+        for s, new in sr.refine_lengths(table).items():
+            if new:
+                lab = settings[s]["label"] or "array"
+                typer.echo(
+                    f"to bisect the critical length of {lab}: add {new} to sweep.length and "
+                    "run the same config into this folder again (only the new lengths run)"
+                )
         out = sr.outlet_table(runs, settings, n_rows, edges)
         typer.echo(
             f"device of {n_rows} rows, outlet edges {edges} (fraction of full "

@@ -25,6 +25,7 @@ __all__ = [
     "relabel",
     "migration_table",
     "critical_lengths",
+    "refine_lengths",
     "outlet_table",
 ]
 
@@ -153,6 +154,27 @@ def critical_lengths(table: pd.DataFrame, level: float = 0.5) -> dict[int, list[
             if np.isfinite(f[k]) and np.isfinite(f[k + 1]) and f[k] * f[k + 1] < 0:
                 found.append(float(L[k] - f[k] * (L[k + 1] - L[k]) / (f[k + 1] - f[k])))
         out[int(s)] = found
+    return out
+
+
+def refine_lengths(table: pd.DataFrame, level: float = 0.5) -> dict[int, list[float]]:
+    """Per setting, the midpoints [µm] of neighbouring lengths whose mean fraction brackets
+    ``level``: the lengths to add to ``sweep.length`` to bisect the critical length.
+
+    A pure function of :func:`migration_table` (trapped runs are out of its means).
+    Running the same config with them added into the same folder runs only them: the
+    draws of a length depend on it alone, so the other runs keep their ids.
+    """
+    out: dict[int, list[float]] = {}
+    for s, g in table.groupby("setting"):
+        g = g.sort_values("length")
+        L = g["length"].to_numpy()
+        d = g["fraction_mean"].to_numpy() - level
+        out[int(s)] = [
+            float(0.5 * (L[k] + L[k + 1]))
+            for k in range(len(L) - 1)
+            if np.isfinite(d[k] * d[k + 1]) and d[k] * d[k + 1] < 0
+        ]
     return out
 
 
