@@ -1,7 +1,8 @@
 """One-bead fibers (spheres) through the array: zigzag/displacement transition vs the DLD law.
 
 For each row shift ε, spheres of diameter D = 2a (one bead of radius a) run
-through ``--rows`` rows from ``--starts`` seeded random entries; D_c is where
+through ``--rows`` rows from ``--starts`` seeded random entries (an ordinary
+``fibersweep run`` sweep with ``flow.array`` set and ``sweep.random``); D_c is where
 the mean displacement fraction crosses 1/2 (linear in D). It is compared with
 the empirical law of Davis, D_c = 1.4 G ε^0.48, and with the steric estimate
 D_c = 2 β of a point particle that follows the streamlines until it touches
@@ -17,7 +18,9 @@ import tempfile
 
 import numpy as np
 
-from fibersweep.sweep.arrays import ArrayConfig, run_array_sweep
+from fibersweep.config import parse_config
+from fibersweep.sweep.runner import run_sweep
+from fibersweep.sweep.store import read_runs
 
 
 def main() -> None:
@@ -33,14 +36,16 @@ def main() -> None:
         fr = []
         with tempfile.TemporaryDirectory() as tmp:
             for a in radii:
-                cfg = ArrayConfig.model_validate({
-                    "array": {"pillar_shape": args.shape, "shift": eps},
-                    "flow": {"dx": 2.0},
-                    "fiber": {"bead_radius": a},
-                    "sweep": {"length": [2 * a], "starts": args.starts, "rows": args.rows},
-                    "run": {"output": tmp, "cache_dir": ".fibersweep-cache", "workers": 2},
+                cfg = parse_config({
+                    "flow": {"dx": 2.0, "array": {"pillar_shape": args.shape, "shift": eps}},
+                    "fiber": {"bead_radius": a, "array_rows": args.rows},
+                    "sweep": {"length": [2 * a], "theta0": [-10.0, 10.0], "y0": [0.0, 1.0],
+                              "random": {"count": args.starts, "seed": 0}},
+                    "run": {"output": f"{tmp}/a{a:g}", "cache_dir": ".fibersweep-cache",
+                            "workers": 2},
                 })  # fmt: skip
-                df = run_array_sweep(cfg)
+                run_sweep(cfg)
+                df = read_runs(cfg.run.output)
                 fr.append(float(df["fraction"].mean()))
         d = 2 * np.array(radii)
         f = np.array(fr) - 0.5

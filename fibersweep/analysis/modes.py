@@ -30,7 +30,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["MODES", "ModeSettings", "RowSummary", "summarise_rows", "row_crossings"]
+__all__ = [
+    "MODES",
+    "ModeSettings",
+    "RowSummary",
+    "summarise_rows",
+    "summarise_trajectory",
+    "row_crossings",
+]
 
 MODES = ("zigzag", "displacement", "wrap-and-jump", "trapped", "mixed")
 
@@ -148,3 +155,39 @@ def summarise_rows(
     else:
         mode = "mixed"
     return RowSummary(rows, m, ang, frac, wraps, mode)
+
+
+def summarise_trajectory(
+    traj, array, trap_speed: float, settings: ModeSettings | None = None
+) -> RowSummary:
+    """:func:`summarise_rows` of a stored :class:`~fibersweep.analysis.trajectory.Trajectory`.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        A run's (thinned) trajectory: centre [µm], angle [deg], contact flag, centre speed.
+    array : fibersweep.geometry.array.PillarArray
+        Its periods and row shift.
+    trap_speed : float
+        Centre speed below which a run that ends in contact is trapped [µm/s]
+        (``fiber.classify.trap_speed`` × u_center, the integrator's stop rule).
+    settings : ModeSettings, optional
+        The other thresholds (defaults of :class:`ModeSettings`).
+    """
+    base = settings or ModeSettings()
+    rule = ModeSettings(
+        zigzag_max=base.zigzag_max,
+        displacement_min=base.displacement_min,
+        wrap_fraction=base.wrap_fraction,
+        wrap_angle_deg=base.wrap_angle_deg,
+        trap_speed=trap_speed,
+    )
+    d = {
+        "t": traj.t,
+        "xc": traj.x,
+        "yc": traj.y,
+        "th": np.radians(traj.theta),
+        "contact": np.asarray(traj.contact, dtype=np.float64),
+        "speed": traj.com_speed,
+    }
+    return summarise_rows(d, array.period_x, array.lateral_shift, rule)

@@ -1,8 +1,8 @@
-"""Pillar-array commands: ``run-array`` (a sweep through a tilted array) and ``sort-report``."""
+"""Pillar-array command ``sort-report`` (and ``run-array``, removed: use ``fibersweep run``)."""
 
 from __future__ import annotations
 
-import json
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -10,35 +10,29 @@ import typer
 
 from fibersweep.cli._app import ConfigArg, Overrides, Verbose, _errors, _setup_logging, app
 from fibersweep.errors import InputError
+from fibersweep.fiber.settings import ARRAY_ROWS
 
 
-@app.command("run-array")
+@app.command("run-array", hidden=True)
 def run_array(
     config: ConfigArg,
     overrides: Overrides = None,
-    workers: Annotated[int | None, typer.Option(help="Worker processes.")] = None,
-    refine: Annotated[
-        int, typer.Option(help="Rounds of bisection of the critical length (adds lengths).")
-    ] = 0,
     verbose: Verbose = False,
 ) -> None:
-    """Fibers through a tilted pillar array: unit-cell flow, seeded random starts, many rows."""
+    """Removed: a pillar-array sweep is ``fibersweep run CONFIG`` with ``flow.array`` set."""
     _setup_logging(verbose)
     with _errors():
-        from fibersweep.sweep.arrays import load_array_config, run_array_sweep
-
-        cfg = load_array_config(config, overrides or ())
-        df = run_array_sweep(cfg, workers, refine=refine)
-        typer.echo(f"{len(df)} runs -> {Path(cfg.run.output) / 'runs.parquet'}")
-        typer.echo(df.groupby(["setting", "length"])["mode"].value_counts().unstack(fill_value=0)
-                   .to_string())  # fmt: skip
+        raise InputError(
+            "run-array: removed; use fibersweep run CONFIG (a pillar array is the flow.array "
+            "section of the standard config: see configs/array.yaml and docs/arrays.md)"
+        )
 
 
 @app.command("sort-report")
 def sort_report(
-    results: Annotated[Path, typer.Argument(help="Output folder of run-array.")],
+    results: Annotated[Path, typer.Argument(help="Output folder of an array sweep.")],
     rows: Annotated[
-        int | None, typer.Option(help="Rows of the device [default: swept rows].")
+        int | None, typer.Option(help="Rows of the device [default: fiber.array_rows].")
     ] = None,
     outlets: Annotated[
         str, typer.Option(help="Outlet edges, fractions of the full displacement, comma separated.")
@@ -56,32 +50,33 @@ def sort_report(
         from fibersweep.analysis.modes import ModeSettings
         from fibersweep.sweep import sort_report as sr
 
-        try:
-            runs = pd.read_parquet(results / "runs.parquet")
-            meta = json.loads((results / "array.json").read_text())
-        except (OSError, ValueError) as exc:
-            raise InputError(f"RESULTS: {results} holds no array sweep ({exc})") from None
+        runs, settings, cfg = sr.load_array_results(results)
         try:
             edges = [float(e) for e in outlets.split(",") if e.strip()]
         except ValueError:
             raise InputError(f"--outlets: not a list of numbers: {outlets!r}") from None
-        cfg = meta["config"]
-        trap_speed = cfg["fiber"]["classify"]["trap_speed"] * cfg["flow"]["u_center"]
-        modes = ModeSettings(zigzag_max=zigzag_max, displacement_min=displacement_min,
-                             trap_speed=trap_speed)  # fmt: skip
-        runs = sr.relabel(runs, meta["settings"], modes)
+        modes = ModeSettings(zigzag_max=zigzag_max, displacement_min=displacement_min)
+        trap_speed = cfg["fiber"]["classify"]["trap_speed"]
+        runs = sr.relabel(runs, settings, modes, trap_speed)
         table = sr.migration_table(runs)
-        n_rows = rows or cfg["sweep"]["rows"]
+        n_rows = rows or cfg["fiber"].get("array_rows", ARRAY_ROWS)
         pd.set_option("display.width", 160)
         typer.echo("migration angle [deg] and mode fractions per setting and length:")
         typer.echo(table.round(3).to_string(index=False))
         for s, crit in sr.critical_lengths(table).items():
-            lab = meta["settings"][s]["label"] or "array"
+            lab = settings[s]["label"] or "array"
             typer.echo(
                 f"critical length(s) of {lab} (mean fraction 0.5): "
                 + (", ".join(f"{c:.1f} µm" for c in crit) or "none in the swept range")
             )
-        out = sr.outlet_table(runs, meta["settings"], n_rows, edges)
+        for s, new in sr.refine_lengths(table).items():
+            if new:
+                lab = settings[s]["label"] or "array"
+                typer.echo(
+                    f"to bisect the critical length of {lab}: add {new} to sweep.length and "
+                    "run the same config into this folder again (only the new lengths run)"
+                )
+        out = sr.outlet_table(runs, settings, n_rows, edges)
         typer.echo(
             f"device of {n_rows} rows, outlet edges {edges} (fraction of full "
             "displacement): recovery and purity per outlet"
@@ -90,19 +85,22 @@ def sort_report(
         table.to_csv(results / "migration.csv", index=False)
         out.to_csv(results / "outlets.csv", index=False)
         if figures:
-            _figures(results, runs, table, meta, cfg)
+            _figures(results, runs, table, settings, cfg)
 
 
-def _figures(results: Path, runs, table, meta, cfg) -> None:
+def _figures(results: Path, runs, table, settings: list[dict], cfg: dict) -> None:
+    from fibersweep.flow.cache import get_flow_field
+    from fibersweep.flow.settings import FlowSettings
     from fibersweep.plots import array as pa
     from fibersweep.plots.style import paper_style, save_figure
-    from fibersweep.sweep.arrays import load_field
 
     written = []
     with paper_style():
-        for i, s in enumerate(meta["settings"]):
-            array = _array_of(s["array"])
-            field = load_field(results / f"field-{i}.npz", array)
+        for i, s in enumerate(settings):
+            # the sweep's cell field, from the cache (solved again if it was removed)
+            flow = FlowSettings.model_validate(s["flow"])
+            field, _ = get_flow_field(flow, cfg["run"]["cache_dir"])
+            array = field.array
             written.append(save_figure(pa.cell_flow_figure(field), results / f"cell-flow-{i}.png",
                                        dpi=110))  # fmt: skip
             sub = runs[runs["setting"] == i]
@@ -113,15 +111,9 @@ def _figures(results: Path, runs, table, meta, cfg) -> None:
             written.append(save_figure(fig, results / f"chrono-{i}.png", dpi=100))
             fig = pa.overlay_figure(sub, array.period_x, sorted(sub["length"].unique()))
             written.append(save_figure(fig, results / f"overlay-{i}.png", dpi=110))
-        tilts = {i: _array_of(s["array"]).tilt_deg for i, s in enumerate(meta["settings"])}
-        labels = {i: s["label"] for i, s in enumerate(meta["settings"])}
+        tilts = {i: math.degrees(math.atan(s["array"]["shift"])) for i, s in enumerate(settings)}
+        labels = {i: s["label"] for i, s in enumerate(settings)}
         written.append(save_figure(pa.migration_figure(table, tilts, labels),
                                    results / "migration.png"))  # fmt: skip
     for w in written:
         typer.echo(f"figure: {w}")
-
-
-def _array_of(stored: dict):
-    from fibersweep.sweep.arrays import ArraySettings
-
-    return ArraySettings.model_validate(stored).to_array()

@@ -89,6 +89,8 @@ def _report(settings, cache_dir: str, force: bool, plot: Path | None, pad: str) 
             f"from x = {box['x0_um']:g}, y = {box['y0_um']:g} µm, nested in the channel "
             f"at dx = {settings.dx:g} µm ({box['channel_report']['steps']} steps)"
         )
+    if settings.array is not None:
+        typer.echo(f"{pad}unit cell of the pillar array (flow.array, docs/arrays.md)")
     conv = "converged" if info.converged else "NOT converged (max_steps reached)"
     coarse = f" (after {info.coarse_steps} on coarser grids)" if info.coarse_steps else ""
     typer.echo(
@@ -103,6 +105,9 @@ def _report(settings, cache_dir: str, force: bool, plot: Path | None, pad: str) 
         f"{pad}U_center reached: {info.u_center_reached:.3f} µm/s "
         f"(target {settings.fluid.u_center:g} µm/s)"
     )
+    if settings.array is not None:  # a pillar array's unit cell: no far upstream
+        _report_cell(field, plot, pad)
+        return
     from fibersweep.flow.uncertainty import other_level, separatrix_estimate
 
     try:
@@ -116,6 +121,22 @@ def _report(settings, cache_dir: str, force: bool, plot: Path | None, pad: str) 
         from fibersweep.plots.flow import plot_flow
 
         typer.echo(f"{pad}wrote {plot_flow(field, plot)}")
+
+
+def _report_cell(field, plot: Path | None, pad: str) -> None:
+    """What a unit-cell field adds: its array and mean flow direction; its figure."""
+    d = field.array.describe()
+    typer.echo(
+        f"{pad}array: gap {d['gap']:.3g} µm, row shift {field.array.lateral_shift:.3g} µm "
+        f"(tilt {field.array.tilt_deg:.2f} deg); mean flow at "
+        f"{field.meta['mean_flow_angle_deg']:.3f} deg to x"
+    )
+    if plot is not None:
+        from fibersweep.plots.array import cell_flow_figure
+        from fibersweep.plots.style import paper_style, save_figure
+
+        with paper_style():
+            typer.echo(f"{pad}wrote {save_figure(cell_flow_figure(field), plot, dpi=110)}")
 
 
 def _echo_separatrix(est, boundary: str, pad: str = "") -> None:

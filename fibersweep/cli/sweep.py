@@ -295,7 +295,9 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
 
     bar = None
     counts: Counter = Counter()
-    short = {"Below": "B", "Above": "A", "Pole-vaulting": "PV", "Trapping": "T", "failed": "fail"}
+    short = {"Below": "B", "Above": "A", "Pole-vaulting": "PV", "Trapping": "T", "failed": "fail",
+             "zigzag": "Z", "displacement": "D", "wrap-and-jump": "WJ", "trapped": "T",
+             "mixed": "M"}  # fmt: skip
 
     def on_plan(plan) -> None:
         nonlocal bar
@@ -306,7 +308,8 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
         bar = progress_bar(total=len(plan.todo), unit="run", smoothing=0.1)
 
     def progress(row) -> None:
-        counts[row["class"] if row["status"] == "ok" else "failed"] += 1
+        label = row.get("mode") or row["class"]  # a pillar array's runs: the mode
+        counts[label if row["status"] == "ok" else "failed"] += 1
         if bar is not None:
             shown = [k for k in short if counts[k]] + [k for k in counts if k not in short]
             bar.set_postfix_str(

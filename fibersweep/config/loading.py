@@ -190,9 +190,9 @@ def apply_overrides(
     for item in overrides:
         key, sep, raw = item.partition("=")
         path = tuple(p.strip() for p in key.split("."))
-        if len(path) > 2 and path[0] == "sweep" and path[1] != "refine":
+        if len(path) > 2 and path[0] == "sweep" and path[1] not in ("refine", "random"):
             # a swept setting is one dotted key inside sweep (or inside sweep.zip);
-            # sweep.refine is a section of its own
+            # sweep.refine and sweep.random are sections of their own
             cut = 3 if path[1] == "zip" and len(path) > 3 else 2
             path = (*path[: cut - 1], ".".join(path[cut - 1 :]))
         if not sep or not all(path):

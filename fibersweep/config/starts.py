@@ -33,6 +33,21 @@ def check_starts(cfg: Any) -> None:
     """
     if cfg.sweep.setting_keys:
         return  # each setting combination is checked as a config of its own
+    if cfg.flow.array is not None:  # a pillar array: its own units and checks
+        from fibersweep.config.array_starts import check_array_config
+
+        check_array_config(cfg)
+    if cfg.sweep.random is not None:  # drawn starts: placed clear, or the length is bad
+        from fibersweep.config.draws import start_points
+
+        try:
+            start_points(cfg)
+        except InputError as exc:
+            name, _, msg = str(exc).partition(": ")
+            raise FieldError("fiber.x0" if name == "x0" else f"sweep.{name}", msg) from None
+        return
+    if cfg.flow.array is not None:
+        return
     from fibersweep.fiber.contact import make_pillar  # numba-backed: import lazily
     from fibersweep.fiber.setup import check_start
 

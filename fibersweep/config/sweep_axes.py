@@ -45,6 +45,7 @@ from fibersweep.fiber.result import FiberStart
 
 __all__ = [
     "Combination",
+    "RandomStarts",
     "RefineSettings",
     "SweepSettings",
     "combinations",
@@ -119,6 +120,18 @@ class RefineSettings(_Strict):
 _TOL_EXAMPLE = {"theta0": 0.5, "y0": 0.005, "length": 0.01}
 
 
+class RandomStarts(_Strict):
+    """Seeded random starts (``sweep.random``): ``count`` per length and setting combination.
+
+    Each start is drawn uniform in the ``theta0`` and ``y0`` ranges ``[lo, hi]``
+    (:func:`fibersweep.config.draws.start_points`); a start that touches the pillar
+    (or a pillar of the array) is drawn again. The same config gives the same starts.
+    """
+
+    count: int = Field(ge=1, strict=True, description="random starts per length")
+    seed: int = Field(0, ge=0, strict=True, description="seed of the draws")
+
+
 class SweepSettings(_Strict):
     """Sweep over the start angle, lateral position and length, and any other setting.
 
@@ -144,6 +157,11 @@ class SweepSettings(_Strict):
     )
     refine: RefineSettings | None = Field(
         None, description="adaptive refinement of class boundaries (off when absent)"
+    )
+    random: RandomStarts | None = Field(
+        None,
+        description="seeded random starts: count per length, uniform in theta0 and y0 given "
+        "as [lo, hi] (off when absent: the grid of the three start axes)",
     )
 
     @field_validator("theta0", "y0", "length")
@@ -176,7 +194,7 @@ class SweepSettings(_Strict):
     def _without_empty_zip(self, handler: Any) -> dict[str, Any]:
         data = handler(self)
         if isinstance(data, dict):
-            for key in ("zip", "refine"):  # written only when used
+            for key in ("zip", "refine", "random"):  # written only when used
                 if data.get(key) is None:
                     data.pop(key, None)
         return data
@@ -192,6 +210,23 @@ class SweepSettings(_Strict):
                         f"{a} has one value in the grid: nothing to bisect; "
                         f"sweep {a} over at least two values or drop it from refine.axes",
                     )
+        return self
+
+    @model_validator(mode="after")
+    def _random_ranges(self) -> SweepSettings:
+        """With ``random``: theta0 and y0 are ranges [lo, hi] (or one value), no refinement."""
+        if self.random is None:
+            return self
+        if self.refine is not None:
+            raise FieldError("refine", "not available with sweep.random (random starts)")
+        for name in ("theta0", "y0"):
+            v = axis_values(getattr(self, name))
+            if v.size > 2 or (v.size == 2 and v[0] > v[1]):
+                raise FieldError(
+                    name,
+                    f"with sweep.random, {name} is the range the starts are drawn from: "
+                    f"[lo, hi] with lo <= hi (or one value); got {_show(v)}",
+                )
         return self
 
     @model_validator(mode="after")
@@ -288,7 +323,10 @@ class SweepSettings(_Strict):
 
     @property
     def size(self) -> int:
-        """Number of start points (product of the three start axes), without making them."""
+        """Number of start points (product of the three start axes, or random count
+        per length), without making them."""
+        if self.random is not None:
+            return self.random.count * axis_count(self.length)
         return axis_count(self.theta0) * axis_count(self.y0) * axis_count(self.length)
 
     def grid(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -508,7 +546,8 @@ def combinations(cfg: Any) -> list[Combination]:
         return [Combination({}, cfg)]
     locs = {k: ("sweep", *loc) for loc, k, _ in cfg.sweep.axis_items()}
     base = cfg.model_dump(mode="json")
-    base["sweep"] = {k: base["sweep"][k] for k in _START_AXES}  # refine: the sweep's
+    # refine: the sweep's; random starts: each combination draws its own
+    base["sweep"] = {k: base["sweep"][k] for k in (*_START_AXES, "random") if k in base["sweep"]}
     out = []
     for assignment in assignments:
         data = copy.deepcopy(base)

@@ -22,6 +22,7 @@ from typing import Any, Literal, NamedTuple
 from fibersweep.analysis.trajectory import CLASSES, Trajectory
 
 __all__ = [
+    "ARRAY_COLUMNS",
     "CLASSES",
     "STATUSES",
     "Column",
@@ -36,6 +37,20 @@ STATUSES = ("ok", "failed")
 
 #: Arrow type names a column may declare (``pyarrow.type_for_alias`` names).
 ARROW_TYPES = ("float64", "int64", "bool", "string")
+
+#: Columns of pillar-array runs only (``flow.array``): written to a table part only
+#: when one of its runs has a ``mode``, so a channel's table is as before they existed.
+ARRAY_COLUMNS = (
+    "rows",
+    "shift_per_row",
+    "migration_angle",
+    "fraction",
+    "mode",
+    "wraps",
+    "contacts",
+    "bridging",
+    "time_on_pillars",
+)
 
 #: Field names of the record whose column is named otherwise in the table.
 COLUMN_NAMES = {"cls": "class"}
@@ -90,9 +105,10 @@ class FiberStart:
     theta0 : float
         Angle from +x, counter-clockwise [degrees].
     y0 : float
-        Centre-of-mass lateral position from the pillar base / h_obs.
+        Centre-of-mass lateral position from the pillar base / h_obs (a pillar
+        array: fraction of period_y in the gap upstream of row 0, 0..1).
     length : float
-        Fiber length L / l_obs.
+        Fiber length L / l_obs (a pillar array: L in µm).
     """
 
     theta0: float = column(
@@ -219,6 +235,39 @@ class RunResult:
         "float64",
         "deg",
         "largest turning of the tangent along the beads on the pillar (NaN for rigid)",
+    )
+    rows: int | None = column(
+        None, "int64", "", "pillar arrays: whole rows of pillars crossed (null in a channel)"
+    )
+    shift_per_row: float = column(
+        math.nan, "float64", "µm", "pillar arrays: mean lateral displacement per row"
+    )
+    migration_angle: float = column(
+        math.nan, "float64", "deg", "pillar arrays: atan(shift_per_row / period_x)"
+    )
+    fraction: float = column(
+        math.nan,
+        "float64",
+        "",
+        "pillar arrays: shift_per_row / (shift period_y); 1 follows the tilt, 0 the flow",
+    )
+    mode: str | None = column(
+        None,
+        "string",
+        "",
+        "pillar arrays: zigzag, displacement, wrap-and-jump, trapped or mixed (null in a channel)",
+    )
+    wraps: int | None = column(
+        None, "int64", "", "pillar arrays: contact episodes with a turn beyond 90 deg"
+    )
+    contacts: int | None = column(
+        None, "int64", "", "pillar arrays: contact episodes (from every step)"
+    )
+    bridging: int | None = column(
+        None, "int64", "", "pillar arrays: steps in contact with two or more pillars at once"
+    )
+    time_on_pillars: float = column(
+        math.nan, "float64", "s", "pillar arrays: time in contact with a pillar"
     )
     trajectory: Trajectory | None = field(default=None, compare=False, repr=False)
 

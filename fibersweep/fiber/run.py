@@ -127,12 +127,14 @@ def simulate(
 
     Parameters
     ----------
-    field : FlowField
-        Steady midplane flow [µm/s].
+    field : FlowField or CellField
+        Steady midplane flow [µm/s]: the channel's, or a pillar array's unit cell
+        (then :func:`fibersweep.fiber.array_run.simulate_array` runs it, with its
+        start in the array's units).
     settings : FiberSettings
         Model, contact, stepping, classification, recording, effects.
     start : FiberStart
-        theta0 [deg], y0 / h_obs, L / l_obs.
+        theta0 [deg], y0 / h_obs, L / l_obs (array: y0 / period_y, L [µm]).
     rng_seed : int, optional
         Seed of the effects' randomness (start noise, Brownian motion).
 
@@ -149,6 +151,12 @@ def simulate(
         cannot resolve, a start overlapping the pillar or outside the channel,
         an unknown effect.
     """
+    from fibersweep.flow.cell import CellField
+
+    if isinstance(field, CellField):  # a pillar array's unit cell (flow.array)
+        from fibersweep.fiber.array_run import simulate_array
+
+        return simulate_array(field, settings, start, rng_seed=rng_seed)
     t_wall = time.perf_counter()
     rng = np.random.default_rng(rng_seed)
     setup = prepare(field, settings, start, rng)

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_serializer
 
 from fibersweep.analysis.settings import ClassifySettings
 
@@ -14,7 +14,11 @@ __all__ = [
     "ClassifySettings",
     "RecordSettings",
     "FiberSettings",
+    "ARRAY_ROWS",
 ]
+
+#: Rows a fiber crosses in a pillar array unless ``fiber.array_rows`` says otherwise.
+ARRAY_ROWS = 20
 
 
 class _Strict(BaseModel):
@@ -93,3 +97,17 @@ class FiberSettings(_Strict):
     effects: dict[str, float] = Field(
         default_factory=dict, description="extra physical effects, name -> strength (0 = off)"
     )
+    array_rows: int = Field(
+        ARRAY_ROWS,
+        ge=1,
+        description="pillar arrays (flow.array): rows of pillars a run crosses before it ends",
+    )
+
+    @model_serializer(mode="wrap")
+    def _array_rows_when_set(self, handler: Any) -> dict[str, Any]:
+        """``array_rows`` is written only away from its default, so the dump, the run ids
+        and the manifest of every config that does not set it stay as before it existed."""
+        data = handler(self)
+        if isinstance(data, dict) and data.get("array_rows") == ARRAY_ROWS:
+            data.pop("array_rows", None)
+        return data

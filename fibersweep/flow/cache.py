@@ -31,7 +31,14 @@ from fibersweep.flow.schemes import get_wall_scheme
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.solver import SOLVER_VERSION, solve_flow
 
-__all__ = ["CacheInfo", "cache_key", "get_flow_field", "load_entry", "CorruptCacheError"]
+__all__ = [
+    "CacheInfo",
+    "cache_key",
+    "entry_complete",
+    "get_flow_field",
+    "load_entry",
+    "CorruptCacheError",
+]
 
 log = logging.getLogger(__name__)
 
@@ -117,6 +124,10 @@ def cache_key(settings: FlowSettings) -> str:
         from fibersweep.flow.patch import PATCH_METHOD
 
         payload["patch_method"] = PATCH_METHOD
+    if settings.array is not None:  # the unit cell's solver (a channel: no key)
+        from fibersweep.flow.cell import CELL_SOLVER_VERSION
+
+        payload["cell_solver"] = CELL_SOLVER_VERSION
     blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
     return hashlib.sha256(blob).hexdigest()[:24]
 
@@ -219,9 +230,33 @@ def _discard(path: Path) -> None:
     shutil.rmtree(trash, ignore_errors=True)
 
 
+def entry_complete(settings: FlowSettings, cache_dir: str | Path) -> bool:
+    """Whether the cache holds a complete entry for ``settings`` (computes nothing)."""
+    key = cache_key(settings)
+    if settings.array is not None:
+        return (Path(cache_dir) / f"cell-{key}.npz").exists()
+    # A complete channel entry is flow-<key>/ with its manifest written last.
+    return (Path(cache_dir) / f"flow-{key}" / MANIFEST).exists()
+
+
+def _cell_info(field: Any, key: str, path: Path, hit: bool) -> CacheInfo:
+    m = field.meta
+    return CacheInfo(
+        key=key,
+        path=path,
+        hit=hit,
+        steps=int(m["steps"]),
+        converged=bool(m["converged"]),
+        residual=float(m["residual"]),
+        seconds=float(m["seconds"]),
+        u_center_reached=float(field.u_center),
+        grid=tuple(int(v) for v in m["grid"]),
+    )
+
+
 def get_flow_field(
     settings: FlowSettings, cache_dir: str | Path, *, force: bool = False, mmap: bool = True
-) -> tuple[FlowField, CacheInfo]:
+) -> tuple[Any, CacheInfo]:
     """The flow field for ``settings``, from the cache or computed and stored.
 
     Parameters
@@ -237,10 +272,18 @@ def get_flow_field(
     Returns
     -------
     (FlowField, CacheInfo)
+        With ``settings.array`` set: the unit cell's
+        :class:`~fibersweep.flow.cell.CellField` (entry ``cell-<key>.npz``,
+        :mod:`fibersweep.flow.cell_cache`).
     """
     root = Path(cache_dir)
     root.mkdir(parents=True, exist_ok=True)
     key = cache_key(settings)
+    if settings.array is not None:
+        from fibersweep.flow.cell_cache import cell_path, get_cell_field
+
+        cell, hit = get_cell_field(settings, root, key, force=force)
+        return cell, _cell_info(cell, key, cell_path(root, key), hit)
     path = root / f"flow-{key}"
     if path.exists() and not force:
         try:

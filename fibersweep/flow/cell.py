@@ -122,6 +122,16 @@ class CellField:
         s = int(self.meta["shift_cells"])
         return (_pad(self.ux, pad, s), _pad(self.uy, pad, s))
 
+    @property
+    def u_center(self) -> float:
+        """Midplane speed of the same flux in an empty channel [µm/s] (the field's scale)."""
+        return float(self.meta["u_center"])
+
+    @property
+    def viscosity(self) -> float:
+        """Dynamic viscosity [Pa s = pN s/µm²]."""
+        return float(self.meta["viscosity"])
+
 
 def _pad(a: np.ndarray, pad: int, s: int) -> np.ndarray:
     nx, ny = a.shape
@@ -421,8 +431,13 @@ def solve_block(array: PillarArray, dx: float, rows: int, *, symmetry: bool = Tr
 
 # ----------------------------------------------------------------- field
 def field_of(array: PillarArray, sol: CellSolve, u_center: float, boundary: str,
-             settings: dict | None = None) -> CellField:  # fmt: skip
-    """Scale a cell solution to µm/s and build the :class:`CellField`."""
+             settings: dict | None = None, viscosity: float = 0.340) -> CellField:  # fmt: skip
+    """Scale a cell solution to µm/s and build the :class:`CellField`.
+
+    ``u_center`` [µm/s]: midplane speed of the same flux in an empty channel (the
+    depth-averaged superficial velocity is ⅔ of it); ``viscosity`` [Pa s] is kept
+    with the field for the fibers that move in it.
+    """
     grid = sol.grid
     # superficial velocity: flux through a face / (λy H), here the half depth
     ux_mean = float(sol.u[0].sum()) / (grid.nx * grid.ny * grid.nz)
@@ -436,6 +451,8 @@ def field_of(array: PillarArray, sol: CellSolve, u_center: float, boundary: str,
     meta = {
         "solver_version": CELL_SOLVER_VERSION,
         "settings": settings or {},
+        "u_center": float(u_center),
+        "viscosity": float(viscosity),
         "shift_cells": sol.shift_cells,
         "steps": sol.steps,
         "seconds": sol.seconds,

@@ -3,14 +3,24 @@
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationInfo,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 
+from fibersweep.flow.array_settings import ArraySettings, check_array_flow
 from fibersweep.geometry import PILLAR_SHAPES, ConvexPolygon, check_shape_name
 from fibersweep.units import Fluid, Geometry
 
 __all__ = [
+    "ArraySettings",
     "GeometrySettings",
     "FluidSettings",
     "FlowSettings",
@@ -130,6 +140,14 @@ class FlowSettings(_Strict):
     """Everything that changes the steady field (all of it enters the cache key)."""
 
     geometry: GeometrySettings = GeometrySettings()
+    array: ArraySettings | None = Field(
+        None,
+        description=(
+            "a tilted pillar array (docs/arrays.md): the flow is then its unit cell with "
+            "shifted periodic boundaries, and geometry is not used; None: the single "
+            "pillar in a channel"
+        ),
+    )
     fluid: FluidSettings = FluidSettings()
     dx: float = Field(4.0, gt=0, description="lattice spacing [µm]")
     collision: Literal["trt", "bgk"] = Field("trt", description="collision operator")
@@ -172,6 +190,8 @@ class FlowSettings(_Strict):
     @classmethod
     def _resolution(cls, dx: float, info: ValidationInfo) -> float:
         geom = info.data.get("geometry")
+        if info.data.get("array") is not None:
+            return dx  # the unit cell's lattice is checked with the array (_array_cell)
         if geom is None or dx <= 0:  # geometry invalid (reported on its own) or dx <= 0
             return dx
         nz = geom.depth / dx
@@ -193,6 +213,8 @@ class FlowSettings(_Strict):
     @classmethod
     def _even_depth(cls, symmetry: bool, info: ValidationInfo) -> bool:
         geom, dx = info.data.get("geometry"), info.data.get("dx")
+        if info.data.get("array") is not None:
+            return symmetry  # checked with the array (_array_cell)
         if symmetry and geom is not None and dx is not None and round(geom.depth / dx) % 2:
             raise ValueError(
                 "symmetry: true needs an even number of nodes across the depth "
@@ -204,6 +226,32 @@ class FlowSettings(_Strict):
     def field_dx(self) -> float:
         """Spacing of the stored midplane field [µm]: ``patch.dx`` with a patch, else ``dx``."""
         return self.dx if self.patch is None else self.patch.dx
+
+    @model_serializer(mode="wrap")
+    def _without_array(self, handler: Any) -> dict[str, Any]:
+        """``array`` is written only when set: a channel's dump, key and manifest stay as before."""
+        data = handler(self)
+        if isinstance(data, dict) and data.get("array") is None:
+            data.pop("array", None)
+        return data
+
+    @model_validator(mode="after")
+    def _array_cell(self) -> FlowSettings:
+        """With ``array``: the settings the unit cell does not use are refused away from
+        their defaults, and the lattice must fit the cell (:func:`check_array_flow`)."""
+        if self.array is None:
+            return self
+        from fibersweep.config.errors import FieldError  # config imports flow: lazily
+
+        for name in ("geometry", "collision", "magic", "keep_3d", "patch"):
+            if getattr(self, name) != type(self).model_fields[name].default:
+                raise FieldError(
+                    name,
+                    f"not used with flow.array (the unit cell of the array is the geometry; "
+                    f"its solver is TRT with its own Lambda); leave flow.{name} out",
+                )
+        check_array_flow(self.array, self.dx, self.pillar_boundary, self.symmetry)
+        return self
 
     @model_validator(mode="after")
     def _patch_grid(self) -> FlowSettings:

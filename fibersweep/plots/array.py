@@ -87,7 +87,7 @@ def chrono_figure(array, runs: list[dict], bead_radius: float, frames: int = 30)
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)
         ax.set_aspect("equal")
-        ax.set_title(f"{run['mode']}: L = {run['length']:g} µm, y0 = {run['y0']:.1f} µm, "
+        ax.set_title(f"{run['mode']}: L = {run['length']:g} µm, y0 = {run['y0']:.2f} λy, "
                      f"θ0 = {run['theta0']:.1f}°", fontsize=8)  # fmt: skip
         ax.set_ylabel("y [µm]")
     axes[-1, 0].set_xlabel("x [µm]")

@@ -7,7 +7,6 @@ U_center its runs move in, the separatrix).
 from __future__ import annotations
 
 import logging
-from pathlib import Path
 from typing import Any
 
 from fibersweep.config import Config
@@ -34,11 +33,9 @@ def flow_field_for(cfg: Config, *, mmap: bool = True) -> tuple[Any, Any]:
 
 def flow_key_for(cfg: Config) -> tuple[str, bool]:
     """The flow-field key of a config and whether the field is cached (computes nothing)."""
-    from fibersweep.flow.cache import MANIFEST, cache_key
+    from fibersweep.flow.cache import cache_key, entry_complete
 
-    key = cache_key(cfg.flow)
-    # A complete cache entry is flow-<key>/ with its manifest written last.
-    return key, (Path(cfg.run.cache_dir) / f"flow-{key}" / MANIFEST).exists()
+    return cache_key(cfg.flow), entry_complete(cfg.flow, cfg.run.cache_dir)
 
 
 def flow_keys_for(cfg: Config) -> dict[str, tuple[Any, bool]]:
@@ -87,12 +84,22 @@ def effective_u_center(fieldobj: Any, fiber: Any) -> float:
     re-applies them later from the manifest, so it must be the run's own.
     """
     from fibersweep.fiber.effects import build_effects
+    from fibersweep.flow.cell import CellField
 
+    if isinstance(fieldobj, CellField):  # array effects act in the kernels only
+        return fieldobj.u_center
     return float(build_effects(fiber.effects).field(fieldobj).fluid.u_center)
 
 
 def _separatrix(fieldobj: Any, info: Any, old: dict[str, Any]) -> float | None:
-    """Far-upstream separatrix y/h_obs of a field (reused from the stored manifest)."""
+    """Far-upstream separatrix y/h_obs of a field (reused from the stored manifest).
+
+    None for a pillar array's unit cell (no upstream far field).
+    """
+    from fibersweep.flow.cell import CellField
+
+    if isinstance(fieldobj, CellField):
+        return None
     if old.get("provenance", {}).get("flow_key") == info.key and "separatrix" in old:
         return old["separatrix"]
     for entry in (old.get("combinations") or {}).values():

@@ -169,9 +169,13 @@ def make_tasks(
     """
     settings = sweep_settings(cfg, flow_key) if settings is None else settings
     columns = cfg.sweep.setting_keys if columns is None else list(columns)
+    from fibersweep.config.draws import start_points
+
     tasks: dict[str, SweepTask] = {}
-    t, y, L = cfg.sweep.grid()
+    t, y, L = start_points(cfg)
     for st in settings:
+        if cfg.sweep.random is not None and st.combination.values:
+            t, y, L = start_points(st.config)  # redraws depend on the combination
         values: tuple[tuple[str, Any], ...] = ()
         if columns:
             dumped = st.config.model_dump(mode="json")

@@ -243,6 +243,11 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     # The thresholds the runs were simulated with (the trap rule also stops a run);
     # kept apart from the config's, which later re-classifications overwrite.
     simulated = man.setdefault("simulated_classify", man["config"]["fiber"]["classify"])
+    from fibersweep.sweep.reclassify_modes import is_array_table, reclassify_modes
+
+    if is_array_table(runs):  # pillar-array runs: their transport modes
+        meta = classified_meta(list_parts(out / RUNS_DIR), man, thresholds)
+        return reclassify_modes(out, man, runs, thresholds, meta)
     geometry, u_center = _run_context(man, out)
     # A folder of several settings: each run's own geometry and speed, by its settings id.
     per_setting = {

@@ -209,7 +209,8 @@ def _run_locked(
     ex = executor_for_run(cfg.run, keep=keep)
     # workers leave Ctrl-C to us when the executor says we handle it (the local pool)
     initargs = (spec, ex.parent_handles_ctrl_c)
-    keep_traj = cfg.fiber.record.trajectories
+    # an array run always keeps its trajectory: its mode is re-labelled from it
+    keep_traj = cfg.fiber.record.trajectories or cfg.flow.array is not None
     t0 = time.perf_counter()
     state = "stopped"
     writer = PartWriter(out, meta, cfg.run.flush_every, cfg.run.flush_seconds)
@@ -363,10 +364,15 @@ def _finish(
     if plan is not None and plan.columns and unsaved is None:
         table = _fill_setting_columns(out, meta, table, plan)
     ok = table[table["status"] == "ok"]
-    summary.table_counts = {c: int((ok["class"] == c).sum()) for c in CLASSES}
-    other = int((~ok["class"].isin(CLASSES)).sum())
-    if other:
-        summary.table_counts["unclassified"] = other
+    if "mode" in ok and ok["mode"].notna().any():  # pillar-array runs: their modes
+        from fibersweep.analysis.modes import MODES
+
+        summary.table_counts = {m: int((ok["mode"] == m).sum()) for m in MODES}
+    else:
+        summary.table_counts = {c: int((ok["class"] == c).sum()) for c in CLASSES}
+        other = int((~ok["class"].isin(CLASSES)).sum())
+        if other:
+            summary.table_counts["unclassified"] = other
     summary.failed = int((table["status"] != "ok").sum())
     manifest.update(
         state=state,

@@ -33,7 +33,7 @@ import pyarrow.parquet as pq
 
 from fibersweep.atomic import TMP_GLOB, atomic_path
 from fibersweep.errors import ResultsError
-from fibersweep.fiber.result import Column, record_columns
+from fibersweep.fiber.result import ARRAY_COLUMNS, Column, record_columns
 from fibersweep.sweep.coldocs import RUN_EXTRA_DOCS, TRAJ_COLUMN_DOCS, docs_for, with_docs
 
 __all__ = [
@@ -147,7 +147,10 @@ def runs_table(
     """Arrow table of run rows with the fixed column types of RUN_COLUMNS first."""
     df = pd.DataFrame(list(rows))
     fields, arrays = [], []
+    array_runs = "mode" in df and df["mode"].notna().any()
     for name, typ in RUN_COLUMNS.items():
+        if name in ARRAY_COLUMNS and not array_runs:
+            continue  # a channel's runs: the table as before pillar arrays existed
         if name in ONLY_WHEN_SET and not (name in df and (df[name].fillna(0) != 0).any()):
             continue  # e.g. no 'round' column in a sweep that was never refined
         col = df[name] if name in df else pd.Series([None] * len(df), dtype=object)

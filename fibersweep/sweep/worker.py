@@ -248,8 +248,15 @@ def field_for(spec: SettingSpec) -> FlowField:
             from fibersweep.flow.settings import FlowSettings
 
             flow = FlowSettings.model_validate_json(spec.flow_json)
-            # The parent verified the entry's checksums; workers only map it.
-            _FIELDS[spec.flow_key] = load_entry(spec.field_path, flow, mmap=True, verify=False)
+            if flow.array is not None:  # a pillar array's unit cell: one small .npz
+                from fibersweep.flow.cell_cache import load_cell_field
+
+                _FIELDS[spec.flow_key] = load_cell_field(spec.field_path)
+            else:
+                # The parent verified the entry's checksums; workers only map it.
+                _FIELDS[spec.flow_key] = load_entry(
+                    spec.field_path, flow, mmap=True, verify=False
+                )
             log.debug("worker %s mapped field %s", _worker_name(), spec.flow_key)
     return _FIELDS[spec.flow_key]
 
@@ -321,10 +328,19 @@ def _warm(field: Any, fiber: Any) -> None:
     short = fiber.model_copy(
         update={"step": fiber.step.model_copy(update={"t_max": 0.01})}, deep=True
     )
+    start = FiberStart(theta0=0.0, y0=2.0, length=0.5)
+    if hasattr(field, "array"):  # a pillar array's cell: a one-bead fiber in the widest gap
+        start = FiberStart(theta0=0.0, y0=_gap_middle(field.array), length=2 * fiber.bead_radius)
     try:
-        simulate(field, short, FiberStart(theta0=0.0, y0=2.0, length=0.5))
+        simulate(field, short, start)
     except RUN_ERRORS as exc:  # a warm-up problem must not hide the real runs' errors
         log.warning("warm-up run raised %s: %s", type(exc).__name__, exc)
+
+
+def _gap_middle(array: Any) -> float:
+    """Lateral fraction of period_y in the middle of the gap across the flow (warm-up start)."""
+    _, y0, _, y1 = array.shape.bounds
+    return float(((y1 + 0.5 * array.gap) / array.period_y) % 1.0)
 
 
 def failed_row(task: SweepTask, reason: str, attempts: int = 1) -> dict[str, Any]:

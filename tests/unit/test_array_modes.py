@@ -70,20 +70,23 @@ def test_wrap_and_jump_needs_turns_in_contact():
 
 
 def test_refine_lengths_bisects_where_the_mean_fraction_crosses_one_half():
+    """The lengths sort-report proposes: midpoints of neighbours bracketing f = 1/2."""
     import pandas as pd
 
-    from fibersweep.sweep.arrays import refine_lengths
+    from fibersweep.sweep.sort_report import migration_table, refine_lengths
 
     runs = pd.DataFrame(
         {
             "setting": [0] * 6 + [1] * 4,
+            "setting_label": [""] * 10,
             "length": [4, 4, 20, 20, 40, 40, 4, 4, 20, 20],
             "fraction": [0.0, 0.1, 0.3, 0.9, 0.9, 1.0, 0.0, 0.0, 0.1, 0.2],
+            "migration_angle": [0.0] * 10,
             "mode": ["zigzag"] * 10,
         }
     )
     # setting 0: means 0.05, 0.6, 0.95 -> bracket (4, 20); setting 1 never crosses
-    assert refine_lengths(runs) == {0: [12.0], 1: []}
+    assert refine_lengths(migration_table(runs)) == {0: [12.0], 1: []}
     # trapped runs do not count in the means
     runs.loc[3, "mode"] = "trapped"
-    assert refine_lengths(runs) == {0: [30.0], 1: []}
+    assert refine_lengths(migration_table(runs)) == {0: [30.0], 1: []}

@@ -142,7 +142,7 @@ def test_batched_run_ids_equal_the_documented_hash():
 def test_every_column_of_a_run_is_typed_and_documented(tmp_path):
     """The runs table's columns are the run record's (one schema): each stored with its
     Arrow type, unit and description; a run's row and a failed row fill the same columns."""
-    from fibersweep.fiber.result import RunResult, record_columns
+    from fibersweep.fiber.result import ARRAY_COLUMNS, RunResult, record_columns
     from fibersweep.sweep.store import COLUMN_DOCS, RUN_COLUMNS, SWEEP_COLUMNS
 
     record = {c.name for c in record_columns()}
@@ -156,10 +156,17 @@ def test_every_column_of_a_run_is_typed_and_documented(tmp_path):
         w.add({**row, "id": "a", "settings": "", "round": 1}, None)  # round > 0: written
         w.add(failed_row(task, "worker process died"), None)
     schema = pq.read_schema(list_parts(tmp_path / RUNS_DIR)[0])
+    # a channel's part: every column but those of pillar-array runs (as before arrays)
+    assert not set(ARRAY_COLUMNS) & set(schema.names)
+    array_row = {**row, "id": "b", "settings": "", "mode": "zigzag", "rows": 3, "wraps": 0}
+    with PartWriter(tmp_path / "array") as w:
+        w.add(array_row, None)
+    array_schema = pq.read_schema(list_parts(tmp_path / "array" / RUNS_DIR)[0])
     for name, typ in RUN_COLUMNS.items():
-        f = schema.field(name)
+        f = (array_schema if name in ARRAY_COLUMNS else schema).field(name)
         assert f.type == typ, name
         assert f.metadata[b"doc"].decode() == COLUMN_DOCS[name][1], name
         assert f.metadata[b"unit"].decode() == COLUMN_DOCS[name][0], name
+    assert read_runs(tmp_path / "array")["mode"].tolist() == ["zigzag"]
     df = read_runs(tmp_path).set_index("id").loc[["a", "x"]]
     assert list(df["n_beads"]) == [5, 0] and df["min_clearance"].isna().all()

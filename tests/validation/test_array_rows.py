@@ -17,17 +17,22 @@ from fibersweep.fiber.run import simulate
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cell import field_of, first_streamline_width, solve_cell
 from fibersweep.flow.field import FlowField
-from fibersweep.sweep.arrays import ArrayConfig, prepare_run
+from fibersweep.flow.settings import FlowSettings
 from fibersweep.units import Fluid
+
+
+def prepare_run(fiber: FiberSettings, field, length: float, x_end: float | None = None):
+    from fibersweep.fiber.array_run import array_run_kernel
+
+    return array_run_kernel(field, fiber, length, x_end)
 
 
 @pytest.fixture(scope="module")
 def small():
     """Triangles 40 µm high, 80 µm periods, ε = 0.1, dx = 4 µm."""
-    cfg = ArrayConfig.model_validate({"flow": {"dx": 4.0}, "run": {"cache_dir": ""}})
-    arr = cfg.array.to_array()
+    arr = FlowSettings.model_validate({"dx": 4.0, "array": {}}).array.to_array()
     field = field_of(arr, solve_cell(arr, 4.0), 600.0, "interpolated")
-    return cfg, field
+    return FiberSettings(), field
 
 
 def test_velocity_is_the_same_at_every_periodic_image(small):
@@ -69,9 +74,8 @@ def test_friction_acts_in_the_array(small):
     for y0 in (45.0, 60.0):
         ends = []
         for mu in (0.0, 0.3, 1.0):
-            fiber = cfg.fiber.model_copy(update={"effects": {"friction": mu}})
-            k = prepare_run(cfg.model_copy(update={"fiber": fiber}), field, 40.0,
-                            x_end=x0 + 3 * field.array.period_x)  # fmt: skip
+            fiber = cfg.model_copy(update={"effects": {"friction": mu}})
+            k = prepare_run(fiber, field, 40.0, x_end=x0 + 3 * field.array.period_x)
             rec, code = run_array_fiber(k, "rigid", x0, y0, 0.0)
             assert code == R.PASSED and rec[:, R.CONTACT].max() >= 1
             ends.append(rec[-1, R.T])
@@ -88,11 +92,10 @@ def test_one_pillar_of_a_sparse_array_as_the_channel_integrator():
     identical to the last bit while no implicit stopped step is taken.
     Tolerance: 1e-6 µm in y, 1e-6° in angle at the end.
     """
-    cfg = ArrayConfig.model_validate({
+    arr = FlowSettings.model_validate({
         "array": {"pillar_size": 75.0, "period_x": 240.0, "period_y": 240.0, "shift": 0.0},
-        "flow": {"dx": 4.0}, "run": {"cache_dir": ""},
-    })  # fmt: skip
-    arr = cfg.array.to_array()
+        "dx": 4.0,
+    }).array.to_array()  # fmt: skip
     cf = field_of(arr, solve_cell(arr, 4.0), 600.0, "interpolated")
     geo = arr.cell_geometry
     X, Y = np.meshgrid(*(np.arange(n) * 4.0 + 2.0 for n in cf.ux.shape), indexing="ij")
@@ -105,7 +108,7 @@ def test_one_pillar_of_a_sparse_array_as_the_channel_integrator():
     for y0, th0 in [(0.3, -5.0), (0.45, 5.0), (0.38, 0.0)]:  # all touch the pillar
         res = simulate(ff, settings, FiberStart(th0, y0, length / geo.pillar_base_length))
         tr = res.trajectory
-        k = prepare_run(cfg, cf, length, x_end=float(tr.x[-1]))
+        k = prepare_run(FiberSettings(), cf, length, x_end=float(tr.x[-1]))
         rec, _ = run_array_fiber(k, "rigid", 40.0, geo.y_from_base(y0), math.radians(th0))
         y_end = np.interp(tr.x[-1], rec[:, R.XC], rec[:, R.YC])
         th_end = np.interp(tr.x[-1], rec[:, R.XC], rec[:, R.TH])
@@ -127,17 +130,16 @@ def test_one_bead_fiber_is_a_steric_sphere():
     1/ε = 10 lanes before it reaches the pillar's first streamline). (The
     empirical DLD law 1.4 G ε^0.48 = 18.5 µm is not met: docs/arrays.md.)
     """
-    base = {"array": {"pillar_shape": "circle", "shift": 0.1}, "flow": {"dx": 2.0},
-            "run": {"cache_dir": ""}}  # fmt: skip
-    cfg = ArrayConfig.model_validate(base)
-    arr = cfg.array.to_array()
+    arr = FlowSettings.model_validate(
+        {"array": {"pillar_shape": "circle", "shift": 0.1}, "dx": 2.0}
+    ).array.to_array()
     sol = solve_cell(arr, 2.0)
     beta, _ = first_streamline_width(arr, sol.u, 2.0)
     field = field_of(arr, sol, 600.0, "interpolated")
     d_c = 2.0 * (beta / 1.1 - 0.6)
     for scale, zigzag in ((0.8, True), (1.2, False)):
         a = 0.5 * scale * d_c
-        c = ArrayConfig.model_validate({**base, "fiber": {"bead_radius": a}})
+        c = FiberSettings(bead_radius=a)
         x0 = 0.5 * (arr.shape.bounds[0] + arr.shape.bounds[2] - arr.period_x)
         k = prepare_run(c, field, 2 * a, x_end=x0 + 20 * arr.period_x)
         for y0 in (5.0, 25.0, 55.0, 75.0):
@@ -145,3 +147,45 @@ def test_one_bead_fiber_is_a_steric_sphere():
             yc = row_crossings(rec[:, R.XC], rec[:, R.YC], arr.period_x)
             f = (yc[20] - yc[10]) / (10 * arr.lateral_shift)
             assert (abs(f) < 0.25) if zigzag else (f > 0.75), (scale, y0, f)
+
+
+def test_simulate_on_a_cell_field_is_the_array_run(small):
+    """``simulate`` dispatches on the field: on a unit cell it runs the array kernel
+    from y0 = fraction of period_y in the gap upstream of row 0, for fiber.array_rows
+    rows, and its record's array columns are the trajectory's summary. Checked
+    against the kernel run directly from the same start: the same end (exact: the same
+    arithmetic), and the summary of the stored (thinned) trajectory equal to the
+    record's columns (exact: the same function)."""
+    from fibersweep.analysis.modes import summarise_trajectory
+    from fibersweep.fiber.array_run import start_x
+
+    fiber, field = small
+    fiber = fiber.model_copy(update={"array_rows": 4})
+    arr = field.array
+    res = simulate(field, fiber, FiberStart(theta0=3.0, y0=0.7, length=40.0))
+    assert res.status == "ok" and res.cls == ""
+    k = prepare_run(fiber, field, 40.0)
+    rec, code = run_array_fiber(k, "rigid", start_x(arr), 0.7 * arr.period_y, math.radians(3.0))
+    assert code == R.PASSED
+    assert res.x_f == rec[-1, R.XC] and res.y_f == rec[-1, R.YC]
+    assert res.rows >= 4 and res.n_beads == 10
+    s = summarise_trajectory(res.trajectory, arr, k.params.trap_speed)
+    assert (s.rows, s.mode, s.wraps) == (res.rows, res.mode, res.wraps)
+    assert s.fraction == res.fraction and s.angle_deg == res.migration_angle
+    assert res.contacts >= 0 and res.time_on_pillars >= 0.0
+
+
+def test_a_start_on_a_pillar_or_outside_the_cell_is_bad_input(small):
+    """Bad starts raise InputError naming y0 (a sweep records them as failed runs)."""
+    from fibersweep.errors import InputError
+    from fibersweep.fiber.array_run import start_x
+
+    fiber, field = small
+    arr = field.array
+    _, cy = arr.shape.centroid  # row 0's pillar, at the start's height
+    with pytest.raises(InputError, match="^y0"):
+        simulate(field, fiber, FiberStart(theta0=90.0, y0=1.5, length=20.0))
+    # an 80 µm fiber along the flow, centred in the row gap, reaches into row 0's pillar
+    assert start_x(arr) + 40.0 > arr.shape.bounds[0]
+    with pytest.raises(InputError, match="touches a pillar"):
+        simulate(field, fiber, FiberStart(theta0=0.0, y0=cy / arr.period_y, length=80.0))

@@ -1,0 +1,126 @@
+"""``fibersweep classify`` for pillar-array results: re-label each run's transport mode.
+
+An array run's mode and migration (:mod:`fibersweep.analysis.modes`) are a pure
+function of its stored trajectory, its array and the trap rule
+(``fiber.classify.trap_speed`` × the setting's U_center), so they are
+re-derived here from the store, without simulating, and the runs table is
+rewritten atomically as the channel's re-classification does.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import pandas as pd
+
+from fibersweep.analysis.modes import MODES, summarise_trajectory
+from fibersweep.atomic import atomic_path
+from fibersweep.errors import InputError
+from fibersweep.fiber.settings import ClassifySettings
+from fibersweep.flow.array_settings import ArraySettings
+from fibersweep.sweep.manifest import write_manifest
+from fibersweep.sweep.store import (
+    RUNS_DIR,
+    list_parts,
+    part_name,
+    read_trajectories,
+    runs_table,
+    write_table_atomic,
+)
+
+__all__ = ["is_array_table", "mode_counts", "reclassify_modes"]
+
+log = logging.getLogger(__name__)
+
+#: Columns re-derived from the trajectory.
+RELABELLED = ("rows", "shift_per_row", "migration_angle", "fraction", "mode", "wraps")
+
+
+def is_array_table(runs: pd.DataFrame) -> bool:
+    """Whether a runs table holds pillar-array runs (a ``mode`` column with values)."""
+    return "mode" in runs and bool(runs["mode"].notna().any())
+
+
+def mode_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFrame:
+    """Runs per mode (ok runs) and failures, with fractions; one block per swept combination."""
+    by = [k for k in (by or []) if k in runs]
+    if by:
+        blocks = []
+        for values, group in runs.groupby(by, sort=True, dropna=False):
+            values = values if isinstance(values, tuple) else (values,)
+            block = mode_counts(group)
+            for k, v in reversed(list(zip(by, values, strict=True))):
+                block.insert(0, k, v)
+            blocks.append(block)
+        return pd.concat(blocks, ignore_index=True)
+    ok = runs[runs["status"] == "ok"]
+    rows = [(m, int((ok["mode"] == m).sum())) for m in MODES]
+    rows.append(("failed", int((runs["status"] != "ok").sum())))
+    df = pd.DataFrame(rows, columns=["mode", "runs"])
+    df["fraction"] = (df["runs"] / max(1, int(df["runs"].sum()))).round(4)
+    return df
+
+
+def reclassify_modes(
+    out: Path, man: dict, runs: pd.DataFrame, thresholds: ClassifySettings, meta: dict
+):
+    """Re-label every array run with a stored trajectory; rewrite the table and manifest.
+
+    Returns
+    -------
+    fibersweep.sweep.reclassify.Reclassified
+    """
+    from fibersweep.sweep.reclassify import COUNTS_FILE, Reclassified, trajectory_from_frame
+
+    combos = man.get("combinations") or {}
+    base_flow = man["config"]["flow"]
+
+    def context(sid: str):
+        entry = combos.get(sid) or {}
+        flow = entry.get("flow") or base_flow
+        u = entry.get("u_center_effective") or flow["fluid"]["u_center"]
+        return ArraySettings.model_validate(flow["array"]).to_array(), float(u)
+
+    contexts: dict[str, tuple] = {}
+    traj = read_trajectories(out, list(runs["id"]))
+    if traj.empty:
+        raise InputError(f"{out}: no trajectories stored for its array runs")
+    groups = dict(tuple(traj.groupby("id", sort=False)))
+    runs = runs.copy()
+    old_mode = runs["mode"].copy()
+    for i in range(len(runs)):
+        rid = runs.at[i, "id"]
+        if rid not in groups or pd.isna(runs.at[i, "mode"]):
+            continue
+        sid = runs.at[i, "settings"]
+        if sid not in contexts:
+            contexts[sid] = context(sid)
+        array, u = contexts[sid]
+        summ = summarise_trajectory(
+            trajectory_from_frame(groups[rid].sort_values("sample")),
+            array,
+            thresholds.trap_speed * u,
+        )
+        for col, value in zip(
+            RELABELLED,
+            (summ.rows, summ.shift_per_row, summ.angle_deg, summ.fraction, summ.mode, summ.wraps),
+            strict=True,
+        ):
+            runs.at[i, col] = value
+    changed = int((runs["mode"] != old_mode).sum())
+    old_parts = list_parts(out / RUNS_DIR)
+    write_table_atomic(
+        runs_table(runs.to_dict("records"), meta), out / RUNS_DIR / part_name("-classified")
+    )
+    for p in old_parts:
+        p.unlink(missing_ok=True)
+    counts = mode_counts(runs, list(man.get("swept") or []))
+    counts_path = out / COUNTS_FILE
+    with atomic_path(counts_path) as tmp:
+        counts.to_csv(tmp, index=False)
+    man["config"]["fiber"]["classify"] = thresholds.model_dump(mode="json")
+    total = mode_counts(runs)
+    man["counts"] = {m: int(n) for m, n in zip(total["mode"], total["runs"], strict=True)}
+    write_manifest(out, man)
+    return Reclassified(len(runs), changed, counts, counts_path)
