@@ -34,8 +34,6 @@ def check_array_config(cfg: Any) -> None:
     from fibersweep.fiber.rows import array_pillar, check_array_effects
 
     fiber = cfg.fiber
-    if fiber.model != "rigid":
-        raise FieldError("fiber.model", "pillar arrays run the rigid model for now")
     try:
         check_array_effects(fiber)
     except InputError as exc:
@@ -53,6 +51,17 @@ def check_array_config(cfg: Any) -> None:
             f"L = {short[0]:g} µm is shorter than one bead (2a = {2 * fiber.bead_radius:g} µm); "
             "in a pillar array lengths are in µm",
         )
+    if fiber.model != "rigid":
+        from fibersweep.fiber.setup import MIN_BEADS
+
+        few = [float(L) for L in lengths if n_beads_of(float(L), fiber.bead_radius) < MIN_BEADS]
+        if few:
+            raise FieldError(
+                "sweep.length",
+                f"L = {few[0]:g} µm is {n_beads_of(few[0], fiber.bead_radius)} bead(s); the "
+                f"{fiber.model} model needs at least {MIN_BEADS} (a sphere runs with the rigid "
+                "model)",
+            )
     y = axis_values(cfg.sweep.y0)
     if np.any((y < 0) | (y > 1)):
         raise FieldError(

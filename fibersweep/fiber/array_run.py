@@ -20,6 +20,7 @@ classify`` re-labels the modes from the store.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import time
@@ -30,6 +31,7 @@ from fibersweep.errors import InputError
 from fibersweep.fiber import record as R
 from fibersweep.fiber.models import MODELS
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
+from fibersweep.fiber.setup import MIN_BEADS
 
 __all__ = ["array_run_kernel", "n_beads_of", "simulate_array", "start_clear", "start_x"]
 
@@ -105,7 +107,8 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
     field : fibersweep.flow.cell.CellField
         Unit-cell midplane velocity [µm/s] and its array.
     settings : FiberSettings
-        Rigid model, contact, step, trap rule, effects acting in the kernels.
+        Fiber model (rigid or bead-spring), contact, step, trap rule, effects acting in
+        the kernels.
     start : FiberStart
         theta0 [deg], y0 [fraction of period_y], length [µm].
     rng_seed : int, optional
@@ -141,6 +144,11 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
             f"length: L = {start.length} µm is shorter than one bead (2a = {2 * a} µm)"
         )
     n = n_beads_of(start.length, a)
+    if settings.model != "rigid" and n < MIN_BEADS:
+        raise InputError(
+            f"length: L = {start.length} µm is {n} bead(s); the {settings.model} model needs "
+            f"at least {MIN_BEADS} (a sphere runs with the rigid model)"
+        )
     effects = check_array_effects(settings)
     pillar = array_pillar(array, settings, field.viscosity, field.u_center)
     if not start_clear(array, pillar, n, a, start.y0, start.theta0):
@@ -154,7 +162,9 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
     y0 = start.y0 * array.period_y
     k = array_run_kernel(field, settings, start.length)
     try:
-        rec, _, code = MODELS[settings.model].integrate(k, x0, y0, math.radians(start.theta0), None)
+        rec, beads, code = MODELS[settings.model].integrate(
+            k, x0, y0, math.radians(start.theta0), None
+        )
     except (FloatingPointError, np.linalg.LinAlgError, ZeroDivisionError) as exc:
         log.warning("run %s failed: %s", start, exc)
         return RunResult(
@@ -164,7 +174,11 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
     npil = rec[:, R.CONTACT]  # pillars in contact at each step
     contact = npil > 0.5
     t = rec[:, R.T]
-    kept = _thin(R.trajectory_from_record(rec), max(settings.record.samples, 2))
+    has_beads = beads is not None and len(beads) > 0
+    kept = _thin(R.trajectory_from_record(rec, beads if has_beads else None),
+                 max(settings.record.samples, 2))  # fmt: skip
+    if kept.beads is not None and not settings.record.all_beads:
+        kept = dataclasses.replace(kept, beads=None)
     summ = summarise_trajectory(kept, array, k.params.trap_speed)
     common = dict(
         start=start,
@@ -189,6 +203,40 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
         time_on_pillars=float(np.sum(np.diff(t) * contact[:-1])) if t.size > 1 else 0.0,
         trajectory=kept,
     )
+    if has_beads:
+        common.update(_deformation(array, pillar, beads, npil, settings))
     if code < 0:
         return RunResult(status="failed", reason=R.STOP_REASONS[code], **common)
     return RunResult(status="ok", **common)
+
+
+def _deformation(array, pillar, beads: np.ndarray, npil: np.ndarray, settings) -> dict:
+    """Deformation observables of a bead-spring run (``fiber.deformation.deformation``).
+
+    Each recorded configuration is moved by the lattice vector of the pillar nearest
+    to its centre, so that this pillar is the cell's own (row 0, column 0), whose
+    outline the wrap angle is measured against.
+
+    Parameters
+    ----------
+    beads : ndarray, shape (rows, n, 2)
+        Bead positions [µm], unwrapped lab frame.
+    npil : ndarray, shape (rows,)
+        Pillars in contact at each row.
+    """
+    from fibersweep.fiber.deformation import deformation
+
+    cx, cy = array.shape.centroid
+    mid = beads.mean(axis=1)
+    row = np.rint((mid[:, 0] - cx) / array.period_x)
+    col = np.rint((mid[:, 1] - cy - row * array.lateral_shift) / array.period_y)
+    shift = np.stack([row * array.period_x, row * array.lateral_shift + col * array.period_y], 1)
+    return deformation(
+        beads - shift[:, None, :],
+        (npil > 0.5).astype(np.float64),
+        pillar.vertices,
+        pillar.circle,
+        pillar.r_cut,
+        settings.bead_radius,
+        settings.young_modulus,
+    )

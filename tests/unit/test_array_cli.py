@@ -30,7 +30,7 @@ from fibersweep.cli import app
         (["sweep.flow.array.gap=[1]"], "sweep.flow.array.gap"),  # not a setting
         (["fiber.effects={inlet_speed: 0.1}"], "fiber.effects"),  # a channel-only effect
         (["fiber.effects={frictoin: 0.1}"], "fiber.effects"),  # unknown effect
-        (["fiber.model=bead-spring"], "fiber.model"),  # rigid only, for now
+        (["fiber.model=bead-spring-ros2"], "sweep.length"),  # 4 µm: one bead, not a chain
         (["sweep.y0=[0.2, 1.5]"], "sweep.y0"),  # a fraction of period_y
         (["sweep.length=[2, 40]"], "sweep.length"),  # shorter than one bead (µm)
     ],
