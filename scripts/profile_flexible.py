@@ -93,7 +93,7 @@ def _t_wmatrix(k, beads):
 @nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_factor(k, reps, piv):
     for _ in range(reps):
-        I.system(k.bead, 1e-4, piv)
+        I.system(k.bead, 1e-4, piv, I.GAMMA)
 
 
 @nb.njit  # not cached: a cache here would not see edits of the package kernels
