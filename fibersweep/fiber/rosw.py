@@ -76,9 +76,7 @@ GAMMA_MATRIX = _frozen(
 B = _frozen([2.4212380706095346e-01, -1.2232505839045147e00, 1.5452602553351020e00, GAMMA3])
 """Weights b_i of the third-order solution."""
 
-BHAT = _frozen(
-    [3.7810903145819369e-01, -9.6042292212423178e-02, 0.5, 2.1793326075422950e-01]
-)
+BHAT = _frozen([3.7810903145819369e-01, -9.6042292212423178e-02, 0.5, 2.1793326075422950e-01])
 """Weights b̂_i of the embedded second-order solution."""
 
 
