@@ -1,4 +1,4 @@
-"""Adaptive linearly implicit (ROS2) stepping of the bead-spring fiber (docs/flexible.md).
+"""Adaptive linearly implicit (Rosenbrock-W) stepping of the bead-spring fiber (docs/flexible.md).
 
 Same model as :mod:`fibersweep.fiber.beadspring` (stretching + bending springs,
 RPY mobility, pillar contact, the effects' stages), other time stepping. With
@@ -27,6 +27,12 @@ product, and one in-place LU factorisation of I − γhW whose factors serve bot
 stages (:mod:`fibersweep.fiber.lu`); a rejected step redoes the LU and the
 stage-2 f only. The mobility is lagged in W only: f itself always uses M at its
 own argument.
+
+With ``fiber.step.rosenbrock: ros34pw2`` (``Params.rosw`` = 1) the same loop
+(:func:`integrate_implicit`) takes the four stages of the third-order W-method
+ROS34PW2 instead (:mod:`fibersweep.fiber.rosw`: four f, one LU, four solves) and
+sets the next step with the exponent 1/3. Only the stages differ
+(:func:`_try_ros2`, :func:`_try_ros34pw2`); the ROS2 path is unchanged bit for bit.
 """
 
 from __future__ import annotations
