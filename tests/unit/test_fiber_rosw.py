@@ -191,3 +191,27 @@ def test_transformed_form_matches_the_hairer_wanner_form():
     assert np.allclose(err, ref_err, rtol=1e-10, atol=1e-16)
     a, c, m, e = transformed(ALPHA, GAMMA_MATRIX, B, BHAT)
     assert np.allclose(np.tril(a, -1), a) and np.allclose(np.tril(c, -1), c)
+
+
+def test_fiber_kernel_agrees_with_ros2_in_free_flow(coarse_field):
+    """The fiber kernel's ROS34PW2 path (``fiber.step.rosenbrock: ros34pw2``) against
+    ROS2 at a tight tolerance (1e-6 µm, bead error 4e-7 µm against Δt = 2.5e-5 s BDF2
+    at t = 0.3 s): E = 1 MPa, L = 0.5 l_obs, free flow to t = 0.2 s (68 ROS34PW2 steps
+    against 399). Measured 1.6e-5 µm; tolerance 1e-4 µm on every bead (ROS34PW2's
+    own error at its 2 µm displacement bound is ~3e-5 µm over 0.3 s,
+    docs/flexible.md)."""
+    from fibersweep.fiber.result import FiberStart
+    from fibersweep.fiber.run import simulate_for
+    from fibersweep.fiber.settings import FiberSettings
+
+    start = FiberStart(0.0, 0.45, 0.5)
+    out = {}
+    for method, tol in (("ros2", 1e-6), ("ros34pw2", 1e-4)):
+        st = FiberSettings(
+            model="bead-spring-ros2",
+            young_modulus=1e6,
+            step={"rosenbrock": method, "tolerance": tol},
+        )
+        traj, _ = simulate_for(coarse_field, st, start, 0.2)
+        out[method] = traj.beads[-1]
+    assert np.max(np.hypot(*(out["ros34pw2"] - out["ros2"]).T)) < 1e-4
