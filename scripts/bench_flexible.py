@@ -1,4 +1,4 @@
-"""Time the adaptive ROS2 bead-spring model against the fixed-step one over E and L; print ratios.
+"""Time the adaptive bead-spring models (ROS2, ROS34PW2) against the fixed-step one; print ratios.
 
 Usage: python scripts/bench_flexible.py [--dx 4] [--cache .fibersweep-cache]
        [--moduli 26e6 5e6 1e6 0.1e6] [--lengths 0.5 1.0] [--y0 0.45]
@@ -13,11 +13,15 @@ run of ``bead-spring`` at Δt = ``--reference-dt`` (1e-6 s; minutes per run)
 gives the error of both models: |Δδ| (δ = (y_f - y0)/h_obs) and the largest
 distance between the final bead positions at the reference's end time [µm]
 (``simulate_for`` to the same time). ``--reference-dt 0`` skips the references.
-``--equal-accuracy`` instead times both models at matched δ errors for every
-(E, L) of the grid (e.g. ``--moduli 26e6 --lengths 1.0``): fixed Δt = 2e-4 and
-1e-4 s against ROS2 at tighter tolerances, the errors taken against the
-Δt = 5e-5 s δ (at 26 MPa, l_obs within 1e-6 of Δt = 1e-6 s), and prints the
-ratio of each pair's wall times, measured in the same run.
+``--equal-accuracy`` instead times, for every (E, L) of the grid, two accuracy
+levels of three runs each: fixed Δt = 2e-4 / 1e-4 s, ROS2 at tolerance
+3e-4 / 1e-4 µm and ROS34PW2 (``fiber.step.rosenbrock: ros34pw2``) at 1e-5 /
+1e-6 µm (its error estimate is that of a second-order solution, so it needs a
+tighter tolerance than ROS2 for the same error). Errors are taken against the
+Δt = 5e-5 s run (at 26 MPa, l_obs within 1e-6 in δ of Δt = 1e-6 s): |Δδ| and
+the largest bead error at a common time. It
+prints the ratios of the wall times (fixed/ros3, ros2/ros3, fixed/ros2),
+measured in the same run, and their min / median / max over the grid.
 """
 
 from __future__ import annotations
@@ -49,42 +53,79 @@ def _beads_at(field, model, E, start, t_end, dt=None):
     return traj.beads[-1]
 
 
-ACCURACY_PAIRS = (
-    (("fixed dt = 2e-4 s", "bead-spring", {"dt": 2e-4}),
-     ("ros2 tol 3e-4", "bead-spring-ros2", {"tolerance": 3e-4})),
-    (("fixed dt = 1e-4 s", "bead-spring", {"dt": 1e-4}),
-     ("ros2 tol 1e-4", "bead-spring-ros2", {"tolerance": 1e-4})),
-    (("fixed dt = 2e-4 s", "bead-spring", {"dt": 2e-4}),
-     ("ros2 tol 1e-3, disp 1.0/0.05", "bead-spring-ros2",
-      {"tolerance": 1e-3, "ros2_max_displacement": 1.0, "ros2_contact_displacement": 0.05})),
+ACCURACY_LEVELS = (
+    ("fixed dt = 2e-4 s", {"dt": 2e-4}, "ros2 tol 3e-4", {"tolerance": 3e-4},
+     "ros3 tol 1e-5", {"rosenbrock": "ros34pw2", "tolerance": 1e-5}),
+    ("fixed dt = 1e-4 s", {"dt": 1e-4}, "ros2 tol 1e-4", {"tolerance": 1e-4},
+     "ros3 tol 1e-6", {"rosenbrock": "ros34pw2", "tolerance": 1e-6}),
 )  # fmt: skip
+"""Per accuracy level: the fixed-step run, the ROS2 run and the ROS34PW2 run compared."""
+
+T_GRID = 2e-4
+"""The comparison time is a multiple of this [s], so that every fixed step lands on it."""
+
+
+def _settings(model, E, step):
+    return FiberSettings(model=model, young_modulus=E, step=StepSettings(**step))
+
+
+def _accuracy_run(field, model, E, step, start, ref_delta, ref_beads, t_cmp):
+    """(wall [s], steps, |Δδ|, largest bead error at t_cmp [µm]) of one run."""
+    st = _settings(model, E, step)
+    t0 = time.perf_counter()
+    r = simulate(field, st, start)
+    wall = time.perf_counter() - t0
+    traj, _ = simulate_for(field, st, start, t_cmp)
+    err = float(np.max(np.hypot(*(traj.beads[-1] - ref_beads).T)))
+    return wall, r.n_steps, abs(r.delta - ref_delta), err
 
 
 def equal_accuracy(field, y0: float, moduli, lengths) -> None:
-    """Print wall time, steps, |Δδ| and the wall-time ratio of each pair of ACCURACY_PAIRS.
+    """Print, per (E, L) and level of ACCURACY_LEVELS, the three runs and their wall-time ratios.
 
-    For every (E, L) of the grid; errors against the Δt = 5e-5 s δ of that (E, L).
-    A pair is at equal accuracy when the ROS2 |Δδ| is at most the fixed-step one
-    (the line says so).
+    Errors against the fixed-step Δt = 5e-5 s run of the same (E, L): |Δδ| (δ as
+    reported, read at the first step past the stop line) and the largest bead
+    distance [µm] at t_cmp, a multiple of T_GRID near 0.8 of the reference's end
+    time: past the pillar contact (which ends near 0.6 of it at y0/h = 0.45), so
+    it holds the error of the approach and of the contact, and is free of where a
+    step lands on the stop line. Each ratio says, for δ and for the beads, whether
+    the faster run's error is at most 1.5 times the slower run's ("=") or not
+    ("LESS").
     """
+    ratios: dict[str, list[float]] = {"fixed/ros3": [], "ros2/ros3": [], "fixed/ros2": []}
     for E in moduli:
         for L in lengths:
             start = FiberStart(0.0, y0, L)
             _, ref = _run(field, "bead-spring", E, start)
+            t_cmp = T_GRID * round(0.8 * ref.t_end / T_GRID)
+            traj, _ = simulate_for(field, _settings("bead-spring", E, {}), start, t_cmp)
+            ref_beads = traj.beads[-1]
             print(f"E = {E / 1e6:g} MPa, L/l = {L:g}; reference: fixed dt = 5e-5 s, "
-                  f"delta {ref.delta:+.7f}")  # fmt: skip
-            for pair in ACCURACY_PAIRS:
-                walls, errs = [], []
-                for label, model, step in pair:
-                    st = FiberSettings(model=model, young_modulus=E, step=StepSettings(**step))
-                    t0 = time.perf_counter()
-                    r = simulate(field, st, start)
-                    walls.append(time.perf_counter() - t0)
-                    errs.append(abs(r.delta - ref.delta))
-                    print(f"  {label:30s} {walls[-1]:7.3f} s {r.n_steps:7d} steps  |d delta| "
-                          f"{errs[-1]:.1e}", flush=True)  # fmt: skip
-                same = "ros2 as accurate or more" if errs[1] <= errs[0] else "ros2 LESS accurate"
-                print(f"  -> speed-up fixed/ros2 {walls[0] / walls[1]:.1f} ({same})")
+                  f"delta {ref.delta:+.7f}; beads compared at t = {t_cmp:.4f} s")  # fmt: skip
+            for level in ACCURACY_LEVELS:
+                res = {}
+                runs = {
+                    "fixed": (level[0], "bead-spring", level[1]),
+                    "ros2": (level[2], "bead-spring-ros2", level[3]),
+                    "ros3": (level[4], "bead-spring-ros2", level[5]),
+                }
+                for key, (label, model, step) in runs.items():
+                    res[key] = _accuracy_run(field, model, E, step, start, ref.delta,
+                                             ref_beads, t_cmp)  # fmt: skip
+                    w, n, dd, eb = res[key]
+                    print(f"  {label:20s} {w:7.3f} s {n:7d} steps  |d delta| {dd:.1e}  "
+                          f"bead err {eb:.1e} um", flush=True)  # fmt: skip
+                line = []
+                for slow, fast in (("fixed", "ros3"), ("ros2", "ros3"), ("fixed", "ros2")):
+                    a, b = res[slow], res[fast]
+                    d_ok = "=" if b[2] <= 1.5 * a[2] else "LESS"
+                    b_ok = "=" if b[3] <= 1.5 * a[3] else "LESS"
+                    ratios[f"{slow}/{fast}"].append(a[0] / b[0])
+                    line.append(f"{slow}/{fast} {a[0] / b[0]:5.1f} (delta {d_ok}, beads {b_ok})")
+                print("  -> speed-up " + ", ".join(line))
+    for key, v in ratios.items():
+        print(f"speed-up {key}: min {min(v):.1f}, median {float(np.median(v)):.1f}, "
+              f"max {max(v):.1f}")  # fmt: skip
 
 
 def main() -> None:
@@ -103,6 +144,8 @@ def main() -> None:
     warm = FiberStart(0.0, 0.8, 0.5)
     for m in ("bead-spring", "bead-spring-ros2"):
         _run(field, m, 26e6, warm)
+    _accuracy_run(field, "bead-spring-ros2", 26e6, ACCURACY_LEVELS[0][5], warm, 0.0,
+                  np.zeros((11, 2)), 0.01)  # fmt: skip
     if args.equal_accuracy:
         equal_accuracy(field, args.y0, args.moduli, args.lengths)
         return

@@ -2,6 +2,7 @@
 
 Usage: python scripts/profile_flexible.py [--dx 4] [--cache .fibersweep-cache]
        [--young-modulus 26e6] [--length 1.0] [--y0 0.45] [--tolerance 0.01]
+       [--rosenbrock ros2|ros34pw2]
 
 One run (theta0 = 0, y0/h, L/l_obs) is timed after the kernels are compiled, and
 its accepted / rejected steps are counted. Each part of a step is then timed on
@@ -10,8 +11,9 @@ contact phase weighs as in the run): the bead velocity f(q) (flow interpolation,
 elastic and contact forces, the RPY mobility rebuild and M F), the Jacobian
 J = dF/dq and W = M J; the factorisation of I - γhW and the solves (whose cost does
 not depend on the configuration) 2 000 times at the last one. Per-step costs times the number of
-calls per step (two f, one J, one system, one factorisation, two solves; a
-rejected step redoes all but f(q) and J) estimate the share of each part.
+calls per step (s stages: s f, one J, one system, one factorisation, s solves;
+a rejected step redoes all but f(q) and J; s = 2 for ROS2, 4 for ROS34PW2)
+estimate the share of each part.
 """
 
 from __future__ import annotations
@@ -93,7 +95,7 @@ def _t_wmatrix(k, beads):
 @nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_factor(k, reps, piv):
     for _ in range(reps):
-        I.system(k.bead, 1e-4, piv)
+        I.system(k.bead, 1e-4, piv, I.GAMMA)
 
 
 @nb.njit  # not cached: a cache here would not see edits of the package kernels
@@ -121,7 +123,7 @@ def _run(k, setup):
     while True:
         rec = np.empty((I.CHUNK, R.NCOLS))
         brec = np.empty((I.CHUNK, n, 2))
-        rows, code = I.integrate_ros2(q, state, k, rec, brec, *scratch)
+        rows, code = I.integrate_implicit(q, state, k, rec, brec, *scratch)
         recs.append(rec[:rows])
         brecs.append(brec[:rows])
         if code != R.CHUNK_FULL:
@@ -153,12 +155,14 @@ def main() -> None:
     ap.add_argument("--length", type=float, default=1.0)
     ap.add_argument("--y0", type=float, default=0.45)
     ap.add_argument("--tolerance", type=float, default=0.01)
+    ap.add_argument("--rosenbrock", choices=("ros2", "ros34pw2"), default="ros2")
     args = ap.parse_args()
+    stages = 2 if args.rosenbrock == "ros2" else 4
     field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
     st = FiberSettings(
         model="bead-spring-ros2",
         young_modulus=args.young_modulus,
-        step=StepSettings(tolerance=args.tolerance),
+        step=StepSettings(tolerance=args.tolerance, rosenbrock=args.rosenbrock),
     )
     start = FiberStart(0.0, args.y0, args.length)
     simulate(field, st, start)  # compile
@@ -186,18 +190,19 @@ def main() -> None:
     t_lu = _time(_t_factor, k, piv)
     t_sol = _time(_t_solve, k, piv, b)
     t_np = _time(_t_np_solve, k, b)
-    # calls: f(q) once per accepted step, f(q + h k1) once per try; J and W once per
-    # accepted step; system + LU and the two solves once per try
+    # calls: f(q) once per accepted step, the other stages' f once per try; J and W
+    # once per accepted step; system + LU and the s solves once per try
     tries = acc + rej
     parts = {
-        "f(q): flow, forces, mobility, M F": (t_f, acc + tries),
-        "  of which the RPY mobility rebuild": (t_m, acc + tries),
+        "f(q): flow, forces, mobility, M F": (t_f, acc + (stages - 1) * tries),
+        "  of which the RPY mobility rebuild": (t_m, acc + (stages - 1) * tries),
         "Jacobian J (analytic elastic)": (t_j, acc),
         "W = M J": (t_w, acc),
         "I - γhW and its LU": (t_lu, tries),
-        "two triangular solves": (2 * t_sol, tries),
+        f"{stages} triangular solves": (stages * t_sol, tries),
     }
-    print(f"run: {n} beads, E = {args.young_modulus:g} Pa, L/l = {args.length}, "
+    print(f"run ({args.rosenbrock}): {n} beads, E = {args.young_modulus:g} Pa, "
+          f"L/l = {args.length}, "
           f"tol {args.tolerance} µm: {wall:.3f} s wall, {acc} accepted + {rej} rejected steps, "
           f"{1e6 * wall / acc:.1f} µs per accepted step")  # fmt: skip
     print(f"{'part':38s} {'µs/call':>8} {'calls':>7} {'s':>7} {'share':>6}")

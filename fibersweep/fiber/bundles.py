@@ -106,6 +106,7 @@ class Params(NamedTuple):
     y_lo, y_hi : bead centres must stay between these
     stretch, bend : bead-spring S [pN] and B [pN µm²]
     tol : bead-spring-ros2: local error allowed per step [µm] (NaN otherwise)
+    rosw : bead-spring-ros2: 0 ROS2, 1 ROS34PW2 (step.rosenbrock)
     """
 
     a: float
@@ -126,6 +127,7 @@ class Params(NamedTuple):
     stretch: float
     bend: float
     tol: float = math.nan
+    rosw: int = 0
 
 
 class Work(NamedTuple):
@@ -256,6 +258,7 @@ def make_params(
         stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²
         bend=st.young_modulus * math.pi * a**4 / 4.0,
         tol=float(st.step.tolerance),
+        rosw=int(st.step.rosenbrock == "ros34pw2"),
     )
 
 

@@ -1,4 +1,4 @@
-"""Adaptive linearly implicit (ROS2) stepping of the bead-spring fiber (docs/flexible.md).
+"""Adaptive linearly implicit (Rosenbrock-W) stepping of the bead-spring fiber (docs/flexible.md).
 
 Same model as :mod:`fibersweep.fiber.beadspring` (stretching + bending springs,
 RPY mobility, pillar contact, the effects' stages), other time stepping. With
@@ -27,6 +27,12 @@ product, and one in-place LU factorisation of I − γhW whose factors serve bot
 stages (:mod:`fibersweep.fiber.lu`); a rejected step redoes the LU and the
 stage-2 f only. The mobility is lagged in W only: f itself always uses M at its
 own argument.
+
+With ``fiber.step.rosenbrock: ros34pw2`` (``Params.rosw`` = 1) the same loop
+(:func:`integrate_implicit`) takes the four stages of the third-order W-method
+ROS34PW2 instead (:mod:`fibersweep.fiber.rosw`: four f, one LU, four solves) and
+sets the next step with the exponent 1/3. Only the stages differ
+(:func:`_try_ros2`, :func:`_try_ros34pw2`); the ROS2 path is unchanged bit for bit.
 """
 
 from __future__ import annotations
@@ -41,11 +47,25 @@ from fibersweep.fiber.beadspring import bead_velocity, force_jacobian
 from fibersweep.fiber.bundles import Kernel
 from fibersweep.fiber.lu import lu_factor, lu_solve
 from fibersweep.fiber.mobility import fiber_offsets
+from fibersweep.fiber.rosw import A34, C34, E34, GAMMA3, M34, combine, stage_point, stage_rhs
 
-__all__ = ["GAMMA", "integrate_ros2", "run_bead_spring_ros2", "system", "w_matrix"]
+__all__ = [
+    "GAMMA",
+    "ROSW_ROS2",
+    "ROSW_ROS34PW2",
+    "integrate_implicit",
+    "integrate_ros2",
+    "run_bead_spring_ros2",
+    "system",
+    "w_matrix",
+]
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 CHUNK = 20_000
+ROSW_ROS2 = 0
+"""``Params.rosw`` of ROS2 (``fiber.step.rosenbrock: ros2``)."""
+ROSW_ROS34PW2 = 1
+"""``Params.rosw`` of ROS34PW2 (``fiber.step.rosenbrock: ros34pw2``)."""
 
 
 @nb.njit(cache=True)
@@ -82,15 +102,16 @@ def w_matrix(bw):
 
 
 @nb.njit(cache=True)
-def system(bw, h, piv):
+def system(bw, h, piv, gamma):
     """``bw.lhs`` = LU factors of I − γ h W (W in ``bw.jac``, see :func:`w_matrix`).
 
-    Returns False when the matrix is singular.
+    ``gamma``: the method's γ (:data:`GAMMA` for ROS2, :data:`~fibersweep.fiber.rosw.GAMMA3`
+    for ROS34PW2). Returns False when the matrix is singular.
     """
     w = bw.jac
     lhs = bw.lhs
     n2 = lhs.shape[0]
-    c = GAMMA * h
+    c = gamma * h
     for i2 in range(n2):
         for j2 in range(n2):
             lhs[i2, j2] = -c * w[i2, j2]
@@ -99,8 +120,82 @@ def system(bw, h, piv):
 
 
 @nb.njit(cache=True)
-def integrate_ros2(q, state, k, rec, brec, f0, k1, k2, qn, fext):
-    """Advance a bead-spring fiber with adaptive ROS2 steps until a stop or ``rec`` is full.
+def _bead_max(h, v):
+    """Largest |h v_i| over the beads of v (2n) [µm]."""
+    err = 0.0
+    for i in range(v.shape[0] // 2):
+        err = max(err, math.hypot(h * v[2 * i], h * v[2 * i + 1]))
+    return err
+
+
+@nb.njit(cache=True)
+def _try_ros2(k, q, f0, fext, has_ext, h, piv, ok, k1, k2, qn, qnew):
+    """One ROS2 try from q with the factors of I − γhW in ``bw.lhs``.
+
+    Writes the new positions into ``qnew``; returns the error estimate [µm].
+    """
+    flow, pillar, body, p, w, bw, effects, frame = k
+    n2 = q.shape[0]
+    n = n2 // 2
+    for r in range(n2):
+        k1[r] = f0[r]
+    if ok:
+        lu_solve(bw.lhs, piv, k1)
+        for r in range(n2):
+            qn[r] = q[r] + h * k1[r]
+        _velocity(frame, flow, pillar, body, p, w, bw, effects, qn, fext, has_ext, k2)
+        for r in range(n2):
+            k2[r] -= 2.0 * k1[r]
+        lu_solve(bw.lhs, piv, k2)
+    else:
+        for r in range(n2):
+            k2[r] = 0.0
+    err = 0.0
+    for i in range(n):
+        ex_ = 0.5 * h * (k1[2 * i] + k2[2 * i])
+        ey_ = 0.5 * h * (k1[2 * i + 1] + k2[2 * i + 1])
+        err = max(err, math.hypot(ex_, ey_))
+    for r in range(n2):
+        qnew[r] = q[r] + 1.5 * h * k1[r] + 0.5 * h * k2[r]
+    return err
+
+
+@nb.njit(cache=True)
+def _try_ros34pw2(k, q, f0, fext, has_ext, h, piv, ok, xs, qn, qnew):
+    """One ROS34PW2 try (:mod:`fibersweep.fiber.rosw`), four stages on one LU.
+
+    ``xs`` (4, 2n) receives the transformed stages. Writes the new positions into
+    ``qnew``; returns the error estimate h |Σ e_j x_j| (largest over the beads) [µm].
+    """
+    flow, pillar, body, p, w, bw, effects, frame = k
+    n2 = q.shape[0]
+    if not ok:
+        return 1e300
+    for r in range(n2):
+        xs[0, r] = f0[r]
+    lu_solve(bw.lhs, piv, xs[0])
+    for i in range(1, 4):
+        stage_point(q, h, A34, xs, i, qn)
+        _velocity(frame, flow, pillar, body, p, w, bw, effects, qn, fext, has_ext, xs[i])
+        stage_rhs(C34, xs, i, xs[i])
+        lu_solve(bw.lhs, piv, xs[i])
+    combine(q, h, M34, xs, qnew)
+    for r in range(n2):
+        qn[r] = 0.0
+    combine(qn, 1.0, E34, xs, qn)
+    return _bead_max(h, qn)
+
+
+@nb.njit(cache=True)
+def integrate_implicit(q, state, k, rec, brec, f0, k1, k2, qn, fext):
+    """Advance a bead-spring fiber with adaptive Rosenbrock-W steps until a stop or ``rec`` is full.
+
+    The method is ``k.params.rosw``: 0 ROS2 (module docstring), 1 ROS34PW2
+    (:mod:`fibersweep.fiber.rosw`). Both share everything but the stages: the
+    recorded row and stop test, the step bounds, W = M J and its one LU per try,
+    and the step control (accept when e <= tol; next h = h · min(2, max(0.2,
+    0.9 (tol/e)^(1/p))), p = 2 for ROS2 and 3 for ROS34PW2, the embedded
+    order + 1).
 
     Parameters
     ----------
@@ -133,6 +228,10 @@ def integrate_ros2(q, state, k, rec, brec, f0, k1, k2, qn, fext):
     h = state[3]
     rejected = state[4]
     piv = np.empty(n2, dtype=np.int64)
+    third = p.rosw == ROSW_ROS34PW2
+    gamma = GAMMA3 if third else GAMMA
+    xs = np.empty((4 if third else 0, n2))
+    qnew = np.empty(n2)
     r_cut = pillar.r_cut
     has_ext = False
     for r in range(n2):
@@ -194,39 +293,28 @@ def integrate_ros2(q, state, k, rec, brec, f0, k1, k2, qn, fext):
         disp = min(p.max_disp, max(p.contact_disp, 0.5 * free))
         h_cap = min(disp / (vmax + 1e-12), p.dt_max)
         # W = M(q) J(q), from M(q) left in bw.mob by the top of the loop and the contact
-        # stiffness of q in w.st; one LU of I − γhW serves both stages of a try.
+        # stiffness of q in w.st; one LU of I − γhW serves every stage of a try.
         force_jacobian(frame, pillar, p, w, bw)
         w_matrix(bw)
         while True:
             h = min(h, h_cap)
             if p.mode == 1 and t + h > p.t_stop:
                 h = max(p.t_stop - t, 1e-15)
-            ok = system(bw, h, piv)
-            for r in range(n2):
-                k1[r] = f0[r]
-            if ok:
-                lu_solve(bw.lhs, piv, k1)
-                for r in range(n2):
-                    qn[r] = q[r] + h * k1[r]
-                _velocity(frame, flow, pillar, body, p, w, bw, effects, qn, fext, has_ext, k2)
-                for r in range(n2):
-                    k2[r] -= 2.0 * k1[r]
-                lu_solve(bw.lhs, piv, k2)
+            ok = system(bw, h, piv, gamma)
+            if third:
+                err = _try_ros34pw2(k, q, f0, fext, has_ext, h, piv, ok, xs, qn, qnew)
             else:
-                for r in range(n2):
-                    k2[r] = 0.0
-            err = 0.0
-            for i in range(n):
-                ex_ = 0.5 * h * (k1[2 * i] + k2[2 * i])
-                ey_ = 0.5 * h * (k1[2 * i + 1] + k2[2 * i + 1])
-                err = max(err, math.hypot(ex_, ey_))
+                err = _try_ros2(k, q, f0, fext, has_ext, h, piv, ok, k1, k2, qn, qnew)
             if not (ok and math.isfinite(err)):
                 err = 1e300
-            fac = 0.9 * math.sqrt(p.tol / max(err, 1e-300))
+            if third:
+                fac = 0.9 * (p.tol / max(err, 1e-300)) ** (1.0 / 3.0)
+            else:
+                fac = 0.9 * math.sqrt(p.tol / max(err, 1e-300))
             fac = min(2.0, max(0.2, fac))
             if err <= p.tol or h <= 1e-12:
                 for r in range(n2):
-                    q[r] = q[r] + 1.5 * h * k1[r] + 0.5 * h * k2[r]
+                    q[r] = qnew[r]
                 t += h
                 h = h * fac
                 break
@@ -240,10 +328,16 @@ def integrate_ros2(q, state, k, rec, brec, f0, k1, k2, qn, fext):
     return rows, code
 
 
+integrate_ros2 = integrate_implicit
+"""Former name of :func:`integrate_implicit` (ROS2 when ``k.params.rosw`` is 0)."""
+
+
 def run_bead_spring_ros2(
     k: Kernel, x0: float, y0: float, th0: float, beads0: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """Integrate a bead-spring run with adaptive ROS2 steps (see :func:`integrate_ros2`).
+    """Integrate a bead-spring run with adaptive Rosenbrock-W steps (:func:`integrate_implicit`).
+
+    ROS2 or ROS34PW2 as ``k.params.rosw`` says (``fiber.step.rosenbrock``).
 
     Returns
     -------
@@ -262,7 +356,7 @@ def run_bead_spring_ros2(
     while True:
         rec = np.empty((CHUNK, R.NCOLS))
         brec = np.empty((CHUNK, n, 2))
-        rows, code = integrate_ros2(q, state, k, rec, brec, *scratch)
+        rows, code = integrate_implicit(q, state, k, rec, brec, *scratch)
         recs.append(rec[:rows])
         brecs.append(brec[:rows])
         if code != R.CHUNK_FULL:

@@ -68,6 +68,11 @@ class StepSettings(_Strict):
         gt=0,
         description="bead-spring-ros2: smallest step bound approaching the pillar [µm]",
     )
+    rosenbrock: Literal["ros2", "ros34pw2"] = Field(
+        "ros2",
+        description="bead-spring-ros2: the Rosenbrock-W method, two-stage second order (ros2) "
+        "or four-stage third order with one LU per step (ros34pw2; docs/flexible.md)",
+    )
     x_end: float = Field(
         300.0, gt=0, description="stop when the rearmost bead is this far past the pillar [µm]"
     )

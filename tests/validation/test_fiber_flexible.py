@@ -1,6 +1,7 @@
-"""Validation of the adaptive ROS2 bead-spring integrator (docs/flexible.md).
+"""Validation of the adaptive bead-spring integrators ROS2 and ROS34PW2 (docs/flexible.md).
 
-The fiber is integrated by :func:`integrate_ros2` in a quiescent fluid (the run's
+Every test runs with both Rosenbrock-W methods (``fiber.step.rosenbrock``), same
+tolerances. The fiber is integrated by :func:`integrate_implicit` in a quiescent fluid (the run's
 flow replaced by zeros, the fiber far from the pillar) or in a uniform shear,
 and compared with analytic results: Euler-Bernoulli beam deflection, the
 relaxation rate of the slowest bending mode, the elasto-viscous buckling
@@ -19,7 +20,7 @@ from fibersweep.fiber import record as R
 from fibersweep.fiber.beadspring import bead_velocity, force_jacobian
 from fibersweep.fiber.bundles import FlowArrays, build_kernel
 from fibersweep.fiber.effects import registry
-from fibersweep.fiber.implicit_beadspring import integrate_ros2
+from fibersweep.fiber.implicit_beadspring import integrate_implicit
 from fibersweep.fiber.mobility import fiber_offsets
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
@@ -27,11 +28,13 @@ from fibersweep.fiber.settings import FiberSettings
 from fibersweep.fiber.setup import prepare
 
 A = 2.0  # bead radius [µm]
+METHODS = ("ros2", "ros34pw2")  # fiber.step.rosenbrock
 
 
-def _kernel(field, E, length, t_stop, flow=None, tol=1e-4):
+def _kernel(field, E, length, t_stop, flow=None, tol=1e-4, method="ros2"):
     """Kernel of a run far from the pillar in mode 1 (stop at t_stop), flow replaced."""
-    st = FiberSettings(model="bead-spring-ros2", young_modulus=E, step={"tolerance": tol})
+    step = {"tolerance": tol, "rosenbrock": method}
+    st = FiberSettings(model="bead-spring-ros2", young_modulus=E, step=step)
     setup = prepare(field, st, FiberStart(0.0, 2.0, length), np.random.default_rng(0))
     k = build_kernel(setup, mode=1, t_stop=t_stop)
     if flow is None:
@@ -52,7 +55,7 @@ def _integrate(k, q0, fext=None, h0=1e-6):
     while True:
         rec = np.empty((20_000, R.NCOLS))
         brec = np.empty((20_000, n, 2))
-        rows, code = integrate_ros2(q, state, k, rec, brec, *scratch, fext)
+        rows, code = integrate_implicit(q, state, k, rec, brec, *scratch, fext)
         recs.append(rec[:rows])
         brecs.append(brec[:rows])
         if code != R.CHUNK_FULL:
@@ -66,7 +69,8 @@ def _straight(setup, n):
 
 
 @pytest.mark.slow
-def test_uniform_load_bends_as_euler_bernoulli(coarse_field):
+@pytest.mark.parametrize("method", METHODS)
+def test_uniform_load_bends_as_euler_bernoulli(coarse_field, method):
     """A free fiber loaded by a uniform transverse load q [pN/µm] balanced by the two
     opposite point loads qΛ/2 at its end beads (Λ = (n-1)2a the span) is in equilibrium
     as a simply supported beam: midpoint sag below the chord 5 q Λ⁴ / (384 B),
@@ -85,7 +89,7 @@ def test_uniform_load_bends_as_euler_bernoulli(coarse_field):
     # run 12 relaxation times of the slowest mode: the sag is within e^-12 of equilibrium
     _, k = _kernel(coarse_field, E, 1.0, 1.0)
     sigma, _ = _slowest_bending_mode(k, _straight(setup, n))
-    _, k = _kernel(coarse_field, E, 1.0, 12.0 / sigma)
+    _, k = _kernel(coarse_field, E, 1.0, 12.0 / sigma, method=method)
     beads, _ = _integrate(k, _straight(setup, n), fext)
     b = beads[-1]
     mid = 0.5 * (b[0] + b[-1])
@@ -118,7 +122,8 @@ def _slowest_bending_mode(k, q0):
 
 
 @pytest.mark.slow
-def test_bent_fiber_relaxes_at_the_bending_rate(coarse_field):
+@pytest.mark.parametrize("method", METHODS)
+def test_bent_fiber_relaxes_at_the_bending_rate(coarse_field, method):
     """A fiber bent along the slowest bending mode of the linearised model (amplitude
     0.05 µm) decays as exp(-σt): the measured rate over 2/σ matches σ within 2 %
     (ROS2 with tol 1e-4 µm; the mode's own nonlinearity is O(amplitude²)).
@@ -134,7 +139,7 @@ def test_bent_fiber_relaxes_at_the_bending_rate(coarse_field):
     q0 = _straight(setup, n)
     sigma, v = _slowest_bending_mode(k, q0)
     v *= 0.05 / np.max(np.abs(v))
-    _, k = _kernel(coarse_field, E, 1.0, 2.0 / sigma)
+    _, k = _kernel(coarse_field, E, 1.0, 2.0 / sigma, method=method)
     beads, t = _integrate(k, q0 + v)
     vv = v.reshape(-1) / np.linalg.norm(v)
 
@@ -154,13 +159,15 @@ def test_bent_fiber_relaxes_at_the_bending_rate(coarse_field):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("start", [FiberStart(0.0, 0.45, 0.75), FiberStart(8.0, 0.351, 0.75)])
-def test_stiff_limit_agrees_with_rigid(coarse_field, start):
+def test_stiff_limit_agrees_with_rigid(coarse_field, start, method):
     """At E = 26 MPa (the source's value) the ROS2 bead-spring run gives the rigid
     model's class, and δ within 0.01 (the rigid/bead-spring agreement the project
     requires of the fixed-step model, docs/validation.md)."""
     r = simulate(coarse_field, FiberSettings(x0=1100.0), start)
-    b = simulate(coarse_field, FiberSettings(model="bead-spring-ros2", x0=1100.0), start)
+    st = FiberSettings(model="bead-spring-ros2", x0=1100.0, step={"rosenbrock": method})
+    b = simulate(coarse_field, st, start)
     assert b.status == "ok" and r.status == "ok"
     assert b.cls == r.cls
     assert abs(b.delta - r.delta) < 0.01
@@ -168,16 +175,19 @@ def test_stiff_limit_agrees_with_rigid(coarse_field, start):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("E", [26e6, 0.1e6])
-def test_ros2_matches_fixed_step_bead_spring(coarse_field, E):
+def test_ros2_matches_fixed_step_bead_spring(coarse_field, E, method):
     """Same model, two integrators: ROS2 (tol 0.01 µm) against the fixed Δt = 5e-5 s
     BDF2 (itself within 1e-5 in δ of Δt = 1e-6 s at 26 MPa,
     test_fiber_beadspring.py). Tolerances: same class, δ 2e-3, θ_c 0.5°."""
     start = FiberStart(8.0, 0.351, 0.75)
-    a, b = (
-        simulate(coarse_field, FiberSettings(model=m, young_modulus=E, x0=1100.0), start)
-        for m in ("bead-spring", "bead-spring-ros2")
+    fixed = FiberSettings(model="bead-spring", young_modulus=E, x0=1100.0)
+    a = simulate(coarse_field, fixed, start)
+    st = FiberSettings(
+        model="bead-spring-ros2", young_modulus=E, x0=1100.0, step={"rosenbrock": method}
     )
+    b = simulate(coarse_field, st, start)
     assert a.cls == b.cls
     assert abs(a.delta - b.delta) < 2e-3
     assert abs(a.theta_c - b.theta_c) < 0.5
@@ -191,8 +201,9 @@ def _effect_cases():
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize(("name", "cls"), _effect_cases())
-def test_every_effect_runs_or_is_refused(coarse_field, name, cls):
+def test_every_effect_runs_or_is_refused(coarse_field, name, cls, method):
     """Each registered effect either runs in the ROS2 model (same class as the
     fixed-step bead-spring model with it, δ within 5e-3) or, if it does not list the
     model, is refused with an error naming the effect and the model."""
@@ -200,7 +211,8 @@ def test_every_effect_runs_or_is_refused(coarse_field, name, cls):
 
     value = 0.2  # inside every effect's valid range
     start = FiberStart(8.0, 0.351, 0.75)
-    st = FiberSettings(model="bead-spring-ros2", x0=1100.0, effects={name: value})
+    step = {"rosenbrock": method}
+    st = FiberSettings(model="bead-spring-ros2", x0=1100.0, effects={name: value}, step=step)
     if "bead-spring-ros2" not in cls.models:
         with pytest.raises(InputError, match=name):
             simulate(coarse_field, st, start, rng_seed=1)
@@ -212,7 +224,7 @@ def test_every_effect_runs_or_is_refused(coarse_field, name, cls):
     assert abs(a.delta - b.delta) < 5e-3
 
 
-def _growth_rate(field, E, mbar):
+def _growth_rate(field, E, mbar, method="ros2"):
     """Growth rate / ε̇ of a symmetric bending perturbation of a straight fiber held on
     the compressional axis of u = (-ε̇ (x - x0), ε̇ (y - y0)), with
     μ̄ = 8πμ ε̇ L⁴ / (B c), c = -ln(ε² e), ε = a/L (Young & Shelley 2007's number)."""
@@ -233,7 +245,7 @@ def _growth_rate(field, E, mbar):
     d = 1e-3 * (np.cos(math.pi * s / L) + 0.3 * np.cos(3 * math.pi * s / L))
     q0 = np.column_stack([setup.x0 + s, setup.y0_abs + d])
     T = 6.0 / edot
-    _, k = _kernel(field, E, 1.0, T, flow=flow)
+    _, k = _kernel(field, E, 1.0, T, flow=flow, method=method)
     beads, t = _integrate(k, q0)
 
     def dev(b):
@@ -246,7 +258,8 @@ def _growth_rate(field, E, mbar):
 
 
 @pytest.mark.slow
-def test_compressed_fiber_buckles_at_the_elastoviscous_threshold(coarse_field):
+@pytest.mark.parametrize("method", METHODS)
+def test_compressed_fiber_buckles_at_the_elastoviscous_threshold(coarse_field, method):
     """Becker & Shelley (2001): a slender filament in shear buckles when
     η = 8πμγ̇L⁴/(B c) > 306.4, c = -ln(ε² e), ε = a/L; at 45° the shear compresses it
     at ε̇ = γ̇/2, so in a planar compressional flow along the fiber the threshold is
@@ -268,5 +281,5 @@ def test_compressed_fiber_buckles_at_the_elastoviscous_threshold(coarse_field):
     c = -math.log((A / L) ** 2 * math.e)
     sigma_sb = B * 4.730**4 * c / (8 * math.pi * coarse_field.fluid.viscosity * L**4)
     pred = 153.2 * sigma / sigma_sb
-    assert _growth_rate(coarse_field, E, 0.85 * pred) < 0.0
-    assert _growth_rate(coarse_field, E, 1.15 * pred) > 0.0
+    assert _growth_rate(coarse_field, E, 0.85 * pred, method) < 0.0
+    assert _growth_rate(coarse_field, E, 1.15 * pred, method) > 0.0
