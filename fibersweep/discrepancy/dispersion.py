@@ -23,6 +23,15 @@ The test is the permutation test of :mod:`.stats` on that matrix (column 0
 against a random column per fiber), so its null distribution is exact,
 whatever the dependence between a fiber's observables; it is one-sided
 (over-dispersion), the direction a missing random effect produces.
+
+Naming a random effect (issue 30): :func:`calibration_gain` compares, on the
+held-out fibers, how far the observations' mean dispersion score is from 1
+against the baseline's copies and against the effect's cross-fitted copies.
+The per-fiber scores are exact-mean-1 under exchangeability for any number of
+copies, so the two ensembles need not be the same size. The statistic
+``|mean D_base - 1| - |mean D_effect - 1|`` rewards bringing the spread to
+the data's, not widening as such: an effect fitted too wide on the other half
+makes the held-out data under-dispersed and loses.
 """
 
 from __future__ import annotations
@@ -35,7 +44,13 @@ from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.scores import transform
 from fibersweep.discrepancy.stats import PermTest, permutation_test
 
-__all__ = ["pit_loo", "dispersion_matrix", "dispersion_test"]
+__all__ = [
+    "pit_loo",
+    "dispersion_matrix",
+    "dispersion_test",
+    "observed_dispersion",
+    "calibration_gain",
+]
 
 
 def pit_loo(V: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -100,9 +115,15 @@ def dispersion_matrix(
 
 
 def dispersion_test(
-    values: Mapping[str, np.ndarray], rng: np.random.Generator, n_perm: int = 4999
+    values: Mapping[str, np.ndarray],
+    rng: np.random.Generator,
+    n_perm: int = 4999,
+    two_sided: bool = False,
 ) -> PermTest:
-    """One-sided permutation test of over-dispersion of the observations against their copies.
+    """Permutation test of over-dispersion of the observations against their copies.
+
+    ``two_sided``: over- or under-dispersion (the check after a random effect
+    was fitted: its copies should be neither narrower nor wider than the data).
 
     Returns
     -------
@@ -114,4 +135,59 @@ def dispersion_test(
     D = dispersion_matrix(values, rng)
     if D is None:
         return PermTest(np.nan, np.nan, np.nan, 1.0, 0.0, 0)
-    return permutation_test(D, rng, n_perm=n_perm)
+    return permutation_test(D, rng, n_perm=n_perm, two_sided=two_sided)
+
+
+def observed_dispersion(
+    values: Mapping[str, np.ndarray], rng: np.random.Generator
+) -> np.ndarray | None:
+    """Per-fiber dispersion score of the observation (column 0 of :func:`dispersion_matrix`).
+
+    Returns
+    -------
+    ndarray, shape (n,), or None
+        Expectation exactly 1 per fiber when the observation is one more copy.
+    """
+    D = dispersion_matrix(values, rng)
+    return None if D is None else D[:, 0]
+
+
+def _gain(db: np.ndarray, de: np.ndarray) -> np.ndarray:
+    """|mean db - 1| - |mean de - 1| over the last axis (fibers)."""
+    return np.abs(db.mean(axis=-1) - 1.0) - np.abs(de.mean(axis=-1) - 1.0)
+
+
+def calibration_gain(
+    d_base: np.ndarray, d_effect: np.ndarray, rng: np.random.Generator, n_boot: int = 4000
+) -> tuple[tuple[float, float, float], float]:
+    """Held-out gain in dispersion calibration of an effect over the baseline.
+
+    Parameters
+    ----------
+    d_base, d_effect : ndarray, shape (n,)
+        Per-fiber observed dispersion scores (:func:`observed_dispersion`) of
+        the same held-out fibers against the baseline's and the effect's copies
+        (dimensionless, 1 on average when calibrated). Fibers undefined in
+        either are left out.
+    rng : numpy.random.Generator
+    n_boot : int
+        Paired bootstrap resamples of the fibers.
+
+    Returns
+    -------
+    ((gain, lo, hi), p)
+        ``gain = |mean d_base - 1| - |mean d_effect - 1|`` (positive: the effect's
+        copies match the data's spread better), its percentile 95 % interval, and
+        the one-sided bootstrap p of ``gain <= 0`` ((1 + #{gain* <= 0}) / (1 + B));
+        NaNs and p = 1 without a defined fiber.
+    """
+    db, de = np.asarray(d_base, dtype=np.float64), np.asarray(d_effect, dtype=np.float64)
+    ok = np.isfinite(db) & np.isfinite(de)
+    db, de = db[ok], de[ok]
+    if len(db) == 0:
+        return (np.nan, np.nan, np.nan), 1.0
+    idx = rng.integers(0, len(db), size=(n_boot, len(db)))
+    boot = _gain(db[idx], de[idx])
+    g = float(_gain(db, de))
+    lo, hi = (float(q) for q in np.quantile(boot, [0.025, 0.975]))
+    return (g, lo, hi), float((1 + np.sum(boot <= 0.0)) / (1 + n_boot))
