@@ -35,14 +35,16 @@ A random effect (start noise, Brownian motion) widens the outcomes; its
 per-fiber score improvement carries its own Monte Carlo noise and is often not
 significant where the effect is plain (issue 30: start_noise 2.5 hidden,
 held-out improvement p_Holm 0.44). It has a second, *spread* route: the held-out
-gain in dispersion calibration (:func:`dispersion.calibration_gain`: how much
-closer to 1 the observations' mean dispersion score among the cross-fitted
-copies is than among the baseline's), one more member of the same Holm family
-per random candidate. A random effect is named by this route only when nothing
-is named by the score route nor by a set, its spread gain is significant, and
-with the effect at its pooled value no significant gap (score or signed
-residual: a spread cannot remove a shift) and no significant dispersion, over
-or under (two-sided), is left. Two random effects passing it are "ambiguous".
+spread test (:func:`dispersion.spread_test`: the baseline is over-dispersed and
+the effect's cross-fitted copies reduce the observations' dispersion scores),
+one more member of the same Holm family per random candidate. It counts only
+when the held-out data are not significantly over- or under-dispersed against
+the effect's copies and show no shift against them (a t test of the signed
+PIT, valid under any widening: :func:`dispersion.shift_test`), two gates. A
+random effect is named by this route only when nothing is named by the score
+route nor by a set, and with the effect at its pooled value no significant gap
+(score or signed residual: a spread cannot remove a shift) and no significant
+dispersion, over or under (two-sided), is left. Two random effects passing it are "ambiguous".
 
 The first gate ("is there a gap at all?") is the family-wise test of
 :func:`gap.assess_gap` on all fibers; without it nothing is ever named.
@@ -55,7 +57,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fibersweep.discrepancy.dispersion import calibration_gain
+from fibersweep.discrepancy.dispersion import SpreadTest
 from fibersweep.discrepancy.gap import GapResult, paired_improvement
 from fibersweep.discrepancy.stats import PermTest, boot_p, bootstrap_mean_ci, holm
 
@@ -85,14 +87,15 @@ class HeldOut:
         Per-fiber improvement (for paired comparisons).
     final : GapResult or None
         Gap on all fibers with the effect at its pooled value.
-    spread : (gain, lo, hi) or None
-        Random effects only: held-out gain in dispersion calibration
-        (:func:`dispersion.calibration_gain`), bootstrap 95 %.
-    spread_p, spread_p_holm : float
-        Its one-sided bootstrap p, raw and Holm-adjusted in the same family as
-        the score tests (1 for effects that are not random).
+    spread : SpreadTest or None
+        Random effects only: the held-out spread test (:func:`dispersion.spread_test`).
+    spread_p_holm : float
+        Its p Holm-adjusted in the same family as the score tests (1 for
+        effects that are not random).
     spread_significant : bool
-        ``spread_p_holm <= alpha`` and a positive gain.
+        ``spread_p_holm <= alpha``, a positive reduction, and the held-out data
+        not significantly over- or under-dispersed against the effect's copies,
+        nor shifted (:func:`dispersion.shift_test`).
     final_dispersion : PermTest or None
         Two-sided dispersion test on all fibers with a random effect at its
         pooled value (``explains`` requires it not significant).
@@ -108,8 +111,7 @@ class HeldOut:
     explains: bool
     per_fiber: np.ndarray = field(repr=False)
     final: GapResult | None = field(default=None, repr=False)
-    spread: tuple[float, float, float] | None = None
-    spread_p: float = 1.0
+    spread: SpreadTest | None = field(default=None, repr=False)
     spread_p_holm: float = 1.0
     spread_significant: bool = False
     final_dispersion: PermTest | None = field(default=None, repr=False)
@@ -208,7 +210,7 @@ def evaluate_heldout(
     residuals: Mapping[str, GapResult],
     rng: np.random.Generator,
     alpha: float,
-    dispersion: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None,
+    spread: Mapping[str, SpreadTest] | None = None,
 ) -> list[HeldOut]:
     """Held-out comparison of each fitted effect with the baseline.
 
@@ -221,18 +223,16 @@ def evaluate_heldout(
         The same against the effect's copies.
     residuals : mapping name -> GapResult
         Held-out gap with each effect on.
-    dispersion : mapping name -> (d_base, d_effect), optional
-        For the random effects: the held-out fibers' observed dispersion scores
-        against the baseline's and the effect's copies, shape (n_heldout,) each.
-        Each adds its spread test to the Holm family of the score tests.
+    spread : mapping name -> SpreadTest, optional
+        For the random effects: the held-out spread test. Each adds its p to the
+        Holm family of the score tests.
     """
     names = list(fits)
-    disp = dict(dispersion or {})
+    spread = {n: t for n, t in (spread or {}).items() if n in fits}
     per = {n: paired_improvement(base_scores, effect_scores[n]) for n in names}
     p = [boot_p(per[n], rng) for n in names]
-    spread = {n: calibration_gain(*disp[n], rng) for n in names if n in disp}
     spread_names = list(spread)
-    p_all = np.array(p + [spread[n][1] for n in spread_names])
+    p_all = np.array(p + [spread[n].p for n in spread_names])
     adj_all = holm(p_all) if len(p_all) else p_all
     p_adj = adj_all[: len(names)]
     spread_adj = dict(zip(spread_names, adj_all[len(names) :], strict=True))
@@ -242,12 +242,16 @@ def evaluate_heldout(
         sig = bool(p_adj[k] <= alpha and mean > 0)
         extra = {}
         if n in spread:
-            (g, glo, ghi), gp = spread[n]
+            t = spread[n]
             extra = dict(
-                spread=(g, glo, ghi),
-                spread_p=float(gp),
+                spread=t,
                 spread_p_holm=float(spread_adj[n]),
-                spread_significant=bool(spread_adj[n] <= alpha and g > 0),
+                spread_significant=bool(
+                    spread_adj[n] <= alpha
+                    and t.reduction[0] > 0
+                    and t.calm.p_value > alpha
+                    and t.p_shift > alpha
+                ),
             )
         out.append(
             HeldOut(
@@ -302,7 +306,7 @@ def decide(
         return _set_verdict(good_sets, top_obs, region)
     spread = sorted(
         (h for h in heldout if h.spread_significant and h.explains and h.spread is not None),
-        key=lambda h: -h.spread[0],  # type: ignore[index]
+        key=lambda h: h.spread_p_holm,
     )
     if spread and not any(h.explains for h in sig):
         return _spread_verdict(spread, top_obs, region)
@@ -376,15 +380,16 @@ def _spread_verdict(good: Sequence[HeldOut], top_obs: str, region: str) -> Verdi
             ({a.name: a.value}, {b.name: b.value}),
         )
     h = good[0]
-    g, lo, hi = h.spread  # type: ignore[misc]
+    t = h.spread
+    assert t is not None
     return Verdict(
         "named",
         {h.name: h.value},
         top_obs,
         region,
-        f"{h.name} = {h.value:.3g} explains the gap as a spread (held-out dispersion "
-        f"calibration gain {g:.2g} [{lo:.2g}, {hi:.2g}], p_Holm {h.spread_p_holm:.2g}; "
-        "no significant gap nor dispersion left).",
+        f"{h.name} = {h.value:.3g} explains the gap as a spread (held-out mean dispersion "
+        f"score {t.base_mean:.2f} against the baseline, {t.effect_mean:.2f} with the effect; "
+        f"p_Holm {h.spread_p_holm:.2g}; no significant gap nor dispersion left).",
         ({h.name: h.value},),
     )
 

@@ -44,7 +44,7 @@ from fibersweep.discrepancy.decide import (
     decide,
     evaluate_heldout,
 )
-from fibersweep.discrepancy.dispersion import dispersion_test, observed_dispersion
+from fibersweep.discrepancy.dispersion import dispersion_test, spread_test
 from fibersweep.discrepancy.fit import (
     Fit,
     Signature,
@@ -320,14 +320,12 @@ def cross_fit(st: State) -> State:
         kept[name] = [float(v) for v in vals]
     # random effects: the held-out spread test (decide.py), on the same held-out copies
     spread = {}
-    randoms = [n for n in fitted if run.candidate(n).random]
-    d_base = observed_dispersion(st.values, run.rng) if randoms else None
-    for name in randoms:
-        d_eff = observed_dispersion(eff_values[name], run.rng)
-        if d_base is not None and d_eff is not None:
-            spread[name] = (d_base, d_eff)
+    for name in (n for n in fitted if run.candidate(n).random):
+        t = spread_test(st.values, eff_values[name], run.rng, n_perm=s.n_perm)
+        if t is not None:
+            spread[name] = t
     heldout = evaluate_heldout(fitted, base_scores, eff_scores, residuals, run.rng, s.alpha,
-                               dispersion=spread)  # fmt: skip
+                               spread=spread)  # fmt: skip
     return replace(
         st,
         fits=st.fits + tuple(fits),
@@ -351,7 +349,7 @@ def refit(st: State) -> State:
     sig = sorted((h for h in st.heldout if h.significant), key=lambda h: -h.improvement[0])
     sig += sorted(
         (h for h in st.heldout if h.spread_significant and not h.significant),
-        key=lambda h: -(h.spread[0] if h.spread else 0.0),
+        key=lambda h: h.spread_p_holm,
     )
     fits: list[Fit] = []
     intervals = dict(st.intervals)
