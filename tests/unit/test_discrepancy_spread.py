@@ -156,3 +156,17 @@ def test_a_barely_visible_shift_is_named_a_spread_at_most_alpha():
     # 4000-4099); stated: at most 5 of 100.
     c = _count({"inlet_speed": 0.02}, BOTH, range(4000, 4100))
     assert c["named sn"] <= 5
+
+
+def test_report_states_the_spread_test():
+    # the report's line for a random effect gives both mean dispersion scores and the
+    # Holm-adjusted p of its spread test
+    from fibersweep.discrepancy.report import _spread_dict
+    from fibersweep.discrepancy.report_text import _spread_lines
+
+    v, st = _verdict({"start_noise": 2.5}, BOTH, 2000)
+    rows = [{"effect": h.name, "spread": _spread_dict(h)} for h in st.heldout]
+    text = "\n".join(_spread_lines(rows))
+    h = {x.name: x for x in st.heldout}["start_noise"]
+    assert f"{h.spread.base_mean:.2f} against the baseline" in text
+    assert "inlet_speed" not in text  # not a random effect: no spread test
