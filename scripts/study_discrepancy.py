@@ -231,6 +231,12 @@ def run_scenario(name: str, field, n: int, seed: int, workers: int, kw: dict) ->
                 "p_holm": h.p_holm,
                 "explains": h.explains,
                 "residual": h.residual.flagged,
+                # random effects: the held-out spread test (the second naming route)
+                "spread_p_holm": h.spread_p_holm if h.spread is not None else None,
+                "spread_significant": h.spread_significant,
+                "spread_means": (h.spread.base_mean, h.spread.effect_mean)
+                if h.spread is not None
+                else None,
             }
             for h in res.heldout
         ],

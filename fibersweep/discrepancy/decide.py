@@ -31,6 +31,21 @@ fitted on all fibers (:func:`workflow.run_discrepancy` refits the significant
 candidates), so that a poor fit on one half does not hide a right effect; the
 out-of-sample improvement above is what guards against over-fitting.
 
+A random effect (start noise, Brownian motion) widens the outcomes; its
+per-fiber score improvement carries its own Monte Carlo noise and is often not
+significant where the effect is plain (issue 30: start_noise 2.5 hidden,
+held-out improvement p_Holm 0.44). It has a second, *spread* route: the held-out
+spread test (:func:`dispersion.spread_test`: the baseline is over-dispersed and
+the effect's cross-fitted copies reduce the observations' dispersion scores),
+one more member of the same Holm family per random candidate. It counts only
+when the held-out data are not significantly over- or under-dispersed against
+the effect's copies and show no shift against them (a t test of the signed
+PIT, valid under any widening: :func:`dispersion.shift_test`), two gates. A
+random effect is named by this route only when nothing is named by the score
+route nor by a set, and with the effect at its pooled value no significant gap
+(score or signed residual: a spread cannot remove a shift) and no significant
+dispersion, over or under (two-sided), is left. Two random effects passing it are "ambiguous".
+
 The first gate ("is there a gap at all?") is the family-wise test of
 :func:`gap.assess_gap` on all fibers; without it nothing is ever named.
 """
@@ -42,8 +57,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fibersweep.discrepancy.dispersion import SpreadTest
 from fibersweep.discrepancy.gap import GapResult, paired_improvement
-from fibersweep.discrepancy.stats import boot_p, bootstrap_mean_ci, holm
+from fibersweep.discrepancy.stats import PermTest, boot_p, bootstrap_mean_ci, holm
 
 __all__ = ["HeldOut", "SetHeldOut", "Verdict", "adequate", "evaluate_heldout", "decide"]
 
@@ -69,6 +85,20 @@ class HeldOut:
         remains significant (:func:`adequate`).
     per_fiber : ndarray, shape (n_heldout,)
         Per-fiber improvement (for paired comparisons).
+    final : GapResult or None
+        Gap on all fibers with the effect at its pooled value.
+    spread : SpreadTest or None
+        Random effects only: the held-out spread test (:func:`dispersion.spread_test`).
+    spread_p_holm : float
+        Its p Holm-adjusted in the same family as the score tests (1 for
+        effects that are not random).
+    spread_significant : bool
+        ``spread_p_holm <= alpha``, a positive reduction, and the held-out data
+        not significantly over- or under-dispersed against the effect's copies,
+        nor shifted (:func:`dispersion.shift_test`).
+    final_dispersion : PermTest or None
+        Two-sided dispersion test on all fibers with a random effect at its
+        pooled value (``explains`` requires it not significant).
     """
 
     name: str
@@ -81,6 +111,10 @@ class HeldOut:
     explains: bool
     per_fiber: np.ndarray = field(repr=False)
     final: GapResult | None = field(default=None, repr=False)
+    spread: SpreadTest | None = field(default=None, repr=False)
+    spread_p_holm: float = 1.0
+    spread_significant: bool = False
+    final_dispersion: PermTest | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)
@@ -176,6 +210,7 @@ def evaluate_heldout(
     residuals: Mapping[str, GapResult],
     rng: np.random.Generator,
     alpha: float,
+    spread: Mapping[str, SpreadTest] | None = None,
 ) -> list[HeldOut]:
     """Held-out comparison of each fitted effect with the baseline.
 
@@ -188,15 +223,36 @@ def evaluate_heldout(
         The same against the effect's copies.
     residuals : mapping name -> GapResult
         Held-out gap with each effect on.
+    spread : mapping name -> SpreadTest, optional
+        For the random effects: the held-out spread test. Each adds its p to the
+        Holm family of the score tests.
     """
     names = list(fits)
+    spread = {n: t for n, t in (spread or {}).items() if n in fits}
     per = {n: paired_improvement(base_scores, effect_scores[n]) for n in names}
-    p = np.array([boot_p(per[n], rng) for n in names])
-    p_adj = holm(p) if len(p) else p
+    p = [boot_p(per[n], rng) for n in names]
+    spread_names = list(spread)
+    p_all = np.array(p + [spread[n].p for n in spread_names])
+    adj_all = holm(p_all) if len(p_all) else p_all
+    p_adj = adj_all[: len(names)]
+    spread_adj = dict(zip(spread_names, adj_all[len(names) :], strict=True))
     out = []
     for k, n in enumerate(names):
         mean, lo, hi = bootstrap_mean_ci(per[n], rng)
         sig = bool(p_adj[k] <= alpha and mean > 0)
+        extra = {}
+        if n in spread:
+            t = spread[n]
+            extra = dict(
+                spread=t,
+                spread_p_holm=float(spread_adj[n]),
+                spread_significant=bool(
+                    spread_adj[n] <= alpha
+                    and t.reduction[0] > 0
+                    and t.calm.p_value > alpha
+                    and t.p_shift > alpha
+                ),
+            )
         out.append(
             HeldOut(
                 name=n,
@@ -208,6 +264,7 @@ def evaluate_heldout(
                 residual=residuals[n],
                 explains=sig and adequate(residuals[n]),
                 per_fiber=per[n],
+                **extra,
             )
         )
     return out
@@ -247,6 +304,12 @@ def decide(
     good_sets = sorted((st for st in sets if st.explains(alpha)), key=lambda st: -st.improvement[0])
     if not any(h.explains for h in sig) and good_sets:
         return _set_verdict(good_sets, top_obs, region)
+    spread = sorted(
+        (h for h in heldout if h.spread_significant and h.explains and h.spread is not None),
+        key=lambda h: h.spread_p_holm,
+    )
+    if spread and not any(h.explains for h in sig):
+        return _spread_verdict(spread, top_obs, region)
     if not sig:
         return Verdict(
             "unexplained",
@@ -300,6 +363,34 @@ def decide(
         f"{best.improvement[0]:.2g} [{best.improvement[1]:.2g}, {best.improvement[2]:.2g}], "
         "no significant gap left).",
         ({best.name: best.value},),
+    )
+
+
+def _spread_verdict(good: Sequence[HeldOut], top_obs: str, region: str) -> Verdict:
+    """A random effect named by its held-out spread gain, or ambiguous between two."""
+    if len(good) > 1:
+        a, b = good[0], good[1]
+        return Verdict(
+            "ambiguous",
+            {a.name: a.value, b.name: b.value},
+            top_obs,
+            region,
+            f"Ambiguous between {a.name} = {a.value:.3g} and {b.name} = {b.value:.3g}: "
+            "each matches the data's spread out of sample and leaves no significant gap.",
+            ({a.name: a.value}, {b.name: b.value}),
+        )
+    h = good[0]
+    t = h.spread
+    assert t is not None
+    return Verdict(
+        "named",
+        {h.name: h.value},
+        top_obs,
+        region,
+        f"{h.name} = {h.value:.3g} explains the gap as a spread (held-out mean dispersion "
+        f"score {t.base_mean:.2f} against the baseline, {t.effect_mean:.2f} with the effect; "
+        f"p_Holm {h.spread_p_holm:.2g}; no significant gap nor dispersion left).",
+        ({h.name: h.value},),
     )
 
 

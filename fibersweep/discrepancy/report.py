@@ -162,6 +162,26 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
     }
 
 
+def _spread_dict(h: Any) -> dict[str, Any] | None:
+    """A random effect's held-out spread test (:func:`dispersion.spread_test`), or None."""
+    t = h.spread
+    if t is None:
+        return None
+    return {
+        "base_mean": t.base_mean,
+        "effect_mean": t.effect_mean,
+        "reduction": dict(zip(("mean", "lo95", "hi95"), t.reduction, strict=True)),
+        "p_over": t.p_over,
+        "p_reduce": t.p_reduce,
+        "p": t.p,
+        "p_holm": h.spread_p_holm,
+        "heldout_dispersion_p": t.calm.p_value,
+        "shift_p": t.p_shift,
+        "significant": h.spread_significant,
+        "final_dispersion_p": None if h.final_dispersion is None else h.final_dispersion.p_value,
+    }
+
+
 def _dispersion_dict(res: DiscrepancyResult) -> dict[str, Any]:
     """The dispersion test of the data against the baseline copies, and against the
     copies of each random effect the workflow simulated on every fiber (its final copies).
@@ -272,6 +292,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
                 "gap_after": after,
                 "gap_final": _gap_dict(h.final, w),
                 "gap_removed": _removed(before, after),
+                "spread": _spread_dict(h),
             }
         )
     sets = []

@@ -188,6 +188,7 @@ def _fits(s: dict[str, Any]) -> list[str]:
             f"| {_ci(h['improvement'])} | {_f(h['p'], '.2g')} | {_f(h['p_holm'], '.2g')} "
             f"| {'yes' if h['explains'] else 'no'} |"
         )
+    lines += _spread_lines(s["heldout"])
     if s["sets"]:
         lines += [
             "",
@@ -358,3 +359,24 @@ def markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
     if configs:
         lines += ["", "## Updated model", ""] + [f"- `{c}`" for c in configs]
     return "\n".join(lines) + "\n"
+
+
+def _spread_lines(heldout: list[dict[str, Any]]) -> list[str]:
+    """One line per random effect: its held-out spread test (the second naming route)."""
+    out = []
+    for h in heldout:
+        sp = h.get("spread")
+        if not sp:
+            continue
+        fd = sp.get("final_dispersion_p")
+        out.append(
+            f"- {h['effect']}, held-out spread: mean dispersion score {sp['base_mean']:.2f} "
+            f"against the baseline, {sp['effect_mean']:.2f} with the effect (1: as spread as a "
+            f"copy); p {_f(sp['p'], '.2g')} (Holm {_f(sp['p_holm'], '.2g')}), held-out "
+            f"dispersion p {_f(sp['heldout_dispersion_p'], '.2g')}, shift p "
+            f"{_f(sp['shift_p'], '.2g')}"
+            + (f", final dispersion p {_f(fd, '.2g')}" if fd is not None else "")
+            + f": {'significant' if sp['significant'] else 'not significant'}."
+        )
+    return [""] + out if out else []
+

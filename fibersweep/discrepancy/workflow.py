@@ -44,6 +44,7 @@ from fibersweep.discrepancy.decide import (
     decide,
     evaluate_heldout,
 )
+from fibersweep.discrepancy.dispersion import dispersion_test, spread_test
 from fibersweep.discrepancy.fit import (
     Fit,
     Signature,
@@ -317,7 +318,14 @@ def cross_fit(st: State) -> State:
         residuals[name] = assess_gap(v_after, run.rng, alpha=s.alpha, n_perm=s.n_perm)
         fitted[name] = float(np.mean(vals))
         kept[name] = [float(v) for v in vals]
-    heldout = evaluate_heldout(fitted, base_scores, eff_scores, residuals, run.rng, s.alpha)
+    # random effects: the held-out spread test (decide.py), on the same held-out copies
+    spread = {}
+    for name in (n for n in fitted if run.candidate(n).random):
+        t = spread_test(st.values, eff_values[name], run.rng, n_perm=s.n_perm)
+        if t is not None:
+            spread[name] = t
+    heldout = evaluate_heldout(fitted, base_scores, eff_scores, residuals, run.rng, s.alpha,
+                               spread=spread)  # fmt: skip
     return replace(
         st,
         fits=st.fits + tuple(fits),
@@ -331,13 +339,23 @@ def cross_fit(st: State) -> State:
 
 def refit(st: State) -> State:
     """(6) adequacy: refit the significant candidates on all fibers, near their fold
-    values, and test the gap left with the effect at that value."""
+    values, and test the gap left with the effect at that value.
+
+    Random effects significant by their spread test only (:mod:`.decide`) come after
+    those significant by the score, within the same ``plan.refits`` (the budget);
+    a random effect also gets a two-sided dispersion test at its pooled value.
+    """
     run, plan, s = st.run, st.run.plan, st.run.settings
     sig = sorted((h for h in st.heldout if h.significant), key=lambda h: -h.improvement[0])
+    sig += sorted(
+        (h for h in st.heldout if h.spread_significant and not h.significant),
+        key=lambda h: h.spread_p_holm,
+    )
     fits: list[Fit] = []
     intervals = dict(st.intervals)
     effect_copies = dict(st.effect_copies)
     final = {}
+    calm: dict[str, Any] = {}
     for h in sig[: plan.refits]:
         cand = run.candidate(h.name)
         base = st.base[: plan.fit_copies_of(cand, cand.name == st.lead)]
@@ -356,13 +374,18 @@ def refit(st: State) -> State:
         cps = run.maker.copies(range(plan.copies), {h.name: fit.value}, desc=f"final {h.name}")
         v_final = value_matrices(run.observed, cps, run.observables)
         final[h.name] = (fit.value, assess_gap(v_final, run.rng, alpha=s.alpha, n_perm=s.n_perm))
+        if cand.random:  # neither over- nor under-dispersed at its value
+            calm[h.name] = dispersion_test(v_final, run.rng, n_perm=s.n_perm, two_sided=True)
         effect_copies[h.name] = cps
     heldout = [
         replace(
             h,
             value=final[h.name][0],
             final=final[h.name][1],
-            explains=h.significant and adequate(final[h.name][1]),
+            final_dispersion=calm.get(h.name),
+            explains=(h.significant or h.spread_significant)
+            and adequate(final[h.name][1])
+            and (h.name not in calm or calm[h.name].p_value > s.alpha),
         )
         if h.name in final
         else replace(h, explains=False)

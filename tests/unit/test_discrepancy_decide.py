@@ -151,3 +151,41 @@ def test_library_rejects_unknown_names_listing_valid_ones():
         get_candidates(["frictoin"])
     for c in LIBRARY.values():
         assert c.lo <= 0.0 <= c.hi and all(c.lo <= p <= c.hi for p in c.probes)
+
+
+def _spread_values(s_obs: float, seed: int) -> tuple[dict, dict]:
+    """δ of 60 fibers: the observation s_obs times as spread as 8 baseline copies; 16
+    'effect' copies as spread as the observation (a right random effect)."""
+    rng = np.random.default_rng(seed)
+    x = rng.uniform(0.0, 0.5, 60)
+    obs = x + 0.02 * s_obs * rng.standard_normal(60)
+    base = x[:, None] + 0.02 * rng.standard_normal((60, 8))
+    eff = x[:, None] + 0.02 * s_obs * rng.standard_normal((60, 16))
+    return {"delta": np.column_stack([obs, base])}, {"delta": np.column_stack([obs, eff])}
+
+
+def test_spread_route_names_a_random_effect_only_where_nothing_else_is_named():
+    # a right random effect (observation 2.5x as spread as the baseline copies): its
+    # spread test is significant (p_over and p_reduce both < 0.001 at this size); with no
+    # score-significant candidate it is named by the spread route; with a rival that the
+    # score route names, the score route's verdict stands
+    from dataclasses import replace
+
+    from fibersweep.discrepancy.dispersion import spread_test
+
+    rng = np.random.default_rng(11)
+    vb, ve = _spread_values(2.5, 12)
+    t = spread_test(vb, ve, rng, n_perm=999)
+    ho = _heldout({"start_noise": rng.normal(0.0, 0.3, 60)}, {"start_noise": 0.0})
+    ho = evaluate_heldout({"start_noise": 2.0}, {"delta": np.ones(60)},
+                          {"start_noise": {"delta": 1.0 - ho[0].per_fiber}},
+                          {"start_noise": ho[0].residual}, rng, 0.05,
+                          spread={"start_noise": t})  # fmt: skip
+    h = ho[0]
+    assert h.spread_significant and not h.significant
+    ho = [replace(h, explains=True)]  # as refit() sets it when nothing is left
+    v = decide(_gap(1.5, 7), ho, "R", rng, 0.05)
+    assert v.kind == "named" and list(v.effects) == ["start_noise"] and "spread" in v.text
+    rival = _heldout({"friction": rng.normal(1.0, 0.3, 60)}, {"friction": 0.0})
+    v = decide(_gap(1.5, 7), ho + rival, "R", rng, 0.05)
+    assert v.kind == "named" and list(v.effects) == ["friction"]
