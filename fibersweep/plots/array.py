@@ -65,7 +65,12 @@ def cell_flow_figure(field):
 
 
 def chrono_figure(array, runs: list[dict], bead_radius: float, frames: int = 30):
-    """One panel per run (a mode each): the fiber drawn at equal time intervals over the pillars."""
+    """One panel per run (a mode each): the fiber drawn at equal time intervals over the pillars.
+
+    A run with stored bead positions (``traj_beads``, shape (samples, n_beads, 2) [µm];
+    bead-spring runs with ``fiber.record.all_beads``) is drawn through its beads, so a
+    bent or wrapped fiber shows its shape; otherwise as the straight rod of its angle.
+    """
     fig, axes = subplots(len(runs), 1, figsize=(7.0, 1.9 * len(runs)), squeeze=False)
     for ax, run in zip(axes[:, 0], runs, strict=True):
         t = np.asarray(run["traj_t"])
@@ -74,7 +79,12 @@ def chrono_figure(array, runs: list[dict], bead_radius: float, frames: int = 30)
         times = np.linspace(t[0], t[-1], frames)
         k = np.searchsorted(t, times).clip(0, t.size - 1)
         col = _MODE_COLOURS.get(run["mode"], "k")
+        beads = run.get("traj_beads")
         for j in k:
+            if beads is not None:  # a flexible fiber: its beads, bent as they were
+                ax.plot(beads[j, :, 0], beads[j, :, 1], color=col, lw=1.4, alpha=0.8,
+                        solid_capstyle="round")  # fmt: skip
+                continue
             c, s = math.cos(th[j]), math.sin(th[j])
             if half == 0.0:  # one bead: a sphere
                 ax.add_patch(Circle((xc[j], yc[j]), bead_radius, fc=col, ec="none", alpha=0.8))

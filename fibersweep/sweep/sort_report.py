@@ -92,7 +92,17 @@ def load_array_results(results: str | Path) -> tuple[pd.DataFrame, list[dict], d
         runs[name] = [by_id[r][c].to_numpy(np.float64) for r in runs["id"]]
     runs["traj_th"] = [np.radians(by_id[r]["theta"].to_numpy(np.float64)) for r in runs["id"]]
     runs["traj_contact"] = [by_id[r]["contact"].to_numpy(np.float64) for r in runs["id"]]
+    if "beads" in traj.columns:  # bead-spring runs with fiber.record.all_beads
+        runs["traj_beads"] = [_beads(by_id[r]["beads"]) for r in runs["id"]]
     return runs.reset_index(drop=True), settings, man["config"]
+
+
+def _beads(column: pd.Series) -> np.ndarray | None:
+    """Stored bead positions of one run as (samples, n_beads, 2) [µm], or None."""
+    rows = [np.asarray(v, dtype=np.float64) for v in column if v is not None]
+    if len(rows) != len(column) or not rows or rows[0].size < 4:
+        return None
+    return np.stack(rows).reshape(len(rows), -1, 2)
 
 
 def relabel(

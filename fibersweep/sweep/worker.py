@@ -329,8 +329,11 @@ def _warm(field: Any, fiber: Any) -> None:
         update={"step": fiber.step.model_copy(update={"t_max": 0.01})}, deep=True
     )
     start = FiberStart(theta0=0.0, y0=2.0, length=0.5)
-    if hasattr(field, "array"):  # a pillar array's cell: a one-bead fiber in the widest gap
-        start = FiberStart(theta0=0.0, y0=_gap_middle(field.array), length=2 * fiber.bead_radius)
+    if hasattr(field, "array"):  # a pillar array's cell: a short fiber in the widest gap
+        beads = 1 if fiber.model == "rigid" else 2  # a bead-spring chain needs two
+        start = FiberStart(
+            theta0=0.0, y0=_gap_middle(field.array), length=2 * beads * fiber.bead_radius
+        )
     try:
         simulate(field, short, start)
     except RUN_ERRORS as exc:  # a warm-up problem must not hide the real runs' errors
