@@ -1,0 +1,36 @@
+"""The array chronophotograph draws a flexible fiber's stored beads (its bent shape)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from fibersweep.flow.settings import FlowSettings
+from fibersweep.plots import array as pa
+from fibersweep.sweep.sort_report import _beads
+
+
+def test_stored_beads_come_back_as_samples_by_beads_by_two():
+    rows = pd.Series([list(np.arange(8.0) + k) for k in range(3)])  # 3 samples, 4 beads
+    b = _beads(rows)
+    assert b.shape == (3, 4, 2)
+    assert b[1, 2].tolist() == [5.0, 6.0]  # sample 1: 1 + (4, 5)
+    assert _beads(pd.Series([None, None])) is None  # rigid runs store no beads
+
+
+def test_a_bent_fiber_is_drawn_through_its_beads_not_as_a_rod():
+    arr = FlowSettings.model_validate({"dx": 4.0, "array": {}}).array.to_array()
+    t = np.linspace(0.0, 1.0, 5)
+    s = np.linspace(-10.0, 10.0, 6)
+    bent = np.stack([np.column_stack([s + 40 * k, 30 + 0.05 * s**2]) for k in range(5)])
+    run = {
+        "traj_t": t, "traj_xc": bent[:, :, 0].mean(1), "traj_yc": bent[:, :, 1].mean(1),
+        "traj_th": np.zeros(5), "n_beads": 6, "mode": "displacement", "length": 24.0,
+        "y0": 0.4, "theta0": 0.0, "traj_beads": bent,
+    }  # fmt: skip
+    fig = pa.chrono_figure(arr, [run], 2.0, frames=5)
+    lines = [ln for ln in fig.axes[0].get_lines() if len(ln.get_xdata()) == 6]
+    assert len(lines) == 5  # one polyline of 6 beads per frame
+    assert np.allclose(lines[0].get_ydata(), bent[0, :, 1])  # the parabola, not a rod
+    rod = pa.chrono_figure(arr, [{**run, "traj_beads": None}], 2.0, frames=5)
+    assert not [ln for ln in rod.axes[0].get_lines() if len(ln.get_xdata()) == 6]
