@@ -78,6 +78,13 @@ def fold_fits(
     list of Fit
         One per fold, each with ``value`` the score test's zero (``estimate=True``).
     """
+    return _per_half(cand, maker, observed, base, folds, observables, weights, max_evals,
+                     side=side)  # fmt: skip
+
+
+def _per_half(cand, maker, observed, base, folds, observables, weights, max_evals, **kw):
+    """``fit_effect`` on each training half ``folds[1 - f]``, with the score test's zero
+    (``estimate=True``: the same estimator as the pooled refit, issue 30)."""
     fits = []
     for f in range(len(folds)):
         train = np.asarray(folds[1 - f])
@@ -91,8 +98,8 @@ def fold_fits(
                 observables,
                 weights,
                 max_evals,
-                side=side,
-                estimate=True,  # the same estimator as the pooled refit (issue 30)
+                estimate=True,
+                **kw,
             )
         )
     return fits
@@ -193,25 +200,8 @@ def shared_fold_fits(
     ``max_evals + 1`` entries.
     """
     bounds = (min(float(values.min()), 0.0), max(float(values.max()), 0.0))
-    fits = []
-    for f in range(len(folds)):
-        train = np.asarray(folds[1 - f])
-        fits.append(
-            fit_effect(
-                cand,
-                maker,
-                observed.iloc[train].reset_index(drop=True),
-                [b.iloc[train].reset_index(drop=True) for b in base],
-                train,
-                observables,
-                weights,
-                0,
-                bounds=bounds,
-                known=[float(v) for v in values],
-                estimate=True,
-            )
-        )
-    return fits
+    return _per_half(cand, maker, observed, base, folds, observables, weights, 0,
+                     bounds=bounds, known=[float(v) for v in values])  # fmt: skip
 
 
 def _side_by_side(

@@ -36,6 +36,7 @@ from fibersweep.sweep.store import (
 __all__ = [
     "Reclassified",
     "class_counts",
+    "per_combination",
     "reclassify",
     "rule_column",
     "thresholds_for",
@@ -119,6 +120,19 @@ def trajectory_from_frame(df: pd.DataFrame) -> Trajectory:
     )
 
 
+def per_combination(runs: pd.DataFrame, by: list[str], counts) -> pd.DataFrame:
+    """``counts(group)`` for each combination of the ``by`` columns' values, stacked,
+    the key columns first (one block per combination, fractions within it)."""
+    blocks = []
+    for values, group in runs.groupby(by, sort=True, dropna=False):
+        values = values if isinstance(values, tuple) else (values,)
+        block = counts(group)
+        for k, v in reversed(list(zip(by, values, strict=True))):
+            block.insert(0, k, v)
+        blocks.append(block)
+    return pd.concat(blocks, ignore_index=True)
+
+
 def class_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFrame:
     """Runs per class (ok runs) and failures, with fractions.
 
@@ -137,14 +151,7 @@ def class_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFram
     """
     by = [k for k in (by or []) if k in runs]
     if by:
-        blocks = []
-        for values, group in runs.groupby(by, sort=True, dropna=False):
-            values = values if isinstance(values, tuple) else (values,)
-            block = class_counts(group)
-            for k, v in reversed(list(zip(by, values, strict=True))):
-                block.insert(0, k, v)
-            blocks.append(block)
-        return pd.concat(blocks, ignore_index=True)
+        return per_combination(runs, by, class_counts)
     ok = runs[runs["status"] == "ok"]
     rows = [(c, int((ok["class"] == c).sum())) for c in CLASSES]
     # ok runs the thresholds cannot place (e.g. a trap no longer long enough to count)

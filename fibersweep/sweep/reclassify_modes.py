@@ -46,14 +46,9 @@ def mode_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFrame
     """Runs per mode (ok runs) and failures, with fractions; one block per swept combination."""
     by = [k for k in (by or []) if k in runs]
     if by:
-        blocks = []
-        for values, group in runs.groupby(by, sort=True, dropna=False):
-            values = values if isinstance(values, tuple) else (values,)
-            block = mode_counts(group)
-            for k, v in reversed(list(zip(by, values, strict=True))):
-                block.insert(0, k, v)
-            blocks.append(block)
-        return pd.concat(blocks, ignore_index=True)
+        from fibersweep.sweep.reclassify import per_combination
+
+        return per_combination(runs, by, mode_counts)
     ok = runs[runs["status"] == "ok"]
     rows = [(m, int((ok["mode"] == m).sum())) for m in MODES]
     rows.append(("failed", int((runs["status"] != "ok").sum())))
