@@ -157,6 +157,19 @@ class Config(_Strict):
         return combinations(self)
 
     @model_validator(mode="after")
+    def _random_refine_in_arrays_only(self) -> Config:
+        """Random starts are refined along the length by the mean displacement fraction,
+        which only pillar-array runs have (:mod:`fibersweep.sweep.refine_lengths`)."""
+        sw = self.sweep
+        if sw.random is not None and sw.refine is not None and self.flow.array is None:
+            raise FieldError(
+                "sweep.refine",
+                "with sweep.random, refinement locates a pillar array's critical length "
+                "(flow.array); a channel sweep refines a grid of starts (no sweep.random)",
+            )
+        return self
+
+    @model_validator(mode="after")
     def _starts_fit(self) -> Config:
         """Every sweep point must be a fiber the grid resolves, in the channel, off the pillar.
 

@@ -214,11 +214,16 @@ class SweepSettings(_Strict):
 
     @model_validator(mode="after")
     def _random_ranges(self) -> SweepSettings:
-        """With ``random``: theta0 and y0 are ranges [lo, hi] (or one value), no refinement."""
+        """With ``random``: theta0 and y0 are ranges [lo, hi] (or one value); refinement
+        along the length only (a pillar array's critical length, checked with the flow)."""
         if self.random is None:
             return self
-        if self.refine is not None:
-            raise FieldError("refine", "not available with sweep.random (random starts)")
+        if self.refine is not None and self.refine.axes != ["length"]:
+            raise FieldError(
+                "refine.axes",
+                "with sweep.random only the length is refined (a pillar array's critical "
+                "length); use axes: [length]",
+            )
         for name in ("theta0", "y0"):
             v = axis_values(getattr(self, name))
             if v.size > 2 or (v.size == 2 and v[0] > v[1]):

@@ -170,6 +170,7 @@ def refinement_points(tasks: Sequence[SweepTask], stored: pd.DataFrame) -> pd.Da
         }
     )
     cols = ["id", "status", "class", "delta"]
+    cols += [c for c in ("mode", "fraction") if c in stored]  # pillar-array runs
     have = stored[cols] if len(stored) else pd.DataFrame(columns=cols)
     return pts.merge(have, on="id", how="left")
 
@@ -225,7 +226,13 @@ def next_round(
     """
     pts = refinement_points(tasks, stored)
     used = int((pts["round"] > 0).sum())
-    prop = propose(pts, refine, refine.max_runs - used)
+    if _random_starts(settings):  # a pillar array's critical length (refine_lengths)
+        from fibersweep.sweep.refine_lengths import propose_lengths
+
+        prop = propose_lengths(pts, float(refine.tolerance["length"]),
+                               refine.max_runs - used, _drawer(settings))  # fmt: skip
+    else:
+        prop = propose(pts, refine, refine.max_runs - used)
     states = prop.brackets.get("state", pd.Series(dtype=str))
     open_, stuck = int((states == "open").sum()), int((states == "stuck").sum())
     done = "stuck" if stuck else "located"
@@ -235,6 +242,25 @@ def next_round(
         new = refinement_tasks(settings, tasks, prop.new, rnd + 1)
         reason = "budget" if open_ > len(new) else "running" if new else done
     return new, refinement_summary(prop.brackets, rnd, used, reason)
+
+
+def _random_starts(settings: Sequence[Setting]) -> bool:
+    return bool(settings) and settings[0].config.sweep.random is not None
+
+
+def _drawer(settings: Sequence[Setting]):
+    """(settings id, L) -> that length's seeded starts (theta0, y0), as the grid draws them."""
+    from fibersweep.config.draws import start_points
+
+    by_id = {st.id: st for st in settings}
+
+    def draw(sid: str, length: float) -> tuple[np.ndarray, np.ndarray]:
+        cfg = by_id[str(sid)].config
+        one = cfg.sweep.model_copy(update={"length": [float(length)], "refine": None})
+        t, y, _ = start_points(cfg.model_copy(update={"sweep": one}))
+        return t, y
+
+    return draw
 
 
 def stored_rounds(

@@ -102,11 +102,16 @@ def test_random_starts_in_the_channel_are_redrawn_off_the_pillar():
         (
             {"y0": [0.1, 0.5], "random": {"count": 2},
              "refine": {"axes": ["y0"], "tolerance": {"y0": 0.01}, "max_runs": 10}},
+            "sweep.refine.axes",
+        ),
+        (  # a channel: random starts have no critical length to refine
+            {"y0": [0.1, 0.5], "random": {"count": 2},
+             "refine": {"axes": ["length"], "tolerance": {"length": 0.1}, "max_runs": 10}},
             "sweep.refine",
         ),
     ],
 )  # fmt: skip
-def test_random_needs_ranges_and_no_refinement(sweep, field):
+def test_random_needs_ranges_and_refines_only_an_arrays_length(sweep, field):
     with pytest.raises((ConfigError, FieldError, ValueError)) as exc:
         parse_config({"sweep": sweep})
     assert field in str(exc.value)
