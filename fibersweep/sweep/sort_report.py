@@ -66,14 +66,15 @@ def load_array_results(results: str | Path) -> tuple[pd.DataFrame, list[dict], d
     runs = runs[runs["mode"].notna()].copy()
     combos = man.get("combinations") or {}
     settings = []
-    for sid in pd.unique(runs["settings"]):
+    sids = sorted(pd.unique(runs["settings"]), key=lambda sid: _order(combos.get(sid, {})))
+    for sid in sids:
         entry = combos.get(sid, {})
         flow = entry.get("flow") or man["config"]["flow"]
         values = entry.get("values") or {}
         settings.append(
             {
                 "id": sid,
-                "label": ", ".join(f"{k}={v}" for k, v in values.items()),
+                "label": ", ".join(_value_label(k, v) for k, v in values.items()),
                 "array": flow["array"],
                 "flow": flow,
                 "flow_key": entry.get("flow_key", ""),
@@ -95,6 +96,23 @@ def load_array_results(results: str | Path) -> tuple[pd.DataFrame, list[dict], d
     if "beads" in traj.columns:  # bead-spring runs with fiber.record.all_beads
         runs["traj_beads"] = [_beads(by_id[r]["beads"]) for r in runs["id"]]
     return runs.reset_index(drop=True), settings, man["config"]
+
+
+def _order(entry: dict) -> tuple:
+    """Sort key of a setting combination: its swept values (numbers by value)."""
+    vals = (entry.get("values") or {}).values()
+    return tuple(
+        (0, float(v), "") if isinstance(v, int | float) else (1, 0.0, str(v)) for v in vals
+    )
+
+
+def _value_label(key: str, value) -> str:
+    """'young_modulus = 1e+06 Pa': the setting's last part, its value and unit."""
+    from fibersweep.config import setting_column
+
+    unit = setting_column(key)[1]
+    text = f"{value:g}" if isinstance(value, int | float) else str(value)
+    return f"{key.rsplit('.', 1)[-1]} = {text}{' ' + unit if unit else ''}"
 
 
 def _beads(column: pd.Series) -> np.ndarray | None:

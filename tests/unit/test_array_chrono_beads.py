@@ -34,3 +34,13 @@ def test_a_bent_fiber_is_drawn_through_its_beads_not_as_a_rod():
     assert np.allclose(lines[0].get_ydata(), bent[0, :, 1])  # the parabola, not a rod
     rod = pa.chrono_figure(arr, [{**run, "traj_beads": None}], 2.0, frames=5)
     assert not [ln for ln in rod.axes[0].get_lines() if len(ln.get_xdata()) == 6]
+
+
+def test_settings_are_labelled_with_their_unit_and_ordered_by_value():
+    from fibersweep.sweep.sort_report import _order, _value_label
+
+    assert _value_label("fiber.young_modulus", 1e6) == "young_modulus = 1e+06 Pa"
+    assert _value_label("flow.array.shift", 0.1) == "shift = 0.1"
+    entries = [{"values": {"fiber.young_modulus": v}} for v in (1e6, 1e4, 1e5)]
+    ordered = [e["values"]["fiber.young_modulus"] for e in sorted(entries, key=_order)]
+    assert ordered == [1e4, 1e5, 1e6]  # by value, not as text
