@@ -37,6 +37,7 @@ __all__ = [
     "Reclassified",
     "class_counts",
     "per_combination",
+    "replace_labels",
     "reclassify",
     "rule_column",
     "thresholds_for",
@@ -118,6 +119,35 @@ def trajectory_from_frame(df: pd.DataFrame) -> Trajectory:
         contact=df["contact"].to_numpy(dtype=bool),
         beads=beads,
     )
+
+
+def replace_labels(
+    out: Path, runs: pd.DataFrame, meta: dict[str, Any], man: dict[str, Any],
+    thresholds: ClassifySettings, counts_of,
+) -> tuple[pd.DataFrame, Path]:  # fmt: skip
+    """Write re-labelled ``runs`` as one part replacing the old ones, the counts file and
+    the manifest's thresholds and totals.
+
+    ``counts_of(runs, by=None)`` gives a table whose first column is the label
+    (class or mode) and whose ``runs`` column the count (:func:`class_counts`,
+    :func:`fibersweep.sweep.reclassify_modes.mode_counts`). Returns the counts per
+    swept combination and the path they were written to.
+    """
+    old_parts = list_parts(out / RUNS_DIR)
+    write_table_atomic(
+        runs_table(runs.to_dict("records"), meta), out / RUNS_DIR / part_name("-classified")
+    )
+    for p in old_parts:
+        p.unlink(missing_ok=True)
+    counts = counts_of(runs, list(man.get("swept") or []))
+    counts_path = out / COUNTS_FILE
+    with atomic_path(counts_path) as tmp:
+        counts.to_csv(tmp, index=False)
+    man["config"]["fiber"]["classify"] = thresholds.model_dump(mode="json")
+    total = counts_of(runs)
+    man["counts"] = {c: int(n) for c, n in zip(total.iloc[:, 0], total["runs"], strict=True)}
+    write_manifest(out, man)
+    return counts, counts_path
 
 
 def per_combination(runs: pd.DataFrame, by: list[str], counts) -> pd.DataFrame:
@@ -303,22 +333,8 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
         **{rule_column(name): col.to_numpy() for name, col in by_rule.items()},
     )
     runs.loc[runs["class"] == "Trapping", "delta"] = math.nan
-    old_parts = list_parts(out / RUNS_DIR)
-    meta = classified_meta(old_parts, man, thresholds)
-    write_table_atomic(
-        runs_table(runs.to_dict("records"), meta),
-        out / RUNS_DIR / part_name("-classified"),
-    )
-    for p in old_parts:
-        p.unlink(missing_ok=True)
-    counts = class_counts(runs, list(man.get("swept") or []))
-    counts_path = out / COUNTS_FILE
-    with atomic_path(counts_path) as tmp:
-        counts.to_csv(tmp, index=False)
-    man["config"]["fiber"]["classify"] = thresholds.model_dump(mode="json")
-    total = class_counts(runs)
-    man["counts"] = {c: int(n) for c, n in zip(total["class"], total["runs"], strict=True)}
-    write_manifest(out, man)
+    meta = classified_meta(list_parts(out / RUNS_DIR), man, thresholds)
+    counts, counts_path = replace_labels(out, runs, meta, man, thresholds, class_counts)
     unclassified = int(((runs["status"] == "ok") & ~runs["class"].isin(CLASSES)).sum())
     warnings = _beyond_simulated(
         thresholds, ClassifySettings.model_validate(simulated), unclassified

@@ -15,18 +15,11 @@ from pathlib import Path
 import pandas as pd
 
 from fibersweep.analysis.modes import MODES, summarise_trajectory
-from fibersweep.atomic import atomic_path
 from fibersweep.errors import InputError
 from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.flow.array_settings import ArraySettings
-from fibersweep.sweep.manifest import write_manifest
 from fibersweep.sweep.store import (
-    RUNS_DIR,
-    list_parts,
-    part_name,
     read_trajectories,
-    runs_table,
-    write_table_atomic,
 )
 
 __all__ = ["is_array_table", "mode_counts", "reclassify_modes"]
@@ -66,7 +59,7 @@ def reclassify_modes(
     -------
     fibersweep.sweep.reclassify.Reclassified
     """
-    from fibersweep.sweep.reclassify import COUNTS_FILE, Reclassified, trajectory_from_frame
+    from fibersweep.sweep.reclassify import Reclassified, trajectory_from_frame
 
     combos = man.get("combinations") or {}
     base_flow = man["config"]["flow"]
@@ -104,18 +97,7 @@ def reclassify_modes(
         ):
             runs.at[i, col] = value
     changed = int((runs["mode"] != old_mode).sum())
-    old_parts = list_parts(out / RUNS_DIR)
-    write_table_atomic(
-        runs_table(runs.to_dict("records"), meta), out / RUNS_DIR / part_name("-classified")
-    )
-    for p in old_parts:
-        p.unlink(missing_ok=True)
-    counts = mode_counts(runs, list(man.get("swept") or []))
-    counts_path = out / COUNTS_FILE
-    with atomic_path(counts_path) as tmp:
-        counts.to_csv(tmp, index=False)
-    man["config"]["fiber"]["classify"] = thresholds.model_dump(mode="json")
-    total = mode_counts(runs)
-    man["counts"] = {m: int(n) for m, n in zip(total["mode"], total["runs"], strict=True)}
-    write_manifest(out, man)
+    from fibersweep.sweep.reclassify import replace_labels
+
+    counts, counts_path = replace_labels(out, runs, meta, man, thresholds, mode_counts)
     return Reclassified(len(runs), changed, counts, counts_path)
