@@ -107,6 +107,8 @@ class Params(NamedTuple):
     stretch, bend : bead-spring S [pN] and B [pN µm²]
     tol : bead-spring-ros2: local error allowed per step [µm] (NaN otherwise)
     rosw : bead-spring-ros2: 0 ROS2, 1 ROS34PW2 (step.rosenbrock)
+    w_reuse : bead-spring-ros2: accepted steps one W = M J may serve (step.jacobian_reuse)
+    pi_control : bead-spring-ros2: PI step-size controller (step.controller == "pi")
     """
 
     a: float
@@ -128,6 +130,8 @@ class Params(NamedTuple):
     bend: float
     tol: float = math.nan
     rosw: int = 0
+    w_reuse: int = 1
+    pi_control: bool = False
 
 
 class Work(NamedTuple):
@@ -259,6 +263,8 @@ def make_params(
         bend=st.young_modulus * math.pi * a**4 / 4.0,
         tol=float(st.step.tolerance),
         rosw=int(st.step.rosenbrock == "ros34pw2"),
+        w_reuse=int(st.step.jacobian_reuse),
+        pi_control=st.step.controller == "pi",
     )
 
 
