@@ -37,7 +37,16 @@ GAP = 2
 
 
 @nb.njit(cache=True)
-def exclusion_forces(x, y, gap, r_cut, r_eq, f_ref, fx, fy):
+def exclusion_forces(
+    x: np.ndarray,
+    y: np.ndarray,
+    gap: int,
+    r_cut: float,
+    r_eq: float,
+    f_ref: float,
+    fx: np.ndarray,
+    fy: np.ndarray,
+) -> int:
     """Add the pair forces [pN] of beads at (x, y) [µm] to ``fx, fy``; return the active pairs.
 
     Parameters
@@ -87,7 +96,7 @@ def exclusion_forces(x, y, gap, r_cut, r_eq, f_ref, fx, fy):
 
 
 @nb.njit(cache=True, inline="always")
-def _add_sym(jac, p, q, kxx, kxy, kyy):
+def _add_sym(jac: np.ndarray, p: int, q: int, kxx: float, kxy: float, kyy: float) -> None:
     """jac[2p:2p+2, 2q:2q+2] += [[kxx, kxy], [kxy, kyy]]."""
     jac[2 * p, 2 * q] += kxx
     jac[2 * p, 2 * q + 1] += kxy
@@ -96,7 +105,15 @@ def _add_sym(jac, p, q, kxx, kxy, kyy):
 
 
 @nb.njit(cache=True)
-def exclusion_jacobian(x, y, gap, r_cut, r_eq, f_ref, jac):
+def exclusion_jacobian(
+    x: np.ndarray,
+    y: np.ndarray,
+    gap: int,
+    r_cut: float,
+    r_eq: float,
+    f_ref: float,
+    jac: np.ndarray,
+) -> bool:
     """Add ∂F/∂q [pN/µm] of :func:`exclusion_forces` into ``jac`` (2n, 2n), analytically.
 
     With d = r_i − r_j, F_i = amp w⁴ d, ∂w/∂r_i = −2d/den (den = R² − r_eq²):
