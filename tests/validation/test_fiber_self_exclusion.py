@@ -110,3 +110,47 @@ def test_stiff_fiber_is_bit_identical_with_and_without(coarse_field, path):
     assert np.array_equal(r1, r0, equal_nan=True)
     assert np.array_equal(b1, b0)
     assert min_self_distance(b1) > 1.5 * 2 * A
+
+
+@pytest.mark.parametrize("model", ["bead-spring", "bead-spring-ros2"])
+def test_kernel_jacobians_hold_the_pairs(coarse_field, model):
+    """Both models' Jacobians (analytic ``force_jacobian`` of the Rosenbrock-W path, and
+    ``force_jacobian_fd`` of the fixed step) of a U whose arms are pressed together
+    (0.95 · 2a apart, far from the pillar) against central differences (step 1e-6 µm) of
+    the chain's whole force, springs and pairs: within 1e-6 of max |J| (truncation and
+    round-off ~1e-8 relative; a missing pair block is O(1)). The fixed step reports that
+    J left its band, so its W = M J is taken dense."""
+    from fibersweep.fiber.beadspring import bead_velocity, force_jacobian, force_jacobian_fd
+
+    st = FiberSettings(model=model, young_modulus=1e4)
+    length = 20 * 2 * A / coarse_field.geometry.pillar_base_length
+    setup = prepare(coarse_field, st, FiberStart(0.0, 0.45, length), np.random.default_rng(0))
+    k = build_kernel(setup)
+    flow, pillar, body, p, w, bw, effects, frame = k
+    b = _u_shape(setup.x0, setup.y0_abs)  # arms: beads 0-8 and 11-19
+    b[11:, 1] -= (b[11, 1] - b[0, 1]) - 0.95 * 2 * A  # second arm 0.95 · 2a from the first
+
+    def force(q):
+        w.x[:] = q[0::2]
+        w.y[:] = q[1::2]
+        bead_velocity(frame, flow, pillar, body, p, w, bw, effects)
+        return np.column_stack([w.fx, w.fy]).reshape(-1).copy()
+
+    q0 = b.reshape(-1).copy()
+    h = 1e-6
+    ref = np.empty((q0.size, q0.size))
+    for c in range(q0.size):
+        qp = q0.copy()
+        qp[c] += h
+        qm = q0.copy()
+        qm[c] -= h
+        ref[:, c] = (force(qp) - force(qm)) / (2 * h)
+    force(q0)
+    assert np.max(w.dist) > pillar.r_cut  # no pillar contact: F is springs and pairs
+    if model == "bead-spring":
+        dense = force_jacobian_fd(frame, pillar, p, w, bw)
+        assert dense
+    else:
+        force_jacobian(frame, pillar, p, w, bw)
+    scale = np.max(np.abs(ref))
+    assert np.max(np.abs(bw.jac - ref)) < 1e-6 * scale
