@@ -2,7 +2,9 @@
 
 Energy (docs/model.md), t_i = r_i − r_{i−1}:
     H = Σ_i (S/4a)(|t_i| − 2a)² + Σ_i (B/2a)(1 − t̂_{i+1}·t̂_i),
-S = E π a², B = E π a⁴/4. Bead velocities U = u(r) + M(r) F(r).
+S = E π a², B = E π a⁴/4. Bead velocities U = u(r) + M(r) F(r). F also holds the
+pillar contact and the repulsion of non-neighbouring beads (``fiber.self_exclusion``,
+:mod:`fibersweep.fiber.exclusion`), so the chain cannot pass through itself.
 
 Time stepping: linearly implicit second-order BDF on the positions q (2n),
 with extrapolation q* = 2 q^k − q^{k−1}, frozen mobility M* = M(q*) and the
@@ -25,6 +27,7 @@ from fibersweep.fiber import hooks as H
 from fibersweep.fiber import record as R
 from fibersweep.fiber.bundles import DEFAULT_DT, Kernel
 from fibersweep.fiber.elastic import elastic_forces, elastic_jacobian
+from fibersweep.fiber.exclusion import exclusion_forces, exclusion_jacobian
 from fibersweep.fiber.mobility import fiber_offsets, rpy_fill
 
 __all__ = [
@@ -43,7 +46,9 @@ CHUNK = 20_000
 def bead_velocity(frame, flow, pillar, body, p, w, bw, effects):
     """f(q) = u + M F at the beads ``w.x, w.y`` into ``bw.f`` (2n); M into ``bw.mob``.
 
-    Elastic and contact forces, the background flow, then the effects' stages:
+    Elastic forces, the self-exclusion of non-neighbouring beads
+    (:mod:`fibersweep.fiber.exclusion`, off when ``p.excl_gap`` is 0), contact
+    forces, the background flow, then the effects' stages:
     ``bead_forces`` (extra forces, e.g. friction) before the mobility is built,
     ``bead_mobility`` (e.g. pillar hydrodynamics: f = (I + M Z)⁻¹ u + M' F with
     mob holding M') after. Returns (any_contact, cx, cy).
@@ -60,6 +65,7 @@ def bead_velocity(frame, flow, pillar, body, p, w, bw, effects):
     n = x.shape[0]
     F.velocity(frame, flow, x, y, u)
     elastic_forces(x, y, p.a, p.stretch, p.bend, fx, fy)
+    exclusion_forces(x, y, p.excl_gap, p.excl_cut, p.excl_eq, p.excl_fref, fx, fy)
     n_c, cx, cy = F.contact(frame, pillar, x, y, cfx, cfy, w.st, w.dist)
     any_c = n_c > 0
     for i in range(n):
@@ -121,7 +127,9 @@ def force_jacobian(frame, pillar, p, w, bw):
     """J = ∂F/∂q (2n, 2n) [pN/µm] of the elastic and contact forces at ``w.x, w.y`` into ``bw.jac``.
 
     The elastic part is analytic (:func:`~fibersweep.fiber.elastic.elastic_jacobian`,
-    block pentadiagonal); the contact part, a 2x2 block per bead in contact
+    block pentadiagonal), and so is the self-exclusion's
+    (:func:`~fibersweep.fiber.exclusion.exclusion_jacobian`: blocks anywhere, J is
+    used dense); the contact part, a 2x2 block per bead in contact
     (``w.st`` > 0, as left by the last :func:`bead_velocity`), by central
     differences with step 1e-6 a. Used by ``bead-spring-ros2``;
     :func:`force_jacobian_fd` is the all-differences version of the fixed-step model.
@@ -132,6 +140,7 @@ def force_jacobian(frame, pillar, p, w, bw):
         for j in range(n2):
             jac[i, j] = 0.0
     elastic_jacobian(w.x, w.y, p.a, p.stretch, p.bend, jac)
+    exclusion_jacobian(w.x, w.y, p.excl_gap, p.excl_cut, p.excl_eq, p.excl_fref, jac)
     _contact_jacobian(frame, pillar, 1e-6 * p.a, w, bw)
 
 
@@ -144,6 +153,14 @@ def force_jacobian_fd(frame, pillar, p, w, bw):
     only for beads with a non-zero contact stiffness ``w.st``). Uses
     ``bw.gx, gy, cfx, cfy`` as scratch. The fixed-step model's Jacobian (kept, so
     that its results stay those of the reference); see :func:`force_jacobian`.
+    The self-exclusion's blocks are added analytically
+    (:func:`~fibersweep.fiber.exclusion.exclusion_jacobian`).
+
+    Returns
+    -------
+    bool
+        Whether J has blocks outside the pentadiagonal band (an active
+        self-exclusion pair |i − j| > 2): then W = M J must be taken dense.
     """
     x = w.x
     y = w.y
@@ -198,6 +215,7 @@ def force_jacobian_fd(frame, pillar, p, w, bw):
                 F.contact(frame, pillar, one_x, one_y, c3, c4, d1, d2)
                 jac[2 * j, col] += (c1[0] - c3[0]) / (2.0 * h)
                 jac[2 * j + 1, col] += (c2[0] - c4[0]) / (2.0 * h)
+    return exclusion_jacobian(x, y, p.excl_gap, p.excl_cut, p.excl_eq, p.excl_fref, jac)
 
 
 @nb.njit(cache=True)
@@ -315,13 +333,16 @@ def integrate_bead_spring(q, qprev, state, k, stride, rec, brec):
         if code != R.CHUNK_FULL:
             break
         # Linearly implicit step.
-        force_jacobian_fd(frame, pillar, p, w, bw)
+        dense = force_jacobian_fd(frame, pillar, p, w, bw)
         c = 2.0 * dt / 3.0 if have_prev else dt
         for i2 in range(n2):
             for j2 in range(n2):
                 acc = 0.0
-                # J is banded: bead j couples to beads j-2..j+2 only.
-                for k2 in range(max(0, 2 * (j2 // 2) - 4), min(n2, 2 * (j2 // 2) + 6)):
+                # J is banded: bead j couples to beads j-2..j+2 only, unless a
+                # self-exclusion pair couples distant beads (then all of J's column).
+                lo = 0 if dense else max(0, 2 * (j2 // 2) - 4)
+                hi = n2 if dense else min(n2, 2 * (j2 // 2) + 6)
+                for k2 in range(lo, hi):
                     acc += mob[i2, k2] * jac[k2, j2]
                 lhs[i2, j2] = -c * acc
             lhs[i2, i2] += 1.0

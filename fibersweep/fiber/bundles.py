@@ -34,7 +34,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from fibersweep.fiber.contact import PillarArrays
+from fibersweep.fiber.contact import PillarArrays, contact_force_scale
+from fibersweep.fiber.exclusion import GAP
 from fibersweep.fiber.frame import CHANNEL
 from fibersweep.fiber.hooks import BASELINE
 from fibersweep.fiber.mobility import body_mobility
@@ -109,6 +110,10 @@ class Params(NamedTuple):
     rosw : bead-spring-ros2: 0 ROS2, 1 ROS34PW2 (step.rosenbrock)
     w_reuse : bead-spring-ros2: accepted steps one W = M J may serve (step.jacobian_reuse)
     pi_control : bead-spring-ros2: PI step-size controller (step.controller == "pi")
+    excl_gap : bead-spring self-exclusion: beads |i − j| >= excl_gap repel (0: off;
+        :mod:`fibersweep.fiber.exclusion`)
+    excl_cut, excl_eq, excl_fref : its cutoff χ·2a [µm], r_eq = 2a [µm] and F_ref [pN],
+        those of the pillar contact
     """
 
     a: float
@@ -132,6 +137,10 @@ class Params(NamedTuple):
     rosw: int = 0
     w_reuse: int = 1
     pi_control: bool = False
+    excl_gap: int = 0
+    excl_cut: float = math.nan
+    excl_eq: float = math.nan
+    excl_fref: float = math.nan
 
 
 class Work(NamedTuple):
@@ -240,6 +249,7 @@ def make_params(
     bead_spring = st.model == "bead-spring"
     dt = st.step.dt if st.step.dt is not None else (DEFAULT_DT if bead_spring else math.nan)
     ros2 = st.model == "bead-spring-ros2"
+    excl = st.self_exclusion and st.model in ("bead-spring", "bead-spring-ros2")
     return Params(
         a=a,
         mu=mu,
@@ -265,6 +275,10 @@ def make_params(
         rosw=int(st.step.rosenbrock == "ros34pw2"),
         w_reuse=int(st.step.jacobian_reuse),
         pi_control=st.step.controller == "pi",
+        excl_gap=GAP if excl else 0,
+        excl_cut=st.contact.chi * 2.0 * a,
+        excl_eq=2.0 * a,
+        excl_fref=contact_force_scale(st.contact, mu, a, u_center),
     )
 
 

@@ -34,6 +34,7 @@ __all__ = [
     "SMOOTH",
     "Pillar",
     "PillarArrays",
+    "contact_force_scale",
     "contact_forces",
     "make_pillar",
     "outline_distance",
@@ -321,6 +322,16 @@ def rough_circle_beads(circle: Circle, a_obs: float) -> np.ndarray:
     """Pillar bead centres on a circle, about 2 a_obs apart (at least 3), shape (m, 2)."""
     m = max(3, int(round(2.0 * math.pi * circle.radius / (2.0 * a_obs))))
     return np.ascontiguousarray(circle.outline(m))
+
+
+def contact_force_scale(
+    contact: ContactSettings, mu: float, bead_radius: float, u_center: float
+) -> float:
+    """F_ref [pN]: ``contact.f_ref``, or 6πμ a |U| when unset (μ [pN s/µm²], a [µm], U [µm/s]).
+
+    The one force scale of the pillar contact and of the fiber's self-exclusion.
+    """
+    return float(contact.f_ref or 6.0 * math.pi * mu * bead_radius * abs(u_center))
 
 
 def make_pillar(

@@ -33,7 +33,7 @@ import numpy as np
 from fibersweep.errors import InputError
 from fibersweep.fiber import frame as F
 from fibersweep.fiber.bundles import FlowArrays, Kernel, assemble, make_params
-from fibersweep.fiber.contact import Pillar, make_pillar
+from fibersweep.fiber.contact import Pillar, contact_force_scale, make_pillar
 from fibersweep.fiber.effects import DynamicsContext, EffectSet, build_effects
 from fibersweep.fiber.effects.base import Effect
 from fibersweep.fiber.models import MODELS
@@ -70,9 +70,9 @@ def check_array_effects(settings: FiberSettings) -> EffectSet:
 
 
 def array_pillar(array, settings: FiberSettings, mu: float, u_center: float) -> Pillar:
-    """The cell's pillar with the channel's contact law (F_ref = 6πμa u_center unless set)."""
+    """The cell's pillar with the channel's contact law (F_ref = 6πμa|u_center| unless set)."""
     a = settings.bead_radius
-    f_ref = settings.contact.f_ref or 6.0 * math.pi * mu * a * u_center
+    f_ref = contact_force_scale(settings.contact, mu, a, u_center)
     return make_pillar(array.cell_geometry, settings.contact, a, f_ref)
 
 

@@ -133,12 +133,24 @@ class FiberSettings(_Strict):
         ge=1,
         description="pillar arrays (flow.array): rows of pillars a run crosses before it ends",
     )
+    self_exclusion: bool = Field(
+        True,
+        description="bead-spring models: non-neighbouring beads repel with the pillar's "
+        "contact law, so a fiber cannot pass through itself (docs/flexible.md)",
+    )
 
     @model_serializer(mode="wrap")
-    def _array_rows_when_set(self, handler: Any) -> dict[str, Any]:
-        """``array_rows`` is written only away from its default, so the dump, the run ids
-        and the manifest of every config that does not set it stay as before it existed."""
+    def _defaults_left_out(self, handler: Any) -> dict[str, Any]:
+        """``array_rows`` and ``self_exclusion`` are written only away from their defaults,
+        so the dump, the run ids and the manifest of every config that does not set them
+        stay as before they existed."""
         data = handler(self)
-        if isinstance(data, dict) and data.get("array_rows") == ARRAY_ROWS:
-            data.pop("array_rows", None)
+        if isinstance(data, dict):
+            for key, default in _HIDDEN_DEFAULTS.items():
+                if key in data and data[key] == default:
+                    data.pop(key)
         return data
+
+
+#: Settings left out of a dump at these values (see ``FiberSettings._defaults_left_out``).
+_HIDDEN_DEFAULTS: dict[str, Any] = {"array_rows": ARRAY_ROWS, "self_exclusion": True}

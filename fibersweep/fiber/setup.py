@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fibersweep.errors import InputError
-from fibersweep.fiber.contact import Pillar, make_pillar
+from fibersweep.fiber.contact import Pillar, contact_force_scale, make_pillar
 from fibersweep.fiber.effects import DynamicsContext, EffectSet, build_effects
 from fibersweep.fiber.mobility import fiber_offsets
 from fibersweep.fiber.result import FiberStart
@@ -169,7 +169,7 @@ def prepare(
     _finite("u_center", u_center)
     if u_center == 0.0:
         raise InputError("u_center: the field has zero speed")
-    f_ref = settings.contact.f_ref or 6.0 * math.pi * field.fluid.viscosity * a * abs(u_center)
+    f_ref = contact_force_scale(settings.contact, field.fluid.viscosity, a, u_center)
     pillar = make_pillar(geo, settings.contact, a, f_ref)
     place = check_start(geo, float(field.dx), settings, start, pillar)
     ctx = DynamicsContext(
