@@ -108,6 +108,8 @@ class Params(NamedTuple):
     stretch, bend : bead-spring S [pN] and B [pN µm²]
     tol : bead-spring-ros2: local error allowed per step [µm] (NaN otherwise)
     rosw : bead-spring-ros2: 0 ROS2, 1 ROS34PW2 (step.rosenbrock)
+    w_reuse : bead-spring-ros2: accepted steps one W = M J may serve (step.jacobian_reuse)
+    pi_control : bead-spring-ros2: PI step-size controller (step.controller == "pi")
     excl_gap : bead-spring self-exclusion: beads |i − j| >= excl_gap repel (0: off;
         :mod:`fibersweep.fiber.exclusion`)
     excl_cut, excl_eq, excl_fref : its cutoff χ·2a [µm], r_eq = 2a [µm] and F_ref [pN],
@@ -133,6 +135,8 @@ class Params(NamedTuple):
     bend: float
     tol: float = math.nan
     rosw: int = 0
+    w_reuse: int = 1
+    pi_control: bool = False
     excl_gap: int = 0
     excl_cut: float = math.nan
     excl_eq: float = math.nan
@@ -269,6 +273,8 @@ def make_params(
         bend=st.young_modulus * math.pi * a**4 / 4.0,
         tol=float(st.step.tolerance),
         rosw=int(st.step.rosenbrock == "ros34pw2"),
+        w_reuse=int(st.step.jacobian_reuse),
+        pi_control=st.step.controller == "pi",
         excl_gap=GAP if excl else 0,
         excl_cut=st.contact.chi * 2.0 * a,
         excl_eq=2.0 * a,

@@ -62,6 +62,8 @@ __all__ = [
 
 GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 CHUNK = 20_000
+KEEP_H = 1.2
+"""With a reused W, a proposed step up to this factor above the factored one keeps it."""
 ROSW_ROS2 = 0
 """``Params.rosw`` of ROS2 (``fiber.step.rosenbrock: ros2``)."""
 ROSW_ROS34PW2 = 1
@@ -238,6 +240,13 @@ def integrate_implicit(q, state, k, rec, brec, f0, k1, k2, qn, fext):
         if fext[r] != 0.0:
             has_ext = True
     cap = rec.shape[0]
+    order = 3.0 if third else 2.0
+    w_age = p.w_reuse  # no W yet: build one at the first step
+    w_sig = -1
+    w_nc = -1
+    h_lu = 0.0
+    err_prev = p.tol
+    last_rejected = False
     rows = 0
     code = np.int64(R.CHUNK_FULL)
     while rows < cap:
@@ -293,33 +302,68 @@ def integrate_implicit(q, state, k, rec, brec, f0, k1, k2, qn, fext):
         disp = min(p.max_disp, max(p.contact_disp, 0.5 * free))
         h_cap = min(disp / (vmax + 1e-12), p.dt_max)
         # W = M(q) J(q), from M(q) left in bw.mob by the top of the loop and the contact
-        # stiffness of q in w.st; one LU of I − γhW serves every stage of a try.
-        force_jacobian(frame, pillar, p, w, bw)
-        w_matrix(bw)
+        # stiffness of q in w.st; one LU of I − γhW serves every stage of a try. With
+        # p.w_reuse > 1 a W (and its LU, while h stays) serves several steps: the
+        # methods keep their order for any W (W-methods); W is refreshed after a
+        # rejection, when the beads in contact change, or when it is w_reuse steps old.
+        n_c = 0
+        c_sig = 0
+        for i in range(n):
+            if w.st[i] > 0.0:
+                n_c += 1
+                c_sig += (i + 1) * (i + 1)
+        if w_age >= p.w_reuse or c_sig != w_sig or n_c != w_nc:
+            force_jacobian(frame, pillar, p, w, bw)
+            w_matrix(bw)
+            w_age = 0
+            w_sig = c_sig
+            w_nc = n_c
+            h_lu = 0.0
+        w_age += 1
         while True:
             h = min(h, h_cap)
             if p.mode == 1 and t + h > p.t_stop:
                 h = max(p.t_stop - t, 1e-15)
-            ok = system(bw, h, piv, gamma)
+            if p.w_reuse > 1 and h_lu > 0.0 and h_lu <= h <= KEEP_H * h_lu:
+                h = h_lu  # keep the factored step rather than refactor for a small change
+            if h != h_lu:
+                ok = system(bw, h, piv, gamma)
+                h_lu = h if ok else 0.0
+            else:
+                ok = True
             if third:
                 err = _try_ros34pw2(k, q, f0, fext, has_ext, h, piv, ok, xs, qn, qnew)
             else:
                 err = _try_ros2(k, q, f0, fext, has_ext, h, piv, ok, k1, k2, qn, qnew)
             if not (ok and math.isfinite(err)):
                 err = 1e300
-            if third:
-                fac = 0.9 * (p.tol / max(err, 1e-300)) ** (1.0 / 3.0)
-            else:
-                fac = 0.9 * math.sqrt(p.tol / max(err, 1e-300))
+            ratio = p.tol / max(err, 1e-300)
+            fac = 0.9 * (ratio ** (1.0 / 3.0) if third else math.sqrt(ratio))
+            if p.pi_control and err <= p.tol and not last_rejected:
+                # Gustafsson's PI controller: (tol/e_n)^(0.7/k) (e_{n-1}/tol)^(0.4/k)
+                fac = 0.9 * ratio ** (0.7 / order) * (err_prev / p.tol) ** (0.4 / order)
             fac = min(2.0, max(0.2, fac))
             if err <= p.tol or h <= 1e-12:
                 for r in range(n2):
                     q[r] = qnew[r]
                 t += h
+                if p.pi_control and last_rejected:
+                    fac = min(fac, 1.0)  # no growth right after a rejection
                 h = h * fac
+                err_prev = max(err, 1e-4 * p.tol)
+                last_rejected = False
                 break
             rejected += 1
             h = h * fac
+            last_rejected = True
+            if w_age > 1:
+                # W is from an earlier step: refresh it at q before the retry. The stage
+                # evaluations overwrote w (positions, contact stiffness) and bw.mob.
+                _velocity(frame, flow, pillar, body, p, w, bw, effects, q, fext, has_ext, f0)
+                force_jacobian(frame, pillar, p, w, bw)
+                w_matrix(bw)
+                w_age = 1
+                h_lu = 0.0
     state[0] = t
     state[1] = stopped_since
     state[2] = theta

@@ -19,6 +19,8 @@ __all__ = [
 
 #: Rows a fiber crosses in a pillar array unless ``fiber.array_rows`` says otherwise.
 ARRAY_ROWS = 20
+#: Step settings left out of a dump at these (default) values (see StepSettings).
+_STEP_DEFAULTS_NOT_WRITTEN = {"jacobian_reuse": 1, "controller": "i"}
 
 
 class _Strict(BaseModel):
@@ -73,6 +75,30 @@ class StepSettings(_Strict):
         description="bead-spring-ros2: the Rosenbrock-W method, two-stage second order (ros2) "
         "or four-stage third order with one LU per step (ros34pw2; docs/flexible.md)",
     )
+    jacobian_reuse: int = Field(
+        1,
+        ge=1,
+        le=1000,
+        description="bead-spring-ros2: accepted steps one W = M J and its LU may serve "
+        "(1: a fresh W every step; more: W is refreshed after a rejected step, when the "
+        "beads in contact change, or after this many steps; docs/flexible.md)",
+    )
+    controller: Literal["i", "pi"] = Field(
+        "i",
+        description="bead-spring-ros2: step-size controller, integral (i) or "
+        "proportional-integral (pi, Gustafsson's 0.7/0.4)",
+    )
+
+    @model_serializer(mode="wrap")
+    def _new_fields_when_set(self, handler: Any) -> dict[str, Any]:
+        """``jacobian_reuse`` and ``controller`` are written only away from their
+        defaults, so the run ids of configs that do not set them stay as before."""
+        data = handler(self)
+        if isinstance(data, dict):
+            for key, default in _STEP_DEFAULTS_NOT_WRITTEN.items():
+                if data.get(key) == default:
+                    data.pop(key, None)
+        return data
     x_end: float = Field(
         300.0, gt=0, description="stop when the rearmost bead is this far past the pillar [µm]"
     )

@@ -215,3 +215,40 @@ def test_fiber_kernel_agrees_with_ros2_in_free_flow(coarse_field):
         traj, _ = simulate_for(coarse_field, st, start, 0.2)
         out[method] = traj.beads[-1]
     assert np.max(np.hypot(*(out["ros34pw2"] - out["ros2"]).T)) < 1e-4
+
+
+@pytest.mark.parametrize(
+    ("method", "reuse", "controller"),
+    [("ros2", 10, "i"), ("ros34pw2", 10, "i"), ("ros2", 1, "pi"), ("ros34pw2", 3, "pi")],
+)
+def test_reused_w_and_pi_controller_keep_the_solution(coarse_field, method, reuse, controller):
+    """``fiber.step.jacobian_reuse`` (one W = M J over several steps) and
+    ``fiber.step.controller: pi`` change the steps, not the solution: ROS2 and
+    ROS34PW2 are W-methods, whose order holds for any W, and the error is still
+    controlled per step. Against ROS2 with a fresh W at 1e-6 µm (E = 1 MPa,
+    L = 0.5 l_obs, free flow to t = 0.2 s), every bead within 1e-4 µm at tolerance
+    1e-4 µm (the bound of the ROS34PW2 test above, same run)."""
+    from fibersweep.fiber.result import FiberStart
+    from fibersweep.fiber.run import simulate_for
+    from fibersweep.fiber.settings import FiberSettings
+
+    start = FiberStart(0.0, 0.45, 0.5)
+
+    def beads(**step):
+        st = FiberSettings(model="bead-spring-ros2", young_modulus=1e6, step=step)
+        traj, _ = simulate_for(coarse_field, st, start, 0.2)
+        return traj.beads[-1]
+
+    ref = beads(rosenbrock="ros2", tolerance=1e-6)
+    got = beads(rosenbrock=method, tolerance=1e-4, jacobian_reuse=reuse, controller=controller)
+    assert np.max(np.hypot(*(got - ref).T)) < 1e-4
+
+
+def test_reuse_and_controller_defaults_are_not_written():
+    """Configs that do not set the two step options keep their dump (and run ids)."""
+    from fibersweep.fiber.settings import FiberSettings
+
+    step = FiberSettings().model_dump()["step"]
+    assert "jacobian_reuse" not in step and "controller" not in step
+    st = FiberSettings(step={"jacobian_reuse": 4, "controller": "pi"}).model_dump()["step"]
+    assert st["jacobian_reuse"] == 4 and st["controller"] == "pi"
