@@ -45,6 +45,29 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
+def _other_revision(manifest: dict[str, Any] | None, resuming: bool) -> str | None:
+    """A note when the stored runs come from another fibersweep revision than this one.
+
+    Settings are compared on resume, the model's code is not: a physics change
+    between the two revisions (a bug fix, a new force) would leave old runs beside
+    new ones under the same ids. The note says so; it is not an error, since most
+    revisions change no result.
+    """
+    from fibersweep.sweep.manifest import revision
+
+    if not resuming or manifest is None:
+        return None
+    old = (manifest.get("provenance") or {}).get("git")
+    now, _ = revision()
+    if old is None or now is None or old == now:
+        return None
+    return (
+        f"the stored runs were made by fibersweep revision {old[:12]}, this is {now[:12]}: "
+        "a change of the model between the two is not detected; if one changed results, "
+        "run again with --no-resume"
+    )
+
+
 def result_settings(cfg: Config, flow_key: str) -> dict[str, Any]:
     """Everything that changes results, as stored in the manifest and compared on resume.
 
@@ -327,6 +350,9 @@ def plan_sweep(
             )
     elif have_results:
         changes = ["manifest.json missing: cannot tell which settings made the stored runs"]
+    note = _other_revision(manifest, have_results and resume)
+    if note:
+        notes.append(note)
 
     if changes and have_results and resume:
         ids_now = {t.key for t in tasks}

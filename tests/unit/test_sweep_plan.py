@@ -91,3 +91,22 @@ def test_move_aside_keeps_old_results(tmp_path):
     dest = move_aside(tmp_path / "out")
     assert dest is not None and len(read_runs(dest)) == 2
     assert read_runs(tmp_path / "out").empty
+
+
+def test_resume_notes_runs_of_another_revision(tmp_path, monkeypatch):
+    """Resuming runs made by another fibersweep revision gives a note (not an error)."""
+    import fibersweep.sweep.manifest as M
+
+    cfg = _cfg(tmp_path)
+    key = "K"
+    _store(cfg, key, n_ok=3)
+    manifest = M.read_manifest(cfg.run.output)
+    manifest["provenance"] = {"git": "a" * 40}
+    write_manifest(cfg.run.output, manifest)
+    monkeypatch.setattr(M, "revision", lambda: ("b" * 40, "checkout"))
+    plan = plan_sweep(cfg, key)
+    assert plan.done_ok == 3 and any("revision aaaaaaaaaaaa" in n for n in plan.notes)
+    monkeypatch.setattr(M, "revision", lambda: ("a" * 40, "checkout"))
+    assert not any("revision" in n for n in plan_sweep(cfg, key).notes)
+    monkeypatch.setattr(M, "revision", lambda: ("b" * 40, "checkout"))
+    assert not any("revision" in n for n in plan_sweep(cfg, key, resume=False).notes)
