@@ -121,11 +121,14 @@ def pooled_refit(
     observables: Sequence[str],
     weights: Mapping[str, float],
     max_evals: int,
+    fixed: Mapping[str, float] | None = None,
 ) -> Fit:
     """The effect refitted on all fibers within :func:`refit_bounds` of the halves' values.
 
     The halves' values are evaluated first (``known``), then ``max_evals`` Brent
     steps; the value is the score test's zero over every evaluated value.
+    ``fixed``: other effects held at these values (a pair's other member,
+    :func:`pairfit.pair_refits`); ``base`` must then be copies made with them on.
     """
     return fit_effect(
         cand,
@@ -137,6 +140,7 @@ def pooled_refit(
         weights,
         max_evals,
         bounds=refit_bounds(cand, values),
+        fixed=fixed,
         stage="refit",
         known=[float(v) for v in values],
         estimate=True,
