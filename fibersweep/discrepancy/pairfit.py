@@ -217,15 +217,23 @@ def pair_refits(
     the two halves' values evaluated on all fibers, then a search around them, the
     score test's zero) and its interval the score test over the fibers
     (:func:`fit.score_interval`). A member of a pair gets the same two functions,
-    with the other member held at its pair value (the mean of its folds' fits;
-    ``fixed``), so its loss profile is that of one value on all fibers. The
-    interval is conditional on the other member's value: it does not carry that
-    value's own uncertainty (measured: docs/discrepancy.md, *Coverage*).
+    with the other member held fixed (``fixed``), so its loss profile is that of
+    one value on all fibers: one more round of :func:`joint_fit`'s coordinate
+    descent, on all fibers. The members are refitted in the given order, each with
+    the other at its latest value: its refit when it has one, else the mean of its
+    folds' fits. Give the member the joint fit's last round did *not* refit first
+    (the added one, fitted in round 1 against the first member's single value):
+    on the stand-in of ``tests/unit/test_discrepancy_pair_interval.py`` the folds'
+    friction was 0.062 low (the first member's single value had absorbed part of
+    friction's slowing), and inlet_speed refitted with friction held there came out
+    0.0025 low (7 standard errors) and its interval covered 0.79-0.90 instead of
+    0.95. Each interval is conditional on the other member's value: it does not
+    carry that value's own uncertainty.
 
     Parameters
     ----------
     members : sequence of Candidate
-        The pair.
+        The pair, in the order they are refitted.
     fold_values : mapping name -> (value scoring fold 0, value scoring fold 1)
         The joint fits of the two folds.
     inp : SelectionInput
@@ -241,7 +249,6 @@ def pair_refits(
         :func:`fit.score_interval` of each refit.
     """
     held = {c.name: float(np.mean(fold_values[c.name])) for c in members}
-    values: dict[str, float] = {}
     intervals: dict[str, tuple[float, float, bool, bool]] = {}
     for cand in members:
         fixed = {n: v for n, v in held.items() if n != cand.name}
@@ -253,8 +260,8 @@ def pair_refits(
                            inp.weights, inp.refit_evals, fixed=fixed)  # fmt: skip
         if on_fit is not None:
             on_fit(fit)
-        values[cand.name] = float(fit.value)
+        held[cand.name] = float(fit.value)
         intervals[cand.name] = score_interval(fit)
         log.info("pair refit %s (with %s): %.4g %s", cand.name, label, fit.value,
                  intervals[cand.name])  # fmt: skip
-    return values, intervals
+    return held, intervals

@@ -227,7 +227,10 @@ def _refitted(
     its adequacy check; the refitted values are the pair's quoted values."""
     t = tried[i]
     if "intervals" not in t:
-        t["values"], t["intervals"] = pair_refits(t["members"], t["fold"], inp, maker, on_fit)
+        # the added member first: the joint fit's last round refitted the first one
+        added, first = t["members"][1], t["members"][0]
+        refit, t["intervals"] = pair_refits((added, first), t["fold"], inp, maker, on_fit)
+        t["values"] = {m: refit[m] for m in t["values"]}  # the set's member order
     return _set_of(tried, i, family, rng)
 
 
