@@ -49,7 +49,7 @@ from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.crossfit import fold_fits, pooled_refit
 from fibersweep.discrepancy.fit import score_interval
 from fibersweep.discrepancy.gap import assess_gap, value_matrices
-from fibersweep.discrepancy.library import get_candidates
+from fibersweep.discrepancy.library import LIBRARY, get_candidates
 from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit, pair_refits, pair_weights
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
@@ -69,10 +69,15 @@ BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
 #: inlet_speed 0.006 (either sign), start_noise 1.6.
 LIMITS = {"friction": 0.11, "pillar_hydro": 0.12, "inlet_speed": 0.006, "start_noise": 1.6}
 
-#: Hidden magnitudes, as multiples of LIMITS (start_noise: up to 3x, 4.8, inside its
-#: range [0, 5]; at 4x, 6.4, the truth would lie outside the fit's range).
+#: How a limit scales with the number of fibers N (docs/discrepancy.md, power analysis:
+#: the z-scores grow as sqrt(N) x magnitude^p, p about 1 for a shift and 2 for a
+#: spread): limit(N) = limit(100) x (100 / N)^(1 / (2 p)).
+EXPONENT = {"friction": 1.0, "pillar_hydro": 1.0, "inlet_speed": 1.0, "start_noise": 2.0}
+
+#: Hidden magnitudes, as multiples of the limit at the study's N (start_noise: up to
+#: 2x, 4.3 at N = 30, inside its range [0, 5]; at 4x the truth would lie outside it).
 RANGES = {"friction": (1.5, 4.0), "pillar_hydro": (1.5, 4.0), "inlet_speed": (1.5, 4.0),
-          "start_noise": (1.5, 3.0)}  # fmt: skip
+          "start_noise": (1.5, 2.0)}  # fmt: skip
 
 #: The single-effect kind rotates over three deterministic library effects.
 SINGLES = ("friction", "pillar_hydro", "inlet_speed")
@@ -83,16 +88,22 @@ KINDS = ("single", "pair", "random")
 SEED0 = {"single": 8001, "pair": 8101, "random": 8201}
 
 
-def draw(name: str, rng: np.random.Generator) -> float:
-    """A hidden value of ``name``: a uniform multiple of its limit (random sign if signed)."""
+def limit(name: str, n: int) -> float:
+    """The detection limit of ``name`` at n fibers, scaled from LIMITS (N = 100)."""
+    return LIMITS[name] * (100.0 / n) ** (1.0 / (2.0 * EXPONENT[name]))
+
+
+def draw(name: str, n: int, rng: np.random.Generator) -> float:
+    """A hidden value of ``name``: a uniform multiple of its limit at n fibers (a random
+    sign for a signed effect), capped at the effect's range."""
     lo, hi = RANGES[name]
-    v = LIMITS[name] * float(rng.uniform(lo, hi))
+    v = min(limit(name, n) * float(rng.uniform(lo, hi)), LIBRARY[name].hi)
     if name == "inlet_speed" and rng.random() < 0.5:
         v = -v
     return round(v, 5)
 
 
-def hidden(kind: str, index: int, seed: int) -> dict[str, float]:
+def hidden(kind: str, index: int, seed: int, n: int) -> dict[str, float]:
     """The hidden effect(s) of data set ``index`` of ``kind`` (values from the seed)."""
     rng = np.random.default_rng([seed, 31])
     if kind == "single":
@@ -101,19 +112,24 @@ def hidden(kind: str, index: int, seed: int) -> dict[str, float]:
         names = PAIR
     else:
         names = ("start_noise",)
-    return {n: draw(n, rng) for n in names}
+    return {e: draw(e, n, rng) for e in names}
 
 
 def _interval_row(name, truth, value, halves, iv) -> dict:
+    """``covered``: the truth in [lo, hi] as reported. ``covered_open``: an end the
+    refit's range cut ('≤' / '≥' in the report) taken as the effect's range end."""
     lo, hi, open_lo, open_hi = iv
+    c = LIBRARY[name]
+    lo_o, hi_o = (c.lo if open_lo else lo), (c.hi if open_hi else hi)
     return {"effect": name, "truth": truth, "value": value, "halves": halves,
             "interval95": [lo, hi], "open": [open_lo, open_hi],
-            "covered": bool(lo <= truth <= hi)}  # fmt: skip
+            "covered": bool(lo <= truth <= hi),
+            "covered_open": bool(lo_o <= truth <= hi_o)}  # fmt: skip
 
 
 def run_set(kind: str, index: int, seed: int, field, n: int, copies: int, workers: int) -> dict:
     """One data set: synthesise, then the workflow's fit-and-interval stages only."""
-    effects = hidden(kind, index, seed)
+    effects = hidden(kind, index, seed, n)
     t0 = time.perf_counter()
     table, _ = synthesize(field, FiberSettings(), BOX, n, effects, seed=seed, workers=workers,
                           progress=False)  # fmt: skip
