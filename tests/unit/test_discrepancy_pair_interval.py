@@ -111,3 +111,38 @@ def test_pair_intervals_cover_the_truth():
         v = np.array(vals[m])
         assert abs(np.mean(cover[m]) - 0.95) <= 0.07, (m, np.mean(cover[m]))
         assert abs(v.mean() - truth) <= 2 * v.std(ddof=1) / np.sqrt(len(v)) + 1e-4, m
+
+
+def test_report_table_shows_each_members_interval():
+    from fibersweep.discrepancy.report_text import _fits
+
+    st = {
+        "set": "inlet_speed + friction", "values": {"inlet_speed": 0.049, "friction": 0.51},
+        "halves": {"inlet_speed": [0.047, 0.052], "friction": [0.44, 0.46]},
+        "interval95": {"inlet_speed": [0.043, 0.056], "friction": [0.43, 0.6]},
+        "interval95_open": {"inlet_speed": [False, False], "friction": [False, True]},
+        "gains": {m: {"mean": 0.3, "lo95": 0.1, "hi95": 0.5} for m in TRUTH},
+        "p_holm": {"inlet_speed": 0.001, "friction": 0.002}, "explains": True,
+    }  # fmt: skip
+    sig = [{"effect": "inlet_speed", "probe": 0.15, "cosine": 0.9, "strength": 3.0}]
+    text = "\n".join(_fits({"signatures": sig, "heldout": [], "sets": [st]}))
+    assert "inlet_speed = 0.049 [0.043, 0.056] (0.047, 0.052)" in text
+    assert "friction = 0.51 [0.43, ≥ 0.6] (0.44, 0.46)" in text
+    # a set that was not refitted (not significant) has no interval
+    del st["interval95"], st["interval95_open"]
+    assert "inlet_speed = 0.049 (0.047, 0.052)" in "\n".join(
+        _fits({"signatures": sig, "heldout": [], "sets": [st]})
+    )
+
+
+def test_plan_counts_the_pair_refits():
+    # per pair: each member's refit is the other member alone (its value 0), the two
+    # folds' values and refit_evals Brent steps on all fibers, fit_copies copies each
+    from fibersweep.discrepancy.library import get_candidates
+    from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
+
+    plan = plan_budget(100, DiscrepancySettings(), get_candidates())
+    joint = 2 * plan.pair_rounds * (plan.fit_evals + 2) * plan.fit_copies * 50
+    held = 3 * plan.copies * 100
+    refits = 2 * (3 + plan.refit_evals) * plan.fit_copies * 100
+    assert plan.cost(100)["pairs"] == plan.pairs * (joint + held + refits)
