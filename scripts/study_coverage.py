@@ -214,8 +214,9 @@ def tabulate(out: Path) -> str:
     """Per kind (and per effect): k/n covered, Wilson 95 %, mean bias, RMSE."""
     rows = [json.loads(p.read_text()) for p in sorted(out.glob("*/seed*.json"))]
     lines = ["| kind | effect | data sets (no gap) | covered k/n | coverage [Wilson 95 %] "
-             "| mean bias | RMSE | mean width | open ends | mean time [s] |",
-             "|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+             "| open ends to the range | mean bias | RMSE | mean width | open ends "
+             "| mean time [s] |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for kind in KINDS:
         sets = [r for r in rows if r["kind"] == kind]
         if not sets:
@@ -237,11 +238,19 @@ def tabulate(out: Path) -> str:
                 wid = np.array([x["interval95"][1] - x["interval95"][0] for x in xs])
                 bias, rmse, width = (f"{err.mean():+.3g}", f"{np.sqrt((err**2).mean()):.3g}",
                                      f"{wid.mean():.3g}")  # fmt: skip
-            nogap = sum(not r["rows"] for r in sets)
             opened = sum(any(x["open"]) for x in xs)
             secs = np.mean([r["seconds"] for r in sets])
-            lines.append(f"| {kind} | {label} | {len(sets)} ({nogap}) | {k}/{len(xs)} | "
-                         f"{k / len(xs):.2f} [{lo:.2f}, {hi:.2f}] | {bias} | {rmse} | {width} | "
+            ko = sum(x.get("covered_open", x["covered"]) for x in xs)
+            lo_o, hi_o = wilson(ko, len(xs))
+            if label != "all":  # the data sets of this effect only
+                sets_e = [r for r in sets if label in r["truth"]]
+                nogap = sum(not r["rows"] for r in sets_e)
+                n_sets = len(sets_e)
+            else:
+                nogap, n_sets = sum(not r["rows"] for r in sets), len(sets)
+            lines.append(f"| {kind} | {label} | {n_sets} ({nogap}) | {k}/{len(xs)} | "
+                         f"{k / len(xs):.2f} [{lo:.2f}, {hi:.2f}] | {ko}/{len(xs)} "
+                         f"[{lo_o:.2f}, {hi_o:.2f}] | {bias} | {rmse} | {width} | "
                          f"{opened} | {secs:.0f} |")  # fmt: skip
         if kind == "pair":
             both = [r for r in sets if r["rows"]]
@@ -249,7 +258,7 @@ def tabulate(out: Path) -> str:
             if both:
                 lo, hi = wilson(kb, len(both))
                 lines.append(f"| pair | both members | {len(sets)} | {kb}/{len(both)} | "
-                             f"{kb / len(both):.2f} [{lo:.2f}, {hi:.2f}] | | | | | |")  # fmt: skip
+                             f"{kb / len(both):.2f} [{lo:.2f}, {hi:.2f}]" + " |" * 7)  # fmt: skip
     return "\n".join(lines)
 
 
