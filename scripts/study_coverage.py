@@ -215,8 +215,8 @@ def tabulate(out: Path) -> str:
     rows = [json.loads(p.read_text()) for p in sorted(out.glob("*/seed*.json"))]
     lines = ["| kind | effect | data sets (no gap) | covered k/n | coverage [Wilson 95 %] "
              "| open ends to the range | mean bias | RMSE | mean width | open ends "
-             "| mean time [s] |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+             "| value at an end | mean time [s] |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for kind in KINDS:
         sets = [r for r in rows if r["kind"] == kind]
         if not sets:
@@ -239,6 +239,8 @@ def tabulate(out: Path) -> str:
                 bias, rmse, width = (f"{err.mean():+.3g}", f"{np.sqrt((err**2).mean()):.3g}",
                                      f"{wid.mean():.3g}")  # fmt: skip
             opened = sum(any(x["open"]) for x in xs)
+            # the value on an end: the accepted stretch lay beside it (widened to hold it)
+            edge = sum(x["value"] in x["interval95"] for x in xs)
             secs = np.mean([r["seconds"] for r in sets])
             ko = sum(x.get("covered_open", x["covered"]) for x in xs)
             lo_o, hi_o = wilson(ko, len(xs))
@@ -251,14 +253,14 @@ def tabulate(out: Path) -> str:
             lines.append(f"| {kind} | {label} | {n_sets} ({nogap}) | {k}/{len(xs)} | "
                          f"{k / len(xs):.2f} [{lo:.2f}, {hi:.2f}] | {ko}/{len(xs)} "
                          f"[{lo_o:.2f}, {hi_o:.2f}] | {bias} | {rmse} | {width} | "
-                         f"{opened} | {secs:.0f} |")  # fmt: skip
+                         f"{opened} | {edge} | {secs:.0f} |")  # fmt: skip
         if kind == "pair":
             both = [r for r in sets if r["rows"]]
             kb = sum(all(x["covered"] for x in r["rows"]) for r in both)
             if both:
                 lo, hi = wilson(kb, len(both))
                 lines.append(f"| pair | both members | {len(sets)} | {kb}/{len(both)} | "
-                             f"{kb / len(both):.2f} [{lo:.2f}, {hi:.2f}]" + " |" * 7)  # fmt: skip
+                             f"{kb / len(both):.2f} [{lo:.2f}, {hi:.2f}]" + " |" * 8)  # fmt: skip
     return "\n".join(lines)
 
 
