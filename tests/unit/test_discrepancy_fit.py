@@ -330,7 +330,8 @@ def test_pooled_refit_brackets_a_random_effects_root():
         for _ in range(60):
             x = rng.uniform(0.0, 0.5, 60)
             model = _Spread(x, rng)
-            observed = pd.DataFrame({"delta": x + 0.02 * np.sqrt(1 + 2.5**2) * rng.standard_normal(60)})
+            d = x + 0.02 * np.sqrt(1 + 2.5**2) * rng.standard_normal(60)
+            observed = pd.DataFrame({"delta": d})
             base = [model.copy(k) for k in range(8)]
             fit = fit_effect(cand, model, observed, base, np.arange(60), ["delta"], {"delta": 1.0},
                              3, bounds=refit_bounds(cand, halves), known=halves, estimate=True,
