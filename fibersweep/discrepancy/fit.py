@@ -446,7 +446,7 @@ def fit_effect(
         Report :func:`slope_estimate` (the zero of the score test's T, smoothed
         over every evaluated value) instead of the best evaluated value: the
         value a report quotes (the pooled refit). For a random effect, the value
-        where the data are as spread as its copies (:func:`dispersion_root`);
+        where the data are as spread as its copies (:func:`dispersion_root`).
         With ``bracket_root`` (the pooled refit, :func:`crossfit.pooled_refit`)
         its search keeps one of the ``max_evals`` evaluations (when it has more
         than one): when Brent stops with the data still more spread than the

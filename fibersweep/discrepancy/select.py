@@ -227,9 +227,12 @@ def _refitted(
     its adequacy check; the refitted values are the pair's quoted values."""
     t = tried[i]
     if "intervals" not in t:
-        # the added member first: the joint fit's last round refitted the first one
-        added, first = t["members"][1], t["members"][0]
-        refit, t["intervals"] = pair_refits((added, first), t["fold"], inp, maker, on_fit)
+        # first the member the joint fit's last round did not refit (joint_fit's round
+        # r fits the added member when r is even): the added one for 2 rounds
+        first, added = t["members"]
+        last = added if (inp.rounds - 1) % 2 == 0 else first
+        order = (first, added) if last is added else (added, first)
+        refit, t["intervals"] = pair_refits(order, t["fold"], inp, maker, on_fit)
         t["values"] = {m: refit[m] for m in t["values"]}  # the set's member order
     return _set_of(tried, i, family, rng)
 
