@@ -245,7 +245,8 @@ def run_scenario(name: str, field, n: int, seed: int, workers: int, kw: dict) ->
     row["sets"] = [
         {"set": st.name, "values": st.values, "p_holm": st.p_holm,
          "explains": st.explains(res.settings.alpha),
-         "left": (st.final or st.residual).flagged}
+         "left": (st.final or st.residual).flagged,
+         "intervals": st.intervals}
         for st in res.sets
     ]  # fmt: skip
     named = res.verdict.alternatives[0] if res.verdict.alternatives else {}

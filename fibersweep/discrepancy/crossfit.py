@@ -121,11 +121,17 @@ def pooled_refit(
     observables: Sequence[str],
     weights: Mapping[str, float],
     max_evals: int,
+    fixed: Mapping[str, float] | None = None,
 ) -> Fit:
     """The effect refitted on all fibers within :func:`refit_bounds` of the halves' values.
 
     The halves' values are evaluated first (``known``), then ``max_evals`` Brent
-    steps; the value is the score test's zero over every evaluated value.
+    steps; the value is the score test's zero over every evaluated value. A random
+    effect's value, its dispersion root, is bracketed: one of the steps is kept for
+    the range's end when the data are still more spread than the copies at the
+    highest value Brent evaluated (:func:`fit.fit_effect`, ``bracket_root``).
+    ``fixed``: other effects held at these values (a pair's other member,
+    :func:`pairfit.pair_refits`); ``base`` must then be copies made with them on.
     """
     return fit_effect(
         cand,
@@ -137,9 +143,11 @@ def pooled_refit(
         weights,
         max_evals,
         bounds=refit_bounds(cand, values),
+        fixed=fixed,
         stage="refit",
         known=[float(v) for v in values],
         estimate=True,
+        bracket_root=True,
     )
 
 

@@ -124,7 +124,10 @@ class SetHeldOut:
     Attributes
     ----------
     values : dict name -> float
-        Pooled value of each member (mean of the two folds' fits).
+        Quoted value of each member: when the set is significant, each member
+        refitted on all fibers with the other at the mean of its folds' fits
+        (:func:`pairfit.pair_refits`, as a single effect's pooled refit); else the
+        mean of the two folds' fits.
     fold_values : dict name -> (float, float)
         The value used to score each fold (fitted on the other one).
     gains : dict name -> (mean, lo, hi)
@@ -139,6 +142,9 @@ class SetHeldOut:
         Cross-fitted gap with the set on.
     final : GapResult or None
         Gap on all fibers with the set at ``values`` (None when not checked).
+    intervals : dict name -> (lo, hi, open_lo, open_hi)
+        95 % score-test interval of each member's refit (:func:`fit.score_interval`;
+        empty when the set was not refitted).
     """
 
     values: dict[str, float]
@@ -149,6 +155,7 @@ class SetHeldOut:
     improvement: tuple[float, float, float]
     residual: GapResult
     final: GapResult | None = None
+    intervals: dict[str, tuple[float, float, bool, bool]] = field(default_factory=dict)
 
     @property
     def name(self) -> str:

@@ -7,7 +7,11 @@ its guarantees are described there):
   leaves with a gap, where a second effect often hides;
 * :func:`rank_partners`: partners ranked by their signature against the gap the
   first effect leaves, not against the whole gap, which it dominates;
-* :func:`joint_fit`: both values fitted on the training fold by coordinate descent.
+* :func:`joint_fit`: both values fitted on the training fold by coordinate descent;
+* :func:`pair_refits`: each member of a significant pair refitted on all fibers with
+  the other held at its pair value, and its 95 % interval, the same refit and score
+  test a single effect's quoted value gets (:func:`crossfit.pooled_refit`,
+  :func:`fit.score_interval`).
 """
 
 from __future__ import annotations
@@ -20,11 +24,12 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.fit import Fit, Signature, fit_effect
+from fibersweep.discrepancy.crossfit import pooled_refit
+from fibersweep.discrepancy.fit import Fit, Signature, fit_effect, score_interval
 from fibersweep.discrepancy.gap import GapResult, feature_vector
 from fibersweep.discrepancy.library import Candidate
 
-__all__ = ["SelectionInput", "joint_fit", "pair_weights", "rank_partners"]
+__all__ = ["SelectionInput", "joint_fit", "pair_refits", "pair_weights", "rank_partners"]
 
 log = logging.getLogger(__name__)
 
@@ -112,6 +117,9 @@ class SelectionInput:
     rounds : int
         Coordinate-descent rounds of the joint fit (1: the added effect only,
         the first held at its single value; 2: then the first refitted too).
+    refit_evals : int
+        Brent steps of each member's pooled refit (:func:`pair_refits`; the
+        workflow passes :attr:`settings.Plan.refit_evals`).
     """
 
     observed: pd.DataFrame
@@ -127,6 +135,7 @@ class SelectionInput:
     alpha: float
     n_perm: int
     rounds: int = 2
+    refit_evals: int = 3
 
 
 def joint_fit(
@@ -193,3 +202,66 @@ def joint_fit(
             on_fit(fit)
         cur[cand.name] = float(fit.value)
     return cur
+
+
+def pair_refits(
+    members: Sequence[Candidate],
+    fold_values: Mapping[str, Sequence[float]],
+    inp: SelectionInput,
+    maker: CopyMaker,
+    on_fit: Callable[[Fit], None] | None = None,
+) -> tuple[dict[str, float], dict[str, tuple[float, float, bool, bool]]]:
+    """Each member of a pair refitted on all fibers, with its 95 % interval.
+
+    A single effect's quoted value is its pooled refit (:func:`crossfit.pooled_refit`:
+    the two halves' values evaluated on all fibers, then a search around them, the
+    score test's zero) and its interval the score test over the fibers
+    (:func:`fit.score_interval`). A member of a pair gets the same two functions,
+    with the other member held fixed (``fixed``), so its loss profile is that of
+    one value on all fibers: one more round of :func:`joint_fit`'s coordinate
+    descent, on all fibers. The members are refitted in the given order, each with
+    the other at its latest value: its refit when it has one, else the mean of its
+    folds' fits. Give the member the joint fit's last round did *not* refit first
+    (the added one, fitted in round 1 against the first member's single value):
+    on the stand-in of ``tests/unit/test_discrepancy_pair_interval.py`` the folds'
+    friction was 0.062 low (the first member's single value had absorbed part of
+    friction's slowing), and inlet_speed refitted with friction held there came out
+    0.0025 low (7 standard errors) and its interval covered 0.79-0.90 instead of
+    0.95. Each interval is conditional on the other member's value: it does not
+    carry that value's own uncertainty.
+
+    Parameters
+    ----------
+    members : sequence of Candidate
+        The pair, in the order they are refitted.
+    fold_values : mapping name -> (value scoring fold 0, value scoring fold 1)
+        The joint fits of the two folds.
+    inp : SelectionInput
+        Its ``weights`` (the pair's loss), ``fit_copies`` and ``refit_evals`` are used.
+    on_fit : callable, optional
+        Called with every refit (the report's fit table).
+
+    Returns
+    -------
+    values : dict name -> float
+        Each member's refitted value.
+    intervals : dict name -> (lo, hi, open_lo, open_hi)
+        :func:`fit.score_interval` of each refit.
+    """
+    held = {c.name: float(np.mean(fold_values[c.name])) for c in members}
+    intervals: dict[str, tuple[float, float, bool, bool]] = {}
+    for cand in members:
+        fixed = {n: v for n, v in held.items() if n != cand.name}
+        label = ", ".join(f"{n}={v:.4g}" for n, v in fixed.items())
+        # the value 0 of this member: the other member alone, on all fibers
+        base = maker.copies(range(inp.fit_copies), fixed, desc=f"pair-refit {label}")
+        fit = pooled_refit(cand, maker, inp.observed, base,
+                           [float(v) for v in fold_values[cand.name]], inp.observables,
+                           inp.weights, inp.refit_evals, fixed=fixed)  # fmt: skip
+        if on_fit is not None:
+            on_fit(fit)
+        held[cand.name] = float(fit.value)
+        intervals[cand.name] = score_interval(fit)
+        log.info("pair refit %s (with %s): %.4g %s", cand.name, label, fit.value,
+                 intervals[cand.name])  # fmt: skip
+    return held, intervals

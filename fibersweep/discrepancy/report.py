@@ -303,6 +303,9 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
                 "set": st.name,
                 "values": st.values,
                 "halves": {k: list(v) for k, v in st.fold_values.items()},
+                # each member's refit on all fibers (the other at its pair value)
+                "interval95": {k: list(v[:2]) for k, v in st.intervals.items()} or None,
+                "interval95_open": {k: list(v[2:]) for k, v in st.intervals.items()} or None,
                 "gains": {
                     k: dict(zip(("mean", "lo95", "hi95"), g, strict=True))
                     for k, g in st.gains.items()

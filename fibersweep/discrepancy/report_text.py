@@ -178,11 +178,7 @@ def _fits(s: dict[str, Any]) -> list[str]:
         spread = abs(a - b) if a is not None and b is not None else None
         ci = h.get("interval95")
         op = h.get("interval95_open") or [False, False]
-        final = _f(h["value"]) + (
-            f" [{'≤ ' if op[0] else ''}{_f(ci[0])}, {'≥ ' if op[1] else ''}{_f(ci[1])}]"
-            if ci
-            else ""
-        )
+        final = _f(h["value"]) + _bracket(ci, op)
         lines.append(
             f"| {h['effect']} | {_f(a)} | {_f(b)} | {_f(spread, '.2g')} | {final} "
             f"| {_ci(h['improvement'])} | {_f(h['p'], '.2g')} | {_f(h['p_holm'], '.2g')} "
@@ -195,15 +191,19 @@ def _fits(s: dict[str, Any]) -> list[str]:
             "### Two effects together (forward selection)",
             "",
             "Contribution of a member: held-out improvement of the set over the set without "
-            "it; p-values Holm-adjusted over every member of every set.",
+            "it; p-values Holm-adjusted over every member of every set. A significant set's "
+            "values are each member refitted on all fibers with the other at its pair value, "
+            "with its 95 % interval (the score test of a single effect's final value; it "
+            "does not carry the other member's uncertainty).",
             "",
-            "| set | values (half A, half B) | contributions [copy-spread units] | p (Holm) "
-            "| explains |",
+            "| set | values [95 % CI] (half A, half B) | contributions [copy-spread units] "
+            "| p (Holm) | explains |",
             "|---|---|---|---|---|",
         ]
         for st in s["sets"]:
             vals = "; ".join(
-                f"{k} = {_f(v)} ({_f(st['halves'][k][0])}, {_f(st['halves'][k][1])})"
+                f"{k} = {_f(v)}{_interval_text(st, k)} "
+                f"({_f(st['halves'][k][0])}, {_f(st['halves'][k][1])})"
                 for k, v in st["values"].items()
             )
             gains = "; ".join(f"{k} {_ci(g)}" for k, g in st["gains"].items())
@@ -212,6 +212,20 @@ def _fits(s: dict[str, Any]) -> list[str]:
                 f"| {st['set']} | {vals} | {gains} | {ps} | {'yes' if st['explains'] else 'no'} |"
             )
     return lines
+
+
+def _bracket(ci: list[float] | None, op: list[bool] | None) -> str:
+    """' [lo, hi]' of a 95 % interval, '≤' / '≥' at an end the refit's range cut."""
+    if not ci:
+        return ""
+    op = op or [False, False]
+    return f" [{'≤ ' if op[0] else ''}{_f(ci[0])}, {'≥ ' if op[1] else ''}{_f(ci[1])}]"
+
+
+def _interval_text(st: dict[str, Any], name: str) -> str:
+    """The bracketed interval of a set member's value ('' when it was not refitted)."""
+    ci = (st.get("interval95") or {}).get(name)
+    return _bracket(ci, (st.get("interval95_open") or {}).get(name))
 
 
 def _before_after(s: dict[str, Any]) -> list[str]:

@@ -54,7 +54,7 @@ from fibersweep.discrepancy.gap import (
     weighted_loss,
 )
 from fibersweep.discrepancy.library import Candidate
-from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit
+from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit, pair_refits
 from fibersweep.discrepancy.stats import boot_p, bootstrap_mean_ci, holm
 
 __all__ = ["crossfit_copies", "forward_pairs"]
@@ -169,6 +169,7 @@ def forward_pairs(
         gains = {m: paired_improvement(without[m], scores) for m in names}
         tried.append(
             {
+                "members": (first, cand),
                 "values": {m: float(np.mean([pf[m] for pf in per_fold])) for m in names},
                 "fold": {m: (per_fold[0][m], per_fold[1][m]) for m in names},
                 "residual": assess_gap(v_after, rng, alpha=inp.alpha, n_perm=inp.n_perm),
@@ -181,6 +182,7 @@ def forward_pairs(
         )
         st = _set_of(tried, len(tried) - 1, family, rng)
         if st.significant(inp.alpha):
+            st = _refitted(tried, len(tried) - 1, family, rng, inp, maker, on_fit)
             final = maker.copies(range(inp.copies), st.values, desc=f"pair-final {st.name}")
             v_final = value_matrices(obs, final, inp.observables)
             gap = assess_gap(v_final, rng, alpha=inp.alpha, n_perm=inp.n_perm)
@@ -194,6 +196,7 @@ def forward_pairs(
         out_copies[st.name] = t["copies"]
         if i not in finals and st.significant(inp.alpha):
             # significant only under the final family (a later pair's p moved it up)
+            st = _refitted(tried, i, family, rng, inp, maker, on_fit)
             final = maker.copies(range(inp.copies), st.values, desc=f"pair-final {st.name}")
             v_final = value_matrices(obs, final, inp.observables)
             finals[i] = (assess_gap(v_final, rng, alpha=inp.alpha, n_perm=inp.n_perm), final)
@@ -208,6 +211,30 @@ def forward_pairs(
         )
         sets.append(st)
     return sets, out_copies
+
+
+def _refitted(
+    tried: list[dict],
+    i: int,
+    family: int,
+    rng: np.random.Generator,
+    inp: SelectionInput,
+    maker: CopyMaker,
+    on_fit: Callable[[Fit], None] | None,
+) -> SetHeldOut:
+    """Pair ``i`` with its members refitted on all fibers and their intervals
+    (:func:`pairfit.pair_refits`), as a significant single effect is refitted before
+    its adequacy check; the refitted values are the pair's quoted values."""
+    t = tried[i]
+    if "intervals" not in t:
+        # first the member the joint fit's last round did not refit (joint_fit's round
+        # r fits the added member when r is even): the added one for 2 rounds
+        first, added = t["members"]
+        last = added if (inp.rounds - 1) % 2 == 0 else first
+        order = (first, added) if last is added else (added, first)
+        refit, t["intervals"] = pair_refits(order, t["fold"], inp, maker, on_fit)
+        t["values"] = {m: refit[m] for m in t["values"]}  # the set's member order
+    return _set_of(tried, i, family, rng)
 
 
 def _set_of(tried: list[dict], i: int, family: int, rng: np.random.Generator) -> SetHeldOut:
@@ -225,4 +252,5 @@ def _set_of(tried: list[dict], i: int, family: int, rng: np.random.Generator) ->
         p_holm={m: float(adj[at + j]) for j, m in enumerate(names)},
         improvement=t["improvement_ci"],
         residual=t["residual"],
+        intervals=dict(t.get("intervals", {})),
     )

@@ -210,6 +210,9 @@ class Plan:
             * (
                 2 * self.pair_rounds * (self.fit_evals + 2) * self.fit_copies * half
                 + 3 * self.copies * n  # + the partner alone when it had no single fit
+                # each member refitted on all fibers (pairfit.pair_refits): the other
+                # member alone (its value 0), both folds' values, the Brent steps
+                + 2 * (1 + 2 + self.refit_evals) * self.fit_copies * n
             ),
             # the extra copies of a random lead candidate's fits, held-out scores and refit
             "random": min(self.random, 1)

@@ -434,6 +434,7 @@ def pairs(st: State) -> State:
         alpha=s.alpha,
         n_perm=s.n_perm,
         rounds=plan.pair_rounds,
+        refit_evals=plan.refit_evals,
     )
     fits: list[Fit] = []
     sets, set_copies = forward_pairs(first, others, inp, run.maker, run.rng, fits.append)

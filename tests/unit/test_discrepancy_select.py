@@ -287,6 +287,11 @@ def test_forward_step_stops_at_the_first_pair_that_explains_the_gap():
                             inp, model, rng)  # fmt: skip
     assert [st.name for st in sets] == ["inlet_speed + friction"]
     assert sets[0].explains(0.05)
+    # the explaining pair was refitted on all fibers: each member's quoted value with
+    # its score-test interval, which holds it
+    assert set(sets[0].intervals) == {"inlet_speed", "friction"}
+    for m, (lo, hi, _, _) in sets[0].intervals.items():
+        assert lo <= sets[0].values[m] <= hi
     assert not any("pillar_scale" in e for e in asked)
     p = [sets[0].p_values[m] for m in ("inlet_speed", "friction")]
     want = holm(np.array(p + [1.0, 1.0]))[:2]
