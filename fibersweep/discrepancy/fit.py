@@ -496,11 +496,15 @@ def fit_effect(
         where the data are as spread as its copies (:func:`dispersion_root`).
         With ``bracket_root`` (the pooled refit, :func:`crossfit.pooled_refit`)
         its search keeps one of the ``max_evals`` evaluations (when it has more
-        than one): when Brent stops with the data still more spread than the
-        copies at its highest value, the range's end is evaluated, so that the
-        root is bracketed. The halves' fits do not: it changed which random
-        effects the held-out spread test names (1 of 100 shift-only stand-in
-        data sets named start_noise, against 0 of 400 without).
+        than one): when Brent stops short of the root (:func:`_unbracketed_end`:
+        the score test's zero at the highest or lowest evaluated value, or for a
+        random effect the data still more spread than the copies at its highest
+        value), the range's end is evaluated, so that the root is bracketed.
+        Otherwise Brent takes the kept step: its path depends only on the
+        (cached) losses, so it is the fit without the bracket. The halves' fits
+        do not bracket: it changed which random effects the held-out spread test
+        names (1 of 100 shift-only stand-in data sets named start_noise, against
+        0 of 400 without).
         ``loss`` stays the loss at the best evaluated value. The halves' fits keep
         the best evaluated value, a point their copies were simulated at.
     """
