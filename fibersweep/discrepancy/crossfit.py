@@ -126,10 +126,12 @@ def pooled_refit(
     """The effect refitted on all fibers within :func:`refit_bounds` of the halves' values.
 
     The halves' values are evaluated first (``known``), then ``max_evals`` Brent
-    steps; the value is the score test's zero over every evaluated value. A random
-    effect's value, its dispersion root, is bracketed: one of the steps is kept for
-    the range's end when the data are still more spread than the copies at the
-    highest value Brent evaluated (:func:`fit.fit_effect`, ``bracket_root``).
+    steps; the value is the score test's zero over every evaluated value. That
+    zero is bracketed: one of the steps is kept for the range's end when the zero
+    lies at the highest (lowest) value evaluated, the loss still falling toward
+    the end, or for a random effect (its value the dispersion root) when the data
+    are still more spread than the copies at the highest value evaluated; when it
+    is not needed Brent takes the step (:func:`fit.fit_effect`, ``bracket_root``).
     ``fixed``: other effects held at these values (a pair's other member,
     :func:`pairfit.pair_refits`); ``base`` must then be copies made with them on.
     """

@@ -398,6 +398,53 @@ def rank_effects(
     return sorted(out, key=lambda s: -s.cosine)
 
 
+def _unbracketed_end(fit: Fit, lo: float, hi: float, tol: float) -> float | None:
+    """The search range's end to evaluate so that the estimate's root is bracketed.
+
+    Brent searches the loss for its best evaluated value, and on a flat, noisy loss it
+    often stops short of the root the pooled refit quotes, which then sits at the
+    highest (lowest) evaluated value with the interval open there. A random effect
+    (``fit.dispersion``): its dispersion root, when the data are still more spread
+    than the copies at the highest value evaluated; on the simulator
+    (``scripts/study_coverage.py``, N = 20) a half returned 3.09 = 0.618 x 5, its
+    highest golden-section point, and the quoted value sat at the top of its interval,
+    below the truth. A shift effect: :func:`slope_estimate`, when it lies at the
+    highest (lowest) evaluated value, the score test's T still negative (positive)
+    there, i.e. the loss still falling toward the range's end; on the simulator 28 of
+    32 friction intervals were open at the top and every miss had a truth of
+    0.89-0.97. One more evaluation at that end brackets the root (or shows it lies
+    beyond: the interval's end is then open).
+
+    Parameters
+    ----------
+    fit : Fit
+        The fit so far (best evaluated value, profile, dispersion scores).
+    lo, hi : float
+        The search range, in the units of the value.
+    tol : float
+        Values closer than this to an end count as that end (units of the value).
+
+    Returns
+    -------
+    float or None
+        ``hi`` or ``lo``, or None when the root is bracketed (or the fit kept 0).
+    """
+    if fit.dispersion:
+        top, D = max(fit.dispersion, key=lambda p: p[0])
+        return hi if top < hi - tol and float(np.nanmean(D)) > 1.0 else None
+    if fit.value == 0.0 or len(fit.profile) < 3:
+        return None
+    x, _ = _merged(fit)
+    if len(x) < 3:
+        return None
+    est = slope_estimate(fit)
+    if est >= x[-1] - tol and x[-1] < hi - tol:
+        return hi
+    if est <= x[0] + tol and x[0] > lo + tol:
+        return lo
+    return None
+
+
 def fit_effect(
     cand: Candidate,
     maker: CopyMaker,
@@ -449,11 +496,15 @@ def fit_effect(
         where the data are as spread as its copies (:func:`dispersion_root`).
         With ``bracket_root`` (the pooled refit, :func:`crossfit.pooled_refit`)
         its search keeps one of the ``max_evals`` evaluations (when it has more
-        than one): when Brent stops with the data still more spread than the
-        copies at its highest value, the range's end is evaluated, so that the
-        root is bracketed. The halves' fits do not: it changed which random
-        effects the held-out spread test names (1 of 100 shift-only stand-in
-        data sets named start_noise, against 0 of 400 without).
+        than one): when Brent stops short of the root (:func:`_unbracketed_end`:
+        the score test's zero at the highest or lowest evaluated value, or for a
+        random effect the data still more spread than the copies at its highest
+        value), the range's end is evaluated, so that the root is bracketed.
+        Otherwise Brent takes the kept step: its path depends only on the
+        (cached) losses, so it is the fit without the bracket. The halves' fits
+        do not bracket: it changed which random effects the held-out spread test
+        names (1 of 100 shift-only stand-in data sets named start_noise, against
+        0 of 400 without).
         ``loss`` stays the loss at the best evaluated value. The halves' fits keep
         the best evaluated value, a point their copies were simulated at.
     """
@@ -505,33 +556,41 @@ def fit_effect(
         if loss(0.2 * (cand.lo if side > 0 else cand.hi)) < seen[0.0]:
             side = -side
         lo, hi = (0.0, cand.hi) if side > 0 else (cand.lo, 0.0)
-    # a random effect's estimate keeps one of its evaluations to bracket its root (below)
-    bracket = int(bracket_root and estimate and bool(disp) and max_evals > 1)
-    if max_evals > 0:  # 0: only the known values (a fixed design, crossfit.shared_values)
+    # the pooled refit's estimate keeps one of its evaluations to bracket its root (below)
+    bracket = int(bracket_root and estimate and max_evals > 1)
+
+    def search(steps: int) -> None:
         minimize_scalar(
             loss,
             bounds=(lo, hi),
             method="bounded",
-            options={"maxiter": max_evals - bracket, "xatol": 1e-3 * (cand.hi - cand.lo)},
+            options={"maxiter": steps, "xatol": 1e-3 * (cand.hi - cand.lo)},
         )
-        top = max(disp) if bracket and len(disp) >= 2 else hi
-        if top < hi - 1e-9 * (cand.hi - cand.lo) and float(np.nanmean(disp[top])) > 1.0:
-            # A random effect's value is the dispersion root, read between evaluated
-            # values only. Brent searched the score loss, which is flat and noisy for a
-            # random effect, and often stopped below the root: on the simulator
-            # (scripts/study_coverage.py, N = 20) a half returned 3.09 = 0.618 x 5,
-            # its highest golden-section point, with the data still more spread than
-            # its copies there, and the quoted value sat at the top of its interval,
-            # below the truth. One more evaluation at the search range's end brackets
-            # the root (or shows it lies beyond: the interval's end is then open).
-            loss(hi)
-    best = min(seen, key=lambda p: (seen[p], abs(p)))
-    evals = tuple(sorted(seen.items()))
-    log.info("fit %s: %.4g (loss %.4g vs baseline %.4g)", cand.name, best, seen[best], seen[0.0])
-    profile = tuple((float(u), per[u]) for u in sorted(per))
-    fit = Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]), evals, profile)
-    if len(disp) >= 2:  # its interval is the dispersion test's (score_interval)
-        fit = replace(fit, dispersion=tuple((float(u), disp[u]) for u in sorted(disp)))
+
+    if max_evals > 0:  # 0: only the known values (a fixed design, crossfit.shared_values)
+        search(max_evals - bracket)
+
+    def result() -> Fit:
+        best = min(seen, key=lambda p: (seen[p], abs(p)))
+        log.info("fit %s: %.4g (loss %.4g vs baseline %.4g)",
+                 cand.name, best, seen[best], seen[0.0])  # fmt: skip
+        profile = tuple((float(u), per[u]) for u in sorted(per))
+        fit = Fit(cand.name, float(best), float(seen[best]), float(seen[0.0]),
+                  tuple(sorted(seen.items())), profile)  # fmt: skip
+        if len(disp) >= 2:  # its interval is the dispersion test's (score_interval)
+            fit = replace(fit, dispersion=tuple((float(u), disp[u]) for u in sorted(disp)))
+        return fit
+
+    fit = result()
+    if bracket and (end := _unbracketed_end(fit, lo, hi, 1e-9 * (cand.hi - cand.lo))) is not None:
+        loss(end)  # the kept evaluation (no simulation when the end was evaluated)
+        fit = result()
+    elif bracket:
+        # not needed: Brent takes the kept step. Its path depends only on the losses,
+        # which are cached, so it repeats its steps without simulating and adds one.
+        search(max_evals)
+        fit = result()
+    best = fit.value
     if estimate and fit.dispersion:
         # a random effect: the value at which the data are as spread as the copies
         fit = replace(fit, value=dispersion_root(fit))
