@@ -193,8 +193,11 @@ def test_score_interval_always_holds_the_fitted_value():
 def test_score_interval_accepts_a_flat_stretch_where_no_fiber_changes():
     # per-fiber loss constant on [0.2, 0.4] (no class flips there), rising outside: the
     # flat stretch is inside the interval (a zero slope with zero spread rejects nothing),
-    # the steep sides are outside. T is read at the midpoints of the evaluated values
-    # (0.15, 0.25, ..., 0.55), so each end lies between the midpoints around 0.2 / 0.4.
+    # the steep sides are outside. Each fiber's slope is read at the midpoints of the
+    # evaluated values (0.15, 0.25, ..., 0.55) and interpolated between them; on
+    # [0.15, 0.25] every fiber's slope shrinks in the same proportion, so T keeps its
+    # (rejecting) value up to the flat midpoint 0.25: each end lies between the midpoints
+    # around 0.2 / 0.4, up to one step of the grid T is read on (0.6 / 399).
     from fibersweep.discrepancy.fit import Fit, score_interval
 
     rng = np.random.default_rng(8)
@@ -203,7 +206,8 @@ def test_score_interval_accepts_a_flat_stretch_where_no_fiber_changes():
     w = rng.uniform(0.5, 1.5, n)
     prof = tuple((float(v), w * (max(0.2 - v, 0.0, v - 0.4) * 10) ** 2) for v in grid)
     lo, hi, open_lo, open_hi = score_interval(Fit("friction", 0.3, 0.0, 0.0, (), prof))
-    assert 0.15 < lo <= 0.25 and 0.35 <= hi < 0.45 and not open_lo and not open_hi
+    step = 0.6 / 399
+    assert 0.15 < lo <= 0.25 + step and 0.35 - step <= hi < 0.45 and not open_lo and not open_hi
 
 
 def test_slope_estimate_of_a_quadratic_profile_is_its_minimiser():
@@ -360,14 +364,17 @@ class _Friction:
         return pd.DataFrame({"delta": self.x + 0.1 * v + 0.02 * self.z[k]})
 
 
-def _refit_coverage(truth: float, halves: list[float], bracket: bool) -> tuple[float, int, list]:
-    """Pooled refits of 60 stand-in data sets (40 fibers, 2 copies, 3 Brent steps, seed
-    71): the mean quoted value, how many 95 % score intervals hold ``truth``, the fits."""
+def _refit_coverage(
+    truth: float, halves: list[float], bracket: bool, close: bool = False, seed: int = 71
+) -> tuple[float, int, list]:
+    """Pooled refits of 60 stand-in data sets (40 fibers, 2 copies, 3 Brent steps): the
+    mean quoted value, how many 95 % score intervals hold ``truth``, the fits. ``close``:
+    the steps after the search that read the interval's ends (off: the bracket alone)."""
     from fibersweep.discrepancy.crossfit import refit_bounds
     from fibersweep.discrepancy.fit import score_interval
 
     cand = LIBRARY["friction"]
-    rng = np.random.default_rng(71)
+    rng = np.random.default_rng(seed)
     vals, hits, fits = [], 0, []
     for _ in range(60):
         x = rng.uniform(0.0, 0.5, 40)
@@ -376,7 +383,7 @@ def _refit_coverage(truth: float, halves: list[float], bracket: bool) -> tuple[f
         base = [model.copy(k) for k in range(2)]
         fit = fit_effect(cand, model, observed, base, np.arange(40), ["delta"], {"delta": 1.0},
                          3, bounds=refit_bounds(cand, halves), known=halves, estimate=True,
-                         bracket_root=bracket)  # fmt: skip
+                         bracket_root=bracket, close_interval=close)  # fmt: skip
         lo, hi, _, _ = score_interval(fit)
         vals.append(fit.value)
         fits.append(fit)
