@@ -268,7 +268,8 @@ def _accepted(
     fit: Fit, level: float, grid: int, centre: float | None = None
 ) -> tuple[float, float, bool, bool]:
     """The stretch where |T| stays below the t quantile nearest ``centre`` (default: the
-    fitted value); ``(centre, centre, False, False)`` when every value is rejected."""
+    fitted value); ``(centre, centre, open_lo, open_hi)`` when every value is rejected,
+    open at an end the centre sits on while the loss still falls toward it."""
     centre = fit.value if centre is None else centre
     x, L = _merged(fit)
     if len(x) < 2:
@@ -279,7 +280,11 @@ def _accepted(
     Tv = _fiber_t(x, L, v)
     inside = np.abs(Tv) <= crit
     if not inside.any():
-        return (centre, centre, False, False)
+        # every value rejected: at an end where the loss still falls outward the truth
+        # lies beyond the evaluated values (open there), otherwise the test is sharp
+        step = (x[-1] - x[0]) / (grid - 1)
+        return (centre, centre, bool(Tv[0] > 0 and centre <= x[0] + step),
+                bool(Tv[-1] < 0 and centre >= x[-1] - step))  # fmt: skip
     # the accepted stretch nearest the centre (with a noisy loss, the slope's zero
     # crossing need not be at the best evaluated value)
     ok = np.flatnonzero(inside)
