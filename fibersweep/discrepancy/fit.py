@@ -555,21 +555,22 @@ def fit_effect(
         do not bracket: it changed which random effects the held-out spread test
         names (1 of 100 shift-only stand-in data sets named start_noise, against
         0 of 400 without).
+        ``loss`` stays the loss at the best evaluated value. The halves' fits keep
+        the best evaluated value, a point their copies were simulated at.
     close_interval : bool
         With ``bracket_root``: after the search, when the quoted value's interval
         (:func:`score_interval`) is open at an evaluated value inside the effect's
         range, away from 0, one evaluation beyond ``max_evals`` goes to that range
         end (:func:`_open_end`); then the interval's closed ends that no evaluated
-        value is near are evaluated (:func:`_unread_ends`, at most two more), and
-        the value is read again over all of them.
-        ``loss`` stays the loss at the best evaluated value. The halves' fits keep
-        the best evaluated value, a point their copies were simulated at.
+        value is near are evaluated (:func:`_unread_ends`, at most two more: at
+        most ``settings.INTERVAL_EVALS`` in all), and the value is read again over
+        all of them.
     """
     k_fit = len(base_copies)
     # The signature suggests the sign of a signed effect; one evaluation at a fifth
     # of the other half checks it (a weak signature can point the wrong way).
     check_side = bounds is None and cand.signed and side != 0.0
-    # evaluations allowed beyond the baseline (a list: the open-interval step adds one)
+    # evaluations allowed beyond the baseline (a list: the interval step adds to it)
     budget = [max_evals + int(check_side) + len(set(known) - {0.0})]
     vals0 = value_matrices(observed, base_copies, observables)
     per: dict[float, np.ndarray] = {0.0: per_fiber_loss(vals0, weights)}
@@ -678,13 +679,13 @@ def _estimated(fit: Fit, estimate: bool) -> Fit:
 def _unread_ends(fit: Fit) -> list[float]:
     """The closed ends of the quoted value's interval that no evaluated value is near.
 
-    Between evaluated values the test's T is an interpolation (:func:`_slope_t`, or
+    Between evaluated values the test's T is an interpolation (:func:`_fiber_t`, or
     linear between the dispersion scores), and an end read from it is only as good as
     the interpolation over that stretch: on inlet_speed data sets (N = 20) the truth
     missed the interval when it lay in a long stretch between the last evaluated
-    value and 0, where the interpolated T at the truth was 2.8-3.1 against 1.5-1.7
-    from evaluations at the truth. Evaluating the ends puts the test's own
-    evaluations where it decides.
+    value and 0, where T interpolated between the midpoints read 2.8-3.1 at the truth
+    against 1.5-1.7 from evaluations at the truth. Evaluating the ends puts the
+    test's own evaluations where it decides.
 
     Returns
     -------
