@@ -572,6 +572,7 @@ def fit_effect(
     check_side = bounds is None and cand.signed and side != 0.0
     # evaluations allowed beyond the baseline (a list: the interval step adds to it)
     budget = [max_evals + int(check_side) + len(set(known) - {0.0})]
+    label = [stage]  # the interval step's runs are counted as "interval"
     vals0 = value_matrices(observed, base_copies, observables)
     per: dict[float, np.ndarray] = {0.0: per_fiber_loss(vals0, weights)}
     seen: dict[float, float] = {0.0: float(np.mean(per[0.0]))}
@@ -595,7 +596,10 @@ def fit_effect(
             # Budget spent: this point is unknown; report the worst seen so Brent moves away.
             return max(seen.values())
         copies = maker.copies(
-            range(k_fit), {**(fixed or {}), cand.name: v}, rows, desc=f"{stage} {cand.name}={v:.4g}"
+            range(k_fit),
+            {**(fixed or {}), cand.name: v},
+            rows,
+            desc=f"{label[0]} {cand.name}={v:.4g}",
         )
         vals = value_matrices(observed, copies, observables)
         per[v] = per_fiber_loss(vals, weights)
@@ -651,6 +655,7 @@ def fit_effect(
         fit = result()
     fit = _estimated(fit, estimate)
     close = bracket and close_interval
+    label[0] = "interval"
     if close and (end := _open_end(fit, cand.lo, cand.hi, 1e-9 * (cand.hi - cand.lo))):
         budget[0] += 1  # one evaluation beyond max_evals, only for an open interval
         loss(end)
