@@ -165,7 +165,8 @@ def _fits(s: dict[str, Any]) -> list[str]:
         "refitted on all fibers (significant candidates), with its 95 % interval: the values "
         "where the fibers' mean loss slope is not significantly different from zero (a score "
         "test over the fibers; it includes the copies' Monte Carlo noise). '≤' / '≥' mark an "
-        "end where the refit's search range stopped before the test rejected. Candidates "
+        "end where the evaluated values stopped before the test rejected (the effect's range "
+        "end, or where a small budget stopped the refit). Candidates "
         "whose fit kept the "
         "baseline (0) on both halves are left out.",
         "",
@@ -215,7 +216,7 @@ def _fits(s: dict[str, Any]) -> list[str]:
 
 
 def _bracket(ci: list[float] | None, op: list[bool] | None) -> str:
-    """' [lo, hi]' of a 95 % interval, '≤' / '≥' at an end the refit's range cut."""
+    """' [lo, hi]' of a 95 % interval, '≤' / '≥' at an end the evaluated values cut."""
     if not ci:
         return ""
     op = op or [False, False]

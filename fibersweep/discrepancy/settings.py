@@ -13,7 +13,12 @@ from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.errors import InputError
 
-__all__ = ["DiscrepancySettings", "Plan", "plan_budget"]
+__all__ = ["DiscrepancySettings", "Plan", "plan_budget", "INTERVAL_EVALS"]
+
+#: Most evaluations a searched pooled refit adds after its search to read its 95 %
+#: interval's ends (:func:`fit.fit_effect`, ``close_interval``): the range end when
+#: the interval is open, then its two ends.
+INTERVAL_EVALS = 3
 
 
 @dataclass(frozen=True)
@@ -187,6 +192,11 @@ class Plan:
         return max(1, self.fit_evals - 2)
 
     @property
+    def _closing(self) -> int:
+        """Evaluations on all fibers a searched refit may add for its interval's ends."""
+        return 0 if self.shared or self.refit_evals < 2 else INTERVAL_EVALS
+
+    @property
     def _starts(self) -> int:
         """Evaluations on all fibers a refit's starting values cost (see :meth:`cost`)."""
         return 0 if self.shared else 1
@@ -202,8 +212,10 @@ class Plan:
             "heldout": self.candidates * self.copies * n,
             # + 1: the halves' values on the fibers their cross-fitted copies did not cover
             # (shared values: the halves' profiles are the pooled one's, no such runs)
-            "refits": self.refits * ((self.refit_evals + self._starts) * self.fit_copies
-                                     + self.copies) * n,  # fmt: skip
+            # + the interval's ends (fit.fit_effect, close_interval)
+            "refits": self.refits * n * (
+                (self.refit_evals + self._starts + self._closing) * self.fit_copies + self.copies
+            ),
             # per pair: joint fits on both folds, pair_rounds 1D fits each (+1: side
             # check; + the other member alone), cross-fitted copies, final copies
             "pairs": self.pairs
@@ -212,14 +224,16 @@ class Plan:
                 + 3 * self.copies * n  # + the partner alone when it had no single fit
                 # each member refitted on all fibers (pairfit.pair_refits): the other
                 # member alone (its value 0), both folds' values, the Brent steps
-                + 2 * (1 + 2 + self.refit_evals) * self.fit_copies * n
+                + 2 * (1 + 2 + self.refit_evals + self._closing) * self.fit_copies * n
             ),
             # the extra copies of a random lead candidate's fits, held-out scores and refit
             "random": min(self.random, 1)
             * (
                 2 * (self.fit_evals + 1) * (self.random_fit_copies - self.fit_copies) * half
                 + (self.random_copies - self.copies) * n
-                + (self.refit_evals + self._starts) * (self.random_fit_copies - self.fit_copies) * n
+                + (self.refit_evals + self._starts + self._closing)
+                * (self.random_fit_copies - self.fit_copies)
+                * n
             ),
         }
 

@@ -329,8 +329,9 @@ def test_plan_counts_the_refits_starting_values_unless_the_fit_values_are_shared
     cands = get_candidates(["friction", "inlet_speed"])
     searched = plan_budget(100, DiscrepancySettings(), cands)
     shared = plan_budget(100, DiscrepancySettings(fit_grid=True), cands)
-    # 2 refits x ((3 Brent steps + 1 for the halves' values) x 2 fit copies + 8 copies)
-    # x 100 fibers; shared values: the halves' profiles are the pooled refit's
-    assert searched.cost(100)["refits"] == 2 * ((3 + 1) * 2 + 8) * 100
+    # 2 refits x ((3 Brent steps + 1 for the halves' values + at most 3 for the
+    # interval's ends) x 2 fit copies + 8 copies) x 100 fibers; shared values: the
+    # halves' profiles are the pooled refit's, no search and no interval steps
+    assert searched.cost(100)["refits"] == 2 * ((3 + 1 + 3) * 2 + 8) * 100
     assert shared.cost(100)["refits"] == 2 * (3 * 2 + 8) * 100
     assert searched.cost(100)["fits"] == shared.cost(100)["fits"]

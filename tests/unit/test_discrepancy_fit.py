@@ -81,6 +81,45 @@ def test_score_interval_of_a_quadratic_profile_matches_the_analytic_one():
     assert not open_lo and not open_hi
 
 
+@pytest.mark.parametrize("grid", [[0.0, 0.08, 0.21, 0.45, 0.6], [0.0, 0.25, 0.29, 0.37, 0.6]])
+def test_score_interval_of_a_quadratic_profile_is_analytic_on_any_evaluated_values(grid):
+    # Unevenly spaced evaluated values (a Brent search's): each fiber's midpoint slope
+    # 2 (m - mu_i), interpolated linearly between midpoints, is exactly its derivative
+    # 2 (v - mu_i) at any v between them, so T(v) = (v - mean mu) / SE(mu) and the
+    # interval is mean(mu) ± t_{n-1} SE wherever the midpoints lie. Tolerance: the
+    # read-out grid's step (0.6 / 399) on each end. (T interpolated between the
+    # midpoints, as before, is exact only where neighbouring slopes have equal spread.)
+    from scipy.stats import t as student_t
+
+    from fibersweep.discrepancy.fit import score_interval
+
+    rng = np.random.default_rng(13)
+    n = 30
+    mu = rng.normal(0.3, 0.15, n)
+    mu = mu + rng.normal(0.0, 0.1, n) * (mu > 0.3)  # unequal spread on either side
+    lo, hi, open_lo, open_hi = score_interval(_quadratic_fit(mu, np.array(grid)))
+    half = student_t.ppf(0.975, n - 1) * mu.std(ddof=1) / np.sqrt(n)
+    assert lo == pytest.approx(mu.mean() - half, abs=0.6 / 399)
+    assert hi == pytest.approx(mu.mean() + half, abs=0.6 / 399)
+    assert not open_lo and not open_hi
+
+
+def test_score_interval_with_every_value_rejected_is_open_toward_the_falling_loss():
+    # The truth far beyond the evaluated values: every fiber's loss still falls at the
+    # highest one, every value is rejected. The interval is the fit's value, open at the
+    # top (the truth lies beyond), not a closed point.
+    from fibersweep.discrepancy.fit import score_interval
+
+    mu = np.random.default_rng(6).normal(1.5, 0.05, 40)
+    fit = _quadratic_fit(mu, np.linspace(0.0, 0.6, 5))
+    lo, hi, open_lo, open_hi = score_interval(type(fit)("friction", 0.6, 0.0, 0.0, (), fit.profile))
+    assert lo == hi == 0.6 and open_hi and not open_lo
+    # mirrored: the loss still falls at the lowest value
+    fit = _quadratic_fit(-mu + 0.6, np.linspace(0.0, 0.6, 5))
+    lo, hi, open_lo, open_hi = score_interval(type(fit)("friction", 0.0, 0.0, 0.0, (), fit.profile))
+    assert lo == hi == 0.0 and open_lo and not open_hi
+
+
 def test_score_interval_is_open_where_the_evaluated_values_stop():
     # the minimum at the edge of the searched range: the test cannot reject beyond it
     from fibersweep.discrepancy.fit import score_interval
@@ -193,8 +232,11 @@ def test_score_interval_always_holds_the_fitted_value():
 def test_score_interval_accepts_a_flat_stretch_where_no_fiber_changes():
     # per-fiber loss constant on [0.2, 0.4] (no class flips there), rising outside: the
     # flat stretch is inside the interval (a zero slope with zero spread rejects nothing),
-    # the steep sides are outside. T is read at the midpoints of the evaluated values
-    # (0.15, 0.25, ..., 0.55), so each end lies between the midpoints around 0.2 / 0.4.
+    # the steep sides are outside. Each fiber's slope is read at the midpoints of the
+    # evaluated values (0.15, 0.25, ..., 0.55) and interpolated between them; on
+    # [0.15, 0.25] every fiber's slope shrinks in the same proportion, so T keeps its
+    # (rejecting) value up to the flat midpoint 0.25: each end lies between the midpoints
+    # around 0.2 / 0.4, up to one step of the grid T is read on (0.6 / 399).
     from fibersweep.discrepancy.fit import Fit, score_interval
 
     rng = np.random.default_rng(8)
@@ -203,7 +245,8 @@ def test_score_interval_accepts_a_flat_stretch_where_no_fiber_changes():
     w = rng.uniform(0.5, 1.5, n)
     prof = tuple((float(v), w * (max(0.2 - v, 0.0, v - 0.4) * 10) ** 2) for v in grid)
     lo, hi, open_lo, open_hi = score_interval(Fit("friction", 0.3, 0.0, 0.0, (), prof))
-    assert 0.15 < lo <= 0.25 and 0.35 <= hi < 0.45 and not open_lo and not open_hi
+    step = 0.6 / 399
+    assert 0.15 < lo <= 0.25 + step and 0.35 - step <= hi < 0.45 and not open_lo and not open_hi
 
 
 def test_slope_estimate_of_a_quadratic_profile_is_its_minimiser():
@@ -360,14 +403,17 @@ class _Friction:
         return pd.DataFrame({"delta": self.x + 0.1 * v + 0.02 * self.z[k]})
 
 
-def _refit_coverage(truth: float, halves: list[float], bracket: bool) -> tuple[float, int, list]:
-    """Pooled refits of 60 stand-in data sets (40 fibers, 2 copies, 3 Brent steps, seed
-    71): the mean quoted value, how many 95 % score intervals hold ``truth``, the fits."""
+def _refit_coverage(
+    truth: float, halves: list[float], bracket: bool, close: bool = False, seed: int = 71
+) -> tuple[float, int, list]:
+    """Pooled refits of 60 stand-in data sets (40 fibers, 2 copies, 3 Brent steps): the
+    mean quoted value, how many 95 % score intervals hold ``truth``, the fits. ``close``:
+    the steps after the search that read the interval's ends (off: the bracket alone)."""
     from fibersweep.discrepancy.crossfit import refit_bounds
     from fibersweep.discrepancy.fit import score_interval
 
     cand = LIBRARY["friction"]
-    rng = np.random.default_rng(71)
+    rng = np.random.default_rng(seed)
     vals, hits, fits = [], 0, []
     for _ in range(60):
         x = rng.uniform(0.0, 0.5, 40)
@@ -376,7 +422,7 @@ def _refit_coverage(truth: float, halves: list[float], bracket: bool) -> tuple[f
         base = [model.copy(k) for k in range(2)]
         fit = fit_effect(cand, model, observed, base, np.arange(40), ["delta"], {"delta": 1.0},
                          3, bounds=refit_bounds(cand, halves), known=halves, estimate=True,
-                         bracket_root=bracket)  # fmt: skip
+                         bracket_root=bracket, close_interval=close)  # fmt: skip
         lo, hi, _, _ = score_interval(fit)
         vals.append(fit.value)
         fits.append(fit)
@@ -421,3 +467,35 @@ def test_shift_bracket_keeps_the_step_for_brent_when_the_root_is_bracketed():
             assert f1.evaluations == f0.evaluations and f1.value == f0.value
             same += 1
     assert same > 0
+
+
+def test_pooled_refit_reads_an_open_interval_at_the_effects_range_end():
+    # Halves far below the truth (0.55, 0.60 for 0.95: refit range [0.30, 0.85]): the
+    # bracket evaluates 0.85, the loss still falls there and every evaluated value is
+    # rejected. Without the interval step no interval held 0.95 (0 of 60, seed 71);
+    # with it, the effect's range end 1.0 is evaluated and the test reads the stretch
+    # up to it: 56 of 60 (0.93). Stated: >= 0.80 (0.93 less 4 binomial sd of 60, 0.13);
+    # never more than INTERVAL_EVALS evaluations beyond the unclosed fit's.
+    from fibersweep.discrepancy.settings import INTERVAL_EVALS
+
+    _, hits_off, off = _refit_coverage(0.95, [0.55, 0.60], bracket=True, close=False)
+    mean_on, hits_on, on = _refit_coverage(0.95, [0.55, 0.60], bracket=True, close=True)
+    assert hits_off == 0
+    assert hits_on / 60 >= 0.80
+    assert abs(mean_on - 0.95) < 0.05
+    for f0, f1 in zip(off, on, strict=True):
+        assert len(f0.evaluations) < len(f1.evaluations) <= len(f0.evaluations) + INTERVAL_EVALS
+
+
+def test_interval_step_evaluates_only_closed_ends_no_value_is_near():
+    # The interval's closed ends are evaluated unless an evaluated value lies within a
+    # twentieth of the evaluated range (it would be merged with it): a quadratic profile
+    # evaluated at 0, 0.3, 0.6 has its ends at mean(mu) ± t SE, both far from them.
+    from fibersweep.discrepancy.fit import _unread_ends, score_interval
+
+    mu = np.random.default_rng(9).normal(0.3, 0.2, 40)
+    fit = _quadratic_fit(mu, np.array([0.0, 0.3, 0.6]))
+    lo, hi, _, _ = score_interval(fit)
+    assert _unread_ends(fit) == [lo, hi]
+    near = _quadratic_fit(mu, np.array([0.0, lo + 0.01, 0.3, 0.6]))
+    assert _unread_ends(near) == [score_interval(near)[1]]

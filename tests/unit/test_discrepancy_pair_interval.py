@@ -137,12 +137,13 @@ def test_report_table_shows_each_members_interval():
 
 def test_plan_counts_the_pair_refits():
     # per pair: each member's refit is the other member alone (its value 0), the two
-    # folds' values and refit_evals Brent steps on all fibers, fit_copies copies each
+    # folds' values, refit_evals Brent steps and up to INTERVAL_EVALS evaluations for the
+    # interval's ends on all fibers, fit_copies copies each
     from fibersweep.discrepancy.library import get_candidates
-    from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
+    from fibersweep.discrepancy.settings import INTERVAL_EVALS, DiscrepancySettings, plan_budget
 
     plan = plan_budget(100, DiscrepancySettings(), get_candidates())
     joint = 2 * plan.pair_rounds * (plan.fit_evals + 2) * plan.fit_copies * 50
     held = 3 * plan.copies * 100
-    refits = 2 * (3 + plan.refit_evals) * plan.fit_copies * 100
+    refits = 2 * (3 + plan.refit_evals + INTERVAL_EVALS) * plan.fit_copies * 100
     assert plan.cost(100)["pairs"] == plan.pairs * (joint + held + refits)
