@@ -132,6 +132,9 @@ def pooled_refit(
     the end, or for a random effect (its value the dispersion root) when the data
     are still more spread than the copies at the highest value evaluated; when it
     is not needed Brent takes the step (:func:`fit.fit_effect`, ``bracket_root``).
+    Then up to ``settings.INTERVAL_EVALS`` more evaluations read the 95 % interval's
+    ends: the effect's range end when the interval is open inside the range, and
+    the closed ends no evaluated value is near (``close_interval``).
     ``fixed``: other effects held at these values (a pair's other member,
     :func:`pairfit.pair_refits`); ``base`` must then be copies made with them on.
     """
