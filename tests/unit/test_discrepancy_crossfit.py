@@ -289,7 +289,7 @@ def test_shared_values_of_a_random_effect_quote_the_dispersion_root():
     # RMSE 0.44, coverage 0.90, halves' RMSE 0.73 (the searches: 2.51, 0.43, 0.85, 0.57).
     # Stated: mean within 0.3 of 2.5, coverage >= 0.80 (0.95 less the binomial 3 sd of
     # 40 draws, 0.10, and 0.05 for an interval read between few values), value inside.
-    from test_discrepancy_fit import _Spread
+    from test_discrepancy_fit import _spread_case
 
     from fibersweep.discrepancy.crossfit import (
         shared_fold_fits,
@@ -301,11 +301,7 @@ def test_shared_values_of_a_random_effect_quote_the_dispersion_root():
     rng = np.random.default_rng(21)
     vals, hits = [], 0
     for _ in range(40):
-        x = rng.uniform(0.0, 0.5, 60)
-        model = _Spread(x, rng)
-        d = x + 0.02 * np.sqrt(1 + 2.5**2) * rng.standard_normal(60)
-        observed = pd.DataFrame({"delta": d})
-        base = [model.copy(k) for k in range(8)]
+        model, observed, base = _spread_case(rng)
         perm = rng.permutation(60)
         folds = [np.sort(perm[:30]), np.sort(perm[30:])]
         grid = shared_values(cand, 1.0, 6)

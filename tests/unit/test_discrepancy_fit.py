@@ -322,6 +322,16 @@ class _Spread:
         return pd.DataFrame({"delta": self.x[idx] + 0.02 * np.sqrt(1 + v**2) * self.z[k, idx]})
 
 
+def _spread_case(rng: np.random.Generator, truth: float = 2.5, n: int = 60):
+    """One stand-in data set of start noise ``truth``: fibers at x_i ~ U(0, 0.5), the
+    :class:`_Spread` model (its copies' draws), the observed δ with the effect, and the
+    model's 8 baseline copies. Draws in that order from ``rng``."""
+    x = rng.uniform(0.0, 0.5, n)
+    model = _Spread(x, rng)
+    observed = pd.DataFrame({"delta": x + 0.02 * np.sqrt(1 + truth**2) * rng.standard_normal(n)})
+    return model, observed, [model.copy(k) for k in range(8)]
+
+
 def test_random_effect_is_fitted_where_the_data_are_as_spread_as_its_copies():
     # start_noise = 2.5 on the stand-in: 60 data sets of 60 fibers, 8 copies, 5 Brent
     # steps, as the workflow fits a random lead. The quoted value is the crossing of 1 by
@@ -334,10 +344,7 @@ def test_random_effect_is_fitted_where_the_data_are_as_spread_as_its_copies():
     rng = np.random.default_rng(21)
     vals, hits = [], 0
     for _ in range(60):
-        x = rng.uniform(0.0, 0.5, 60)
-        model = _Spread(x, rng)
-        observed = pd.DataFrame({"delta": x + 0.02 * np.sqrt(1 + 2.5**2) * rng.standard_normal(60)})
-        base = [model.copy(k) for k in range(8)]
+        model, observed, base = _spread_case(rng)
         fit = fit_effect(LIBRARY["start_noise"], model, observed, base, np.arange(60),
                          ["delta"], {"delta": 1.0}, max_evals=5, estimate=True)  # fmt: skip
         lo, hi, _, _ = score_interval(fit)
@@ -371,11 +378,7 @@ def test_pooled_refit_brackets_a_random_effects_root():
         rng = np.random.default_rng(61)
         vals, hits = [], 0
         for _ in range(60):
-            x = rng.uniform(0.0, 0.5, 60)
-            model = _Spread(x, rng)
-            d = x + 0.02 * np.sqrt(1 + 2.5**2) * rng.standard_normal(60)
-            observed = pd.DataFrame({"delta": d})
-            base = [model.copy(k) for k in range(8)]
+            model, observed, base = _spread_case(rng)
             fit = fit_effect(cand, model, observed, base, np.arange(60), ["delta"], {"delta": 1.0},
                              3, bounds=refit_bounds(cand, halves), known=halves, estimate=True,
                              bracket_root=bracket)  # fmt: skip
