@@ -288,15 +288,19 @@ def _accepted(
                 bool(Tv[-1] < 0 and centre >= x[-1] - step))  # fmt: skip
     # the accepted stretch nearest the centre (with a noisy loss, the slope's zero
     # crossing need not be at the best evaluated value)
+    return _stretch(v, inside, centre)
+
+
+def _stretch(v: np.ndarray, inside: np.ndarray, centre: float) -> tuple[float, float, bool, bool]:
+    """The run of accepted read-out points (``inside``, at least one) nearest ``centre``:
+    its ends, and whether it reaches the first / last read-out point (open there)."""
     ok = np.flatnonzero(inside)
-    c = int(ok[np.argmin(np.abs(v[ok] - centre))])
-    i0 = c
+    i0 = i1 = int(ok[np.argmin(np.abs(v[ok] - centre))])
     while i0 > 0 and inside[i0 - 1]:
         i0 -= 1
-    i1 = c
-    while i1 < grid - 1 and inside[i1 + 1]:
+    while i1 < len(v) - 1 and inside[i1 + 1]:
         i1 += 1
-    return float(v[i0]), float(v[i1]), i0 == 0, i1 == grid - 1
+    return float(v[i0]), float(v[i1]), i0 == 0, i1 == len(v) - 1
 
 
 def slope_estimate(fit: Fit, level: float = 0.95, grid: int = 400) -> float:
@@ -392,16 +396,8 @@ def dispersion_interval(
     inside = np.abs(np.interp(v, x, T)) <= crit
     if not inside.any():
         return (fit.value, fit.value, False, False)
-    ok = np.flatnonzero(inside)
-    c = int(ok[np.argmin(np.abs(v[ok] - fit.value))])
-    i0 = c
-    while i0 > 0 and inside[i0 - 1]:
-        i0 -= 1
-    i1 = c
-    while i1 < grid - 1 and inside[i1 + 1]:
-        i1 += 1
-    lo, hi = min(float(v[i0]), fit.value), max(float(v[i1]), fit.value)
-    return lo, hi, i0 == 0, i1 == grid - 1
+    lo, hi, open_lo, open_hi = _stretch(v, inside, fit.value)
+    return min(lo, fit.value), max(hi, fit.value), open_lo, open_hi
 
 
 def rank_effects(
