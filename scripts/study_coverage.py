@@ -166,6 +166,8 @@ def run_set(kind: str, index: int, seed: int, field, n: int, copies: int, worker
                                    st.w_gap, plan.refit_evals)  # fmt: skip
                 row["rows"] = [_interval_row(c.name, effects[c.name], fit.value,
                                              halves[c.name], score_interval(fit))]  # fmt: skip
+                # the refit's per-fiber losses: other read-outs of its interval offline
+                row["profile"] = [[v, loss.tolist()] for v, loss in fit.profile]
         row["runs"] = sim.used
     row["seconds"] = time.perf_counter() - t0
     return row
@@ -271,6 +273,8 @@ def main() -> None:
                     help="data sets per kind with a significant gap (fitted)")  # fmt: skip
     ap.add_argument("--max-sets", type=int, default=60, help="most data sets drawn per kind")
     ap.add_argument("--first", type=int, default=0, help="index of the first data set")
+    ap.add_argument("--seed-offset", type=int, default=0,
+                    help="added to each kind's first seed (new data sets)")  # fmt: skip
     ap.add_argument("--n", type=int, default=60, help="fibers per data set")
     ap.add_argument("--copies", type=int, default=8, help="baseline copies per fiber")
     ap.add_argument("--workers", type=int, default=1)
@@ -293,7 +297,7 @@ def main() -> None:
         if not todo:
             break
         for kind in todo:
-            seed = SEED0[kind] + i
+            seed = SEED0[kind] + args.seed_offset + i
             path = out / kind / f"seed{seed}.json"
             if path.exists():
                 continue

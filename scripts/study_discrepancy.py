@@ -213,6 +213,7 @@ def run_scenario(name: str, field, n: int, seed: int, workers: int, kw: dict) ->
         "detected": res.gap.any,
         "truth": effects,
         "fitted": res.verdict.effects,
+        "alternatives": list(res.verdict.alternatives),
         "fold_values": res.extra.get("fold_values", {}),
         "significant": res.gap.flagged,
         "simulations": res.simulations,
@@ -342,12 +343,28 @@ def halves_span(rows: list[dict]) -> list[bool]:
     return out
 
 
+def _quoted_intervals(r: dict) -> dict:
+    """The intervals of the values a row's verdict quotes: a named set's own (each
+    member refitted with the other held), else the single effects' refits."""
+    for st in r.get("sets", []):
+        if st["intervals"] and st["values"] == r["fitted"]:
+            return st["intervals"]
+    return r.get("intervals", {})
+
+
 def targets(rows: list[dict], predicted: dict[int, dict]) -> str:
     """The issue's targets, measured on these rows."""
     single = [r for r in rows if len(r["truth"]) == 1]
     right = [r for r in single if next(iter(r["truth"])) in r["fitted"]]
     pairs = [r for r in rows if len(r["truth"]) == 2]
     as_pairs = [r for r in pairs if set(r["fitted"]) == set(r["truth"])]
+    # "ambiguous" with the hidden pair as one alternative (rows written before the
+    # alternatives were recorded have none)
+    offered = [
+        r for r in pairs
+        if r["verdict"].startswith("ambiguous")
+        and any(set(a) == set(r["truth"]) for a in r.get("alternatives", []))
+    ]  # fmt: skip
     wrong = [r for r in rows if r["wrong_names"]]
     fa = [r for r in rows if r["scenario"] == "none"]
     lines = [
@@ -356,6 +373,8 @@ def targets(rows: list[dict], predicted: dict[int, dict]) -> str:
         f"- wrong names: {len(wrong)} of {len(rows)} runs"
         + (f" ({', '.join(r['scenario'] for r in wrong)})" if wrong else ""),
         f"- pairs named as pairs: {len(as_pairs)} of {len(pairs)}",
+        f"- pairs offered as one alternative of an ambiguous verdict: {len(offered)} of "
+        f"{len(pairs)}",
         f"- false alarms on no-effect data: {sum(r['verdict'] != 'no significant gap' for r in fa)}"
         f" of {len(fa)}",
     ]
@@ -384,7 +403,7 @@ def targets(rows: list[dict], predicted: dict[int, dict]) -> str:
     inside = [
         lo <= r["fitted"][e] <= hi
         for r in rows
-        for e, (lo, hi, *_) in r.get("intervals", {}).items()
+        for e, (lo, hi, *_) in _quoted_intervals(r).items()
         if e in r["fitted"]
     ]
     if inside:
@@ -473,7 +492,7 @@ def main() -> None:
     ap.add_argument("--fit-grid", action="store_true",
                     help="fit both halves at shared values fixed before the data "
                          "(DiscrepancySettings.fit_grid; off: Brent searches)")  # fmt: skip
-    ap.add_argument("--pairs", type=int, default=2)
+    ap.add_argument("--pairs", type=int, default=3)
     ap.add_argument("--power-fibers", type=int, default=40,
                     help="fibers simulated by the power analyses (0: none)")  # fmt: skip
     ap.add_argument("--predict-fibers", type=int, default=None,

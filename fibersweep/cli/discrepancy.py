@@ -140,8 +140,8 @@ def discrepancy(
     ] = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
     pairs: Annotated[
-        int, typer.Option(help="Second effects tried with the best one (0: single effects).")
-    ] = 2,
+        int, typer.Option(help="Pairs of effects tried (0: single effects only).")
+    ] = 3,
     power: Annotated[
         bool,
         typer.Option(help="Power analysis when the verdict is no gap or unexplained."),

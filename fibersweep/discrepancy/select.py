@@ -1,37 +1,45 @@
-"""Forward selection: add a second effect to the best single one, out of sample.
+"""Forward selection: add a second effect to a significant single one, out of sample.
 
-When no single effect explains the gap, other candidates B are added to the
-effect A that improved the held-out fibers most among the significant ones
-(A must be significant alone: from a non-significant start the step once named
-a wrong pair, a wrong A plus a B that undid A's side effect; the set also needs
-each member's own contribution significant):
+When the best single effect leaves a gap, other candidates B are added to the
+significant effects A that leave one (the ``settings.PAIR_FIRSTS`` that improved
+the held-out fibers most; each A must be significant alone: from a
+non-significant start the step once named a wrong pair, a wrong A plus a B that
+undid A's side effect; the set also needs each member's own contribution
+significant):
 
 0. partners are ranked by their signature against the gap A leaves
-   (:func:`rank_partners`), not against the whole gap, which A dominates; and
-   the loss also scores the observables A leaves with a gap
-   (:func:`pair_weights`): B's part of the gap often shows only once A's is
-   removed, and a loss blind to it can neither fit B nor see its contribution;
+   (:func:`pairfit.rank_partners`), not against the whole gap, which A
+   dominates; and the loss also scores the observables A leaves with a gap
+   (:func:`pairfit.pair_weights`): B's part of the gap often shows only once
+   A's is removed, and a loss blind to it can neither fit B nor see its
+   contribution. The plan's pairs are taken in turn from each A's ranking
+   (A1's best partner, A2's best, A1's second, ...; :func:`pair_trials`), a
+   set of two effects tried once;
 1. joint fit, on the same two folds as the single fits, by coordinate descent
-   (:func:`joint_fit`): B is fitted with A at its single value, then A is
-   refitted with B at that value, both on the training fold only;
+   (:func:`pairfit.joint_fit`): B is fitted with A at its single value, then A
+   is refitted with B at that value, both on the training fold only;
 2. cross-fitted copies with both effects on score the held-out fold;
 3. each member's own contribution is the per-fiber improvement of the pair
    over the pair without it (over B alone for A, over A alone for B), tested
    by a one-sided bootstrap; the p-values of every member of every pair form
    one Holm family;
-4. a pair whose members both contribute significantly is checked for
-   adequacy on all fibers, with each member at the mean of its two fold
-   values (the pooled estimate).
+4. a pair whose members both contribute significantly is refitted on all
+   fibers (:func:`pairfit.pair_refits`) and checked for adequacy there.
 
-Partners are tried best-ranked first, and the step stops at the first pair
-that explains the gap (significant contributions, no gap left). The Holm
-family is every member of every pair that may be tried, the untried ones
-counted with p = 1: Holm is monotone in the p-values, so stopping early never
-rejects more than trying every partner would.
+Pairs are tried in that order, and the step stops after the round in which a
+pair explains the gap (significant contributions, no gap left): the other
+first member's pair of that round is still tried, so that two look-alike first
+members (off_midplane and inlet_speed, held-out improvements 1.02 and 1.00 with
+friction = 0.35 + inlet_speed = -0.04 hidden) give two explaining sets and an
+ambiguous verdict, not whichever came first. The Holm family is every member of
+every pair that may be tried, the untried ones counted with p = 1: Holm is
+monotone in the p-values, so stopping early never rejects more than trying
+every pair would.
 
 The rule of :func:`decide.decide` then names the pair when it leaves no
-significant gap. Two effects are the most this step adds: a third would need
-more fibers than the studies this was measured on (N <= 200) hold.
+significant gap and no single effect explains the gap. Two effects are the
+most this step adds: a third would need more fibers than the studies this was
+measured on (N <= 200) hold.
 """
 
 from __future__ import annotations
@@ -57,7 +65,7 @@ from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit, pair_refits
 from fibersweep.discrepancy.stats import boot_p, bootstrap_mean_ci, holm
 
-__all__ = ["crossfit_copies", "forward_pairs"]
+__all__ = ["PairTrial", "crossfit_copies", "forward_pairs", "pair_trials"]
 
 log = logging.getLogger(__name__)
 
@@ -86,22 +94,61 @@ def crossfit_copies(
     ]
 
 
+#: One pair to try: the first member (a significant single effect), the partner
+#: added to it, and the selection input (its loss weights follow the gap the first
+#: member leaves, :func:`pairfit.pair_weights`).
+PairTrial = tuple[Candidate, Candidate, SelectionInput]
+
+
+def pair_trials(queues: Sequence[Sequence[PairTrial]], k: int) -> list[list[PairTrial]]:
+    """The first ``k`` pairs taken in turn from each first member's ranked partners.
+
+    Parameters
+    ----------
+    queues : sequence of sequence of PairTrial
+        Per first member (best first), its partners best-ranked first.
+    k : int
+        Pairs to try in all; a set of two effects is tried once.
+
+    Returns
+    -------
+    list of list of PairTrial
+        Rounds: round r holds each first member's r-th partner (:func:`forward_pairs`
+        finishes the round in which a pair explains the gap).
+    """
+    rounds: list[list[PairTrial]] = []
+    seen: set[frozenset[str]] = set()
+    depth = max((len(q) for q in queues), default=0)
+    for r in range(depth):
+        rnd: list[PairTrial] = []
+        for q in queues:
+            if r >= len(q) or len(seen) >= k:
+                continue
+            key = frozenset((q[r][0].name, q[r][1].name))
+            if key not in seen:
+                seen.add(key)
+                rnd.append(q[r])
+        if rnd:
+            rounds.append(rnd)
+    return rounds
+
+
 def forward_pairs(
-    first: Candidate,
-    others: Sequence[Candidate],
-    inp: SelectionInput,
+    rounds: Sequence[Sequence[PairTrial]],
     maker: CopyMaker,
     rng: np.random.Generator,
     on_fit: Callable[[Fit], None] | None = None,
 ) -> tuple[list[SetHeldOut], dict[str, list[pd.DataFrame]]]:
-    """Try every pair ``first + B`` (see the module docstring).
+    """Try the pairs round by round, up to the round in which one explains the gap.
 
     Parameters
     ----------
-    first : Candidate
-        The single effect that improved the held-out fibers most.
-    others : sequence of Candidate
-        Effects to add (``first`` excluded).
+    rounds : sequence of sequence of PairTrial
+        (first, partner, input): ``first`` a significant single effect with its
+        fold values in ``input.fold_values``, ``partner`` the effect added to it
+        (:func:`pair_trials`). A round is finished once begun, so that the best
+        partners of two look-alike first members (off_midplane and inlet_speed)
+        are both tried and two sets that explain make the verdict ambiguous.
     on_fit : callable, optional
         Called with every fit of the joint fits (for the report's fit table).
 
@@ -112,19 +159,20 @@ def forward_pairs(
     copies : dict set name -> list of DataFrame
         Copies of each set (all fibers), final values when checked, else cross-fitted.
     """
-    folds = inp.folds
-    obs = inp.observed
-    w = inp.weights
-    base_scores = weighted_loss(inp.base_values, w)
-    single_scores = {n: weighted_loss(v, w) for n, v in inp.single_values.items()}
-    v1 = [float(v) for v in inp.fold_values[first.name]]
     tried: list[dict] = []
     # Holm over every member of every pair that may be tried (untried: p = 1), so
     # stopping at the first pair that explains the gap tests no more liberally than
     # trying them all (Holm is monotone in the p-values)
-    family = 2 * len(others)
+    family = 2 * sum(len(rnd) for rnd in rounds)
     finals: dict[int, tuple[GapResult, list[pd.DataFrame]]] = {}
-    for cand in others:
+    explained: int | None = None  # the round in which a pair explained the gap
+    for r, (first, cand, inp) in ((r, t) for r, rnd in enumerate(rounds) for t in rnd):
+        if explained is not None and r > explained:
+            break
+        folds, obs, w = inp.folds, inp.observed, inp.weights
+        base_scores = weighted_loss(inp.base_values, w)
+        single_scores = {n: weighted_loss(v, w) for n, v in inp.single_values.items()}
+        v1 = [float(v) for v in inp.fold_values[first.name]]
         single = inp.fold_values.get(cand.name, [0.0, 0.0])
         per_fold = [
             joint_fit(
@@ -170,6 +218,7 @@ def forward_pairs(
         tried.append(
             {
                 "members": (first, cand),
+                "inp": inp,
                 "values": {m: float(np.mean([pf[m] for pf in per_fold])) for m in names},
                 "fold": {m: (per_fold[0][m], per_fold[1][m]) for m in names},
                 "residual": assess_gap(v_after, rng, alpha=inp.alpha, n_perm=inp.n_perm),
@@ -180,26 +229,19 @@ def forward_pairs(
                 "improvement_ci": bootstrap_mean_ci(paired_improvement(base_scores, scores), rng),
             }
         )
-        st = _set_of(tried, len(tried) - 1, family, rng)
-        if st.significant(inp.alpha):
-            st = _refitted(tried, len(tried) - 1, family, rng, inp, maker, on_fit)
-            final = maker.copies(range(inp.copies), st.values, desc=f"pair-final {st.name}")
-            v_final = value_matrices(obs, final, inp.observables)
-            gap = assess_gap(v_final, rng, alpha=inp.alpha, n_perm=inp.n_perm)
-            finals[len(tried) - 1] = (gap, final)
-            if replace(st, final=gap).explains(inp.alpha):
-                break  # the best-ranked partner that explains the gap: stop here
+        i = len(tried) - 1
+        if _set_of(tried, i, family, rng).significant(inp.alpha):
+            st, finals[i] = _checked(tried, i, family, rng, maker, on_fit)
+            if replace(st, final=finals[i][0]).explains(inp.alpha):
+                explained = r  # finish this round, then stop
     sets: list[SetHeldOut] = []
     out_copies: dict[str, list[pd.DataFrame]] = {}
     for i, t in enumerate(tried):
         st = _set_of(tried, i, family, rng)
         out_copies[st.name] = t["copies"]
-        if i not in finals and st.significant(inp.alpha):
+        if i not in finals and st.significant(t["inp"].alpha):
             # significant only under the final family (a later pair's p moved it up)
-            st = _refitted(tried, i, family, rng, inp, maker, on_fit)
-            final = maker.copies(range(inp.copies), st.values, desc=f"pair-final {st.name}")
-            v_final = value_matrices(obs, final, inp.observables)
-            finals[i] = (assess_gap(v_final, rng, alpha=inp.alpha, n_perm=inp.n_perm), final)
+            st, finals[i] = _checked(tried, i, family, rng, maker, on_fit)
         if i in finals:
             st = replace(st, final=finals[i][0])
             out_copies[st.name] = finals[i][1]
@@ -213,12 +255,28 @@ def forward_pairs(
     return sets, out_copies
 
 
+def _checked(
+    tried: list[dict],
+    i: int,
+    family: int,
+    rng: np.random.Generator,
+    maker: CopyMaker,
+    on_fit: Callable[[Fit], None] | None,
+) -> tuple[SetHeldOut, tuple[GapResult, list[pd.DataFrame]]]:
+    """Pair ``i`` refitted on all fibers (:func:`_refitted`), and the gap it leaves
+    there with the copies that measured it."""
+    inp = tried[i]["inp"]
+    st = _refitted(tried, i, family, rng, maker, on_fit)
+    final = maker.copies(range(inp.copies), st.values, desc=f"pair-final {st.name}")
+    v_final = value_matrices(inp.observed, final, inp.observables)
+    return st, (assess_gap(v_final, rng, alpha=inp.alpha, n_perm=inp.n_perm), final)
+
+
 def _refitted(
     tried: list[dict],
     i: int,
     family: int,
     rng: np.random.Generator,
-    inp: SelectionInput,
     maker: CopyMaker,
     on_fit: Callable[[Fit], None] | None,
 ) -> SetHeldOut:
@@ -226,6 +284,7 @@ def _refitted(
     (:func:`pairfit.pair_refits`), as a significant single effect is refitted before
     its adequacy check; the refitted values are the pair's quoted values."""
     t = tried[i]
+    inp = t["inp"]
     if "intervals" not in t:
         # first the member the joint fit's last round did not refit (joint_fit's round
         # r fits the added member when r is even): the added one for 2 rounds

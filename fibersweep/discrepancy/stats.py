@@ -15,7 +15,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PermTest", "permutation_test", "holm", "bootstrap_mean_ci", "boot_p", "excess"]
+__all__ = [
+    "PermTest",
+    "boot_p",
+    "bootstrap_mean_ci",
+    "conformal_quantile",
+    "excess",
+    "holm",
+    "permutation_test",
+]
 
 
 @dataclass(frozen=True)
@@ -144,3 +152,26 @@ def boot_p(d: np.ndarray, rng: np.random.Generator, n_boot: int = 4000) -> float
         return 1.0
     means = d[rng.integers(0, len(d), size=(n_boot, len(d)))].mean(axis=1)
     return float((1 + np.sum(means <= 0.0)) / (1 + n_boot))
+
+
+def conformal_quantile(scores: np.ndarray, level: float = 0.95) -> float:
+    """Split-conformal quantile: the k-th smallest of n scores, k = ceil((n + 1) level).
+
+    If a new score is exchangeable with the n calibration scores, it is at most
+    this value with probability at least ``level`` (and below (k + 1) / (n + 1)
+    when the scores have no ties). Used to calibrate the score test's critical
+    value on simulated data sets (:data:`fit.CRIT_SCALE`).
+
+    Parameters
+    ----------
+    scores : ndarray, shape (n,)
+    level : float
+
+    Returns
+    -------
+    float
+        inf when k > n (too few scores for the level).
+    """
+    s = np.sort(np.asarray(scores, dtype=float))
+    k = int(np.ceil((len(s) + 1) * level))
+    return float(s[k - 1]) if k <= len(s) else float("inf")

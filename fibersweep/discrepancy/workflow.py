@@ -6,8 +6,8 @@ It simulates (1) ``copies`` jittered baseline copies of every measured fiber,
 and ranks the library's effects on one half of the fibers, (5) fits the best
 few on each half and scores each half with the value fitted on the other
 (two-fold cross-fitting: every fiber is held out once), compares with the
-baseline and decides; (6) when no single effect explains the gap, it tries
-adding other candidates to the significant one that helped most
+baseline and decides; (6) when the best single effect leaves a gap, it tries
+adding other candidates to the significant ones that helped most and leave one
 (:mod:`.select`, forward selection). The simulation count is planned up front
 and never exceeds ``budget``.
 
@@ -67,8 +67,8 @@ from fibersweep.discrepancy.localise import FEATURES, Region, find_region
 from fibersweep.discrepancy.observables import has_tracks
 from fibersweep.discrepancy.pairfit import SelectionInput, pair_weights, rank_partners
 from fibersweep.discrepancy.schema import MeasuredData
-from fibersweep.discrepancy.select import crossfit_copies, forward_pairs
-from fibersweep.discrepancy.settings import DiscrepancySettings, Plan, plan_budget
+from fibersweep.discrepancy.select import crossfit_copies, forward_pairs, pair_trials
+from fibersweep.discrepancy.settings import PAIR_FIRSTS, DiscrepancySettings, Plan, plan_budget
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
 from fibersweep.fiber.settings import FiberSettings
@@ -403,41 +403,44 @@ def refit(st: State) -> State:
 def pairs(st: State) -> State:
     """(7) forward selection when the best significant single effect leaves a gap.
 
-    The first effect must be significant alone: started from one that is not, the
+    Each first member must be significant alone: started from one that is not, the
     step named a wrong pair (friction = 0.25 hidden, N = 100: pillar_hydro, p_Holm
-    0.53 alone, + inlet_speed undoing pillar_hydro's slowing).
+    0.53 alone, + inlet_speed undoing pillar_hydro's slowing). Partners are added to
+    the ``PAIR_FIRSTS`` significant singles that leave a gap, best held-out
+    improvement first, the plan's pairs taken from their rankings in turn
+    (:func:`select.pair_trials`).
     """
     run, plan, s = st.run, st.run.plan, st.run.settings
-    helped = [h for h in st.heldout if h.significant]
-    best = max(helped, key=lambda h: h.improvement[0]) if helped else None
-    if best is None or best.explains or plan.pairs <= 0:
+    helped = sorted((h for h in st.heldout if h.significant), key=lambda h: -h.improvement[0])
+    if not helped or helped[0].explains or plan.pairs <= 0:
         return st
-    first = run.candidate(best.name)
-    # partners ranked by how well their signature matches the gap the best single
-    # effect leaves (not the whole gap, which it dominates)
-    left = best.final or best.residual
-    others = [
-        run.candidate(name)
-        for name in rank_partners(best.name, list(st.signatures), left, plan.pairs)
-    ]
-    inp = SelectionInput(
-        observed=run.observed,
-        folds=run.folds,
-        fold_values=st.fold_values,
-        base_values=st.values,
-        single_values=st.eff_values,
-        weights=pair_weights(st.weights, st.gap, left, s.alpha),
-        observables=run.observables,
-        copies=plan.copies,
-        fit_copies=plan.fit_copies,
-        fit_evals=plan.fit_evals,
-        alpha=s.alpha,
-        n_perm=s.n_perm,
-        rounds=plan.pair_rounds,
-        refit_evals=plan.refit_evals,
-    )
+    queues = []
+    for h in [h for h in helped if not h.explains][:PAIR_FIRSTS]:
+        # partners ranked by how well their signature matches the gap this single
+        # effect leaves (not the whole gap, which it dominates)
+        left = h.final or h.residual
+        inp = SelectionInput(
+            observed=run.observed,
+            folds=run.folds,
+            fold_values=st.fold_values,
+            base_values=st.values,
+            single_values=st.eff_values,
+            weights=pair_weights(st.weights, st.gap, left, s.alpha),
+            observables=run.observables,
+            copies=plan.copies,
+            fit_copies=plan.fit_copies,
+            fit_evals=plan.fit_evals,
+            alpha=s.alpha,
+            n_perm=s.n_perm,
+            rounds=plan.pair_rounds,
+            refit_evals=plan.refit_evals,
+        )
+        first = run.candidate(h.name)
+        ranked = rank_partners(h.name, list(st.signatures), left, plan.pairs)
+        queues.append([(first, run.candidate(name), inp) for name in ranked])
     fits: list[Fit] = []
-    sets, set_copies = forward_pairs(first, others, inp, run.maker, run.rng, fits.append)
+    trials = pair_trials(queues, plan.pairs)
+    sets, set_copies = forward_pairs(trials, run.maker, run.rng, fits.append)
     return replace(
         st,
         fits=st.fits + tuple(fits),

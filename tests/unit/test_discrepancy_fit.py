@@ -74,11 +74,20 @@ def test_score_interval_of_a_quadratic_profile_matches_the_analytic_one():
     rng = np.random.default_rng(3)
     n = 50
     mu = rng.normal(0.3, 0.1, n)
-    lo, hi, open_lo, open_hi = score_interval(_quadratic_fit(mu, np.linspace(0.0, 0.6, 5)))
+    fit = _quadratic_fit(mu, np.linspace(0.0, 0.6, 5))
+    lo, hi, open_lo, open_hi = score_interval(fit, scale=1.0)  # Student's quantile
     half = student_t.ppf(0.975, n - 1) * mu.std(ddof=1) / np.sqrt(n)
     assert lo == pytest.approx(mu.mean() - half, abs=0.6 / 400)
     assert hi == pytest.approx(mu.mean() + half, abs=0.6 / 400)
     assert not open_lo and not open_hi
+    # the 95 % interval's default critical value is CRIT_SCALE x Student's quantile
+    # (calibrated on simulated data sets): the same half-width times CRIT_SCALE
+    from fibersweep.discrepancy.fit import CRIT_SCALE
+
+    lo, hi, _, _ = score_interval(fit)
+    assert lo == pytest.approx(mu.mean() - CRIT_SCALE * half, abs=0.6 / 400)
+    assert hi == pytest.approx(mu.mean() + CRIT_SCALE * half, abs=0.6 / 400)
+    assert score_interval(fit, level=0.9) == score_interval(fit, level=0.9, scale=1.0)
 
 
 @pytest.mark.parametrize("grid", [[0.0, 0.08, 0.21, 0.45, 0.6], [0.0, 0.25, 0.29, 0.37, 0.6]])
@@ -97,7 +106,7 @@ def test_score_interval_of_a_quadratic_profile_is_analytic_on_any_evaluated_valu
     n = 30
     mu = rng.normal(0.3, 0.15, n)
     mu = mu + rng.normal(0.0, 0.1, n) * (mu > 0.3)  # unequal spread on either side
-    lo, hi, open_lo, open_hi = score_interval(_quadratic_fit(mu, np.array(grid)))
+    lo, hi, open_lo, open_hi = score_interval(_quadratic_fit(mu, np.array(grid)), scale=1.0)
     half = student_t.ppf(0.975, n - 1) * mu.std(ddof=1) / np.sqrt(n)
     assert lo == pytest.approx(mu.mean() - half, abs=0.6 / 399)
     assert hi == pytest.approx(mu.mean() + half, abs=0.6 / 399)
@@ -130,14 +139,15 @@ def test_score_interval_is_open_where_the_evaluated_values_stop():
 
 
 def test_score_interval_covers_the_truth_at_its_level():
-    # 200 data sets of 40 fibers: the 95 % interval covers the true 0.3 in 90-99 % of them
+    # 200 data sets of 40 fibers: the 95 % interval with Student's quantile (the test
+    # itself, exact for normal per-fiber minima) covers the true 0.3 in 90-99 % of them
     from fibersweep.discrepancy.fit import score_interval
 
     rng = np.random.default_rng(4)
     grid = np.linspace(0.0, 0.6, 5)
     hits = 0
     for _ in range(200):
-        lo, hi, _, _ = score_interval(_quadratic_fit(rng.normal(0.3, 0.1, 40), grid))
+        lo, hi, _, _ = score_interval(_quadratic_fit(rng.normal(0.3, 0.1, 40), grid), scale=1.0)
         hits += lo <= 0.3 <= hi
     assert 0.90 <= hits / 200 <= 0.99
 

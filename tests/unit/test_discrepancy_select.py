@@ -247,7 +247,8 @@ def test_partners_are_ranked_by_the_gap_the_first_effect_leaves():
     assert rank_partners("inlet_speed", sig, left, 1) == ["friction"]
 
 
-def test_forward_step_stops_at_the_first_pair_that_explains_the_gap():
+@pytest.mark.parametrize("finish_round", [False, True])
+def test_forward_step_stops_at_the_first_pair_that_explains_the_gap(finish_round):
     # truth friction 0.5 + inlet_speed 0.05 (stand-in model, 1 % copy noise, 60 fibers):
     # the best-ranked partner (friction) explains the gap, so the next one (pillar_scale)
     # is never simulated, and the pair's p-values are Holm-adjusted over the 4 members
@@ -283,8 +284,24 @@ def test_forward_step_stops_at_the_first_pair_that_explains_the_gap():
         single_values={"inlet_speed": value_matrices(obs, cps, inp.observables)},
     )
     rng = np.random.default_rng(2)
-    sets, _ = forward_pairs(LIBRARY["inlet_speed"], [LIBRARY["friction"], LIBRARY["pillar_scale"]],
-                            inp, model, rng)  # fmt: skip
+    # one first member: one pair per round
+    rounds = [[(LIBRARY["inlet_speed"], LIBRARY[b], inp)] for b in ("friction", "pillar_scale")]
+    sets, _ = forward_pairs(rounds, model, rng)
+    if finish_round:
+        # a second first member in the first round (friction, its partner inlet_speed):
+        # the round is finished after its first pair explains, the next round is not begun
+        asked.clear()
+        inp2 = replace(inp, fold_values={**single, "friction": [0.5, 0.5]})
+        rounds = [
+            [(LIBRARY["inlet_speed"], LIBRARY["friction"], inp),
+             (LIBRARY["friction"], LIBRARY["inlet_speed"], inp2)],
+            [(LIBRARY["inlet_speed"], LIBRARY["pillar_scale"], inp)],
+        ]  # fmt: skip
+        both, _ = forward_pairs(rounds, model, np.random.default_rng(2))
+        assert [st.name for st in both] == ["inlet_speed + friction", "friction + inlet_speed"]
+        assert all(st.explains(0.05) for st in both)
+        assert not any("pillar_scale" in e for e in asked)
+        return
     assert [st.name for st in sets] == ["inlet_speed + friction"]
     assert sets[0].explains(0.05)
     # the explaining pair was refitted on all fibers: each member's quoted value with
@@ -335,3 +352,61 @@ def test_pair_values_are_not_brents_golden_section_points():
     joint = joint_fit(LIBRARY["inlet_speed"], LIBRARY["friction"], start, np.arange(n), inp,
                       model)  # fmt: skip
     assert joint["inlet_speed"] == pytest.approx(0.05, abs=0.004)
+
+
+def test_a_weaker_single_and_a_pair_that_both_explain_are_ambiguous():
+    # the best single (largest held-out improvement) leaves a gap, a weaker one does
+    # not, and a pair explains: the verdict lists the single and the pair (issue 30,
+    # hidden friction + inlet_speed where pillar_hydro alone left no gap)
+    rng = np.random.default_rng(9)
+    n = 60
+    ho = evaluate_heldout(
+        {"friction": 0.26, "pillar_hydro": 0.45},
+        {"delta": np.full(n, 1.0)},
+        {
+            "friction": {"delta": 1.0 - rng.normal(0.9, 0.3, n)},
+            "pillar_hydro": {"delta": 1.0 - rng.normal(0.5, 0.3, n)},
+        },
+        {"friction": _gap(1.5, 1), "pillar_hydro": _gap(0.0, 2)},
+        rng,
+        alpha=0.05,
+    )
+    best = max(ho, key=lambda h: h.improvement[0])
+    assert best.name == "friction" and not best.explains
+    assert next(h for h in ho if h.name == "pillar_hydro").explains
+    pair = _set(("friction", "inlet_speed"), (0.001, 0.002), 0.0, 17)
+    v = decide(_gap(2.0, 18), ho, "R", rng, 0.05, [pair])
+    assert v.kind == "ambiguous"
+    assert v.alternatives == ({"pillar_hydro": 0.45}, {"friction": 0.1, "inlet_speed": 0.1})
+    assert set(v.effects) == {"pillar_hydro", "friction", "inlet_speed"}
+    assert "pillar_hydro = 0.45 and (friction = 0.1 + inlet_speed = 0.1)" in v.text
+    # without the pair the weaker single is not named: the best one is partial
+    v = decide(_gap(2.0, 18), ho, "R", rng, 0.05, [])
+    assert v.kind == "unexplained" and v.effects == {}
+    assert "pillar_hydro alone leaves no significant gap" in v.text
+
+
+def test_pairs_are_taken_in_turn_from_each_first_member():
+    # two first members with their ranked partners: the plan's pairs alternate
+    # between them in rounds, and a set met twice (A + B, then B + A) is tried once
+    from fibersweep.discrepancy.library import LIBRARY
+    from fibersweep.discrepancy.select import pair_trials
+
+    L = LIBRARY
+    q1 = [(L["pillar_hydro"], L[b], "in1") for b in ("off_midplane", "inlet_speed", "friction")]
+    q2 = [(L["inlet_speed"], L[b], "in2") for b in ("pillar_hydro", "friction")]
+
+    def names(rounds):
+        return [[(a.name, b.name, inp) for a, b, inp in rnd] for rnd in rounds]
+
+    assert names(pair_trials([q1, q2], 2)) == [
+        [("pillar_hydro", "off_midplane", "in1"), ("inlet_speed", "pillar_hydro", "in2")],
+    ]
+    assert names(pair_trials([q1, q2], 4)) == [
+        [("pillar_hydro", "off_midplane", "in1"), ("inlet_speed", "pillar_hydro", "in2")],
+        [("inlet_speed", "friction", "in2")],  # pillar_hydro + inlet_speed was tried
+        [("pillar_hydro", "friction", "in1")],
+    ]
+    # one first member: its partners in order, one per round, as before
+    assert names(pair_trials([q1], 2)) == [[t] for t in names([q1[:2]])[0]]
+    assert pair_trials([], 2) == []
