@@ -167,7 +167,7 @@ def test_kill_then_resume_equals_uninterrupted(reference, tmp_path, flow_cache_d
             assert 1 <= man["rows"] < N_RUNS
             assert not (out / LOCK_FILE).exists()
     else:
-        assert code == 0  # a dead worker is replaced; its runs are re-run
+        assert code == 0, text  # a dead worker is replaced; its runs are re-run
     _resume_and_compare(cfg, out, reference)
 
 
