@@ -263,37 +263,24 @@ def _checked(
     maker: CopyMaker,
     on_fit: Callable[[Fit], None] | None,
 ) -> tuple[SetHeldOut, tuple[GapResult, list[pd.DataFrame]]]:
-    """Pair ``i`` refitted on all fibers (:func:`_refitted`), and the gap it leaves
-    there with the copies that measured it."""
-    inp = tried[i]["inp"]
-    st = _refitted(tried, i, family, rng, maker, on_fit)
+    """Pair ``i`` with its members refitted on all fibers and their intervals
+    (:func:`pairfit.pair_refits`), as a significant single effect is refitted before
+    its adequacy check (the refitted values are the pair's quoted values), and the
+    gap it leaves there with the copies that measured it. Called once per pair (the
+    caller keeps the result in ``finals``)."""
+    t = tried[i]
+    inp = t["inp"]
+    # first the member the joint fit's last round did not refit (joint_fit's round r
+    # fits the added member when r is even): the added one for 2 rounds
+    first, added = t["members"]
+    last = added if (inp.rounds - 1) % 2 == 0 else first
+    order = (first, added) if last is added else (added, first)
+    refit, t["intervals"] = pair_refits(order, t["fold"], inp, maker, on_fit)
+    t["values"] = {m: refit[m] for m in t["values"]}  # the set's member order
+    st = _set_of(tried, i, family, rng)
     final = maker.copies(range(inp.copies), st.values, desc=f"pair-final {st.name}")
     v_final = value_matrices(inp.observed, final, inp.observables)
     return st, (assess_gap(v_final, rng, alpha=inp.alpha, n_perm=inp.n_perm), final)
-
-
-def _refitted(
-    tried: list[dict],
-    i: int,
-    family: int,
-    rng: np.random.Generator,
-    maker: CopyMaker,
-    on_fit: Callable[[Fit], None] | None,
-) -> SetHeldOut:
-    """Pair ``i`` with its members refitted on all fibers and their intervals
-    (:func:`pairfit.pair_refits`), as a significant single effect is refitted before
-    its adequacy check; the refitted values are the pair's quoted values."""
-    t = tried[i]
-    inp = t["inp"]
-    if "intervals" not in t:
-        # first the member the joint fit's last round did not refit (joint_fit's round
-        # r fits the added member when r is even): the added one for 2 rounds
-        first, added = t["members"]
-        last = added if (inp.rounds - 1) % 2 == 0 else first
-        order = (first, added) if last is added else (added, first)
-        refit, t["intervals"] = pair_refits(order, t["fold"], inp, maker, on_fit)
-        t["values"] = {m: refit[m] for m in t["values"]}  # the set's member order
-    return _set_of(tried, i, family, rng)
 
 
 def _set_of(tried: list[dict], i: int, family: int, rng: np.random.Generator) -> SetHeldOut:
