@@ -355,7 +355,10 @@ def _quoted_intervals(r: dict) -> dict:
 def targets(rows: list[dict], predicted: dict[int, dict]) -> str:
     """The issue's targets, measured on these rows."""
     single = [r for r in rows if len(r["truth"]) == 1]
-    right = [r for r in single if next(iter(r["truth"])) in r["fitted"]]
+    # named alone (the verdict's one effect), or one alternative of an ambiguous verdict
+    right = [r for r in single if r["verdict"].startswith("named") and r["truth"].keys()
+             == r["fitted"].keys()]  # fmt: skip
+    among = [r for r in single if r not in right and next(iter(r["truth"])) in r["fitted"]]
     pairs = [r for r in rows if len(r["truth"]) == 2]
     as_pairs = [r for r in pairs if set(r["fitted"]) == set(r["truth"])]
     # "ambiguous" with the hidden pair as one alternative (rows written before the
@@ -369,7 +372,8 @@ def targets(rows: list[dict], predicted: dict[int, dict]) -> str:
     fa = [r for r in rows if r["scenario"] == "none"]
     lines = [
         "",
-        f"- right effect named (single hidden effects): {len(right)} of {len(single)}",
+        f"- right effect named (single hidden effects): {len(right)} of {len(single)}; "
+        f"one alternative of an ambiguous verdict in {len(among)} more",
         f"- wrong names: {len(wrong)} of {len(rows)} runs"
         + (f" ({', '.join(r['scenario'] for r in wrong)})" if wrong else ""),
         f"- pairs named as pairs: {len(as_pairs)} of {len(pairs)}",
@@ -487,6 +491,9 @@ def main() -> None:
     ap.add_argument("--random-copies", type=int, default=None,
                     help="held-out copies of random effects (default: 2 x --copies)")  # fmt: skip
     ap.add_argument("--candidates", type=int, default=3)
+    ap.add_argument("--tied", type=int, default=2,
+                    help="most effects fitted beyond --candidates whose signature ties "
+                         "with the best (settings.TIE_COSINE)")  # fmt: skip
     ap.add_argument("--fit-evals", type=int, default=5)
     ap.add_argument("--refits", type=int, default=2)
     ap.add_argument("--fit-grid", action="store_true",
@@ -518,6 +525,7 @@ def main() -> None:
         scenario(s)  # fails loudly on an unknown one
     kw = dict(
         copies=args.copies, fit_copies=args.fit_copies, candidates=args.candidates,
+        tied=args.tied,
         random_fit_copies=args.random_fit_copies, random_copies=args.random_copies,
         fit_evals=args.fit_evals, refits=args.refits, pairs=args.pairs,
         power_fibers=args.power_fibers, fit_grid=args.fit_grid,

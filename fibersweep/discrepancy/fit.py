@@ -38,6 +38,7 @@ __all__ = [
     "Signature",
     "Fit",
     "rank_effects",
+    "choose_candidates",
     "fit_effect",
     "combined_loss",
     "per_fiber_loss",
@@ -459,6 +460,35 @@ def rank_effects(
         log.info("signature %s: cos %.2f at %g", best.name, best.cosine, best.probe)
         out.append(replace(best, vectors=tuple(vecs)))
     return sorted(out, key=lambda s: -s.cosine)
+
+
+def choose_candidates(
+    signatures: Sequence[Signature], k: int, tied: int, window: float
+) -> list[Signature]:
+    """The effects to fit: the ``k`` best matches, and up to ``tied`` more that tie.
+
+    A further effect ties when its cosine is within ``window`` of the best one's:
+    look-alike effects (the slowing ones) have signatures that the noise of an
+    N = 100 gap does not order, and an effect outside the fitted few is never named.
+
+    Parameters
+    ----------
+    signatures : sequence of Signature
+        Best match first (:func:`rank_effects`).
+    k : int
+        Effects always fitted (those with a positive cosine only).
+    tied : int
+        Most effects added beyond ``k``.
+    window : float
+        Largest shortfall of a tied effect's cosine below the best's.
+    """
+    positive = [sg for sg in signatures if sg.cosine > 0]
+    chosen = positive[:k]
+    if not chosen:
+        return []
+    floor = chosen[0].cosine - window
+    extra = [sg for sg in positive[k:] if sg.cosine >= floor][:tied]
+    return chosen + extra
 
 
 def _unbracketed_end(fit: Fit, lo: float, hi: float, tol: float) -> float | None:

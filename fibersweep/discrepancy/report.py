@@ -381,6 +381,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
             "copies": res.plan.copies,
             "fit_copies": res.plan.fit_copies,
             "candidates": res.plan.candidates,
+            "tied": res.plan.tied,
             "fit_evals": res.plan.fit_evals,
             "pairs": res.plan.pairs,
             "seed": res.settings.seed,

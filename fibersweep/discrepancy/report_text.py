@@ -141,6 +141,23 @@ def _gap_table(s: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _chosen_text(settings: dict[str, Any]) -> list[str]:
+    """Which of the ranked effects were fitted, and a blank line (``settings``: the
+    summary's; nothing when it does not say)."""
+    from fibersweep.discrepancy.settings import TIE_COSINE
+
+    if "candidates" not in settings:
+        return []
+    k, tied = settings["candidates"], settings.get("tied", 0)
+    more = (
+        f", and up to {tied} more whose cosine is within {TIE_COSINE:g} of the best one's "
+        "(look-alike effects that the noise may have put out of order)"
+        if tied
+        else ""
+    )
+    return [f"The {k} best matches with a positive cosine are fitted{more}.", ""]
+
+
 def _fits(s: dict[str, Any]) -> list[str]:
     if not s["signatures"]:
         return []
@@ -148,6 +165,7 @@ def _fits(s: dict[str, Any]) -> list[str]:
         "",
         "## Effects ranked by signature",
         "",
+        *_chosen_text(s.get("settings", {})),
         "| effect | probe | cosine with the gap | signature strength |",
         "|---|---|---|---|",
     ]

@@ -48,6 +48,7 @@ from fibersweep.discrepancy.dispersion import dispersion_test, spread_test
 from fibersweep.discrepancy.fit import (
     Fit,
     Signature,
+    choose_candidates,
     rank_effects,
     score_interval,
 )
@@ -68,7 +69,13 @@ from fibersweep.discrepancy.observables import has_tracks
 from fibersweep.discrepancy.pairfit import SelectionInput, pair_weights, rank_partners
 from fibersweep.discrepancy.schema import MeasuredData
 from fibersweep.discrepancy.select import crossfit_copies, forward_pairs, pair_trials
-from fibersweep.discrepancy.settings import PAIR_FIRSTS, DiscrepancySettings, Plan, plan_budget
+from fibersweep.discrepancy.settings import (
+    PAIR_FIRSTS,
+    TIE_COSINE,
+    DiscrepancySettings,
+    Plan,
+    plan_budget,
+)
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
 from fibersweep.fiber.settings import FiberSettings
@@ -268,7 +275,7 @@ def rank(st: State) -> State:
         probe_copy=max(plan.copies, plan.random_copies) + 1,
         rng=run.rng,
     )
-    chosen = [sg for sg in signatures if sg.cosine > 0][: plan.candidates]
+    chosen = choose_candidates(signatures, plan.candidates, plan.tied, TIE_COSINE)
     lead = chosen[0].name if chosen else ""  # a random lead gets more copies
     return replace(st, signatures=tuple(signatures), chosen=tuple(chosen), lead=lead)
 

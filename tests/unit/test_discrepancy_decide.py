@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from fibersweep.discrepancy.decide import decide, evaluate_heldout
+from fibersweep.discrepancy.fit import Signature, choose_candidates
 from fibersweep.discrepancy.gap import assess_gap
 from fibersweep.discrepancy.library import LIBRARY, get_candidates
 from fibersweep.discrepancy.workflow import DiscrepancySettings, plan_budget
@@ -118,6 +119,37 @@ def test_budget_plan_shrinks_and_refuses_too_small():
     assert small.copies >= 2
     with pytest.raises(InputError, match="budget"):
         plan_budget(100, DiscrepancySettings(budget=150), cands)
+
+
+def test_tied_signatures_are_fitted_beyond_the_best_few():
+    """k best with a positive cosine, then up to ``tied`` within the window of the best."""
+    cosines = {"a": 0.89, "b": 0.85, "c": 0.75, "d": 0.73, "e": 0.71, "f": 0.40}
+    sig = [Signature(n, 1.0, c, 1.0) for n, c in cosines.items()]
+    names = [sg.name for sg in choose_candidates(sig, 3, 2, 0.2)]
+    assert names == ["a", "b", "c", "d", "e"]  # pillar_hydro, seed 9301: fifth, 0.18 below
+    assert [sg.name for sg in choose_candidates(sig, 3, 1, 0.2)] == ["a", "b", "c", "d"]
+    assert [sg.name for sg in choose_candidates(sig, 3, 2, 0.15)] == ["a", "b", "c"]
+    assert [sg.name for sg in choose_candidates(sig, 3, 0, 0.2)] == ["a", "b", "c"]
+    # the k best are fitted however far below the best; no negative cosine ever
+    neg = [Signature("a", 1.0, 0.9, 1.0), Signature("b", 1.0, 0.1, 1.0),
+           Signature("c", 1.0, -0.2, 1.0)]  # fmt: skip
+    assert [sg.name for sg in choose_candidates(neg, 3, 2, 0.2)] == ["a", "b"]
+    assert choose_candidates([Signature("a", 1.0, -0.1, 1.0)], 3, 2, 0.2) == []
+
+
+def test_plan_counts_the_tied_candidates_and_drops_them_first_under_a_budget():
+    cands = get_candidates(["friction", "pillar_hydro", "off_midplane", "inlet_speed"])
+    s = DiscrepancySettings()
+    full = plan_budget(100, s, cands)
+    assert (full.candidates, full.tied, full.fitted) == (3, 1, 4)  # 4 effects in the library
+    none = plan_budget(100, DiscrepancySettings(tied=0), cands)
+    # each tied effect: both halves' fits (5 + 1 evaluations x 2 copies x 50) and its
+    # held-out copies (8 x 100)
+    assert full.total(100) - none.total(100) == 2 * 6 * 2 * 50 + 8 * 100
+    cut = plan_budget(100, DiscrepancySettings(budget=full.total(100) - 1), cands)
+    assert cut.tied == 0 and cut.pairs == full.pairs and cut.fit_evals == full.fit_evals
+    with pytest.raises(InputError, match="discrepancy.tied"):
+        DiscrepancySettings(tied=-1)
 
 
 def test_random_effects_get_more_copies_and_lose_them_first_under_a_budget():

@@ -128,6 +128,12 @@ def test_report_table_shows_each_members_interval():
     text = "\n".join(_fits({"signatures": sig, "heldout": [], "sets": [st]}))
     assert "inlet_speed = 0.049 [0.043, 0.056] (0.047, 0.052)" in text
     assert "friction = 0.51 [0.43, ≥ 0.6] (0.44, 0.46)" in text
+    # which ranked effects were fitted, from the plan in the summary's settings
+    plan = {"candidates": 3, "tied": 2}
+    text = "\n".join(_fits({"signatures": sig, "heldout": [], "sets": [], "settings": plan}))
+    assert "The 3 best matches with a positive cosine are fitted, and up to 2 more" in text
+    assert "more whose cosine" not in "\n".join(_fits({"signatures": sig, "heldout": [], "sets": [],
+                                           "settings": {"candidates": 3, "tied": 0}}))  # fmt: skip
     # a set that was not refitted (not significant) has no interval
     del st["interval95"], st["interval95_open"]
     assert "inlet_speed = 0.049 (0.047, 0.052)" in "\n".join(
