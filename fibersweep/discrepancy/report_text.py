@@ -10,6 +10,7 @@ import json
 from typing import Any
 
 from fibersweep.discrepancy.observables import OBSERVABLES, has_tracks, log_scale, scored
+from fibersweep.discrepancy.settings import TIE_COSINE
 
 __all__ = ["markdown"]
 
@@ -144,8 +145,6 @@ def _gap_table(s: dict[str, Any]) -> list[str]:
 def _chosen_text(settings: dict[str, Any]) -> list[str]:
     """Which of the ranked effects were fitted, and a blank line (``settings``: the
     summary's; nothing when it does not say)."""
-    from fibersweep.discrepancy.settings import TIE_COSINE
-
     if "candidates" not in settings:
         return []
     k, tied = settings["candidates"], settings.get("tied", 0)
