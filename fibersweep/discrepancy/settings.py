@@ -191,6 +191,9 @@ class Plan:
     inlet_speed (signature cosine 0.12) they took an N = 100 analysis from
     about 5 to 25 minutes. ``shared``: the halves are fitted at shared values
     (``DiscrepancySettings.fit_grid``), so a refit's starting values cost nothing.
+    ``tied``: most effects fitted beyond ``candidates`` when their signatures tie
+    with the best (``DiscrepancySettings.tied``); the costs count them all
+    (``fitted``).
     """
 
     copies: int
