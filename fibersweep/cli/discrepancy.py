@@ -299,6 +299,8 @@ def power_cmd(
             lim += f" [{lo}, {hi}]"
         if r["dispersion_limit"] is not None:
             lim += f"; dispersion test from {r['dispersion_limit']:.3g}"
+        if r["read_at"] is not None:
+            lim += f"; read at {r['read_at']:.3g}"
         need = r["fibers_for_realistic"]
         typer.echo(
             f"  {r['effect']:>13} {'+' if r['probe'] > 0 else '-'}  from {lim:>36}"
