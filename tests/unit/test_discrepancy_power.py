@@ -120,25 +120,38 @@ def test_limit_interval_from_resampled_starts_holds_the_limit():
         assert lo <= e.limit <= hi
 
 
-class _SpreadMaker:
-    """Stand-in copy maker: δ of copy k = x_i + 0.02 sqrt(1 + v^2) z_ik for start_noise v
-    (common random numbers), nothing else; counts its runs like the simulator."""
+class _StandInMaker:
+    """Stand-in copy maker: δ of copy k = x_i + response(effects, z_ik) (common random
+    numbers, x_i uniform in [0, 0.5], z_ik standard normal), nothing else; counts its
+    runs like the simulator."""
 
-    def __init__(self, n: int, seed: int):
+    def __init__(self, n: int, seed: int, response):
         rng = np.random.default_rng(seed)
         self.x = rng.uniform(0.0, 0.5, n)
         self.z = rng.standard_normal((3, n))
         self.n = n
+        self.response = response
         self.sim = type("Sim", (), {"used": 0})()
 
     def copies(self, ks, effects=None, rows=None, desc=""):
         import pandas as pd
 
-        v = float((effects or {}).get("start_noise", 0.0))
         idx = np.arange(self.n) if rows is None else rows
         self.sim.used += len(list(ks)) * len(idx)
-        return [pd.DataFrame({"delta": self.x[idx] + 0.02 * math.sqrt(1 + v**2) * self.z[k, idx]})
+        return [pd.DataFrame({"delta": self.x[idx] + self.response(effects or {}, self.z[k, idx])})
                 for k in ks]  # fmt: skip
+
+
+def _spread(effects, z):
+    """start_noise v widens the noise: 0.02 sqrt(1 + v^2) z."""
+    return 0.02 * math.sqrt(1 + float(effects.get("start_noise", 0.0)) ** 2) * z
+
+
+def _saturating(effects, z):
+    """inlet_speed m shifts by m up to 0.02 and no further; noise sd 0.02. Below 0.02
+    z grows as m; the probes at 0.15 and 0.075 both see the same shift."""
+    m = float(effects.get("inlet_speed", 0.0))
+    return math.copysign(min(abs(m), 0.02), m) + 0.02 * z
 
 
 def test_power_states_the_dispersion_tests_limit_of_a_random_effect():
@@ -149,35 +162,12 @@ def test_power_states_the_dispersion_tests_limit_of_a_random_effect():
     from fibersweep.discrepancy.library import LIBRARY
     from fibersweep.discrepancy.power import analyse_power
 
-    pw = analyse_power(_SpreadMaker(60, 1), [LIBRARY["start_noise"], LIBRARY["friction"]], 100,
-                       ["delta"], np.random.default_rng(2), n_sim=60)  # fmt: skip
+    pw = analyse_power(_StandInMaker(60, 1, _spread), [LIBRARY["start_noise"], LIBRARY["friction"]],
+                       100, ["delta"], np.random.default_rng(2), n_sim=60)  # fmt: skip
     sn = pw.get("start_noise")
     msg = f"family {sn.limit}, dispersion {sn.dispersion_limit}"
     assert sn.dispersion_limit is not None and 0.0 < sn.dispersion_limit < 5.0, msg
     assert pw.get("friction").dispersion_limit is None
-
-
-class _SaturatingMaker:
-    """Stand-in copy maker: inlet_speed m shifts δ by m up to 0.02 and no further, noise
-    sd 0.02 per copy (common random numbers). Below 0.02 z grows as m; the probes at
-    0.15 and 0.075 both see the same shift."""
-
-    def __init__(self, n: int, seed: int):
-        rng = np.random.default_rng(seed)
-        self.x = rng.uniform(0.0, 0.5, n)
-        self.z = rng.standard_normal((3, n))
-        self.n = n
-        self.sim = type("Sim", (), {"used": 0})()
-
-    def copies(self, ks, effects=None, rows=None, desc=""):
-        import pandas as pd
-
-        m = float((effects or {}).get("inlet_speed", 0.0))
-        shift = math.copysign(min(abs(m), 0.02), m)
-        idx = np.arange(self.n) if rows is None else rows
-        self.sim.used += len(list(ks)) * len(idx)
-        return [pd.DataFrame({"delta": self.x[idx] + shift + 0.02 * self.z[k, idx]})
-                for k in ks]  # fmt: skip
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -193,7 +183,7 @@ def test_a_limit_far_below_the_probes_is_read_again_where_it_lies(seed):
 
     def limit(probe, refine, n_boot=0):
         cand = Candidate("inlet_speed", -0.3, 0.3, (probe,), 0.05, "")
-        pw = analyse_power(_SaturatingMaker(60, seed), [cand], 100, ["delta"],
+        pw = analyse_power(_StandInMaker(60, seed, _saturating), [cand], 100, ["delta"],
                            np.random.default_rng(seed), n_sim=60, refine=refine,
                            n_boot=n_boot)  # fmt: skip
         return pw.effects[0], pw.simulations
