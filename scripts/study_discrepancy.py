@@ -270,15 +270,21 @@ def run_scenario(name: str, field, n: int, seed: int, workers: int, kw: dict) ->
     return row
 
 
-def predicted_detection(field, n: int, seed: int, workers: int, n_sim: int) -> dict:
-    """Power analysis on starts from BOX: P(detect) of each single-effect scenario at N = n."""
+def predicted_detection(
+    field, n: int, seed: int, workers: int, n_sim: int, extra: tuple[str, ...] = ()
+) -> dict:
+    """Power analysis on starts from BOX: P(detect) of each single-effect scenario at N = n.
+
+    The table's scenarios and those of ``extra`` (``NAME=VALUE`` ones included).
+    """
     rng = np.random.default_rng([seed, 17])
     starts = np.column_stack([rng.uniform(*BOX[c], n_sim) for c in ("theta0", "y0", "length")])
     with Simulator(field, FiberSettings(), workers=workers, progress=False) as sim:
         maker = CopyMaker(starts, NoiseModel(), seed, sim)
         pw = analyse_power(maker, get_candidates(), n, scored(), rng, n_sim=n_sim)
     out = {"limits": {f"{e.name}{'+' if e.probe > 0 else '-'}": e.limit for e in pw.effects}}
-    for name, (effects, outside, _) in SCENARIOS.items():
+    for name in dict.fromkeys([*SCENARIOS, *extra]):
+        effects, outside, _ = scenario(name)
         if len(effects) == 1 and outside is None:
             ((eff, m),) = effects.items()
             e = pw.get(eff, m)
@@ -288,16 +294,18 @@ def predicted_detection(field, n: int, seed: int, workers: int, n_sim: int) -> d
     return out
 
 
-def predicted_over_seeds(field, n: int, seeds: list[int], workers: int, n_sim: int) -> dict:
+def predicted_over_seeds(
+    field, n: int, seeds: list[int], workers: int, n_sim: int, extra: tuple[str, ...] = ()
+) -> dict:
     """:func:`predicted_detection` for several power seeds (other simulated starts).
 
     The prediction scales z-scores measured on ``n_sim`` fibers, so it carries
     their sampling noise; its spread over seeds shows how much. Each scenario's
     value is the mean over the seeds, ``per_seed`` holds them all.
     """
-    each = [predicted_detection(field, n, s, workers, n_sim) for s in seeds]
+    each = [predicted_detection(field, n, s, workers, n_sim, extra) for s in seeds]
     out = dict(each[0])
-    names = [k for k, v in out.items() if k in SCENARIOS and v is not None]
+    names = [k for k, v in out.items() if (k in SCENARIOS or k in extra) and v is not None]
     for name in names:
         out[name] = float(np.mean([e[name] for e in each]))
     out["per_seed"] = {name: [e[name] for e in each] for name in names}
@@ -538,7 +546,9 @@ def main() -> None:
     for n in args.n:
         n_pred = args.power_fibers if args.predict_fibers is None else args.predict_fibers
         if n_pred:
-            predicted[n] = predicted_over_seeds(field, n, args.power_seeds, args.workers, n_pred)
+            predicted[n] = predicted_over_seeds(
+                field, n, args.power_seeds, args.workers, n_pred, tuple(args.scenarios)
+            )
             log.warning("power at N = %d: %s", n, predicted[n]["limits"])
         if args.predict_only:
             continue

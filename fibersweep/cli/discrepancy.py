@@ -267,7 +267,7 @@ def power_cmd(
         with Simulator(
             field, cfg.fiber, workers=workers or cfg.run.workers, executor=cfg.run.executor,
             scheduler=cfg.run.scheduler, planned=3 * min(simulate, len(starts)) * (
-                1 + 2 * sum(len(c.probes) for c in cands)), tracks=False,
+                1 + 3 * sum(len(c.probes) for c in cands)), tracks=False,
         ) as sim:  # fmt: skip
             maker = CopyMaker(starts, NoiseModel(), seed, sim)
             pw = analyse_power(maker, cands, n, obs, rng, n_sim=simulate, alpha=alpha,
@@ -278,6 +278,7 @@ def power_cmd(
             rows.append(
                 {
                     "effect": e.name, "probe": e.probe, "limit": e.limit, "gamma": e.gamma,
+                    "read_at": e.read_at,
                     "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
                     "dispersion_limit": e.dispersion_limit,
                     "realistic": real, "fibers_for_realistic": pw.fibers_needed(e.name, real),
@@ -298,6 +299,8 @@ def power_cmd(
             lim += f" [{lo}, {hi}]"
         if r["dispersion_limit"] is not None:
             lim += f"; dispersion test from {r['dispersion_limit']:.3g}"
+        if r["read_at"] is not None:
+            lim += f"; read at {r['read_at']:.3g}"
         need = r["fibers_for_realistic"]
         typer.echo(
             f"  {r['effect']:>13} {'+' if r['probe'] > 0 else '-'}  from {lim:>36}"

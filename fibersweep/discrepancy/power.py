@@ -12,7 +12,16 @@ and number of fibers.
 Scaling (the approximation this rests on, checked by the study): the z of a
 test grows as ``sqrt(N)`` with the number of fibers, and as ``m ** gamma`` with
 the magnitude, gamma read off the two probes (1 for a shift, 2 for a spread
-whose variance grows as m², clipped to [0.5, 3]). The family detects when
+whose variance grows as m², clipped to [0.5, 3]). A power law is only good
+near where it was read: a permutation z saturates once a shift is large
+against the copies' spread (the shifted column widens its own null), and a
+score's excess grows as m² for small shifts but m for large ones. So unless
+the limit lies within a factor ``REFINE_FACTOR`` of one of the two magnitudes
+it was read from, or between them with at most ``BRACKET_RATIO`` from one to
+the other, the effect is simulated again at the limit, and the limit is read
+again from two magnitudes: that one and the simulated one nearest to it, each
+test's z following its own power law between them (exact at both); at most
+``refine`` times. The family detects when
 any test passes its Bonferroni threshold at alpha / m (Holm is at least as
 powerful): ``P(detect) = 1 - prod_j (1 - P_j)``, with ``P_j = Phi(z_j - z1)``
 for a one-sided score test (z1 = Phi^-1(1 - alpha/m); a score better than the
@@ -69,6 +78,11 @@ log = logging.getLogger(__name__)
 #: Parallel per-fiber effects beyond this |cosine| make two effects look-alikes.
 LOOKALIKE_COSINE = 0.9
 
+#: A limit this factor away from both magnitudes it was read from is read again there,
+REFINE_FACTOR = 1.25
+#: unless they bracket it within this ratio (an interpolation).
+BRACKET_RATIO = 4.0
+
 
 @dataclass(frozen=True)
 class EffectPower:
@@ -80,9 +94,12 @@ class EffectPower:
     probe : float
         Probe magnitude m_p (signed).
     z : tuple of float
-        Expected z-vector (family of gap tests) at m_p with ``n_sim`` fibers.
+        Expected z-vector (family of gap tests) at :attr:`at` with ``n_sim`` fibers.
     gamma : float
-        Growth exponent of z with the magnitude.
+        Growth exponent of z with the magnitude: of the strongest test between
+        m_p and m_p / 2, used for every test; read at a refined magnitude, that
+        of the strongest test between :attr:`at` and :attr:`against` (each
+        test then has its own, :meth:`z_of`).
     limit : float or None
         Smallest magnitude (same sign as the probe) detected with the target
         power at ``n`` fibers; None when not within the effect's range.
@@ -97,10 +114,18 @@ class EffectPower:
         (:mod:`.dispersion`, one-sided at alpha) detects with the target power
         at ``n`` fibers, scaled like ``limit``. None: not a random effect, or
         not within its range.
-    boot : tuple of (z, gamma)
+    boot : tuple of (z, gamma) or (z, gamma, z_against)
         The read-out of each bootstrap resample of the simulated starts
         (:func:`limit_intervals`), for the intervals of derived numbers
         (:meth:`fibers_needed_ci`). Empty: not computed.
+    read_at : float or None
+        Magnitude (signed) the z-vector was read at, when not the probe: the
+        refined read-out near the limit (module docstring). None: the probe.
+    against : float or None
+        With ``read_at``: the other simulated magnitude (signed) the per-test
+        power laws run through.
+    z_against : tuple of float
+        With ``read_at``: the z-vector at ``against``.
     """
 
     name: str
@@ -111,14 +136,38 @@ class EffectPower:
     one_sided: tuple[bool, ...] | None = None
     limit_ci: tuple[float | None, float | None] | None = None
     dispersion_limit: float | None = None
-    boot: tuple[tuple[tuple[float, ...], float], ...] = field(default=(), repr=False)
+    boot: tuple[tuple, ...] = field(default=(), repr=False)
+    read_at: float | None = None
+    against: float | None = None
+    z_against: tuple[float, ...] = ()
+
+    @property
+    def at(self) -> float:
+        """Magnitude (signed) the z-vector is read at."""
+        return self.probe if self.read_at is None else self.read_at
+
+    def z_of(self, m: float) -> np.ndarray:
+        """Expected z-vector at magnitude m (same sign as the probe) with ``n_sim`` fibers.
+
+        Read at the probe: ``z (|m| / |m_p|) ** gamma``. Read at a refined
+        magnitude: each test's own power law through its z at :attr:`at` and
+        at :attr:`against` (:func:`pair_exponents`), anchored at the larger
+        magnitude, where the signal is best measured.
+        """
+        if self.read_at is None or self.against is None:
+            return np.asarray(self.z) * (abs(m) / abs(self.probe)) ** self.gamma
+        za, zb = np.asarray(self.z), np.asarray(self.z_against)
+        g = pair_exponents(za, self.read_at, zb, self.against)
+        if abs(self.against) >= abs(self.read_at):
+            return zb * (abs(m) / abs(self.against)) ** g
+        return za * (abs(m) / abs(self.read_at)) ** g
 
     def detect(self, m: float, n_fibers: int, n_sim: int, z_crit: float) -> float:
         """Detection probability at magnitude m (same sign as the probe) and N fibers."""
         if m == 0.0 or np.sign(m) != np.sign(self.probe):
             return 0.0
-        scale = math.sqrt(n_fibers / n_sim) * (abs(m) / abs(self.probe)) ** self.gamma
-        return detect_probability(np.asarray(self.z) * scale, z_crit, self.one_sided)
+        z = self.z_of(m) * math.sqrt(n_fibers / n_sim)
+        return detect_probability(z, z_crit, self.one_sided)
 
     def fibers_needed(
         self, m: float, n_sim: int, z_crit: float, power: float, most: int = 100_000
@@ -148,8 +197,9 @@ class EffectPower:
         if not self.boot:
             return None
         ns = []
-        for z, gamma in self.boot:
-            k = replace(self, z=z, gamma=gamma, boot=()).fibers_needed(m, n_sim, z_crit, power)
+        for z, gamma, *zb in self.boot:
+            eb = replace(self, z=z, gamma=gamma, z_against=zb[0] if zb else self.z_against, boot=())
+            k = eb.fibers_needed(m, n_sim, z_crit, power)
             ns.append(math.inf if k is None else float(k))
         lo, hi = percentile_interval(ns, level)
         return (None if lo is None else int(lo), None if hi is None else int(hi))
@@ -340,6 +390,30 @@ def _gamma(z_full: np.ndarray, z_half: np.ndarray) -> float:
     return float(np.clip(math.log2(a / b), 0.5, 3.0)) if a > 3 and b > 0.5 else 1.0
 
 
+def pair_exponents(z_a: np.ndarray, m_a: float, z_b: np.ndarray, m_b: float) -> np.ndarray:
+    """Each test's growth exponent between two magnitudes, clipped to [0.5, 3].
+
+    ``log(|z_big| / |z_small|) / log(|m_big| / |m_small|)``, the small z floored at
+    1e-3 (a test that reads nothing at the small magnitude grows as fast as allowed).
+    """
+    za, zb = np.abs(np.asarray(z_a, float)), np.abs(np.asarray(z_b, float))
+    (z_lo, m_lo), (z_hi, m_hi) = sorted(((za, abs(m_a)), (zb, abs(m_b))), key=lambda t: t[1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.log(z_hi / np.maximum(z_lo, 1e-3)) / math.log(m_hi / m_lo)
+    return np.clip(np.where(np.isfinite(g), g, 1.0), 0.5, 3.0)
+
+
+def _read_out(e: EffectPower, z_at: np.ndarray, z_against: np.ndarray) -> EffectPower:
+    """``e`` with the z-vectors at its magnitudes: the probe and half of it, or
+    ``e.read_at`` and ``e.against`` (refined; :meth:`EffectPower.z_of`)."""
+    if e.read_at is None:
+        return replace(e, z=tuple(float(x) for x in z_at), gamma=_gamma(z_at, z_against))
+    g = pair_exponents(z_at, e.read_at, z_against, e.against)
+    big = z_against if abs(e.against) >= abs(e.read_at) else z_at
+    return replace(e, z=tuple(float(x) for x in z_at), gamma=float(g[int(np.argmax(np.abs(big)))]),
+                   z_against=tuple(float(x) for x in z_against))  # fmt: skip
+
+
 def limit_intervals(
     effects: Sequence[EffectPower],
     copies: Sequence[tuple[list[pd.DataFrame], list[pd.DataFrame]]],
@@ -367,9 +441,11 @@ def limit_intervals(
     ----------
     effects : sequence of EffectPower
         As :func:`analyse_power` found them.
-    copies : sequence of (full, half)
-        The copies with the effect at the probe and at half of it, one pair per
-        entry of ``effects``, over the same simulated rows as ``base``.
+    copies : sequence of (read, against)
+        The copies with the effect at the read-out magnitude (the probe, or the
+        refined one, :attr:`EffectPower.at`) and at the magnitude its exponent is
+        read against (half the probe, or :attr:`EffectPower.against`), one pair
+        per entry of ``effects``, over the same simulated rows as ``base``.
     ens : float
         The ensemble-size factor :func:`analyse_power` applied to the z-vectors.
     n_boot : int
@@ -392,10 +468,11 @@ def limit_intervals(
             sub_h = [d.iloc[idx].reset_index(drop=True) for d in half]
             z_full = _z_of(sub_f, sub_b, observables, rng, n_perm=99, n_boot=1) * ens
             z_half = _z_of(sub_h, sub_b, observables, rng, n_perm=99, n_boot=1) * ens
-            eb = replace(e, z=tuple(float(x) for x in z_full), gamma=_gamma(z_full, z_half))
+            eb = _read_out(e, z_full, z_half)
             lim = _limit(eb, by[e.name], n, n_sim, z_crit, power)
             lims[i].append(math.inf if lim is None else abs(lim))
-            reads[i].append((eb.z, eb.gamma))
+            reads[i].append((eb.z, eb.gamma) if e.read_at is None
+                            else (eb.z, eb.gamma, eb.z_against))  # fmt: skip
     out = []
     for e, ls, rd in zip(effects, lims, reads, strict=True):
         ci = tuple(None if x is None else math.copysign(x, e.probe)
@@ -416,6 +493,7 @@ def analyse_power(
     alpha: float = 0.05,
     power: float = 0.8,
     n_boot: int = 0,
+    refine: int = 4,
 ) -> PowerResult:
     """Detection limits and look-alikes of ``candidates`` (see the module docstring).
 
@@ -436,6 +514,10 @@ def analyse_power(
     n_boot : int
         Bootstrap resamples of the simulated starts for each limit's interval
         (:func:`limit_intervals`; 0: none). No new simulation.
+    refine : int
+        Most times a limit far from the magnitudes it was read from is read
+        again at the limit (one more simulated magnitude each; module
+        docstring). 0: never.
     """
     if copies < 3:
         raise ValueError(f"copies must be >= 3, got {copies}")
@@ -460,12 +542,13 @@ def analyse_power(
         for mp in cand.probes:
             z_full, eff = _z_vector(maker, base, {cand.name: mp}, rows, observables, rng)
             z_half, eff_h = _z_vector(maker, base, {cand.name: mp / 2}, rows, observables, rng)
-            kept.append((eff, eff_h))
             z_full, z_half = z_full * ens, z_half * ens
-            gamma = _gamma(z_full, z_half)
-            zt = tuple(float(x) for x in z_full)
-            e = EffectPower(cand.name, float(mp), zt, gamma, None, one_sided)
+            e = _read_out(EffectPower(cand.name, float(mp), (), 1.0, None, one_sided),
+                          z_full, z_half)  # fmt: skip
             lim = _limit(e, cand, n, n_sim, z_crit, power)
+            e, lim, pair = _refine(e, lim, (eff, eff_h), z_half, refine, cand, maker, base,
+                                   rows, observables, rng, n, z_crit, power, ens)  # fmt: skip
+            kept.append(pair)
             d_lim = None
             if cand.random:
                 zd_full = _z_dispersion(eff, base, observables, drng) * ens
@@ -508,6 +591,53 @@ def analyse_power(
         cosines=cos,
         simulations=maker.sim.used - used0,
     )
+
+
+def _refine(
+    e: EffectPower,
+    lim: float | None,
+    pair: tuple[list[pd.DataFrame], list[pd.DataFrame]],
+    z_half: np.ndarray,
+    times: int,
+    cand: Candidate,
+    maker: CopyMaker,
+    base: list[pd.DataFrame],
+    rows: np.ndarray,
+    observables: Sequence[str],
+    rng: np.random.Generator,
+    n: int,
+    z_crit: float,
+    power: float,
+    ens: float,
+) -> tuple[EffectPower, float | None, tuple[list[pd.DataFrame], list[pd.DataFrame]]]:
+    """Read the limit again where it lies while it is far from its read-out's magnitudes.
+
+    Far: more than ``REFINE_FACTOR`` from both, and not between them within
+    ``BRACKET_RATIO``. ``pair`` holds the copies at the probe and at half of it.
+    Returns the read-out, its limit and its (read, against) copies.
+    """
+    sims = {e.probe: (np.asarray(e.z), pair[0]), e.probe / 2.0: (z_half, pair[1])}
+    n_sim = len(rows)
+    for _ in range(times):
+        pair_m = (e.probe, e.probe / 2.0) if e.read_at is None else (e.read_at, e.against)
+        lo, hi = sorted(abs(m) for m in pair_m)
+        if (
+            lim is None
+            or any(m / REFINE_FACTOR <= abs(lim) <= m * REFINE_FACTOR for m in (lo, hi))
+            or (lo <= abs(lim) <= hi and hi <= BRACKET_RATIO * lo)
+        ):
+            break  # read close to the limit, or interpolated over a short bracket
+        z_r, eff_r = _z_vector(maker, base, {cand.name: lim}, rows, observables, rng)
+        z_r = z_r * ens
+        near = min(sims, key=lambda m: abs(math.log(abs(m) / abs(lim))))
+        e = _read_out(replace(e, read_at=float(lim), against=float(near)), z_r, sims[near][0])
+        pair = (eff_r, sims[near][1])
+        sims[lim] = (z_r, eff_r)
+        new = _limit(e, cand, n, n_sim, z_crit, power)
+        log.info("power %s@%g: limit %s read at %.3g and %.3g", cand.name, e.probe, new, lim,
+                 near)  # fmt: skip
+        lim = new
+    return e, lim, pair
 
 
 def _limit(

@@ -130,6 +130,7 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
                 "direction": "+" if e.probe > 0 else "-",
                 "probe": e.probe,
                 "gamma": e.gamma,
+                "read_at": e.read_at,
                 "limit": e.limit,
                 "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
                 "dispersion_limit": e.dispersion_limit,

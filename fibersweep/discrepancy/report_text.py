@@ -317,15 +317,22 @@ def _power(s: dict[str, Any]) -> list[str]:
             f"| {e['effect']} | {e['direction']} | {lim} | {ci_txt} | {_f(e['realistic'])} "
             f"| {_f(e['fibers_for_realistic'], 'd') if e['fibers_for_realistic'] else '> 100000'} |"
         )
+    again = [e for e in pw["effects"] if e.get("read_at") is not None]
     disp = [e for e in pw["effects"] if e.get("dispersion_limit") is not None]
-    if disp:
-        lines += [
-            "",
+    for lead, items in (
+        (
+            "Read again where they lie (the probes were far from them, and a power law "
+            "read there would misplace them; the effect was simulated again at the limit): ",
+            [f"{e['effect']} {e['direction']} at {_f(e['read_at'])}" for e in again],
+        ),
+        (
             "The dispersion test alone (one-sided at alpha, outside the gap family) would "
-            "detect with the same probability: "
-            + ", ".join(f"{e['effect']} from {_f(e['dispersion_limit'])}" for e in disp)
-            + ".",
-        ]
+            "detect with the same probability: ",
+            [f"{e['effect']} from {_f(e['dispersion_limit'])}" for e in disp],
+        ),
+    ):
+        if items:
+            lines += ["", lead + ", ".join(items) + "."]
     if pw["lookalikes"]:
         lines += [
             "",

@@ -5,6 +5,7 @@ stand-in read-out; no simulations)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -115,3 +116,29 @@ def test_each_resamples_read_out_reproduces_its_limit():
         lim = _limit(EffectPower(e.name, e.probe, z, g, None, e.one_sided), CAND, 100, 40, zc, 0.8)
         lims.append(math.inf if lim is None else lim)
     assert percentile_interval(lims) == pytest.approx(e.limit_ci)
+
+
+def test_a_refined_read_out_passes_through_both_magnitudes_per_test():
+    # Two tests read at m = 0.01 and 0.04: z = (1, 0.2) and (4, 3.2). Each follows its
+    # own power law between them (exponents 1 and 2), exact at both ends to 1e-12,
+    # and the exponents are clipped to [0.5, 3] (a test that reads nothing below
+    # grows as fast as allowed).
+    from fibersweep.discrepancy.power import pair_exponents
+
+    za, zb = np.array([1.0, -0.2]), np.array([4.0, -3.2])
+    assert np.allclose(pair_exponents(za, 0.01, zb, 0.04), [1.0, 2.0], rtol=0, atol=1e-12)
+    assert np.allclose(pair_exponents(zb, 0.04, za, 0.01), [1.0, 2.0], rtol=0, atol=1e-12)
+    g = pair_exponents(np.array([0.0, 4.0]), 0.01, np.array([5.0, 1.0]), 0.04)
+    assert g.tolist() == [3.0, 0.5]
+    e = EffectPower("x", 0.15, tuple(za), 1.0, None, read_at=0.01, against=0.04,
+                    z_against=tuple(zb))  # fmt: skip
+    assert np.allclose(e.z_of(0.01), za, rtol=0, atol=1e-12)
+    assert np.allclose(e.z_of(0.04), zb, rtol=0, atol=1e-12)
+    assert np.allclose(e.z_of(0.02), [2.0, -0.8], rtol=0, atol=1e-12)
+    # detection follows: 4 x the fibers doubles every z
+    assert e.detect(0.02, 40, 10, 2.5) == pytest.approx(
+        1 - np.prod(1 - norm.cdf(np.array([4.0, 1.6]) - 2.5)), abs=1e-12
+    )
+    # a bootstrap read-out of a refined entry carries its second z-vector
+    eb = replace(e, boot=((tuple(za), 1.0, tuple(zb)),) * 3)
+    assert eb.fibers_needed_ci(0.02, 10, 2.5, 0.8) == (eb.fibers_needed(0.02, 10, 2.5, 0.8),) * 2

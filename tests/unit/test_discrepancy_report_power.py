@@ -11,7 +11,7 @@ def _summary(kind: str) -> dict:
         {"effect": "friction", "direction": "+", "limit": 0.11, "limit_ci": [0.08, 0.2],
          "realistic": 0.4, "fibers_for_realistic": 12},
         {"effect": "pillar_hydro", "direction": "+", "limit": 0.3, "limit_ci": [0.1, None],
-         "realistic": 0.5, "fibers_for_realistic": 80},
+         "realistic": 0.5, "fibers_for_realistic": 80, "read_at": 0.25},
         {"effect": "start_noise", "direction": "+", "limit": 1.6, "limit_ci": None,
          "realistic": 2.0, "fibers_for_realistic": 60, "dispersion_limit": 1.3},
     ]  # fmt: skip
@@ -30,6 +30,9 @@ def test_power_table_shows_each_limit_with_its_interval():
     assert "| pillar_hydro | + | 0.3 | [0.1, out of range] |" in text
     assert "| start_noise | + | 1.6 | – |" in text
     assert "dispersion test alone" in text and "start_noise from 1.3" in text
+    # a limit read again where it lies says where; the others (read at the probes) do not
+    again = next(x for x in text.split("\n") if x.startswith("Read again"))
+    assert again.endswith("pillar_hydro + at 0.25.") and "friction" not in again
 
 
 def test_advice_of_an_unexplained_gap_names_the_next_measurement_and_the_unseen_sizes():
