@@ -387,11 +387,18 @@ class PartWriter:
         return self._oldest is not None and time.monotonic() - self._oldest >= self.flush_seconds
 
     def add(self, row: Mapping[str, Any], trajectory: Mapping[str, np.ndarray] | None) -> None:
-        """Queue one run's row (must hold ``id``) and its trajectory columns, if any."""
+        """Queue one run's row (must hold ``id``) and its trajectory columns, if any.
+
+        Ctrl-C can land anywhere in the main thread: the trajectory table is built
+        before anything is queued and queued before the row, so an interrupt never
+        leaves a row without its trajectory (a trajectory without its row is harmless:
+        the run is not done, and its re-run's trajectory replaces it).
+        """
+        table = _traj_table(str(row["id"]), trajectory) if trajectory else None
         with self._lock:
+            if table is not None:
+                self._traj.append(table)
             self._rows.append(dict(row))
-            if trajectory:
-                self._traj.append(_traj_table(str(row["id"]), trajectory))
             if self._oldest is None:
                 self._oldest = time.monotonic()
         if len(self._rows) >= self.flush_every or self._due():

@@ -74,6 +74,30 @@ def test_parts_are_atomic_and_deduplicated(tmp_path):
     assert read_trajectories(tmp_path).equals(tr)
 
 
+def test_an_interrupt_while_queueing_never_leaves_a_row_without_its_trajectory(
+    tmp_path, monkeypatch
+):
+    # Ctrl-C (a KeyboardInterrupt in the main thread) while a run's trajectory table is
+    # built: the run is not queued at all, so the close that follows the interrupt
+    # writes no row without its trajectory, and a resume runs it again. (Seen in CI:
+    # SIGINT mid-sweep left one ok row whose trajectory was never written.)
+    import fibersweep.sweep.store as store
+
+    def interrupted(run_id, cols):
+        raise KeyboardInterrupt
+
+    with PartWriter(tmp_path) as w:
+        w.add(_row("a"), _traj(5, 1.0))
+        monkeypatch.setattr(store, "_traj_table", interrupted)
+        try:
+            w.add(_row("b"), _traj(5, 2.0))
+        except KeyboardInterrupt:
+            pass
+        assert w.pending == 1
+    assert list(read_runs(tmp_path)["id"]) == ["a"]
+    assert set(read_trajectories(tmp_path)["id"]) == {"a"}
+
+
 def test_failed_rows_keep_types_and_reason(tmp_path):
     with PartWriter(tmp_path) as w:
         w.add(failed_row(SweepTask("x", 1.0, 0.3, 0.5), "worker process died"), None)
