@@ -1,0 +1,67 @@
+"""The expected z of the power analysis's strongest tests against an effect's magnitude.
+
+The power analysis scales z with a power law of the magnitude; this prints what
+the z-vector really is at several magnitudes, on one set of simulated starts
+(the starts of ``study_discrepancy.py --predict-only --power-seeds SEED``), so
+the law can be checked where a limit lies (docs/discrepancy.md, *Limits read
+near the limit*)::
+
+    python scripts/power_zcurve.py --seeds 1 2 --effect inlet_speed \
+        --magnitudes 0.15 0.075 0.03 0.015 0.0075
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, value_matrices
+from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.observables import scored
+from fibersweep.discrepancy.power import _z_vector
+from fibersweep.discrepancy.simulate import Simulator
+from fibersweep.fiber.settings import FiberSettings
+from fibersweep.flow.cache import get_flow_field
+from fibersweep.flow.settings import FlowSettings
+
+#: Start box of the studies (as scripts/study_discrepancy.py).
+BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1])
+    ap.add_argument("--effect", default="inlet_speed")
+    ap.add_argument("--magnitudes", type=float, nargs="+", default=[0.15, 0.075, 0.03, 0.015])
+    ap.add_argument("--simulate", type=int, default=40, help="simulated starts")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--cache", default=".fibersweep-cache/tests")
+    args = ap.parse_args()
+    field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
+    n = args.simulate
+    # the analysis's ensemble factor for 3 copies against a workflow of 8 (power.analyse_power)
+    ens = math.sqrt((1 + 1 / 2) / (1 + 1 / 8))
+    for seed in args.seeds:
+        rng = np.random.default_rng([seed, 17])
+        starts = np.column_stack([rng.uniform(*BOX[c], n) for c in ("theta0", "y0", "length")])
+        with Simulator(field, FiberSettings(), workers=args.workers, progress=False) as sim:
+            maker = CopyMaker(starts, NoiseModel(), seed, sim)
+            rows = np.arange(n)
+            base = maker.copies(range(3), None, rows, desc="baseline")
+            g0 = assess_gap(value_matrices(base[0], base[1:], scored()), rng, n_perm=99, n_boot=10)
+            side = feature_one_sided(g0)
+            for m in args.magnitudes:
+                z, _ = _z_vector(maker, base, {args.effect: m}, rows, scored(), rng)
+                z = z * ens
+                top = np.argsort(-np.abs(z))[:3]
+                tests = "  ".join(
+                    f"test {j} ({'score' if side[j] else 'residual'}) {z[j]:+.2f}" for j in top
+                )
+                print(f"seed {seed}  {args.effect} = {m:g}:  {tests}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
