@@ -13,7 +13,6 @@ near the limit*)::
 from __future__ import annotations
 
 import argparse
-import math
 
 import numpy as np
 
@@ -21,7 +20,7 @@ from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, value_matrices
 from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.observables import scored
-from fibersweep.discrepancy.power import _z_vector
+from fibersweep.discrepancy.power import _z_vector, ensemble_factor
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cache import get_flow_field
@@ -42,8 +41,7 @@ def main() -> None:
     args = ap.parse_args()
     field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
     n = args.simulate
-    # the analysis's ensemble factor for 3 copies against a workflow of 8 (power.analyse_power)
-    ens = math.sqrt((1 + 1 / 2) / (1 + 1 / 8))
+    ens = ensemble_factor(3, 8)  # as power.analyse_power: 3 copies, a workflow of 8
     for seed in args.seeds:
         rng = np.random.default_rng([seed, 17])
         starts = np.column_stack([rng.uniform(*BOX[c], n) for c in ("theta0", "y0", "length")])

@@ -67,6 +67,8 @@ __all__ = [
     "EffectPower",
     "PowerResult",
     "analyse_power",
+    "ensemble_factor",
+    "pair_exponents",
     "standardised_values",
     "detect_probability",
     "limit_intervals",
@@ -383,6 +385,15 @@ def _z_dispersion(
     return float(np.mean(zs))
 
 
+def ensemble_factor(copies: int, workflow_copies: int) -> float:
+    """Scale of a z read with ``copies - 1`` baseline copies to one with ``workflow_copies``.
+
+    sqrt((1 + 1/(copies - 1)) / (1 + 1/workflow_copies)): the copies' own noise in
+    the null shrinks with the ensemble the workflow scores against.
+    """
+    return math.sqrt((1 + 1 / (copies - 1)) / (1 + 1 / workflow_copies))
+
+
 def _gamma(z_full: np.ndarray, z_half: np.ndarray) -> float:
     """Growth exponent of the strongest test's z with the magnitude (see module docstring)."""
     j = int(np.argmax(np.abs(z_full)))
@@ -471,6 +482,7 @@ def limit_intervals(
             eb = _read_out(e, z_full, z_half)
             lim = _limit(eb, by[e.name], n, n_sim, z_crit, power)
             lims[i].append(math.inf if lim is None else abs(lim))
+            # (z, gamma) as before refinement existed; a refined read-out adds z_against
             reads[i].append((eb.z, eb.gamma) if e.read_at is None
                             else (eb.z, eb.gamma, eb.z_against))  # fmt: skip
     out = []
@@ -525,7 +537,7 @@ def analyse_power(
     rows = np.arange(n_sim)
     used0 = maker.sim.used
     base = maker.copies(range(copies), None, rows, desc="power baseline")
-    ens = math.sqrt((1 + 1 / (copies - 1)) / (1 + 1 / workflow_copies))
+    ens = ensemble_factor(copies, workflow_copies)
     g0 = assess_gap(value_matrices(base[0], base[1:], observables), rng, n_perm=99, n_boot=10)
     one_sided = tuple(bool(x) for x in feature_one_sided(g0))
     m_tests = len(one_sided)
