@@ -137,21 +137,23 @@ def _is_type_checking(test: ast.expr) -> bool:
 def _statements(tree: ast.Module) -> Iterable[tuple[ast.Import | ast.ImportFrom, str]]:
     """Every import statement of a module with where it stands."""
 
-    def walk(node: ast.AST, where: str) -> Iterable[tuple[ast.Import | ast.ImportFrom, str]]:
-        for child in ast.iter_child_nodes(node):
-            if isinstance(child, (ast.Import, ast.ImportFrom)):
-                yield child, where
-            elif isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
-                yield from walk(child, "type-checking" if where == "type-checking" else "function")
-            elif isinstance(child, ast.If) and _is_type_checking(child.test):
-                for stmt in child.body:
-                    yield from walk(ast.Module(body=[stmt], type_ignores=[]), "type-checking")
-                for stmt in child.orelse:
-                    yield from walk(ast.Module(body=[stmt], type_ignores=[]), where)
-            else:
-                yield from walk(child, where)
+    def visit(node: ast.AST, where: str) -> Iterable[tuple[ast.Import | ast.ImportFrom, str]]:
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            yield node, where
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            inner = "type-checking" if where == "type-checking" else "function"
+            for child in ast.iter_child_nodes(node):
+                yield from visit(child, inner)
+        elif isinstance(node, ast.If) and _is_type_checking(node.test):
+            for stmt in node.body:
+                yield from visit(stmt, "type-checking")
+            for stmt in node.orelse:
+                yield from visit(stmt, where)
+        else:
+            for child in ast.iter_child_nodes(node):
+                yield from visit(child, where)
 
-    yield from walk(tree, "module")
+    yield from visit(tree, "module")
 
 
 def _known(name: str, modules: Mapping[str, Path]) -> str | None:
@@ -270,7 +272,8 @@ def circle_report(edges: list[Arrow], root: Path) -> str:
             key=lambda e: (e.source, e.line),
         )
         shown = "\n".join(f"    {e.show(root)}" for e in inside)
-        blocks.append(f"  circle of {len(component)}: {' -> '.join(component)}\n{shown}")
+        head = f"circle of {len(component)} modules" if len(component) > 1 else "self-import"
+        blocks.append(f"  {head}: {', '.join(component)}\n{shown}")
     return "\n".join(blocks)
 
 
