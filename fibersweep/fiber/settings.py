@@ -6,7 +6,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_serializer
 
-from fibersweep.analysis.settings import ClassifySettings
+from fibersweep.analysis.classify import ClassifySettings
 
 __all__ = [
     "ContactSettings",
