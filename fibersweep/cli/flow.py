@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from fibersweep.cli._app import (
+    SETUP,
     ConfigArg,
     Overrides,
     Verbose,
@@ -19,7 +20,7 @@ from fibersweep.cli._app import (
 )
 
 
-@app.command()
+@app.command(rich_help_panel=SETUP)
 def flow(
     config: ConfigArg,
     overrides: Overrides = None,
