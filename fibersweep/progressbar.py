@@ -205,6 +205,12 @@ class WarmingBar:
             bar.bar_format = None  # a rate measured after start-up: show it, and the estimate
             bar.refresh()
 
+    def close(self) -> None:
+        """Close the bar; its last line gives the overall rate, start-up included."""
+        if not getattr(self._bar, "disable", False):
+            self._bar.bar_format = None
+        self._bar.close()
+
     def __getattr__(self, name: str) -> Any:
         return getattr(self._bar, name)
 

@@ -185,12 +185,12 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
         missing = [flow for flow, is_cached in fields.values() if not is_cached]
         if per_run is None and cached:
             per_run = estimate_run_s(cfg, plan.todo)
-            how = "timed on one run of this sweep"
+            how = _timed_on(cfg, plan.todo) + " of this sweep"
         if missing:
             flow_s, per_run_timed, note = _estimate_fields(cfg, plan.todo, missing)
             typer.echo(f"  {note}")
             if per_run is None:
-                per_run, how = per_run_timed, "timed on one run on a probe field"
+                per_run, how = per_run_timed, _timed_on(cfg, plan.todo) + " on a probe field"
     # same rule as SweepPlan.estimate_s: no more workers busy than runs to do
     est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(cfg.run.workers)
     if est is not None and flow_s:
@@ -203,6 +203,16 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     )
     if cfg.sweep.refine is not None:
         _dry_run_refinement(cfg, plan, extra, rnd, info)
+
+
+def _timed_on(cfg, todo) -> str:
+    """How many runs the estimate timed (one per length in a pillar array)."""
+    from fibersweep.sweep.estimate import sample_tasks
+
+    if cfg.flow.array is None:
+        return "timed on one run"
+    n = len(sample_tasks(todo))
+    return "timed on one run" if n == 1 else f"mean of {n} runs timed, one per length,"
 
 
 def _dry_run_refinement(cfg, plan, extra, rnd: int, info) -> None:

@@ -218,7 +218,7 @@ def plot_tracks(
             periods = {i: a.period_x for i, a in enumerate(arrays)}
             shifts = {i: a.lateral_shift for i, a in enumerate(arrays)}
             with paper_style():
-                fig = rows_figure(aruns, periods, shifts=shifts, ncols=4)
+                fig = rows_figure(aruns, periods, shifts=shifts)
                 path = _save(fig, out or results / "figures" / "tracks.png")
             typer.echo(f"wrote {path} ({len(aruns)} runs)")
             return

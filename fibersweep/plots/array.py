@@ -65,7 +65,7 @@ def cell_flow_figure(field):
 
 
 def overlay_figure(runs, period_x: float | dict, lengths: list[float] | None = None,
-                   ncols: int = 3, shifts: dict | None = None):  # fmt: skip
+                   ncols: int | None = None, shifts: dict | None = None):  # fmt: skip
     """Lateral displacement y − y0 [µm] against rows crossed, many fibers per panel.
 
     One panel per (setting, length) of ``runs`` (a setting's label in the title when
@@ -81,6 +81,8 @@ def overlay_figure(runs, period_x: float | dict, lengths: list[float] | None = N
         λx [µm], or per setting index.
     lengths : list of float, optional
         The lengths to draw (default: all).
+    ncols : int, optional
+        Panels per row (default: one per length, up to 7, so a row is a setting).
     shifts : dict, optional
         ε λy [µm] per setting index (the tilt line).
     """
@@ -92,9 +94,9 @@ def overlay_figure(runs, period_x: float | dict, lengths: list[float] | None = N
         for L in lengths
         if ((runs["length"] == L) & ((runs["setting"] == s) if s is not None else True)).any()
     ]
-    ncols = min(ncols, len(panels))
+    ncols = min(ncols or min(len(lengths), 7), len(panels))
     nrows = -(-len(panels) // ncols)
-    fig, axes = subplots(nrows, ncols, figsize=(2.5 * ncols, 2.2 * nrows + 0.4), sharey=True,
+    fig, axes = subplots(nrows, ncols, figsize=(2.3 * ncols, 2.0 * nrows + 0.4), sharey=True,
                          sharex=True, squeeze=False, layout="constrained")  # fmt: skip
     flat = axes.ravel()
     for ax, (s, L) in zip(flat, panels, strict=False):

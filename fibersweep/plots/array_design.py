@@ -255,9 +255,9 @@ def critical_figure(
     ax.set_xlabel(f"{name}" + (f" [{unit}]" if unit else ""))
     ax.set_ylabel("critical length [µm]")
     ax.set_title(
-        "mean f = 1/2; bars: statistical error; grey: between the simulated lengths; "
-        "arrows: no crossing (f above or below 1/2 at every length)",
-        fontsize=6,
+        "critical length: mean f = 1/2; bars: statistical error; grey: between the\n"
+        "simulated lengths; arrows: none (f above or below 1/2 at every length)",
+        fontsize=7,
     )
     if len(groups) > 1 or target is not None:
         ax.legend(fontsize=7)

@@ -164,8 +164,10 @@ def fractions_figure(runs: pd.DataFrame, key: str, level: float = 0.95) -> Figur
         q = fr[sel]
         x = x_all[sel] + (j - (len(classes) - 1) / 2) * 0.06 * step
         st = styles[cls]
+        # rounding can put an end a hair inside a fraction of 0 or 1
+        err = np.clip([q["fraction"] - q["lo"], q["hi"] - q["fraction"]], 0.0, None)
         ax.errorbar(
-            x, q["fraction"], yerr=[q["fraction"] - q["lo"], q["hi"] - q["fraction"]],
+            x, q["fraction"], yerr=err,
             marker=st["marker"], color=st["color"], mec="k", mew=0.4, ms=5, lw=1.0,
             capsize=2.5, label=cls,
         )  # fmt: skip
