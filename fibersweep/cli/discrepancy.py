@@ -71,7 +71,8 @@ def synth(
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
-    """Measured-like fibers from the model with hidden effects and measurement noise.
+    """Measured-like fibers past one pillar from the model, with hidden effects and
+    measurement noise.
 
     Starts are uniform in the range of CONFIG's sweep axes; the truth (effects,
     noise, true starts) goes to a separate JSON file. With --tracks, the
@@ -170,7 +171,8 @@ def discrepancy(
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
-    """Where the model disagrees with MEASURED, which effect(s) explain it, and the gap left."""
+    """Where the model disagrees with fibers MEASURED past one pillar, which effects
+    explain it, and the gap left."""
     _setup_logging(verbose)
     with _errors():
         cfg = _load(config, overrides)

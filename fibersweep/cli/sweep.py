@@ -1,4 +1,4 @@
-"""The sweep commands (issue 4/5): ``run``, ``classify`` and ``plot-phase``."""
+"""The sweep commands: ``run``, ``classify``, ``plot-phase`` and ``check``."""
 
 from __future__ import annotations
 
@@ -528,7 +528,10 @@ def plot_phase(
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Phase diagram, δ map, contact map and δ distribution of a sweep.
+    """Phase diagram, δ map, contact map and δ distribution of a sweep past one pillar.
+
+    A pillar array's runs have modes, not the channel's classes: exit 2 naming
+    sort-report, plot-fractions and explore.
 
     A folder of several settings gets one panel per value of the swept keys that
     vary (--col, --row), and one file per value of any further one.

@@ -127,7 +127,8 @@ def plot_fractions(
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Fraction of runs in each class against one setting, with binomial (Wilson) intervals."""
+    """Fraction of runs in each class (a pillar array: each mode) against one setting,
+    with binomial (Wilson) intervals."""
     _setup_logging(verbose)
     with _errors():
         from fibersweep.plots.fractions import class_fractions, fractions_figure
@@ -158,7 +159,11 @@ def plot_delta(
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Lateral displacement δ against one setting: every run, median, quartiles, 5–95 %."""
+    """Lateral displacement δ past one pillar against one setting: every run, median,
+    quartiles, 5–95 %.
+
+    A pillar array's runs have no δ (their displacement is f: sort-report); exit 2.
+    """
     _setup_logging(verbose)
     with _errors():
         from fibersweep.plots.fractions import delta_by_figure, delta_spread
@@ -198,7 +203,8 @@ def plot_tracks(
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Centre-of-mass paths of the runs --where selects (all by default), by class.
+    """Paths of the runs --where selects (all by default): past one pillar by class, through
+    a pillar array as displacement against rows crossed by mode.
 
     A pillar array's runs: their lateral displacement against the rows crossed, one
     panel per setting and length, by mode, with the array's tilt.
