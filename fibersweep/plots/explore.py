@@ -375,9 +375,9 @@ function pillarTrace(r, tr) {
     const L = D.lattices[r[iSet]], o = L.outline;
     const x0 = Math.min(...tr.x) - L.px, x1 = Math.max(...tr.x) + L.px;
     const y0 = Math.min(...tr.y) - 0.5 * L.py, y1 = Math.max(...tr.y) + 0.5 * L.py;
-    for (let q = Math.floor(x0 / L.px) - 1; q <= Math.ceil(x1 / L.px) + 1; q++) {
+    for (let q = Math.floor(x0 / L.px); q <= Math.ceil(x1 / L.px); q++) {
       const dy = q * L.ls;
-      for (let c = Math.floor((y0 - dy) / L.py) - 1; c <= Math.ceil((y1 - dy) / L.py) + 1; c++) {
+      for (let c = Math.floor((y0 - dy) / L.py); c <= Math.ceil((y1 - dy) / L.py); c++) {
         const ox = q * L.px, oy = dy + c * L.py;
         o.forEach(p => { xs.push(p[0] + ox); ys.push(p[1] + oy); });
         xs.push(o[0][0] + ox, null); ys.push(o[0][1] + oy, null);
