@@ -206,13 +206,13 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
 
 
 def _timed_on(cfg, todo) -> str:
-    """How many runs the estimate timed (one per length in a pillar array)."""
+    """How many runs the estimate timed (in a pillar array, spread over the lengths)."""
     from fibersweep.sweep.estimate import sample_tasks
 
     if cfg.flow.array is None:
         return "timed on one run"
     n = len(sample_tasks(todo))
-    return "timed on one run" if n == 1 else f"mean of {n} runs timed, one per length,"
+    return "timed on one run" if n == 1 else f"mean of {n} runs timed across the lengths"
 
 
 def _dry_run_refinement(cfg, plan, extra, rnd: int, info) -> None:
@@ -267,7 +267,7 @@ def _estimate_fields(cfg, todo, missing) -> tuple[float, float, str]:
     """Seconds for the fields not cached, seconds per run, and a line on how.
 
     The runs are timed on the probe field of the first field not cached: its middle
-    run, or in a pillar array one run per length (their cost depends on it).
+    run, or in a pillar array runs spread across the lengths (their cost depends on it).
     """
     from fibersweep.fiber.result import FiberStart
     from fibersweep.sweep.estimate import PROBE_STEPS, estimate_uncached, sample_tasks

@@ -13,8 +13,8 @@ solver runs :data:`PROBE_STEPS` steps per solve, its speed gives the solve's
 time at :data:`CELL_STEPS_PER_NODE` steps per node of the cell's largest side,
 and the runs are timed on that probe cell. An array run's cost depends on the
 fiber's length (a sphere crosses the rows fast, a long fiber slides along every
-pillar) and its mode, so one run per length of the sweep is timed
-(:func:`sample_tasks`), up to :data:`MAX_TIMED` runs.
+pillar) and its mode, so one run per length (and setting) of the sweep is timed, spread
+evenly over them up to :data:`MAX_TIMED` runs (:func:`sample_tasks`).
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ TYPICAL_STEPS = (1800, 2100)
 #: ``configs/array.yaml`` (80 µm periods, 40 µm deep) at dx = 2 µm (40 nodes:
 #: 4200 steps for the two solves) and dx = 4 µm (20 nodes: 1600).
 CELL_STEPS_PER_NODE = 45
-#: Most runs timed for an estimate (one per length of an array sweep).
+#: Most runs timed for an estimate (spread over the lengths of an array sweep).
 MAX_TIMED = 6
 
 
@@ -230,12 +230,13 @@ def _simulate_quiet(field: Any, fiber: FiberSettings, start: FiberStart) -> None
 
 
 def sample_tasks(todo: Sequence[SweepTask], k: int = MAX_TIMED) -> list[SweepTask]:
-    """Up to ``k`` runs of ``todo`` that stand for it: the middle run of each length
-    (spread over the lengths when there are more than ``k``), else the middle run."""
-    by_length: dict[float, list[SweepTask]] = {}
+    """Up to ``k`` runs of ``todo`` that stand for it: the middle run of each length and
+    setting combination (spread evenly over them, by length, when there are more than
+    ``k``), else the middle run."""
+    by_length: dict[tuple[float, str], list[SweepTask]] = {}
     for t in todo:
-        by_length.setdefault(float(t.length), []).append(t)
-    groups = [by_length[L] for L in sorted(by_length)]
+        by_length.setdefault((float(t.length), str(t.settings)), []).append(t)
+    groups = [by_length[key] for key in sorted(by_length)]
     if len(groups) > k:
         groups = [groups[round(i * (len(groups) - 1) / (k - 1))] for i in range(k)]
     return [g[len(g) // 2] for g in groups] or list(todo[:1])
@@ -276,7 +277,7 @@ def time_run(field: Any, fiber: FiberSettings, start: FiberStart) -> float:
 
 def estimate_run_s(cfg: Any, todo: list[SweepTask]) -> float:
     """Seconds per run of a sweep, timed on its middle to-do point (see :func:`time_run`);
-    in a pillar array, the mean over one run per length (:func:`sample_tasks`).
+    in a pillar array, the mean over runs spread across the lengths (:func:`sample_tasks`).
 
     Each run is made with its own setting combination (its field must be cached).
     """
