@@ -51,7 +51,14 @@ from fibersweep.errors import SolverError
 from fibersweep.flow.cuts import Cuts, pillar_cuts
 from fibersweep.flow.ghost import extend_into_wall
 from fibersweep.flow.lattice import Grid
-from fibersweep.flow.lbm import DEFAULT_KERNEL, LatticeSolution, choose_tau, rates, run_stepper
+from fibersweep.flow.lbm import (
+    DEFAULT_KERNEL,
+    LatticeSolution,
+    choose_tau,
+    rates,
+    run_stepper,
+    wall_kind,
+)
 from fibersweep.flow.midplane import full_depth, midplane_average
 from fibersweep.flow.schemes import get_wall_scheme
 from fibersweep.flow.settings import FlowSettings
@@ -198,8 +205,7 @@ def _solve(settings: FlowSettings, grid: Grid, cuts: Cuts | None, axis: int, ker
     grad = np.zeros((3, 3, *u0.shape[1:]), dtype=np.float32)
     stepper = make_stepper(kernel, grid, u0, rho0, grad, force, omega_p, omega_m, cuts=cuts,
                            dtype=np.dtype(settings.precision), axis=axis)  # fmt: skip
-    boundary = "staircase" if cuts is None else "interpolated"
-    return run_stepper(settings, grid, stepper, solve_rates, boundary, threads)
+    return run_stepper(settings, grid, stepper, solve_rates, wall_kind(grid, cuts), threads)
 
 
 def cell_solution(settings: FlowSettings, axis: int = 0, *, kernel: str = DEFAULT_KERNEL,
@@ -237,13 +243,12 @@ def solve_cell(settings: FlowSettings, *, kernel: str = DEFAULT_KERNEL,
     """
     if settings.array is None:
         raise ValueError("solve_cell needs flow settings with an array")
-    grid = cell_grid(settings)
-    cuts = pillar_cuts(grid, settings.array.to_array().shape, settings.pillar_boundary)
-    along = _solve(settings, grid, cuts, 0, kernel, threads)
-    mirror = grid.shift == 0 and np.array_equal(grid.solid, grid.solid[:, ::-1])
+    along = cell_solution(settings, 0, kernel=kernel, threads=threads)
+    solid = along.grid.solid
+    mirror = along.grid.shift == 0 and np.array_equal(solid, solid[:, ::-1])
     if settings.array.mean_flow == "force" or mirror:
         return _cell_solve(along.u, [along])
-    across = _solve(settings, grid, cuts, 1, kernel, threads)
+    across = cell_solution(settings, 1, kernel=kernel, threads=threads)
     alpha = -float(along.u[1].sum()) / float(across.u[1].sum())
     log.info("unit cell: lateral force %.4g x the axial one sets the mean flow along x", alpha)
     return _cell_solve(along.u + alpha * across.u, [along, across])

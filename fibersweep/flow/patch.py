@@ -50,6 +50,7 @@ from fibersweep.flow.lbm import (
     rates,
     run_stepper,
     solve_nested,
+    wall_kind,
 )
 from fibersweep.flow.midplane import midplane_average, midplane_weights
 from fibersweep.flow.schemes import get_wall_scheme
@@ -258,8 +259,7 @@ def solve_patch_lattice(
     stepper = PatchStepper(grid, u0, rho0, grad, fx, omega_p, omega_m, cuts=cuts,
                            dtype=np.dtype(settings.precision))  # fmt: skip
     del u0, rho0, grad
-    boundary = "staircase" if cuts is None else "interpolated"
-    sol = run_stepper(fine, grid, stepper, fine_rates, boundary, threads)
+    sol = run_stepper(fine, grid, stepper, fine_rates, wall_kind(grid, cuts), threads)
     return sol, box, pgeom
 
 
