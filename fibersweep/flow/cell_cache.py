@@ -3,7 +3,8 @@
 The key is the flow cache key (:func:`fibersweep.flow.cache.cache_key`, which
 adds the cell solver's version when ``flow.array`` is set). A field is solved
 once (:func:`fibersweep.flow.cell.solve_cell`), scaled (:func:`~fibersweep.flow.cell.field_of`)
-and written atomically; an unreadable entry is discarded and solved again.
+and written atomically, with its full-depth field if ``flow.keep_3d``; an
+unreadable entry is discarded and solved again.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import numpy as np
 from fibersweep.atomic import atomic_write
 from fibersweep.flow.array_settings import ArraySettings
 from fibersweep.flow.cell import CellField, field_of, solve_cell
+from fibersweep.flow.settings import FlowSettings
 
 __all__ = ["cell_path", "get_cell_field", "load_cell_field", "save_cell_field"]
 
@@ -54,7 +56,9 @@ def load_cell_field(path: str | Path) -> CellField:
         return CellField(array, z["ux"], z["uy"], float(z["dx"]), meta, u3d)
 
 
-def get_cell_field(settings, cache_dir: str | Path, key: str, *, force: bool = False):
+def get_cell_field(
+    settings: FlowSettings, cache_dir: str | Path, key: str, *, force: bool = False
+) -> tuple[CellField, bool]:
     """The unit-cell field of ``settings`` (a FlowSettings with ``array``): cached or solved.
 
     Returns

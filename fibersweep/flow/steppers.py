@@ -75,8 +75,8 @@ class PullStepper(_Stepper):
     otherwise interpolated bounce-back at the wall fractions ``cuts``.
     ``dtype``: storage (and collision) precision of the populations, float32 or float64.
     With shifted x faces the ghost columns are filled after the pillar, so the
-    pillar's cut links must stay clear of the x faces (a unit cell's pillar does:
-    :data:`~fibersweep.flow.lattice.EDGE_CELLS`).
+    pillar must stay clear of the x faces (a unit cell's pillar does: it is
+    centred, and a sub-grid wall keeps :data:`~fibersweep.flow.lattice.EDGE_CELLS`).
     """
 
     def __init__(
@@ -84,6 +84,8 @@ class PullStepper(_Stepper):
         cuts: Cuts | None = None, dtype: np.dtype | type = np.float32, axis: int = 0,
     ):  # fmt: skip
         self.fx, self.omega_p, self.omega_m, self.shift = fx, omega_p, omega_m, grid.shift
+        if grid.shift and (grid.solid[0].any() or grid.solid[-1].any()):
+            raise ValueError("the pull stepper needs the pillar clear of shifted x faces")
         frame = self._frame(axis)
         self.links, self.solid_cells = boundary_links(grid)
         self.sources = pull_sources(grid)
