@@ -167,29 +167,25 @@ def _estimate_cell(
     from fibersweep.flow.cell import field_of, solve_cell
 
     t_start = time.perf_counter()
-    array = flow.array.to_array()
-    kw = dict(
-        boundary=flow.pillar_boundary, symmetry=flow.symmetry, tolerance=flow.tolerance,
-        tau=flow.tau, precision=flow.precision, mean_flow=flow.array.mean_flow,
-    )  # fmt: skip
-    cell_log = logging.getLogger("fibersweep.flow.cell")
+    probe = flow.model_copy(update={"max_steps": PROBE_STEPS, "check_every": PROBE_STEPS // 2})
     quiet = _NotConverged()
-    cell_log.addFilter(quiet)  # the probe stops before convergence on purpose
+    logs = [logging.getLogger(n) for n in ("fibersweep.flow.lbm", "fibersweep.flow.cell")]
+    for lg in logs:
+        lg.addFilter(quiet)  # the probe stops before convergence on purpose
     try:
         t0 = time.perf_counter()
-        solve_cell(array, flow.dx, max_steps=4, check_every=2, **kw)  # compile (or load)
+        solve_cell(flow.model_copy(update={"max_steps": 4, "check_every": 2}))  # compile (or load)
         compile_s = time.perf_counter() - t0
-        sol = solve_cell(array, flow.dx, max_steps=PROBE_STEPS, check_every=PROBE_STEPS // 2,
-                         **kw)  # fmt: skip
+        sol = solve_cell(probe)
     finally:
-        cell_log.removeFilter(quiet)
+        for lg in logs:
+            lg.removeFilter(quiet)
     g = sol.grid
     cells = g.nx * g.ny * g.nz
     solves = max(1, round(sol.steps / PROBE_STEPS))  # 2 with the mean flow made along x
     mlups = cells * sol.steps / max(sol.seconds, 1e-9) / 1e6
     steps = solves * CELL_STEPS_PER_NODE * max(g.nx, g.ny, g.nz_full)
-    field = field_of(array, sol, flow.fluid.u_center, flow.pillar_boundary,
-                     flow.model_dump(mode="json"), viscosity=flow.fluid.viscosity)  # fmt: skip
+    field = field_of(probe, sol)
     run_s, warmup_s = _time_runs(field, fiber, starts)
     return UncachedEstimate(
         flow_s=steps * cells / (mlups * 1e6),
