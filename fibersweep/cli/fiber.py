@@ -19,10 +19,12 @@ from fibersweep.cli._app import (
     choices,
     flow_progress,
 )
-from fibersweep.fiber.settings import FiberSettings
+from fibersweep.fiber.settings import LEGACY_MODELS, FiberSettings
 
-# the models FiberSettings accepts (the model registry matches them, tested)
-Model = choices("Model", typing.get_args(FiberSettings.model_fields["model"].annotation))
+# the models FiberSettings accepts (the model registry matches them, tested), and former names
+Model = choices(
+    "Model", (*typing.get_args(FiberSettings.model_fields["model"].annotation), *LEGACY_MODELS)
+)
 
 
 @app.command()
@@ -55,10 +57,10 @@ def simulate(
         from fibersweep.fiber.run import simulate_reversible
         from fibersweep.flow.cache import get_flow_field
 
-        cfg = _load(config, overrides)
+        # --model is the override fiber.model=..., validated with the others (its integrator)
+        extra = [f"fiber.model={model.value}"] if model is not None else []
+        cfg = _load(config, [*(overrides or []), *extra])
         fiber = cfg.fiber
-        if model is not None:
-            fiber = fiber.model_copy(update={"model": model.value})
         if plot is not None:
             rec = fiber.record.model_copy(
                 update={"trajectories": True, "samples": max(fiber.record.samples, 2000)}
@@ -78,7 +80,8 @@ def simulate(
 
         typer.echo(
             f"start: theta0 = {theta0:g}°, y0/h = {y0:g}, L/l_obs = {length:g} "
-            f"({res.n_beads} beads), model {fiber.model}, pillar {fiber.contact.pillar}"
+            f"({res.n_beads} beads), model {fiber.model} ({fiber.resolved_integrator}), "
+            f"pillar {fiber.contact.pillar}"
         )
         if res.status != "ok":
             typer.echo(f"status: failed ({res.reason})")
