@@ -35,7 +35,7 @@ TRAP = FiberStart(8.0, 0.351, 0.75)
 APEX = FiberStart(5.0, 0.40, 1.0)
 SHORT = FiberStart(8.0, 0.351, 0.5)
 SOFT = FiberStart(0.0, 0.33, 2.0)
-SOFT_TRAP = FiberStart(0.0, 0.30, 2.0)
+SOFT_LOW = FiberStart(0.0, 0.30, 2.0)
 E_SOFT = {"young_modulus": 1e4}
 SMOOTH = {"contact": {"pillar": "smooth"}}
 ROS3 = {"step": {"rosenbrock": "ros34pw2"}}
@@ -109,7 +109,7 @@ CASES = {
     # A soft fiber (10 kPa, 43 beads) bent over the apex: its self-exclusion pairs act.
     "ros2_soft_rough": ("run", "bead-spring-ros2", SOFT, {"x0": 1060.0, **E_SOFT}, None),
     "ros2_soft_smooth": ("run", "bead-spring-ros2", SOFT, {"x0": 1060.0, **E_SOFT, **SMOOTH}, None),
-    "ros2_soft_trap": ("run", "bead-spring-ros2", SOFT_TRAP, {"x0": 1060.0, **E_SOFT}, None),
+    "ros2_soft_low": ("run", "bead-spring-ros2", SOFT_LOW, {"x0": 1060.0, **E_SOFT}, None),
     "ros34_soft_rough": ("run", "bead-spring-ros2", SOFT, {"x0": 1060.0, **E_SOFT, **ROS3}, None),
     "ros34_soft_smooth": (
         "run",
