@@ -187,35 +187,50 @@ class FiberSettings(_Strict):
 
     @model_validator(mode="before")
     @classmethod
-    def _legacy_model(cls, data: Any) -> Any:
-        """Read ``model: bead-spring-ros2`` as bead-spring with ``step.rosenbrock``'s integrator."""
-        if not isinstance(data, dict) or data.get("model") not in LEGACY_MODELS:
+    def _legacy_names(cls, data: Any) -> Any:
+        """Read the former spelling: ``model: bead-spring-ros2``, its method in ``step.rosenbrock``.
+
+        That pair becomes (bead-spring, the method), and ``step.rosenbrock`` is dropped
+        whenever a Rosenbrock integrator is set (it must then name the same one), so both
+        spellings give equal settings and run ids. With the rigid model or BDF2 it keeps
+        its old meaning: none.
+        """
+        if not isinstance(data, dict):
             return data
-        legacy = data["model"]
+        legacy = data.get("model") in LEGACY_MODELS
+        integrator = data.get("integrator")
         step = data.get("step")
         if isinstance(step, BaseModel):
-            given = step.model_fields_set
-            step = step.model_dump()
+            given, step = step.model_fields_set, step.model_dump()
         else:
             step = dict(step or {})
             given = set(step)
-        method = step.pop("rosenbrock", "ros2") if "rosenbrock" in given else "ros2"
+        if not legacy and (integrator not in ROSENBROCK or "rosenbrock" not in given):
+            return data
+        method = step.pop("rosenbrock", None) if "rosenbrock" in given else None
         step.pop("rosenbrock", None)
-        integrator = data.get("integrator")
-        if integrator is None:
-            integrator = method
-        elif integrator not in ROSENBROCK or ("rosenbrock" in given and integrator != method):
-            raise ValueError(
-                f"fiber.integrator: {integrator!r} contradicts fiber.model: {legacy} with "
-                f"step.rosenbrock {method!r}; write model: bead-spring, integrator: {method}"
+        if legacy:
+            integrator = integrator or method or "ros2"
+            name = data["model"]
+            if integrator not in ROSENBROCK:
+                raise ValueError(
+                    f"fiber.integrator: {integrator!r} contradicts fiber.model: {name}, the former "
+                    f"name of bead-spring with a Rosenbrock integrator: {', '.join(ROSENBROCK)}"
+                )
+            log.warning(
+                "fiber.model: %s is deprecated; read as model: %s, integrator: %s",
+                name,
+                LEGACY_MODELS[name],
+                integrator,
             )
-        log.warning(
-            "fiber.model: %s is deprecated; read as model: %s, integrator: %s",
-            legacy,
-            LEGACY_MODELS[legacy],
-            integrator,
-        )
-        return {**data, "model": LEGACY_MODELS[legacy], "integrator": integrator, "step": step}
+            data = {**data, "model": LEGACY_MODELS[name]}
+        if method not in (None, integrator):
+            raise ValueError(
+                f"fiber.step.rosenbrock: {method!r} contradicts fiber.integrator: {integrator!r} "
+                "(step.rosenbrock is the deprecated way to name a Rosenbrock integrator; write "
+                "only fiber.integrator)"
+            )
+        return {**data, "integrator": integrator, "step": step}
 
     @field_validator("integrator")
     @classmethod
@@ -230,20 +245,6 @@ class FiberSettings(_Strict):
                 f"(model: integrator): {valid_pairs()}"
             )
         return None if value == INTEGRATORS[model][0] else value
-
-    @model_validator(mode="after")
-    def _rosenbrock_agrees(self) -> FiberSettings:
-        """``step.rosenbrock`` away from its default must name the Rosenbrock integrator set."""
-        if (
-            self.integrator in ROSENBROCK
-            and self.step.rosenbrock != "ros2"
-            and self.step.rosenbrock != self.integrator
-        ):
-            raise ValueError(
-                f"fiber.step.rosenbrock: {self.step.rosenbrock!r} contradicts fiber.integrator: "
-                f"{self.integrator!r} (step.rosenbrock is deprecated: leave it out)"
-            )
-        return self
 
     @property
     def resolved_integrator(self) -> str:

@@ -60,15 +60,21 @@ def test_rigid_and_bdf2_dumps_and_ids_are_as_before_the_integrator_setting():
 
 def test_the_former_model_name_reads_as_the_pair_with_a_logged_deprecation(caplog):
     """``model: bead-spring-ros2`` with ``step.rosenbrock`` is the pair (bead-spring, method):
-    equal settings, equal run ids, a warning naming the new spelling."""
+    equal settings, equal run ids, a warning naming the new spelling; so is the new spelling
+    with a ``step.rosenbrock`` that agrees."""
     start = FiberStart(0.0, 0.4, 1.0)
     for method in ("ros2", "ros34pw2"):
         with caplog.at_level(logging.WARNING, logger="fibersweep.fiber.settings"):
             old = FiberSettings(model="bead-spring-ros2", step={"rosenbrock": method})
         assert f"integrator: {method}" in caplog.text and "deprecated" in caplog.text
         new = FiberSettings(model="bead-spring", integrator=method)
-        assert old == new and run_id(start, old, "k") == run_id(start, new, "k")
+        both = FiberSettings(model="bead-spring", integrator=method, step={"rosenbrock": method})
+        assert old == new == both and run_id(start, old, "k") == run_id(start, new, "k")
         assert integrator_of(old).name == method
+    # with the rigid model or BDF2, step.rosenbrock keeps its old meaning (none) and dump
+    for model in ("rigid", "bead-spring"):
+        st = FiberSettings(model=model, step={"rosenbrock": "ros34pw2"})
+        assert st.integrator is None and st.step.rosenbrock == "ros34pw2"
 
 
 @pytest.mark.parametrize(
