@@ -25,10 +25,12 @@ measured in the same run, and their min / median / max over the grid.
 
 With ``--against TREE`` (a checkout of another version), it times every (E, L)
 of the grid with each integrator of ``--integrators`` (fixed, ros2, ros3; tolerances
-at their defaults) in this tree and in TREE alternately, ``--rounds`` times each
-in fresh processes (Numba compiled beforehand in each), and prints the ratio
+at their defaults) in this tree and in TREE alternately (each first in turn),
+``--rounds`` times each in fresh processes (Numba compiled beforehand in each), and
+prints the ratio
 this/other of the median over rounds of each round's minimum of ``--repeat`` runs,
-and whether both took the same steps. The settings are spelled so that every
+and whether both took the same steps. ``--cpu`` times the process's CPU time instead
+of the wall clock (steadier when other work loads the cores). The settings are spelled so that every
 version reads them (the former model name ``bead-spring-ros2``).
 
 Usage: python scripts/bench_flexible.py --against /tmp/before [--rounds 3] [--repeat 3]
@@ -164,10 +166,11 @@ def child(args: argparse.Namespace) -> None:
             for L in args.lengths:
                 st = _settings(model, E, step)
                 times = []
+                clock = time.process_time if args.cpu else time.perf_counter
                 for _ in range(args.repeat):
-                    t0 = time.perf_counter()
+                    t0 = clock()
                     r = simulate(field, st, FiberStart(0.0, args.y0, L))
-                    times.append(time.perf_counter() - t0)
+                    times.append(clock() - t0)
                 out[f"{name:5s} E = {E / 1e6:g} MPa, L/l = {L:g}"] = [min(times), r.n_steps]
     print(json.dumps(out))
 
@@ -179,11 +182,13 @@ def against(args: argparse.Namespace) -> None:
     argv = [sys.executable, str(Path(__file__).resolve()), "--child", "--dx", str(args.dx),
             "--cache", str(Path(args.cache).resolve()), "--repeat", str(args.repeat),
             "--y0", str(args.y0), "--moduli", *map(str, args.moduli),
-            "--lengths", *map(str, args.lengths), "--integrators", *args.integrators]  # fmt: skip
+            "--lengths", *map(str, args.lengths), "--integrators", *args.integrators,
+            *(["--cpu"] if args.cpu else [])]  # fmt: skip
     times: dict[tuple[str, str], list[float]] = {}
     steps: dict[tuple[str, str], int] = {}
     for rnd in range(args.rounds):
-        for name, tree in trees.items():
+        order = list(trees.items())
+        for name, tree in order[:: 1 if rnd % 2 == 0 else -1]:  # each tree first in turn
             env = {**os.environ, "PYTHONPATH": str(tree)}
             run = subprocess.run(argv, cwd=tree, env=env, capture_output=True, text=True)
             if run.returncode != 0:
@@ -192,8 +197,10 @@ def against(args: argparse.Namespace) -> None:
                 times.setdefault((case, name), []).append(t)
                 steps[(case, name)] = n
             print(f"round {rnd} {name} done", flush=True)
+    clock = "CPU" if args.cpu else "wall"
     print(f"this: {trees['this']}\nother: {trees['other']}\n{args.rounds} rounds, each the "
-          f"minimum of {args.repeat} runs; ratio of the medians over rounds; y0/h = {args.y0}")
+          f"minimum of {args.repeat} runs ({clock} time); ratio of the medians over rounds; "
+          f"y0/h = {args.y0}")  # fmt: skip
     for case in dict.fromkeys(c for c, _ in times):
         a = statistics.median(times[(case, "this")])
         b = statistics.median(times[(case, "other")])
@@ -218,6 +225,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3, help="runs per case and round (--against)")
     ap.add_argument("--integrators", nargs="+", choices=list(INTEGRATORS),
                     default=list(INTEGRATORS), help="--against: the integrators timed")  # fmt: skip
+    ap.add_argument("--cpu", action="store_true", help="--against: CPU time, not wall time")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:

@@ -77,7 +77,7 @@ def integrate_bdf2(q, qprev, state, k, stride, rec, brec):
         any_c, cx, cy, min_d = velocity_at(frame, flow, pillar, body, p, w, bw, effects, qs)
         # The current state q (time t) with the velocity estimate v.
         pose = R.bead_pose(q, v, theta)
-        theta, _, _, _, _, com_speed, hx, _, tx, _, y_min, y_max, finite, _, _ = pose
+        theta, _, _, _, _, com_speed, hx, _, tx, _, y_min, y_max, finite, _ = pose
         cflag = 1.0 if any_c else 0.0
         stopped = any_c and com_speed < p.trap_speed and have_prev
         code, stopped_since = R.stop_test(

@@ -89,7 +89,7 @@ def bead_velocity(frame, flow, pillar, body, p, w, bw, effects):
     return any_c, cx, cy
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def velocity_at(frame, flow, pillar, body, p, w, bw, effects, q):
     """:func:`bead_velocity` at positions ``q`` (2n) [µm], copied into ``w.x, w.y`` first.
 

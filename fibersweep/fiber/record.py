@@ -100,10 +100,10 @@ def bead_pose(q, v, theta):
 
     Returns
     -------
-    (theta, xc, yc, vxc, vyc, com_speed, hx, hy, tx, ty, y_min, y_max, finite_q, finite_v, vmax)
+    (theta, xc, yc, vxc, vyc, com_speed, hx, hy, tx, ty, y_min, y_max, finite_q, finite_v)
         Axis angle [rad], centre and its velocity [µm, µm/s], its speed, head and
         tail bead [µm], lowest and highest bead centre [µm], whether q and v are
-        finite, and the largest bead speed [µm/s].
+        finite.
     """
     n = q.shape[0] // 2
     hx = q[2 * n - 2]
@@ -120,7 +120,6 @@ def bead_pose(q, v, theta):
     y_max = -1e300
     finite_q = True
     finite_v = True
-    vmax = 0.0
     for i in range(n):
         xc += q[2 * i] / n
         yc += q[2 * i + 1] / n
@@ -128,14 +127,12 @@ def bead_pose(q, v, theta):
         vyc += v[2 * i + 1] / n
         y_min = min(y_min, q[2 * i + 1])
         y_max = max(y_max, q[2 * i + 1])
-        vmax = max(vmax, math.hypot(v[2 * i], v[2 * i + 1]))
         if not (math.isfinite(q[2 * i]) and math.isfinite(q[2 * i + 1])):
             finite_q = False
         if not (math.isfinite(v[2 * i]) and math.isfinite(v[2 * i + 1])):
             finite_v = False
     com_speed = math.hypot(vxc, vyc)
-    return (theta, xc, yc, vxc, vyc, com_speed, hx, hy, tx, ty, y_min, y_max, finite_q,
-            finite_v, vmax)  # fmt: skip
+    return theta, xc, yc, vxc, vyc, com_speed, hx, hy, tx, ty, y_min, y_max, finite_q, finite_v
 
 
 @nb.njit(cache=True, inline="always")
@@ -146,7 +143,7 @@ def write_bead_row(r, br, t, q, v, pose, contact, cx, cy, min_d):
     tail→head vector, the head speed that of bead n−1.
     """
     n = q.shape[0] // 2
-    theta, xc, yc, vxc, vyc, com_speed, hx, hy, tx, ty, _, _, _, _, _ = pose
+    theta, xc, yc, vxc, vyc, com_speed, hx, hy, tx, ty, _, _, _, _ = pose
     ex = hx - tx
     ey = hy - ty
     om = (ex * (v[2 * n - 1] - v[1]) - ey * (v[2 * n - 2] - v[0])) / (ex * ex + ey * ey)

@@ -246,7 +246,7 @@ def integrate_rosenbrock(q, state, k, rec, brec, f0, k1, k2, qn, fext):
             frame, flow, pillar, body, p, w, bw, effects, q, fext, has_ext, f0
         )
         pose = R.bead_pose(q, f0, theta)
-        theta, _, _, _, _, com_speed, hx, _, tx, _, y_min, y_max, fin_q, fin_v, vmax = pose
+        theta, _, _, _, _, com_speed, hx, _, tx, _, y_min, y_max, fin_q, fin_v = pose
         R.write_bead_row(rec[rows], brec[rows], t, q, f0, pose, 1.0 if any_c else 0.0, cx, cy,
                          min_d)  # fmt: skip
         rows += 1
@@ -257,6 +257,9 @@ def integrate_rosenbrock(q, state, k, rec, brec, f0, k1, k2, qn, fext):
         if code != R.CHUNK_FULL:
             break
         # Step bounds: displacement far from / approaching the pillar, largest step.
+        vmax = 0.0
+        for i in range(n):
+            vmax = max(vmax, math.hypot(f0[2 * i], f0[2 * i + 1]))
         free = min_d - r_cut
         disp = min(p.max_disp, max(p.contact_disp, 0.5 * free))
         h_cap = min(disp / (vmax + 1e-12), p.dt_max)
