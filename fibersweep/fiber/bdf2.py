@@ -116,7 +116,7 @@ def integrate_bdf2(q, qprev, state, k, stride, rec, brec):
                 rhs[i2] = c * (f[i2] - (q[i2] - qprev[i2]) / dt)
             else:
                 rhs[i2] = c * f[i2]
-        delta = np.linalg.solve(lhs, rhs)  # LAPACK: the reference's results, bit for bit
+        delta = np.linalg.solve(lhs, rhs)  # LAPACK: the reference's solve (lu rounds otherwise)
         for k2 in range(n2):
             qnew = qs[k2] + delta[k2]
             if have_prev:
