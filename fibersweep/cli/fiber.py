@@ -22,10 +22,12 @@ from fibersweep.cli._app import (
     flow_progress,
 )
 from fibersweep.errors import InputError
-from fibersweep.fiber.settings import FiberSettings
+from fibersweep.fiber.settings import LEGACY_MODELS, FiberSettings
 
-# the models FiberSettings accepts (the model registry matches them, tested)
-Model = choices("Model", typing.get_args(FiberSettings.model_fields["model"].annotation))
+# the models FiberSettings accepts (the model registry matches them, tested), and former names
+Model = choices(
+    "Model", (*typing.get_args(FiberSettings.model_fields["model"].annotation), *LEGACY_MODELS)
+)
 
 
 #: Seconds above which making the kernels ready means they were compiled, not loaded.
@@ -82,10 +84,10 @@ def simulate(
         from fibersweep.flow.cache import get_flow_field
         from fibersweep.plots.shapes import is_flexible
 
-        cfg = _load(config, overrides)
+        # --model is the override fiber.model=..., validated with the others (its integrator)
+        extra = [f"fiber.model={model.value}"] if model is not None else []
+        cfg = _load(config, [*(overrides or []), *extra])
         fiber = cfg.fiber
-        if model is not None:
-            fiber = fiber.model_copy(update={"model": model.value})
         if plot is not None:  # the drawing needs the trajectory, and a bent fiber its beads
             rec = fiber.record.model_copy(
                 update={
@@ -150,7 +152,8 @@ def _echo_channel(res, fiber, reversible: bool, back: float) -> None:
     st = res.start
     typer.echo(
         f"start: theta0 = {st.theta0:g}°, y0/h = {st.y0:g}, L/l_obs = {st.length:g} "
-        f"({res.n_beads} beads), model {fiber.model}, pillar {fiber.contact.pillar}"
+        f"({res.n_beads} beads), model {fiber.model} ({fiber.resolved_integrator}), "
+        f"pillar {fiber.contact.pillar}"
     )
     if res.status != "ok":
         typer.echo(f"status: failed ({res.reason})")
@@ -183,7 +186,8 @@ def _echo_array(res, array, fiber) -> None:
     st = res.start
     typer.echo(
         f"start: theta0 = {st.theta0:g}°, y0 = {st.y0:g} of period_y (in the gap before row "
-        f"0), L = {st.length:g} µm ({res.n_beads} beads), model {fiber.model}"
+        f"0), L = {st.length:g} µm ({res.n_beads} beads), "
+        f"model {fiber.model} ({fiber.resolved_integrator})"
     )
     typer.echo(
         f"array: periods {array.period_x:g} x {array.period_y:g} µm, shift {array.shift:g} "

@@ -201,7 +201,7 @@ def test_stiff_bead_spring_fiber_follows_the_rigid_one_through_the_array(small, 
     cfg, field = small
     start = FiberStart(0.0, y0, 60.0)
     rigid = simulate(field, cfg.model_copy(update={"array_rows": 5}), start)
-    stiff = cfg.model_copy(update={"model": "bead-spring-ros2", "array_rows": 5})
+    stiff = cfg.model_copy(update={"model": "bead-spring", "integrator": "ros2", "array_rows": 5})
     flex = simulate(field, stiff, start)
     assert rigid.status == flex.status == "ok", (rigid, flex)
     assert flex.mode == rigid.mode and flex.rows == rigid.rows == 5
@@ -217,7 +217,8 @@ def test_softer_fibers_bend_more_around_the_array_pillars(small):
     out = []
     for e in (26e6, 1e6, 1e5):
         fiber = cfg.model_copy(
-            update={"model": "bead-spring-ros2", "young_modulus": e, "array_rows": 5}
+            update={"model": "bead-spring", "integrator": "ros2", "young_modulus": e,
+                    "array_rows": 5}  # fmt: skip
         )
         r = simulate(field, fiber, FiberStart(0.0, 0.6, 60.0))
         assert r.status == "ok" and r.contacts > 0, r
