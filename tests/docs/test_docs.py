@@ -137,8 +137,12 @@ def _scratch(tmp: Path, flow_cache: Path) -> tuple[Path, dict[str, str]]:
     shim = bin_dir / "fibersweep"
     shim.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} -m fibersweep "$@"\n')
     shim.chmod(0o755)
-    (bin_dir / "python").symlink_to(sys.executable)
-    (bin_dir / "python3").symlink_to(sys.executable)
+    # A wrapper, not a symlink: a symlink to a virtual environment's interpreter placed
+    # in another folder starts the base interpreter, without the environment's packages.
+    for name in ("python", "python3"):
+        wrapper = bin_dir / name
+        wrapper.write_text(f'#!/bin/sh\nexec {shlex.quote(sys.executable)} "$@"\n')
+        wrapper.chmod(0o755)
     env = dict(os.environ)
     env["PATH"] = f"{bin_dir}{os.pathsep}{env.get('PATH', '')}"
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO), env.get("PYTHONPATH")]))
@@ -253,3 +257,14 @@ def test_no_reference_outside_the_repository() -> None:
             resolved = (path.parent / target).resolve()
             assert REPO in resolved.parents or resolved == REPO, f"{path.name}: {target}"
             assert resolved.exists(), f"{path.name}: broken link {target}"
+
+
+def test_python_on_the_doc_path_is_the_tests_environment(tmp_path: Path) -> None:
+    """``python3`` in a doc command sees the environment the tests run in (a venv too)."""
+    _, env = _scratch(tmp_path, tmp_path)
+    for name in ("python", "python3"):
+        out = subprocess.run(
+            [name, "-c", "import sys; print(sys.prefix)"],
+            env=env, capture_output=True, text=True, check=True,
+        )  # fmt: skip
+        assert out.stdout.strip() == sys.prefix, f"{name} runs {out.stdout.strip()}"
