@@ -7,7 +7,7 @@
    (``fibersweep run`` with ``flow.array`` and ``sweep.random``), extrapolated to 1000
    starts from the runs' own wall times: target under 600 s.
 
-    python3 scripts/bench_array.py [--starts 40]
+    python3 scripts/benchmarks/bench_array.py [--starts 40]
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Time one fiber run (L = l_obs, start to far downstream) in both models; print the ratio.
 
-Usage: python scripts/bench_fiber.py [--dx 4] [--cache .fibersweep-cache] [--repeat 5]
+Usage: python scripts/benchmarks/bench_fiber.py [--dx 4] [--cache .fibersweep-cache] [--repeat 5]
 
 Timings on a shared machine are noisy, so the script reports the ratio of the
 two models measured in the same process, after a warm-up that compiles the
@@ -16,7 +16,7 @@ processes (Numba compiled beforehand in each), so the machine's load hits both
 alike, and prints the ratio this/other of the median over rounds of each
 round's minimum run time.
 
-Usage: python scripts/bench_fiber.py --against /tmp/before [--rounds 5] [--repeat 20]
+Usage: python scripts/benchmarks/bench_fiber.py --against /tmp/before [--rounds 5] [--repeat 20]
 """
 
 from __future__ import annotations
@@ -76,7 +76,7 @@ def child(args: argparse.Namespace) -> None:
 
 def against(args: argparse.Namespace) -> None:
     """This tree and ``args.against``, alternately in fresh processes: ratios this/other."""
-    here = Path(__file__).resolve().parent.parent
+    here = Path(__file__).resolve().parents[2]  # the repository
     trees = {"this": here, "other": args.against.resolve()}
     cache = str(Path(args.cache).resolve())
     argv = [sys.executable, str(Path(__file__).resolve()), "--child", "--dx", str(args.dx),

@@ -6,7 +6,7 @@ receiving it pickled, this checks that a run costs the same on either: the same
 starts, alternated batch by batch in one process, CPU time (not wall: the machine is
 shared), ratio of the medians printed.
 
-Usage:  python scripts/bench_field_mmap.py [--cache .fibersweep-cache] [--rounds 4]
+Usage:  python scripts/benchmarks/bench_field_mmap.py [--cache .fibersweep-cache] [--rounds 4]
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Time the adaptive bead-spring models (ROS2, ROS34PW2) against the fixed-step one; print ratios.
 
-Usage: python scripts/bench_flexible.py [--dx 4] [--cache .fibersweep-cache]
+Usage: python scripts/benchmarks/bench_flexible.py [--dx 4] [--cache .fibersweep-cache]
        [--moduli 26e6 5e6 1e6 0.1e6] [--lengths 0.5 1.0] [--y0 0.45]
        [--reference-dt 1e-6] [--reference-moduli 26e6] [--reference-lengths 1.0]
 

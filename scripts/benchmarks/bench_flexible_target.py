@@ -2,8 +2,10 @@
 
 Usage::
 
-    python scripts/bench_flexible_target.py references [--moduli 26e6 0.1e6] [--lengths 0.5 1.0]
-    python scripts/bench_flexible_target.py compare [--moduli ...] [--lengths ...] [--repeat 3]
+    python scripts/benchmarks/bench_flexible_target.py references [--moduli 26e6 0.1e6] [--lengths \
+        0.5 1.0]
+    python scripts/benchmarks/bench_flexible_target.py compare [--moduli ...] [--lengths ...] \
+        [--repeat 3]
 
 "Today's run" is ``bead-spring`` at its default fixed step Δt = 5e-5 s (BDF2 with a
 Newton solve, 4.1–4.3 s for L = l_obs). The target asks for the new integrator to be

@@ -14,7 +14,7 @@ noisy machine:
   AA: 19 x 4 B read + 19 x 4 B written in place (152 B). Pull: the same plus
   19 x 4 B of write-allocate reads of the second array (228 B).
 
-Usage: python scripts/bench_lbm.py [--steps 30] [--dx 4]
+Usage: python scripts/benchmarks/bench_lbm.py [--steps 30] [--dx 4]
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ the peak is reset through /proc/self/clear_refs). Then the full channel at
 dx = 1 µm is extrapolated from the measured rates and bytes per cell: an
 extrapolation, not a measurement.
 
-Usage: python scripts/bench_precision.py [--dx 2] [--steps 200] [--threads 2]
+Usage: python scripts/benchmarks/bench_precision.py [--dx 2] [--steps 200] [--threads 2]
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from fibersweep.flow.steppers import make_stepper
 PRECISIONS = ("float32", "float64")
 FULL_DX1_CELLS = 2400 * 800 * 20  # full channel, dx = 1 µm, half depth
 FULL_DX1_STEPS = (3300, 5200)  # fine-level steps of the dx = 1 µm small-channel solves
-QUIET_FLOAT32_MLUPS = 114.7  # AA kernel, 2 threads, quiet machine (scripts/bench_lbm.py)
+QUIET_FLOAT32_MLUPS = 114.7  # AA kernel, 2 threads, quiet machine (scripts/benchmarks/bench_lbm.py)
 TARGET_S = 15 * 60
 
 

@@ -19,7 +19,7 @@ are listed. Refined brackets the uniform grid has no counterpart for are counted
 band thinner than its step). Writes the refined phase figure with its boundaries (missed
 segments marked) to --figure.
 
-Usage:  nice -n 5 python scripts/bench_refine.py [--cache .fibersweep-cache] [--out DIR]
+Usage:  nice -n 5 python scripts/benchmarks/bench_refine.py [--cache .fibersweep-cache] [--out DIR]
             [--dtheta 2] [--coarse 0.05] [--tol 0.005] [--delta-jump 0.1] [--workers 2]
             [--figure docs/figures/refine.png]
 """

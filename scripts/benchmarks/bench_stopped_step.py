@@ -11,8 +11,9 @@ the discrepancy study draws its fibers from (θ0 in [-10, 10]°, y0/h in
 
 Usage::
 
-    nice -n 5 python scripts/bench_stopped_step.py --n 80
-    nice -n 5 python scripts/bench_stopped_step.py --n 80 --box study --effects friction=0.5
+    nice -n 5 python scripts/benchmarks/bench_stopped_step.py --n 80
+    nice -n 5 python scripts/benchmarks/bench_stopped_step.py --n 80 --box study --effects \
+        friction=0.5
 """
 
 from __future__ import annotations
@@ -23,13 +24,14 @@ import time
 import numpy as np
 
 from fibersweep.config import load_config
+from fibersweep.discrepancy.synth import STUDY_BOX
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
 from fibersweep.flow.cache import get_flow_field
 
 BOXES = {
     "quick": ((-8.0, 8.0), (0.05, 0.9), (0.75, 1.25)),
-    "study": ((-10.0, 10.0), (0.15, 0.65), (0.5, 1.4)),
+    "study": tuple(STUDY_BOX[c] for c in ("theta0", "y0", "length")),
 }
 
 

@@ -20,12 +20,12 @@ each after one untimed warm-up (Numba caches), in one run so the machine's load
 hits both alike, and prints the ratios of the medians (this / other):
   * a whole sweep, ``fibersweep run CONFIG`` from an empty folder, the command's wall
     time (interpreter and pool start-up included; the flow field is cached);
-  * the discrepancy check of scripts/snapshot_discrepancy.py (``--disc-n`` fibers),
+  * the discrepancy check of scripts/tools/snapshot_discrepancy.py (``--disc-n`` fibers),
     timed by its own report (the workflow alone, synthesis excluded).
 
-Usage:  python scripts/bench_sweep.py [--config configs/quick.yaml] [--paper-sample 60]
+Usage:  python scripts/benchmarks/bench_sweep.py [--config configs/quick.yaml] [--paper-sample 60]
                                       [--chunk-size 1 --chunk-size auto]
-        python scripts/bench_sweep.py --against /tmp/before [--rounds 3] [--disc-n 30]
+        python scripts/benchmarks/bench_sweep.py --against /tmp/before [--rounds 3] [--disc-n 30]
                                       [--cache DIR] [--only sweep|discrepancy]
 """
 
@@ -206,10 +206,10 @@ def _timed(tree: Path, argv: list[str], pattern: str | None) -> float:
 
 def compare_trees(args: argparse.Namespace) -> None:
     """Sweep and discrepancy times of this tree against ``args.against``, interleaved."""
-    here = Path(__file__).resolve().parent.parent
+    here = Path(__file__).resolve().parents[2]  # the repository
     trees = {"this": here, "other": args.against.resolve()}
     cache = str(Path(args.cache).resolve())
-    snap = str(here / "scripts" / "snapshot_discrepancy.py")
+    snap = str(here / "scripts" / "tools" / "snapshot_discrepancy.py")
     times: dict[tuple[str, str], list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
 

@@ -7,7 +7,7 @@ this one run.
 
 Usage::
 
-    nice -n 5 python scripts/bench_track_record.py --n 40
+    nice -n 5 python scripts/benchmarks/bench_track_record.py --n 40
 """
 
 from __future__ import annotations

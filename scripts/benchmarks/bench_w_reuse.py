@@ -1,6 +1,7 @@
 """Reusing W = M J over steps, and a PI step controller, in the adaptive bead-spring model.
 
-Usage: python scripts/bench_w_reuse.py [--moduli 26e6] [--lengths 1.0] [--tolerances 1e-4 1e-6]
+Usage: python scripts/benchmarks/bench_w_reuse.py [--moduli 26e6] [--lengths 1.0] [--tolerances \
+    1e-4 1e-6]
 
 For each (E, L) of the grid, from θ0 = 0, y0/h = 0.45 at dx = 4 µm, runs
 ``bead-spring-ros2`` with ``fiber.step.rosenbrock`` ros2 and ros34pw2, every

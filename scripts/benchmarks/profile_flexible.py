@@ -1,6 +1,6 @@
 """Where the time of a ``bead-spring-ros2`` pillar pass goes; prints a per-part table.
 
-Usage: python scripts/profile_flexible.py [--dx 4] [--cache .fibersweep-cache]
+Usage: python scripts/benchmarks/profile_flexible.py [--dx 4] [--cache .fibersweep-cache]
        [--young-modulus 26e6] [--length 1.0] [--y0 0.45] [--tolerance 0.01]
        [--rosenbrock ros2|ros34pw2]
 

@@ -8,11 +8,11 @@ of resolution or model moves.
   be equal bit for bit (NaN equal to NaN; the columns that record when, where and
   how long a run ran are left out, and columns only one side has are listed);
   exit status 1 on any difference;
-* ``--snapshot``: A and B are folders of ``scripts/snapshot_discrepancy.py``
+* ``--snapshot``: A and B are folders of ``scripts/tools/snapshot_discrepancy.py``
   (the discrepancy workflow's every simulated batch, the synthesised tables and
   the verdict), compared bit for bit the same way.
 
-Usage:  python scripts/compare_runs.py RESULTS_A RESULTS_B [--exact | --snapshot]
+Usage:  python scripts/tools/compare_runs.py RESULTS_A RESULTS_B [--exact | --snapshot]
 """
 
 from __future__ import annotations
@@ -25,10 +25,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from fibersweep.sweep.store import read_runs, read_trajectories
+from fibersweep.sweep.store import VOLATILE_COLUMNS, read_runs, read_trajectories
 
 #: Columns that say when, where and how long a run ran: not results.
-VOLATILE = ("wall_time", "cpu_time", "worker", "finished_at", "attempts")
 
 
 def _same(a: pd.Series, b: pd.Series) -> np.ndarray:
@@ -71,15 +70,15 @@ def diff_tables(a: pd.DataFrame, b: pd.DataFrame, key: list[str], what: str) -> 
 
 def exact(a: str, b: str) -> int:
     """Bit-for-bit comparison of two results folders; number of differing tables/columns."""
-    ra = read_runs(a).drop(columns=list(VOLATILE), errors="ignore")
-    rb = read_runs(b).drop(columns=list(VOLATILE), errors="ignore")
+    ra = read_runs(a).drop(columns=list(VOLATILE_COLUMNS), errors="ignore")
+    rb = read_runs(b).drop(columns=list(VOLATILE_COLUMNS), errors="ignore")
     bad = diff_tables(ra, rb, ["id"], "runs")
     ta, tb = read_trajectories(a), read_trajectories(b)
     return bad + diff_tables(ta, tb, ["id", "sample"], "trajectories")
 
 
 def snapshot(a: str, b: str) -> int:
-    """Bit-for-bit comparison of two discrepancy snapshots (scripts/snapshot_discrepancy.py)."""
+    """Bit-for-bit comparison of two discrepancy snapshots (tools/snapshot_discrepancy.py)."""
     bad = 0
     for name, key in (("measured", ["fiber_id"]), ("tracks", ["fiber_id", "t"]),
                       ("batches", ["batch"])):  # fmt: skip

@@ -9,7 +9,7 @@
 
 Usage::
 
-    python scripts/discrepancy_doc_figures.py --cache .fibersweep-cache/tests
+    python scripts/tools/discrepancy_doc_figures.py --cache .fibersweep-cache/tests
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import logging
 import shutil
+import sys
 import tempfile
 from pathlib import Path
 
@@ -33,22 +34,21 @@ from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.plots.style import paper_style
 
-BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+from common import BOX, DEFAULT_CACHE, study_field, uniform_starts  # noqa: E402
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cache", default=".fibersweep-cache/tests")
+    ap.add_argument("--cache", default=DEFAULT_CACHE)
     ap.add_argument("--out", default="docs/figures")
     args = ap.parse_args()
     logging.basicConfig(level=logging.WARNING)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
+    field = study_field(args.cache)
     hidden = {"friction": 0.8, "inlet_speed": 0.15}
     table, _ = synthesize(field, FiberSettings(), BOX, 20, hidden, seed=5, workers=1,
                           progress=False)  # fmt: skip
@@ -64,7 +64,7 @@ def main() -> None:
         write_report(res, tmp, Config().model_dump(mode="json"))
         shutil.copy(Path(tmp) / "gap_before_after.png", out / "discrepancy_gap_pair.png")
     rng = np.random.default_rng(0)
-    meas = np.column_stack([rng.uniform(*BOX[c], 20) for c in ("theta0", "y0", "length")])
+    meas = uniform_starts(rng, 20)
     with Simulator(field, FiberSettings(), workers=1, progress=False) as sim:
         nx = discriminate(
             sim, NoiseModel(), ({"inlet_speed": -0.06}, {"off_midplane": 0.10}), meas,

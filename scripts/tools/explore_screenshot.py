@@ -2,7 +2,8 @@
 
 Opens the page in headless Chromium (selenium, Debian's chromium and
 chromium-driver), clicks the first run of the class given, and saves the window.
-    python3 scripts/explore_screenshot.py results/quick/explore.html explore.png --cls Pole-vaulting
+    python3 scripts/tools/explore_screenshot.py results/quick/explore.html explore.png --cls \
+        Pole-vaulting
 """
 
 from __future__ import annotations

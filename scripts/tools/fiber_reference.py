@@ -1,8 +1,8 @@
 """Record or compare reference fiber runs (rigid and bead-spring, each effect on and off).
 
 Usage:
-    python scripts/fiber_reference.py record OUT.npz [--cache DIR]
-    python scripts/fiber_reference.py compare OUT.npz [--cache DIR]
+    python scripts/tools/fiber_reference.py record OUT.npz [--cache DIR]
+    python scripts/tools/fiber_reference.py compare OUT.npz [--cache DIR]
 
 Runs a fixed handful of fibers on the cached dx = 4 µm test flow field
 (``FIBERSWEEP_TEST_CACHE`` or ``.fibersweep-cache/tests``): contact and no

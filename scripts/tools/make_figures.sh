@@ -2,7 +2,7 @@
 # Regenerate docs/figures/ (every figure of README.md and docs/) with the commands the docs show.
 # Runs in a scratch folder with a copy of configs/; flow fields come from (and go to) the
 # repository's cache, .fibersweep-cache/. About three minutes on two free cores with cached fields.
-#   bash scripts/make_figures.sh
+#   bash scripts/tools/make_figures.sh
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 out="$repo/docs/figures"

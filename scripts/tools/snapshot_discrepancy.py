@@ -6,13 +6,13 @@ Synthesises N measured fibers (default 60) with hidden ``pillar_scale`` and
 observables and the pillar_scale track rescaling are exercised), then runs the
 workflow on a reduced plan. Every batch the workflow's ``Simulator`` returns is
 kept, in order, with its stage label; with the synthesised tables and the
-verdict they go to OUT (Parquet + JSON). ``scripts/compare_runs.py --snapshot A
+verdict they go to OUT (Parquet + JSON). ``scripts/tools/compare_runs.py --snapshot A
 B`` then compares two such folders exactly.
 
 Uses only the public API that existed before the run-path refactor (issue 31), so
 the same script runs on the old and the new tree.
 
-Usage:  python scripts/snapshot_discrepancy.py OUT [--n 60] [--seed 3] [--workers 2]
+Usage:  python scripts/tools/snapshot_discrepancy.py OUT [--n 60] [--seed 3] [--workers 2]
                                                   [--cache DIR]
 """
 
@@ -28,13 +28,13 @@ import pandas as pd
 from fibersweep.discrepancy import simulate as sim_mod
 from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
 from fibersweep.discrepancy.schema import validate_measured
+from fibersweep.discrepancy.synth import STUDY_BOX as BOX
 from fibersweep.discrepancy.synth import synthesize_with_tracks
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.settings import FlowSettings
 
-BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
 HIDDEN = {"pillar_scale": 0.1, "friction": 0.5}
 PLAN = dict(
     copies=3, fit_copies=2, candidates=2, fit_evals=4, refits=1, n_perm=999,

@@ -46,13 +46,12 @@ def test_hidden_friction_with_tracks_runs_the_whole_workflow(tmp_path, coarse_fi
     """A small hidden-effect data set with tracks through gap, signatures and fit (reduced)."""
     from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
     from fibersweep.discrepancy.schema import validate_measured
-    from fibersweep.discrepancy.synth import synthesize_with_tracks
+    from fibersweep.discrepancy.synth import STUDY_BOX, synthesize_with_tracks
     from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
     from fibersweep.fiber.settings import FiberSettings
 
-    box = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
     table, tracks, _ = synthesize_with_tracks(
-        coarse_field, FiberSettings(), box, 16, {"friction": 1.0}, seed=1, workers=1,
+        coarse_field, FiberSettings(), STUDY_BOX, 16, {"friction": 1.0}, seed=1, workers=1,
         progress=False, fps=100.0,
     )  # fmt: skip
     data = validate_measured(table)

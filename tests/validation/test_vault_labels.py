@@ -4,10 +4,11 @@
 of the default field (configs/quick.yaml), each labelled by eye from its
 chronophotograph (docs/figures/vault-labels); the trajectories are stored, so the rules
 are judged without solving anything. The bounds are the measured agreement
-(docs/fidelity.md, ``python scripts/vault_labels.py compare``) less about two binomial
-standard errors (sqrt(p(1-p)/100) <= 0.05 on the design set), so a rule change that costs
-a few runs fails here and is looked at again. The default rule was chosen on the design
-set and is confirmed on the holdout set, which no rule or setting was chosen on.
+(docs/fidelity.md, ``python scripts/studies/fidelity/vault_labels.py compare``) less
+about two binomial standard errors (sqrt(p(1-p)/100) <= 0.05 on the design set), so a
+rule change that costs a few runs fails here and is looked at again. The default rule was
+chosen on the design set and is confirmed on the holdout set, which no rule or setting was
+chosen on.
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ the empirical law of Davis, D_c = 1.4 G ε^0.48, and with the steric estimate
 D_c = 2 β of a point particle that follows the streamlines until it touches
 (β the first-streamline width of the simulated gap profile).
 
-    python3 scripts/array_dc.py [--shifts 0.1 0.2] [--starts 8] [--rows 20]
+    python3 scripts/studies/arrays/array_dc.py [--shifts 0.1 0.2] [--starts 8] [--rows 20]
 """
 
 from __future__ import annotations

@@ -4,7 +4,8 @@ The 95 % interval of a refitted value (:func:`fibersweep.discrepancy.fit.score_i
 is the stretch where the score test's |T| stays below ``scale`` x Student's quantile.
 With ``scale`` = 1 it covered 34 of 40 hidden single effects at N = 20 (per-fiber
 slopes are step-like, and T between evaluated values is an interpolation). This
-script reads the single-effect data sets of ``scripts/study_coverage.py`` (each JSON
+script reads the single-effect data sets of ``scripts/studies/discrepancy/study_coverage.py`` (each
+JSON
 keeps the refit's per-fiber losses, ``profile``) and finds, per data set, the
 smallest ``scale`` whose interval holds the truth. The calibrated ``scale`` is the
 split-conformal quantile of these: the k-th smallest of n with k = ceil((n + 1) x
@@ -12,11 +13,11 @@ split-conformal quantile of these: the k-th smallest of n with k = ceil((n + 1) 
 0.95 (exchangeability; no model of T). ``--check`` reads the intervals of other
 data sets (new seeds) at ``scale`` = 1 and at the calibrated value::
 
-    python scripts/study_coverage.py --kinds single --sets 40 --max-sets 80 --n 20 \
-        --copies 4 --seed-offset 2000 --out results/cal_a
-    python scripts/study_coverage.py --kinds single --sets 40 --max-sets 80 --n 20 \
-        --copies 4 --seed-offset 2000 --first 50 --out results/cal_b
-    python scripts/calibrate_interval.py results/cal_a --check results/cal_b
+    python scripts/studies/discrepancy/study_coverage.py --kinds single --sets 40 --max-sets 80 \
+        --n 20 --copies 4 --seed-offset 2000 --out results/cal_a
+    python scripts/studies/discrepancy/study_coverage.py --kinds single --sets 40 --max-sets 80 \
+        --n 20 --copies 4 --seed-offset 2000 --first 50 --out results/cal_b
+    python scripts/studies/discrepancy/calibrate_interval.py results/cal_a --check results/cal_b
 
 The read-out is offline: a data set's evaluated values are those its refit chose
 with the scale of its own run (the interval step evaluates the interval's ends).
@@ -27,13 +28,16 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
-from study_coverage import wilson
 
 from fibersweep.discrepancy.fit import Fit, score_interval
 from fibersweep.discrepancy.stats import conformal_quantile
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from common import wilson  # noqa: E402
 
 
 def load(out: Path) -> list[tuple[dict, Fit]]:

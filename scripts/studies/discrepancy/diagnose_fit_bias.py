@@ -16,9 +16,10 @@ workflow reported) and the zero of the mean loss slope
 
 Usage::
 
-    python scripts/diagnose_fit_bias.py --effect pillar_hydro=0.6 --n 60 \
+    python scripts/studies/discrepancy/diagnose_fit_bias.py --effect pillar_hydro=0.6 --n 60 \
         --grid 0 1.4 15 --copy-seeds 1 2 3 --out results/fitbias_ph
-    python scripts/diagnose_fit_bias.py --summarise results/fitbias_ph/profile.npz
+    python scripts/studies/discrepancy/diagnose_fit_bias.py --summarise \
+        results/fitbias_ph/profile.npz
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from __future__ import annotations
 import argparse
 import logging
 import pickle
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -39,17 +41,17 @@ from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 
-BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from common import BOX, DEFAULT_CACHE, study_field  # noqa: E402
+
 log = logging.getLogger("fitbias")
 
 
 def measure(args) -> Path:
     name, val = args.effect.split("=")
     truth = float(val)
-    field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
+    field = study_field(args.cache)
     table, _ = synthesize(field, FiberSettings(), BOX, args.n, {name: truth}, seed=args.seed,
                           workers=args.workers, progress=False)  # fmt: skip
     data = validate_measured(table, source="diagnose")
@@ -181,7 +183,7 @@ def main() -> None:
     ap.add_argument("--copy-seeds", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--fit-copies", type=int, default=2)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--cache", default=".fibersweep-cache/tests")
+    ap.add_argument("--cache", default=DEFAULT_CACHE)
     ap.add_argument("--out", default="results/fitbias")
     ap.add_argument(
         "--workflow-fits",

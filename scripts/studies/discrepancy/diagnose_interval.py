@@ -1,6 +1,6 @@
 """Why the refit's 95 % interval missed: the score test's T at the truth, read three ways.
 
-For the single-kind data sets of ``scripts/study_coverage.py`` (same seeds, same
+For the single-kind data sets of ``scripts/studies/discrepancy/study_coverage.py`` (same seeds, same
 stages: noise floor, the true effect's signature, the halves' fits, the pooled
 refit's search and bracket, *without* the interval step of
 :func:`fibersweep.discrepancy.fit.fit_effect`), the per-fiber losses at the
@@ -20,8 +20,9 @@ Under the test's own assumptions T at the truth has rms 1 over data sets; an rms
 above that from a read-out, but not from the evaluations at the truth, is the
 read-out's error. One JSON per data set, so the study can be stopped and resumed::
 
-    python scripts/diagnose_interval.py --effect inlet_speed --sets 16 --out results/diag_interval
-    python scripts/diagnose_interval.py --tabulate --out results/diag_interval
+    python scripts/studies/discrepancy/diagnose_interval.py --effect inlet_speed --sets 16 --out \
+        results/diag_interval
+    python scripts/studies/discrepancy/diagnose_interval.py --tabulate --out results/diag_interval
 """
 
 from __future__ import annotations
@@ -29,12 +30,12 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 from scipy.stats import t as student_t
-from study_coverage import BOX, SEED0, SINGLES, hidden, limit
 
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.crossfit import fold_fits, refit_bounds
@@ -53,8 +54,13 @@ from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, Run, noise_floor, plan_budget, rank
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from common import BOX, DEFAULT_CACHE, study_field  # noqa: E402
+from common import COVERAGE_SEED0 as SEED0  # noqa: E402
+from common import COVERAGE_SINGLES as SINGLES  # noqa: E402
+from common import coverage_hidden as hidden  # noqa: E402
+from common import coverage_limit as limit  # noqa: E402
 
 log = logging.getLogger("diagnose_interval")
 
@@ -135,14 +141,14 @@ def main() -> None:
     ap.add_argument("--sets", type=int, default=16, help="data sets with a gap")
     ap.add_argument("--n", type=int, default=20)
     ap.add_argument("--copies", type=int, default=4)
-    ap.add_argument("--cache", default=".fibersweep-cache/tests")
+    ap.add_argument("--cache", default=DEFAULT_CACHE)
     ap.add_argument("--out", default="results/diag_interval")
     ap.add_argument("--tabulate", action="store_true")
     args = ap.parse_args()
     logging.basicConfig(level=logging.WARNING)
     out = Path(args.out)
     if not args.tabulate:
-        field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
+        field = study_field(args.cache)
         out.mkdir(parents=True, exist_ok=True)
         first = SINGLES.index(args.effect)  # the study's rotation over the singles
         done = 0

@@ -6,13 +6,15 @@ the z-vector really is at several magnitudes, on one set of simulated starts
 the law can be checked where a limit lies (docs/discrepancy.md, *Limits read
 near the limit*)::
 
-    python scripts/power_zcurve.py --seeds 1 2 --effect inlet_speed \
+    python scripts/studies/discrepancy/power_zcurve.py --seeds 1 2 --effect inlet_speed \
         --magnitudes 0.15 0.075 0.03 0.015 0.0075
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -23,11 +25,9 @@ from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.power import _z_vector, ensemble_factor
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 
-#: Start box of the studies (as scripts/study_discrepancy.py).
-BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from common import DEFAULT_CACHE, study_field, uniform_starts  # noqa: E402
 
 
 def main() -> None:
@@ -37,14 +37,14 @@ def main() -> None:
     ap.add_argument("--magnitudes", type=float, nargs="+", default=[0.15, 0.075, 0.03, 0.015])
     ap.add_argument("--simulate", type=int, default=40, help="simulated starts")
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--cache", default=".fibersweep-cache/tests")
+    ap.add_argument("--cache", default=DEFAULT_CACHE)
     args = ap.parse_args()
-    field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
+    field = study_field(args.cache)
     n = args.simulate
     ens = ensemble_factor(3, 8)  # as power.analyse_power: 3 copies, a workflow of 8
     for seed in args.seeds:
         rng = np.random.default_rng([seed, 17])
-        starts = np.column_stack([rng.uniform(*BOX[c], n) for c in ("theta0", "y0", "length")])
+        starts = uniform_starts(rng, n)
         with Simulator(field, FiberSettings(), workers=args.workers, progress=False) as sim:
             maker = CopyMaker(starts, NoiseModel(), seed, sim)
             rows = np.arange(n)

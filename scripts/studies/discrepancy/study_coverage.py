@@ -1,8 +1,8 @@
 """Coverage of the discrepancy workflow's 95 % intervals on the simulator (issue 30).
 
 Per data set: a hidden value (or pair of values) drawn at random from a stated
-range (``RANGES``: 1.5-4x the effect's detection limit at N = 100 stated in
-docs/discrepancy.md), measured-like fibers synthesised with it
+range (``COVERAGE_RANGES`` of ``scripts/studies/common.py``: 1.5-4x the effect's
+detection limit at N = 100), measured-like fibers synthesised with it
 (:func:`synth.synthesize`), and ONLY the workflow's own stages for the true
 effect(s), with no candidate screening:
 
@@ -29,9 +29,10 @@ measure naming.
 One JSON per data set under ``OUT/KIND/seedS.json``; a set whose file exists is
 skipped, so the study can be stopped and continued, and more seeds appended::
 
-    python scripts/study_coverage.py --kinds single pair random --sets 20 --n 20 \
+    python scripts/studies/discrepancy/study_coverage.py --kinds single pair random --sets 20 --n \
+        20 \
         --copies 4 --workers 1 --out results/coverage
-    python scripts/study_coverage.py --tabulate results/coverage
+    python scripts/studies/discrepancy/study_coverage.py --tabulate results/coverage
 """
 
 from __future__ import annotations
@@ -39,11 +40,11 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import binomtest
 
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.crossfit import fold_fits, pooled_refit
@@ -56,67 +57,15 @@ from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, Run, noise_floor, plan_budget, rank
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from common import BOX, DEFAULT_CACHE, study_field, wilson  # noqa: E402
+from common import COVERAGE_KINDS as KINDS  # noqa: E402
+from common import COVERAGE_PAIR as PAIR  # noqa: E402
+from common import COVERAGE_SEED0 as SEED0  # noqa: E402
+from common import coverage_hidden as hidden  # noqa: E402
 
 log = logging.getLogger("coverage")
-
-#: Start box of the synthetic fibers (as scripts/study_discrepancy.py).
-BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
-
-#: Detection limits at N = 100 stated in docs/discrepancy.md (power analysis, median
-#: over 8 sets of 40 simulated starts): friction 0.11, pillar_hydro 0.12,
-#: inlet_speed 0.006 (either sign), start_noise 1.6. These were read at the probes;
-#: read near the limit they are higher (docs/discrepancy.md, *Limits read near the
-#: limit*: friction 0.18, pillar_hydro 0.18, inlet_speed 0.011). Kept, so that the
-#: documented coverage studies draw the same hidden values.
-LIMITS = {"friction": 0.11, "pillar_hydro": 0.12, "inlet_speed": 0.006, "start_noise": 1.6}
-
-#: How a limit scales with the number of fibers N (docs/discrepancy.md, power analysis:
-#: the z-scores grow as sqrt(N) x magnitude^p, p about 1 for a shift and 2 for a
-#: spread): limit(N) = limit(100) x (100 / N)^(1 / (2 p)).
-EXPONENT = {"friction": 1.0, "pillar_hydro": 1.0, "inlet_speed": 1.0, "start_noise": 2.0}
-
-#: Hidden magnitudes, as multiples of the limit at the study's N (start_noise: up to
-#: 2x, 4.3 at N = 30, inside its range [0, 5]; at 4x the truth would lie outside it).
-RANGES = {"friction": (1.5, 4.0), "pillar_hydro": (1.5, 4.0), "inlet_speed": (1.5, 4.0),
-          "start_noise": (1.5, 2.0)}  # fmt: skip
-
-#: The single-effect kind rotates over three deterministic library effects.
-SINGLES = ("friction", "pillar_hydro", "inlet_speed")
-PAIR = ("friction", "inlet_speed")
-KINDS = ("single", "pair", "random")
-#: First seed of each kind (never used before: docs and tests use 1-71, 300-319 and,
-#: on stand-ins, 1000-5199).
-SEED0 = {"single": 8001, "pair": 8101, "random": 8201}
-
-
-def limit(name: str, n: int) -> float:
-    """The detection limit of ``name`` at n fibers, scaled from LIMITS (N = 100)."""
-    return LIMITS[name] * (100.0 / n) ** (1.0 / (2.0 * EXPONENT[name]))
-
-
-def draw(name: str, n: int, rng: np.random.Generator) -> float:
-    """A hidden value of ``name``: a uniform multiple of its limit at n fibers (a random
-    sign for a signed effect), capped at the effect's range."""
-    lo, hi = RANGES[name]
-    v = min(limit(name, n) * float(rng.uniform(lo, hi)), LIBRARY[name].hi)
-    if name == "inlet_speed" and rng.random() < 0.5:
-        v = -v
-    return round(v, 5)
-
-
-def hidden(kind: str, index: int, seed: int, n: int) -> dict[str, float]:
-    """The hidden effect(s) of data set ``index`` of ``kind`` (values from the seed)."""
-    rng = np.random.default_rng([seed, 31])
-    if kind == "single":
-        names: tuple[str, ...] = (SINGLES[index % len(SINGLES)],)
-    elif kind == "pair":
-        names = PAIR
-    else:
-        names = ("start_noise",)
-    return {e: draw(e, n, rng) for e in names}
-
 
 def _interval_row(name, truth, value, halves, iv) -> dict:
     """``covered``: the truth in [lo, hi] as reported. ``covered_open``: an end the
@@ -209,12 +158,6 @@ def _fitted(out: Path, kind: str) -> int:
     return sum(bool(json.loads(p.read_text())["rows"]) for p in out.glob(f"{kind}/seed*.json"))
 
 
-def wilson(k: int, n: int) -> tuple[float, float]:
-    """Wilson 95 % interval of a binomial proportion k / n."""
-    ci = binomtest(k, n).proportion_ci(confidence_level=0.95, method="wilson")
-    return float(ci.low), float(ci.high)
-
-
 def tabulate(out: Path) -> str:
     """Per kind (and per effect): k/n covered, Wilson 95 %, mean bias, RMSE."""
     rows = [json.loads(p.read_text()) for p in sorted(out.glob("*/seed*.json"))]
@@ -281,7 +224,7 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=60, help="fibers per data set")
     ap.add_argument("--copies", type=int, default=8, help="baseline copies per fiber")
     ap.add_argument("--workers", type=int, default=1)
-    ap.add_argument("--cache", default=".fibersweep-cache/tests")
+    ap.add_argument("--cache", default=DEFAULT_CACHE)
     ap.add_argument("--out", default="results/coverage")
     ap.add_argument("--tabulate", action="store_true", help="no runs: the table of --out")
     args = ap.parse_args()
@@ -290,7 +233,7 @@ def main() -> None:
     if args.tabulate:
         print(tabulate(out))
         return
-    field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
+    field = study_field(args.cache)
     # index-major: a study cut short has every kind at its first indices. A data set
     # without a significant gap is recorded (the workflow would name nothing) and costs
     # only its noise floor; indices go on until --sets data sets of each kind were

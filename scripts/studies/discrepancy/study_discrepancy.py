@@ -23,12 +23,12 @@ observed detection rate (gap found) per scenario, and the wall time per N.
 
 Usage (the full study of the issue; hours on 2 cores)::
 
-    python scripts/study_discrepancy.py --n 100 200 --seeds 1 2 3 4 --workers 2
+    python scripts/studies/discrepancy/study_discrepancy.py --n 100 200 --seeds 1 2 3 4 --workers 2
 
 A reduced study (what docs/discrepancy.md reports)::
 
-    python scripts/study_discrepancy.py --n 40 --seeds 1 --copies 4 --fit-evals 4 \
-        --refits 1 --scenarios none friction=0.5 friction=0.5+inlet_speed=0.05
+    python scripts/studies/discrepancy/study_discrepancy.py --n 40 --seeds 1 --copies 4 \
+        --fit-evals 4 --refits 1 --scenarios none friction=0.5 friction=0.5+inlet_speed=0.05
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import sys
 import time
 from pathlib import Path
 
@@ -53,12 +54,11 @@ from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
 from fibersweep.fiber.settings import ContactSettings, FiberSettings
-from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from common import BOX, DEFAULT_CACHE, study_field, uniform_starts  # noqa: E402
 
 log = logging.getLogger("study")
-
-BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
 
 #: name -> (hidden library effects, out-of-library change, acceptable verdicts)
 SCENARIOS = {
@@ -278,7 +278,7 @@ def predicted_detection(
     The table's scenarios and those of ``extra`` (``NAME=VALUE`` ones included).
     """
     rng = np.random.default_rng([seed, 17])
-    starts = np.column_stack([rng.uniform(*BOX[c], n_sim) for c in ("theta0", "y0", "length")])
+    starts = uniform_starts(rng, n_sim)
     with Simulator(field, FiberSettings(), workers=workers, progress=False) as sim:
         maker = CopyMaker(starts, NoiseModel(), seed, sim)
         pw = analyse_power(maker, get_candidates(), n, scored(), rng, n_sim=n_sim)
@@ -519,7 +519,7 @@ def main() -> None:
     ap.add_argument("--predict-only", action="store_true",
                     help="only the predicted-detection power analysis, no scenarios "
                          "(tabulate it after the scenario files)")  # fmt: skip
-    ap.add_argument("--cache", default=".fibersweep-cache/tests")
+    ap.add_argument("--cache", default=DEFAULT_CACHE)
     ap.add_argument("--out", default="results/study_discrepancy")
     ap.add_argument("--tabulate", nargs="+", metavar="STUDY_JSON", default=None,
                     help="no runs: print the table and targets of earlier studies' "
@@ -538,7 +538,7 @@ def main() -> None:
         fit_evals=args.fit_evals, refits=args.refits, pairs=args.pairs,
         power_fibers=args.power_fibers, fit_grid=args.fit_grid,
     )  # fmt: skip
-    field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
+    field = study_field(args.cache)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rows: list[dict] = []

@@ -13,7 +13,7 @@ finds a gap, and prints the rates with their binomial standard errors.
 
 Usage::
 
-    python scripts/study_dispersion.py --effect start_noise --magnitudes 1 2 3 \
+    python scripts/studies/discrepancy/study_dispersion.py --effect start_noise --magnitudes 1 2 3 \
         --n 100 --replicas 8 --out results/dispersion
 """
 
@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -33,10 +34,10 @@ from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 
-BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from common import DEFAULT_CACHE, study_field, uniform_starts  # noqa: E402
+
 log = logging.getLogger("dispersion")
 
 
@@ -50,13 +51,13 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=31)
     ap.add_argument("--alpha", type=float, default=0.05)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--cache", default=".fibersweep-cache/tests")
+    ap.add_argument("--cache", default=DEFAULT_CACHE)
     ap.add_argument("--out", default="results/dispersion")
     args = ap.parse_args()
     logging.basicConfig(level=logging.WARNING)
-    field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
+    field = study_field(args.cache)
     rng = np.random.default_rng([args.seed, 5])
-    starts = np.column_stack([rng.uniform(*BOX[c], args.n) for c in ("theta0", "y0", "length")])
+    starts = uniform_starts(rng, args.n)
     obs = scored()
     rows = []
     with Simulator(field, FiberSettings(), workers=args.workers, progress=False) as sim:

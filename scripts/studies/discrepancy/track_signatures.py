@@ -12,7 +12,7 @@ measurement error the noise laws of the track observables must describe.
 
 Usage::
 
-    nice -n 5 python scripts/track_signatures.py --n 40 --copies 4 \
+    nice -n 5 python scripts/studies/discrepancy/track_signatures.py --n 40 --copies 4 \
         --effects friction=0.25 pillar_hydro=1 inlet_speed=0.05
 """
 

@@ -17,7 +17,8 @@ then lists the runs whose label depends on the variant (the runs to look at:
 With ``--other DIR`` (the same sweep at another resolution) it also prints the
 fraction of runs whose reference label differs between the two folders.
 
-Usage: python scripts/classify_sensitivity.py RESULTS [--other RESULTS2] [--list 30]
+Usage: python scripts/studies/fidelity/classify_sensitivity.py RESULTS [--other RESULTS2] [--list \
+    30]
 """
 
 from __future__ import annotations

@@ -20,13 +20,26 @@ Candidates:
   instead of the IB kernel's z-average, from the patch's 3D solution
   (u = c0 − c2 ζ² through the two nodes nearest the midplane).
 
-Usage: python3 scripts/offset_study.py [--taus 0.8 1 1.5] [--shifts 0.5 1] [--axes y] [--examples]
+With ``band`` first, it prints instead where the two worked examples change class:
+for each (θ0, L) of the examples, the class per y0/h_obs over ``--y0`` (paper.yaml's
+fiber settings) on ``model`` (the patch field, TRT, sub-grid pillar), ``source`` (BGK
+τ = 1, staircase pillar), ``source+plain`` (that field as the plain forcing term
+reports it), ``model+hydro`` (``fiber.effects.pillar_hydro`` = ``--hydro``, the
+source's ~10 % slowing) and, with ``--thickness``, ``model+disk`` (the field averaged
+over the bead's cross-section). Its fields come from ``--cache`` (the default mode
+stores them there).
+
+Usage: python3 scripts/studies/fidelity/offset_study.py [--taus 0.8 1 1.5] [--shifts 0.5 1]
+       [--axes y] [--examples]
+       python3 scripts/studies/fidelity/offset_study.py band [--y0 0.30 0.31 ...] [--hydro 0.4]
+       [--thickness]
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import sys
 import time
 
 import numpy as np
@@ -98,7 +111,58 @@ def examples(field: FlowField, fiber_settings) -> str:
     return "; ".join(f"{r.cls}" if r.status == "ok" else f"failed ({r.status})" for r in res)
 
 
+SHORT = {"Above": "A", "Below": "B", "Trapping": "T", "Pole-vaulting": "PV"}
+
+
+def band(field, fiber, theta0: float, length: float, y0s: list[float]) -> str:
+    """The class of each start (θ0, y0, L) over ``y0s``, abbreviated, in one line."""
+    from fibersweep.fiber.result import FiberStart
+    from fibersweep.fiber.run import simulate
+
+    out = []
+    for y0 in y0s:
+        r = simulate(field, fiber, FiberStart(theta0, y0, length))
+        out.append(SHORT.get(r.cls, r.cls) if r.status == "ok" else "fail")
+    return " ".join(f"{c:>2}" for c in out)
+
+
+def band_main(argv: list[str]) -> None:
+    """``band``: where the worked examples change class, on the model and its candidates."""
+    from fibersweep.config.loading import load_config
+
+    ap = argparse.ArgumentParser(prog="offset_study.py band", description=band_main.__doc__)
+    default_y0 = [round(0.29 + 0.01 * i, 2) for i in range(10)]
+    ap.add_argument("--y0", type=float, nargs="+", default=default_y0)
+    ap.add_argument("--hydro", type=float, default=0.4)
+    ap.add_argument("--thickness", action="store_true")
+    ap.add_argument("--config", default="configs/paper.yaml")
+    ap.add_argument("--cache", default=".fibersweep-cache/patch")
+    args = ap.parse_args(argv)
+    logging.basicConfig(level=logging.WARNING)
+    fiber = load_config(args.config).fiber
+    hydro = load_config(args.config, [f"fiber.effects.pillar_hydro={args.hydro}"]).fiber
+    model, _ = get_flow_field(settings_of(), args.cache)
+    src = {"collision": "bgk", "tau": 1.0, "pillar_boundary": "staircase"}
+    source, _ = get_flow_field(settings_of(**src), args.cache)
+    cases = [("model", model, fiber), ("source", source, fiber),
+             ("source+plain", plain_forcing(source), fiber),
+             (f"model+hydro {args.hydro:g}", model, hydro)]  # fmt: skip
+    if args.thickness:
+        disk = [f for n, f in thickness_fields(settings_of(), 2.0).items() if n.startswith("disk")]
+        cases.append(("model+disk a=2", disk[0], fiber))
+    head = " ".join(f"{y:>4.2f}"[1:] for y in args.y0)
+    for theta0, y0q, length in EXAMPLES:
+        print(f"theta0 = {theta0:g} deg, L = {length:g} l_obs (source's start y0 = {y0q}); "
+              f"class by y0/h:")  # fmt: skip
+        print(f"  {'field':<18} {head}")
+        for name, field, fs in cases:
+            print(f"  {name:<18} {band(field, fs, theta0, length, args.y0)}", flush=True)
+
+
 def main() -> None:
+    if sys.argv[1:2] == ["band"]:
+        band_main(sys.argv[2:])
+        return
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--taus", type=float, nargs="*", default=[0.8, 1.0, 1.5])
     ap.add_argument("--shifts", type=float, nargs="*", default=[0.5, 1.0, 1.5], help="µm")

@@ -6,7 +6,7 @@ without contact (source: < 0.07); the mean δ per fiber length in the window
 0.3 ≤ y0/h ≤ 0.55 (source: grows with L); the fraction of positive δ (source:
 most); and where pole-vaulting and trapping occur (θ0 sign, y0 range).
 
-Usage: python scripts/source_checks.py RESULTS
+Usage: python scripts/studies/fidelity/source_checks.py RESULTS
 """
 
 from __future__ import annotations

@@ -24,12 +24,13 @@ Trapping) with a one-line reason. Steps:
 
 Usage::
 
-    python scripts/vault_labels.py select results/band-dx4 > starts.csv   # one-off
-    python scripts/vault_labels.py simulate [--config configs/quick.yaml]
-    python scripts/vault_labels.py pictures
-    python scripts/vault_labels.py pictures --set holdout --out docs/figures/vault-labels/holdout \
+    python scripts/studies/fidelity/vault_labels.py select results/band-dx4 > starts.csv   # one-off
+    python scripts/studies/fidelity/vault_labels.py simulate [--config configs/quick.yaml]
+    python scripts/studies/fidelity/vault_labels.py pictures
+    python scripts/studies/fidelity/vault_labels.py pictures --set holdout --out \
+        docs/figures/vault-labels/holdout \
         --zoom --grid 2x3 --dpi 110 --snapshots 18
-    python scripts/vault_labels.py compare
+    python scripts/studies/fidelity/vault_labels.py compare
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ from fibersweep.analysis.labelled import (
 )
 from fibersweep.analysis.trajectory import CLASSES, Trajectory
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 DATA = REPO / "tests" / "data" / "vault_labels"
 LABELS = DATA / "labels.csv"
 TRAJ = DATA / "trajectories.npz"

@@ -2,8 +2,8 @@
 
 The numbers of docs/flexible.md, "Array: the band-pass filter":
 
-    python3 scripts/bandpass_summary.py results/array-flexible
-    python3 scripts/bandpass_summary.py results/array-bandpass-600
+    python3 scripts/studies/flexible/bandpass_summary.py results/array-flexible
+    python3 scripts/studies/flexible/bandpass_summary.py results/array-bandpass-600
 
 Modes are re-derived from the stored trajectories with the default rule (as
 ``fibersweep sort-report`` does). Per (E, L) it prints the runs, the mean

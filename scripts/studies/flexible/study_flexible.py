@@ -1,6 +1,7 @@
 """Single pillar: δ, class fractions and deformation against E, rigid limit to bending fibers.
 
-Usage: python scripts/study_flexible.py [--dx 4] [--cache .fibersweep-cache] [--out DIR]
+Usage: python scripts/studies/flexible/study_flexible.py [--dx 4] [--cache .fibersweep-cache] \
+    [--out DIR]
        [--lengths 0.6 1.2] [--moduli 26e6 2e6 0.5e6 0.1e6 0.03e6]
        [--thetas -10 0 10] [--y0s 10]
 

@@ -16,8 +16,10 @@ Two steps, so that the expensive fine solve runs once and on its own:
 
 Usage::
 
-    python scripts/convergence.py solve --dx 1 --kind interpolated [--domain small] [--cache DIR]
-    python scripts/convergence.py report [--domain small] [--kinds interpolated staircase]
+    python scripts/studies/flow/convergence.py solve --dx 1 --kind interpolated [--domain small] \
+        [--cache DIR]
+    python scripts/studies/flow/convergence.py report [--domain small] [--kinds interpolated \
+        staircase]
 
 The default cache is ``.fibersweep-cache/convergence`` in the current directory.
 """
@@ -196,8 +198,9 @@ def report(cache: Path, kinds: list[str], domain: str = "spec") -> None:
             entry = cache / f"flow-{cache_key(settings)}"
             if not entry.exists():
                 print(
-                    f"{kind:13s} {dx:4g}  (not computed: python scripts/convergence.py solve "
-                    f"--dx {dx:g} --kind {kind} --domain {domain})"
+                    f"{kind:13s} {dx:4g}  (not computed: python "
+                    f"scripts/studies/flow/convergence.py solve --dx {dx:g} --kind {kind} "
+                    f"--domain {domain})"
                 )
                 continue
             field = load_entry(entry, settings, mmap=True, verify=False)

@@ -10,7 +10,7 @@ observed order from the three and the extrapolated separatrix.
 
 Example (docs/fidelity.md, 'Fine patch')::
 
-    python3 scripts/patch_levels.py --patch-dx 2 1
+    python3 scripts/studies/flow/patch_levels.py --patch-dx 2 1
 """
 
 from __future__ import annotations

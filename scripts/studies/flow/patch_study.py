@@ -7,7 +7,7 @@ Prints one table row per field; ``--json`` writes the rows.
 
 Example (the reduced channel of docs/fidelity.md, 'Fine patch')::
 
-    python3 scripts/patch_study.py --width 400 --length 800 --margins 20 40 80 160
+    python3 scripts/studies/flow/patch_study.py --width 400 --length 800 --margins 20 40 80 160
 """
 
 from __future__ import annotations

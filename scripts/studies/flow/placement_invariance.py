@@ -16,7 +16,7 @@ separatrix is also given with the solid nodes left at zero ("raw", what the
 tracer saw before the ghost values of fibersweep.flow.ghost), to show what
 those change.
 
-Usage: python scripts/placement_invariance.py [--dx 4] [--kinds interpolated staircase]
+Usage: python scripts/studies/flow/placement_invariance.py [--dx 4] [--kinds interpolated staircase]
        [--shifts 0 0.25 0.5 0.75] [--cache DIR]
 """
 
