@@ -535,7 +535,39 @@ def _columns_page() -> str:
     ]
     rows = [[f"`{name}`", unit, doc] for name, (unit, doc) in TRAJ_COLUMN_DOCS.items()]
     lines += _table(["column", "unit", "meaning"], rows)
+    lines += ["", *_measured_section()]
     return "\n".join(lines) + "\n"
+
+
+def _measured_section() -> list[str]:
+    """The measured-fiber table that ``fibersweep discrepancy`` reads (its observables)."""
+    from fibersweep.discrepancy.observables import OBSERVABLES
+    from fibersweep.discrepancy.schema import START_COLUMNS
+    from fibersweep.fiber.result import FiberStart
+
+    lines = [
+        "## Measured-fiber table (input of `fibersweep discrepancy`)",
+        "",
+        "One row per measured fiber (Parquet or CSV): the start columns, then any of the",
+        "observables; a column left out is not tested",
+        "([comparing with measurements](../discrepancy.md)). `fiber_id` (a label) and",
+        "`angle_unit` (`deg` or `rad`) are optional. Track observables come from a",
+        "trajectories table ([trajectories](../trajectories.md)); derived ones are computed",
+        "from the columns named.",
+        "",
+    ]
+    starts = {f.name: f.metadata for f in FiberStart.__dataclass_fields__.values()}
+    rows = [[f"`{c}`", "start", "yes", starts[c]["unit"], starts[c]["doc"]] for c in START_COLUMNS]
+    for name, o in OBSERVABLES.items():
+        if o.track:
+            source = "from the track"
+        elif o.derived_from:
+            source = "derived from " + ", ".join(f"`{d}`" for d in o.derived_from)
+        else:
+            source = "column"
+        rows.append([f"`{name}`", f"{o.kind}, {source}", "yes" if o.required else "",
+                     o.unit, o.description])  # fmt: skip
+    return lines + _table(["column", "kind", "required", "unit", "meaning"], rows)
 
 
 # --------------------------------------------------------------------------- pages
