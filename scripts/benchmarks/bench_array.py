@@ -7,7 +7,7 @@
    (``fibersweep run`` with ``flow.array`` and ``sweep.random``), extrapolated to 1000
    starts from the runs' own wall times: target under 600 s.
 
-    python3 scripts/benchmarks/bench_array.py [--starts 40]
+    python3 scripts/benchmarks/bench_array.py [--starts 40] [--dx 2] [--rows 50]
 """
 
 from __future__ import annotations
@@ -29,24 +29,31 @@ from fibersweep.flow.cell import field_of, solve_cell
 from fibersweep.sweep.runner import run_sweep
 from fibersweep.sweep.store import read_runs
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--dx", "5", "--rows", "3", "--starts", "10"]
+
 ARRAY = {"pillar_size": 50.0, "period_x": 100.0, "period_y": 100.0, "shift": 0.1, "depth": 40.0}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--starts", type=int, default=40, help="starts of the reduced sweep")
+    ap.add_argument("--dx", type=float, default=2.0, help="lattice spacing of the cell [µm]")
+    ap.add_argument("--rows", type=int, default=50, help="rows of the single-fiber runs")
     args = ap.parse_args()
+    dx = args.dx
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cpus, "
           f"numba threads {numba.get_num_threads()}")  # fmt: skip
     cfg = parse_config({
-        "flow": {"dx": 2.0, "array": ARRAY}, "fiber": {"array_rows": 50},
+        "flow": {"dx": dx, "array": ARRAY}, "fiber": {"array_rows": args.rows},
         "sweep": {"length": [80.0], "theta0": [-10.0, 10.0], "y0": [0.0, 1.0],
                   "random": {"count": 1}},
     })  # fmt: skip
     arr = cfg.flow.array.to_array()
     solve_cell(arr, 5.0, tolerance=1e-3)  # compile the kernels on a coarse cell
     t0 = time.perf_counter()
-    sol = solve_cell(arr, 2.0)
+    sol = solve_cell(arr, dx)
     t_field = time.perf_counter() - t0
     g = sol.grid
     print(f"1. unit cell {g.nx}x{g.ny}x{g.nz} (half depth), {sol.steps} steps (both solves), "
@@ -55,7 +62,7 @@ def main() -> None:
     x0 = start_x(arr)
     warm = array_run_kernel(field, cfg.fiber, 80.0, x_end=x0 + 100.0)
     run_array_fiber(warm, "rigid", x0, 0.0, 0.0)  # compile
-    k = array_run_kernel(field, cfg.fiber, 80.0)  # 50 rows (fiber.array_rows)
+    k = array_run_kernel(field, cfg.fiber, 80.0)  # --rows rows (fiber.array_rows)
     times = []
     pillar = array_pillar(arr, cfg.fiber, field.viscosity, field.u_center)
     n = n_beads_of(80.0, 2.0)
@@ -67,13 +74,14 @@ def main() -> None:
         times.append(time.perf_counter() - t0)
         print(f"   y0 = {y0:4.0f} µm: {rec.shape[0]} steps, code {code}, {times[-1]:.2f} s")
     worst = max(times)
-    print(f"2. 50 rows, L = 80 µm: worst {worst:.2f} s, mean {sum(times) / len(times):.2f} s "
+    mean = sum(times) / len(times)
+    print(f"2. {args.rows} rows, L = 80 µm: worst {worst:.2f} s, mean {mean:.2f} s "
           f"-> {worst / 2.0:.2f} of the 2 s target")  # fmt: skip
     with tempfile.TemporaryDirectory() as tmp:
         lengths = [8.0 * k for k in range(1, 11)]
         per = max(1, args.starts // 10)
         sweep = parse_config({
-            "flow": {"dx": 2.0, "array": ARRAY},
+            "flow": {"dx": dx, "array": ARRAY},
             "sweep": {"length": lengths, "theta0": [-10.0, 10.0], "y0": [0.0, 1.0],
                       "random": {"count": per, "seed": 0}},
             "run": {"output": tmp, "cache_dir": tmp, "workers": 2},

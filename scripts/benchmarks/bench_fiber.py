@@ -36,6 +36,10 @@ from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.settings import FlowSettings
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--repeat", "1", "--no-effects"]
+
 STARTS = {
     "no contact (theta0 = 0, y0/h = 0.8)": FiberStart(0.0, 0.8, 1.0),
     "contact at the apex (theta0 = 0, y0/h = 0.45)": FiberStart(0.0, 0.45, 1.0),

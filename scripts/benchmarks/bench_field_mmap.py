@@ -21,6 +21,10 @@ from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.settings import FlowSettings
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--rounds", "1"]
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

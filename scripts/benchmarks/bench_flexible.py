@@ -38,6 +38,10 @@ from fibersweep.fiber.settings import FiberSettings, StepSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.settings import FlowSettings
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--moduli", "1e6", "--lengths", "0.5", "--reference-dt", "0"]
+
 
 def _run(field, model, E, start, dt=None):
     st = FiberSettings(model=model, young_modulus=E, step=StepSettings(dt=dt))

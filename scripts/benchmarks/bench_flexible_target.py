@@ -47,6 +47,14 @@ from fibersweep.fiber.settings import FiberSettings, StepSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.settings import FlowSettings
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = [
+    ["references", "--moduli", "26e6", "--lengths", "0.5", "--reference-dt", "1e-4",
+     "--ref-dir", "{tmp}"],
+    ["compare", "--moduli", "26e6", "--lengths", "0.5", "--ref-dir", "{tmp}", "--repeat", "1"],
+]
+
 T_GRID = 2e-4
 """Comparison times are multiples of this [s], so that fixed steps land on them."""
 TOLERANCES = (1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7)

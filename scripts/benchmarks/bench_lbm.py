@@ -30,6 +30,10 @@ from fibersweep.flow.lattice import make_grid
 from fibersweep.flow.steppers import make_stepper
 from fibersweep.units import Geometry
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--steps", "2", "--mbytes", "8"]
+
 
 @numba.njit(parallel=True, cache=True)
 def _copy(a: np.ndarray, b: np.ndarray) -> None:

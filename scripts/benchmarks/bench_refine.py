@@ -40,6 +40,10 @@ from fibersweep.sweep.manifest import read_manifest
 from fibersweep.sweep.runner import run_sweep
 from fibersweep.sweep.store import read_runs
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--dtheta", "20", "--coarse", "0.25", "--tol", "0.05", "--out", "{tmp}"]
+
 log = logging.getLogger("bench_refine")
 
 LENGTH = 0.8

@@ -29,6 +29,10 @@ from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
 from fibersweep.flow.cache import get_flow_field
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--n", "2"]
+
 BOXES = {
     "quick": ((-8.0, 8.0), (0.05, 0.9), (0.75, 1.25)),
     "study": tuple(STUDY_BOX[c] for c in ("theta0", "y0", "length")),

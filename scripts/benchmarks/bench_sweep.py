@@ -50,6 +50,10 @@ from fibersweep.sweep.fields import flow_field_for
 from fibersweep.sweep.plan import make_tasks
 from fibersweep.sweep.worker import WorkerSpec, init_worker, run_task
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--repeat", "1", "--paper-sample", "0", "--skip-dask"]
+
 log = logging.getLogger("bench_sweep")
 
 

@@ -23,6 +23,10 @@ from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
 from fibersweep.flow.cache import get_flow_field
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--n", "2"]
+
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

@@ -22,6 +22,10 @@ from fibersweep.fiber.settings import FiberSettings, StepSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.settings import FlowSettings
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--lengths", "0.5", "--tolerances", "1e-2"]
+
 REUSES = (1, 3, 10, 30)
 """Values of ``fiber.step.jacobian_reuse`` timed (1: the default)."""
 

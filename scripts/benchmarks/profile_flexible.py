@@ -37,6 +37,10 @@ from fibersweep.fiber.setup import prepare
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.settings import FlowSettings
 
+#: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
+#: end to end, its numbers mean nothing.
+SMOKE = ["--length", "0.5"]
+
 REPS = 2000
 
 
