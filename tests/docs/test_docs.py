@@ -65,8 +65,9 @@ class Command:
 
 
 def doc_files() -> list[Path]:
-    """README.md and every docs/*.md, in name order."""
-    return [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+    """README.md, CHANGELOG.md and every .md under docs/ (its folders too), in name order."""
+    top = [p for p in (REPO / "README.md", REPO / "CHANGELOG.md") if p.exists()]
+    return [*top, *sorted((REPO / "docs").rglob("*.md"))]
 
 
 def extract(path: Path) -> list[Command]:
@@ -202,15 +203,18 @@ def test_doc_commands_slow(path: Path, tmp_path: Path, flow_cache_dir: Path) -> 
     _run_file(str(path), cmds, tmp_path, flow_cache_dir, slow=True)
 
 
-def test_readme_test_command_is_what_ci_runs() -> None:
-    """The README's set-up command for the tests is the one .ci/run executes."""
+def test_readme_set_up_commands_are_what_ci_runs() -> None:
+    """The README's two set-up commands (install and run, install and test) are the ones
+    .ci/run executes, inside the virtual environment it creates."""
     readme = [c.text for c in extract(REPO / "README.md")]
     ci = (REPO / ".ci" / "run").read_text(encoding="utf-8")
-    tests = [c for c in readme if "pytest" in c]
-    assert tests, "README.md shows no test command"
-    for cmd in tests:
-        for part in cmd.split("#")[0].split("&&"):
-            assert part.strip() in ci, f"README command part {part.strip()!r} is not in .ci/run"
+    setup = [c for c in readme if "pip install -e" in c]
+    assert len(setup) == 2 and any("pytest" in c for c in setup), setup
+    venv = ci.index("venv/bin/activate")
+    for cmd in setup:
+        line = cmd.split("#")[0].strip()
+        assert line in ci, f"README set-up command {line!r} is not in .ci/run"
+        assert ci.index(line) > venv, f"{line!r} runs before .ci/run activates its venv"
 
 
 def test_extract_markers(tmp_path: Path) -> None:
@@ -257,6 +261,55 @@ def test_no_reference_outside_the_repository() -> None:
             resolved = (path.parent / target).resolve()
             assert REPO in resolved.parents or resolved == REPO, f"{path.name}: {target}"
             assert resolved.exists(), f"{path.name}: broken link {target}"
+
+
+def _slug(heading: str) -> str:
+    """The anchor GitHub gives a Markdown heading."""
+    text = re.sub(r"[^\w\- ]", "", heading.strip().lower())
+    return text.replace(" ", "-")
+
+
+def anchors(path: Path) -> set[str]:
+    """Every heading anchor of a Markdown file (a repeated heading gets -1, -2, ...)."""
+    seen: dict[str, int] = {}
+    out = set()
+    in_code = False
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if _FENCE.match(line):
+            in_code = not in_code
+        m = re.match(r"(#{1,6}) (.+)", line)
+        if m and not in_code:
+            slug = _slug(m.group(2))
+            n = seen.get(slug, 0)
+            seen[slug] = n + 1
+            out.add(slug if n == 0 else f"{slug}-{n}")
+    return out
+
+
+def test_every_link_and_anchor_resolves() -> None:
+    """Every relative link of README and docs names a file, and its #anchor a heading there."""
+    bad = []
+    for path in _FILES:
+        text = re.sub(r"```.*?```", "", path.read_text(encoding="utf-8"), flags=re.S)
+        for target in re.findall(r"\]\(([^)\s]+)\)", text):
+            if re.match(r"[a-z]+:", target):
+                continue
+            file, _, anchor = target.partition("#")
+            dest = (path.parent / file).resolve() if file else path
+            rel = path.relative_to(REPO)
+            if not dest.exists():
+                bad.append(f"{rel}: {target} (no such file)")
+            elif anchor and dest.suffix == ".md" and anchor not in anchors(dest):
+                bad.append(f"{rel}: {target} (no heading #{anchor} in {dest.name})")
+    assert not bad, "\n".join(bad)
+
+
+def test_slug_follows_github() -> None:
+    assert _slug("Speed (`python3 scripts/benchmarks/bench_flexible.py`)") == (
+        "speed-python3-scriptsbenchmarksbench_flexiblepy"
+    )
+    assert _slug("`fiber.effects`: the effects") == "fibereffects-the-effects"
+    assert _slug("Reading the interval's ends") == "reading-the-intervals-ends"
 
 
 def test_python_on_the_doc_path_is_the_tests_environment(tmp_path: Path) -> None:
