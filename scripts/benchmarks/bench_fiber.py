@@ -38,7 +38,7 @@ from fibersweep.flow.settings import FlowSettings
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.
-SMOKE = ["--repeat", "1", "--no-effects"]
+SMOKE = ["--repeat", "1", "--no-effects", "--cache", "{cache}"]
 
 STARTS = {
     "no contact (theta0 = 0, y0/h = 0.8)": FiberStart(0.0, 0.8, 1.0),

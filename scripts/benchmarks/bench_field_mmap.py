@@ -23,7 +23,7 @@ from fibersweep.flow.settings import FlowSettings
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.
-SMOKE = ["--rounds", "1"]
+SMOKE = ["--rounds", "1", "--cache", "{cache}"]
 
 
 def main() -> None:

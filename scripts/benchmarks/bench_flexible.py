@@ -40,7 +40,7 @@ from fibersweep.flow.settings import FlowSettings
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.
-SMOKE = ["--moduli", "1e6", "--lengths", "0.5", "--reference-dt", "0"]
+SMOKE = ["--moduli", "1e6", "--lengths", "0.5", "--reference-dt", "0", "--cache", "{cache}"]
 
 
 def _run(field, model, E, start, dt=None):

@@ -51,8 +51,9 @@ from fibersweep.flow.settings import FlowSettings
 #: end to end, its numbers mean nothing.
 SMOKE = [
     ["references", "--moduli", "26e6", "--lengths", "0.5", "--reference-dt", "1e-4",
-     "--ref-dir", "{tmp}"],
-    ["compare", "--moduli", "26e6", "--lengths", "0.5", "--ref-dir", "{tmp}", "--repeat", "1"],
+     "--ref-dir", "{tmp}", "--cache", "{cache}"],
+    ["compare", "--moduli", "26e6", "--lengths", "0.5", "--ref-dir", "{tmp}", "--repeat", "1",
+     "--cache", "{cache}"],
 ]
 
 T_GRID = 2e-4

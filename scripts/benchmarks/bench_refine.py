@@ -42,7 +42,8 @@ from fibersweep.sweep.store import read_runs
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.
-SMOKE = ["--dtheta", "20", "--coarse", "0.25", "--tol", "0.05", "--out", "{tmp}"]
+SMOKE = ["--dtheta", "20", "--coarse", "0.25", "--tol", "0.05", "--out", "{tmp}",
+         "--cache", "{cache}"]  # fmt: skip
 
 log = logging.getLogger("bench_refine")
 

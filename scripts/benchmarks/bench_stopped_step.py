@@ -31,7 +31,7 @@ from fibersweep.flow.cache import get_flow_field
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.
-SMOKE = ["--n", "2"]
+SMOKE = ["--n", "2", "--cache", "{cache}"]
 
 BOXES = {
     "quick": ((-8.0, 8.0), (0.05, 0.9), (0.75, 1.25)),

@@ -25,7 +25,7 @@ from fibersweep.flow.cache import get_flow_field
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.
-SMOKE = ["--n", "2"]
+SMOKE = ["--n", "2", "--cache", "{cache}"]
 
 
 def main() -> None:

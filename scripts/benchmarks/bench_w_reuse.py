@@ -24,7 +24,7 @@ from fibersweep.flow.settings import FlowSettings
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.
-SMOKE = ["--lengths", "0.5", "--tolerances", "1e-2"]
+SMOKE = ["--lengths", "0.5", "--tolerances", "1e-2", "--cache", "{cache}"]
 
 REUSES = (1, 3, 10, 30)
 """Values of ``fiber.step.jacobian_reuse`` timed (1: the default)."""

@@ -39,7 +39,7 @@ from fibersweep.flow.settings import FlowSettings
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.
-SMOKE = ["--length", "0.5"]
+SMOKE = ["--length", "0.5", "--cache", "{cache}"]
 
 REPS = 2000
 

@@ -10,7 +10,9 @@ exit codes and times.
 the script (or a list of such lists, run in order) that makes it finish in seconds to a
 minute: the script still runs end to end, so a change that breaks it fails here. The
 numbers of a smoke run mean nothing. ``{tmp}`` in an argument is a fresh temporary
-folder. Arguments after ``--`` go to every benchmark run by name or ``--all``.
+folder and ``{cache}`` the tests' flow-field cache (``FIBERSWEEP_TEST_CACHE``, else
+``.fibersweep-cache/tests``), so a smoke pass after the tests solves no field again.
+Arguments after ``--`` go to every benchmark run by name or ``--all``.
 
     python3 scripts/benchmarks/run.py --list
     python3 scripts/benchmarks/run.py fiber lbm            # bench_fiber.py, bench_lbm.py
@@ -23,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import os
 import subprocess
 import sys
 import tempfile
@@ -107,6 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     if not names:
         ap.error("name benchmarks, or give --all, --smoke or --list")
     results = []
+    cache = os.environ.get("FIBERSWEEP_TEST_CACHE", str(REPO / ".fibersweep-cache" / "tests"))
     with tempfile.TemporaryDirectory(prefix="bench-") as tmp:
         for name in names:
             path = known[name]
@@ -114,7 +118,8 @@ def main(argv: list[str] | None = None) -> int:
             for i, run_argv in enumerate(runs):
                 folder = Path(tmp) / f"{name}-{i}"
                 folder.mkdir()
-                run_argv = [a.replace("{tmp}", str(folder)) for a in run_argv]
+                run_argv = [a.replace("{tmp}", str(folder)).replace("{cache}", cache)
+                            for a in run_argv]  # fmt: skip
                 code, secs = run_one(path, run_argv, args.timeout)
                 results.append((name, code, secs))
                 if code != 0:
