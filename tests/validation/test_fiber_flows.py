@@ -65,7 +65,7 @@ def test_tumbling_in_shear_follows_jeffery(shear_field, model):
 
     Each model is asked for an accurate integration: the explicit models by a 0.1 µm step
     bound, the adaptive ROS2 model by a 1e-3 µm local error (its default 1e-2 µm, chosen for
-    sweeps, flips 5 % late; docs/flexible.md, "Accuracy in free shear")."""
+    sweeps, flips 5 % late; docs/validation/flexible.md, "Accuracy in free shear")."""
     st = FiberSettings(model=model, x0=200.0, step={"max_displacement": 0.1, "tolerance": 1e-3})
     tr, reason = simulate_for(shear_field, st, FiberStart(170.0, Y0, L_OVER), 0.14)
     assert reason == ""

@@ -3,7 +3,7 @@
 The power analysis scales z with a power law of the magnitude; this prints what
 the z-vector really is at several magnitudes, on one set of simulated starts
 (the starts of ``study_discrepancy.py --predict-only --power-seeds SEED``), so
-the law can be checked where a limit lies (docs/discrepancy.md, *Limits read
+the law can be checked where a limit lies (docs/validation/discrepancy.md, *Limits read
 near the limit*)::
 
     python scripts/studies/discrepancy/power_zcurve.py --seeds 1 2 --effect inlet_speed \

@@ -1,4 +1,4 @@
-"""Study of the discrepancy workflow on data with hidden effects (table in docs/discrepancy.md).
+"""Study of the discrepancy workflow on data with hidden effects (docs/validation/discrepancy.md).
 
 For each scenario: synthesise measured-like fibers with the effect hidden
 (``fibersweep.discrepancy.synth``), run the whole workflow with the default
@@ -25,7 +25,7 @@ Usage (the full study of the issue; hours on 2 cores)::
 
     python scripts/studies/discrepancy/study_discrepancy.py --n 100 200 --seeds 1 2 3 4 --workers 2
 
-A reduced study (what docs/discrepancy.md reports)::
+A reduced study (docs/validation/discrepancy.md)::
 
     python scripts/studies/discrepancy/study_discrepancy.py --n 40 --seeds 1 --copies 4 \
         --fit-evals 4 --refits 1 --scenarios none friction=0.5 friction=0.5+inlet_speed=0.05

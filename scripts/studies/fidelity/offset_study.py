@@ -1,7 +1,7 @@
 """What moves the separatrix by the source's offset: its numerics, the fiber's thickness.
 
 Every field is the full channel at dx = 4 µm with a dx = 2 µm patch around the
-pillar (the source's resolution; flow/patch.py, validated in docs/fidelity.md),
+pillar (the source's resolution; flow/patch.py, validated in docs/validation/flow.md),
 read from or stored in ``--cache``. Per candidate it prints the far-upstream
 separatrix (traced and by flux, h_obs) and its shift from the model's field
 (TRT, sub-grid pillar), and with ``--examples`` the classes of the source's two

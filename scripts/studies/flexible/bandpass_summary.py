@@ -1,6 +1,6 @@
 """Per stiffness and length of a flexible array sweep: migration, modes, deformation, failures.
 
-The numbers of docs/flexible.md, "Array: the band-pass filter":
+The numbers of docs/validation/flexible.md, "Array: the band-pass filter":
 
     python3 scripts/studies/flexible/bandpass_summary.py results/array-flexible
     python3 scripts/studies/flexible/bandpass_summary.py results/array-bandpass-600

@@ -8,7 +8,7 @@ the apex and below the base (/ U), the wall time and the peak resident memory of
 this process so far. With three levels it gives the Richardson estimate: the
 observed order from the three and the extrapolated separatrix.
 
-Example (docs/fidelity.md, 'Fine patch')::
+Example (docs/validation/flow.md, 'Fine patch')::
 
     python3 scripts/studies/flow/patch_levels.py --patch-dx 2 1
 """

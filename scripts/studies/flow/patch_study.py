@@ -5,7 +5,7 @@ Solves the channel once at ``--channel-dx``, nests patches of several margins at
 whole channel solved at ``--patch-dx`` (read from / stored in ``--cache``).
 Prints one table row per field; ``--json`` writes the rows.
 
-Example (the reduced channel of docs/fidelity.md, 'Fine patch')::
+Example (the reduced channel of docs/validation/flow.md, 'Fine patch')::
 
     python3 scripts/studies/flow/patch_study.py --width 400 --length 800 --margins 20 40 80 160
 """
