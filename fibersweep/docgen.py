@@ -289,6 +289,10 @@ def _config_page() -> str:
             lines += ["", "Checks across keys:", ""]
             lines += [f"- `{key}`: {text}" for key, text in across]
         lines.append("")
+    across = _model_checks(Config)
+    if across:
+        lines += ["## Checks across sections", ""]
+        lines += [f"- {text}" for text in across] + [""]
     lines += [
         "## `run.options`: options of each executor",
         "",

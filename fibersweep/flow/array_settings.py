@@ -58,6 +58,7 @@ class ArraySettings(BaseModel):
 
     @model_validator(mode="after")
     def _valid(self) -> ArraySettings:
+        """Pillars that do not overlap along or across the flow; a valid polygon."""
         from fibersweep.config.errors import FieldError  # config imports flow: lazily
 
         try:
