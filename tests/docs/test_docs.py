@@ -321,3 +321,17 @@ def test_python_on_the_doc_path_is_the_tests_environment(tmp_path: Path) -> None
             env=env, capture_output=True, text=True, check=True,
         )  # fmt: skip
         assert out.stdout.strip() == sys.prefix, f"{name} runs {out.stdout.strip()}"
+
+
+def test_guide_pages_stay_short_and_undated() -> None:
+    """A guide page (docs/*.md) says how the tool works today in under 400 lines, and no
+    page has a dated section: history goes to git and CHANGELOG.md."""
+    for path in sorted((REPO / "docs").glob("*.md")):
+        n = len(path.read_text(encoding="utf-8").splitlines())
+        assert n <= 400, f"{path.name}: {n} lines; move studies to docs/validation/"
+    for path in _FILES:
+        for line in path.read_text(encoding="utf-8").splitlines():
+            if line.startswith("#") and path.name != "CHANGELOG.md":
+                assert not re.search(r"\b20\d\d-\d\d-\d\d\b|[Vv]ersion\b", line), (
+                    f"{path.relative_to(REPO)}: dated or version heading {line!r}"
+                )
