@@ -10,8 +10,9 @@ exit codes and times.
 the script (or a list of such lists, run in order) that makes it finish in seconds to a
 minute: the script still runs end to end, so a change that breaks it fails here. The
 numbers of a smoke run mean nothing. ``{tmp}`` in an argument is a fresh temporary
-folder and ``{cache}`` the tests' flow-field cache (``FIBERSWEEP_TEST_CACHE``, else
-``.fibersweep-cache/tests``), so a smoke pass after the tests solves no field again.
+folder (one per benchmark, shared by its runs) and ``{cache}`` the tests' flow-field
+cache (``FIBERSWEEP_TEST_CACHE``, else ``.fibersweep-cache/tests``), so a smoke pass
+after the tests solves no field again.
 Arguments after ``--`` go to every benchmark run by name or ``--all``.
 
     python3 scripts/benchmarks/run.py --list
@@ -115,9 +116,9 @@ def main(argv: list[str] | None = None) -> int:
         for name in names:
             path = known[name]
             runs = smoke_args(path) if args.smoke else [extra]
-            for i, run_argv in enumerate(runs):
-                folder = Path(tmp) / f"{name}-{i}"
-                folder.mkdir()
+            folder = Path(tmp) / name  # one folder per benchmark, shared by its runs
+            folder.mkdir()
+            for run_argv in runs:
                 run_argv = [a.replace("{tmp}", str(folder)).replace("{cache}", cache)
                             for a in run_argv]  # fmt: skip
                 code, secs = run_one(path, run_argv, args.timeout)
