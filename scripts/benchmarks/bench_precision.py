@@ -36,7 +36,7 @@ from fibersweep.flow.steppers import make_stepper
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.
-SMOKE = ["--dx", "4", "--steps", "20", "--rounds", "1"]
+SMOKE = ["--dx", "2", "--steps", "20", "--rounds", "1"]
 
 PRECISIONS = ("float32", "float64")
 FULL_DX1_CELLS = 2400 * 800 * 20  # full channel, dx = 1 µm, half depth
