@@ -4,7 +4,7 @@
 # repository's cache, .fibersweep-cache/. About three minutes on two free cores with cached fields.
 #   bash scripts/tools/make_figures.sh
 set -euo pipefail
-repo="$(cd "$(dirname "$0")/.." && pwd)"
+repo="$(cd "$(dirname "$0")/../.." && pwd)"
 out="$repo/docs/figures"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
@@ -35,6 +35,6 @@ fs plot-phase results/refine -o "$work/refine"
 cp "$work/refine/phase.png" "$out/phase_refine.png"
 fs explore results/quick
 # a screenshot of the explorer after a click (needs chromium, chromium-driver and selenium)
-PYTHONPATH="$repo" python3 "$repo/scripts/explore_screenshot.py" results/quick/explore.html \
+PYTHONPATH="$repo" python3 "$repo/scripts/tools/explore_screenshot.py" results/quick/explore.html \
   "$out/explore.png" --cls Pole-vaulting || echo "explore.png not made (no browser)" >&2
 ls -l "$out"
