@@ -50,7 +50,9 @@ from fibersweep.analysis.labelled import (
 )
 from fibersweep.analysis.trajectory import CLASSES, Trajectory
 
-REPO = Path(__file__).resolve().parents[3]
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from common import REPO  # noqa: E402
+
 DATA = REPO / "tests" / "data" / "vault_labels"
 LABELS = DATA / "labels.csv"
 TRAJ = DATA / "trajectories.npz"
