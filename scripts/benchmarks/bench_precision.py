@@ -36,7 +36,7 @@ from fibersweep.flow.steppers import make_stepper
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.
-SMOKE = ["--dx", "2", "--steps", "20", "--rounds", "1"]
+SMOKE = ["--dx", "2", "--steps", "20", "--rounds", "1", "--width", "400", "--length", "800"]
 
 PRECISIONS = ("float32", "float64")
 FULL_DX1_CELLS = 2400 * 800 * 20  # full channel, dx = 1 µm, half depth
@@ -45,8 +45,14 @@ QUIET_FLOAT32_MLUPS = 114.7  # AA kernel, 2 threads, quiet machine (scripts/benc
 TARGET_S = 15 * 60
 
 
+#: Channel size [µm] of the run (--width, --length; default: the full channel).
+GEOMETRY: dict[str, float] = {}
+
+
 def _settings(dx: float, boundary: str, precision: str, **kw) -> FlowSettings:
-    return FlowSettings(dx=dx, pillar_boundary=boundary, precision=precision, **kw)
+    return FlowSettings(
+        dx=dx, pillar_boundary=boundary, precision=precision, geometry=GEOMETRY, **kw
+    )
 
 
 def _stepper(dx: float, boundary: str, precision: str):
@@ -117,6 +123,7 @@ def memory(dx: float, boundary: str, threads: int) -> dict:
     for p in PRECISIONS:
         cmd = [sys.executable, __file__, "--child-memory", p, "--dx", str(dx)]
         cmd += ["--boundary", boundary, "--threads", str(threads)]
+        cmd += [a for k, v in GEOMETRY.items() for a in (f"--{k}", str(v))]
         res = subprocess.run(cmd, capture_output=True, text=True, check=True)
         d = json.loads(res.stdout.strip().splitlines()[-1])
         d["bytes_per_cell"] = (d["peak_kb"] - d["base_kb"]) * 1024 / d["cells"]
@@ -131,9 +138,12 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=4, help="alternating timing rounds")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--boundary", default="interpolated", help="pillar_boundary")
+    ap.add_argument("--width", type=float, default=None, help="channel width [µm] (default full)")
+    ap.add_argument("--length", type=float, default=None, help="channel length [µm] (default full)")
     ap.add_argument("--child-memory", choices=PRECISIONS, help=argparse.SUPPRESS)
     args = ap.parse_args()
     threads = min(args.threads, numba.config.NUMBA_NUM_THREADS)
+    GEOMETRY.update({k: v for k, v in (("width", args.width), ("length", args.length)) if v})
     if args.child_memory:
         child_memory(args.dx, args.boundary, args.child_memory, threads)
         return
@@ -144,7 +154,7 @@ def main() -> None:
     m = memory(args.dx, args.boundary, threads)
     load1 = os.getloadavg()
     print(
-        f"full channel dx = {args.dx:g} µm ({args.boundary} pillar): "
+        f"channel {GEOMETRY or 'full'}, dx = {args.dx:g} µm ({args.boundary} pillar): "
         f"{r['cells'] / 1e6:.2f} M cells, {args.rounds} rounds x {r['steps_per_round']} "
         "steps per precision, alternating"
     )
