@@ -4,7 +4,7 @@ A labelled set is a CSV (``id, set, theta0, y0, length, label, reason``: one sta
 the class a person gave it from its chronophotograph and why) and the runs'
 trajectories, stored as concatenated columns with offsets in a compressed npz.
 The set the pole-vaulting rules are judged on lives in ``tests/data/vault_labels``
-(docs/fidelity.md, "The pole-vault a person sees"); ``scripts/vault_labels.py``
+(docs/fidelity.md, "The pole-vault a person sees"); ``scripts/studies/fidelity/vault_labels.py``
 builds it and prints every rule's confusion table.
 """
 

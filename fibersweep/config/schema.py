@@ -100,6 +100,7 @@ class RunSettings(_Strict):
 
     @model_validator(mode="after")
     def _scheduler_address(self) -> RunSettings:
+        """A scheduler is an address like tcp://HOST:PORT."""
         if self.scheduler is not None and "://" not in self.scheduler:
             raise FieldError(
                 "scheduler", f"expected an address like tcp://HOST:PORT, got {self.scheduler!r}"

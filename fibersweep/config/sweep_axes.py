@@ -93,6 +93,7 @@ class RefineSettings(_Strict):
 
     @model_validator(mode="after")
     def _tolerances(self) -> RefineSettings:
+        """One positive tolerance per refine axis, and none for another key."""
         for key, tol in self.tolerance.items():
             if key not in self.axes:
                 raise FieldError(

@@ -27,7 +27,23 @@ from fibersweep.errors import InputError
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 
-__all__ = ["synthesize", "synthesize_with_tracks", "parse_effects", "measured_table", "TRACK_NOISE"]
+__all__ = [
+    "STUDY_BOX",
+    "TRACK_NOISE",
+    "measured_table",
+    "parse_effects",
+    "synthesize",
+    "synthesize_with_tracks",
+]
+
+#: Starts around the pillar: the source's ranges of θ0 [deg] and L [l_obs], and y0 [h_obs]
+#: over the band where fibers meet the pillar. The box of the method's calibration studies
+#: (scripts/studies/discrepancy/) and of its validation tests.
+STUDY_BOX: dict[str, tuple[float, float]] = {
+    "theta0": (-10.0, 10.0),
+    "y0": (0.15, 0.65),
+    "length": (0.5, 1.4),
+}
 
 #: Per-frame error of synthetic tracks: centre position [µm] (x, y each), angle [deg].
 #: 1 µm is sub-pixel centroid tracking; the angle of a fiber from its two ends, each

@@ -28,7 +28,7 @@ displacement of a bead per step is also kept below ``Params.max_disp`` and,
 approaching the pillar, below half the gap to the contact cutoff (so that the
 step does not jump into contact), but not below ``Params.contact_disp``.
 
-Cost of a ROS2 step (scripts/profile_flexible.py): two evaluations of f (each
+Cost of a ROS2 step (scripts/benchmarks/profile_flexible.py): two evaluations of f (each
 rebuilds the RPY mobility), the analytic Jacobian
 (:func:`~fibersweep.fiber.beadspring.force_jacobian`), W = M J by one BLAS
 product, and the one LU; a rejected step redoes the LU and the stage
@@ -92,7 +92,7 @@ def w_matrix(bw):
     """W = M J into ``bw.jac`` (2n, 2n), from the mobility ``bw.mob`` and Jacobian ``bw.jac``.
 
     A dense BLAS product (``bw.lhs`` is scratch): at 2n ≈ 44 it is ~5 times faster
-    than a loop over J's band (scripts/profile_flexible.py).
+    than a loop over J's band (scripts/benchmarks/profile_flexible.py).
     """
     np.dot(bw.mob, bw.jac, bw.lhs)
     bw.jac[:, :] = bw.lhs

@@ -61,6 +61,7 @@ class ArraySettings(BaseModel):
 
     @model_validator(mode="after")
     def _valid(self) -> ArraySettings:
+        """Pillars that do not overlap along or across the flow; a valid polygon."""
         try:
             self.to_array()
         except ArrayError as exc:

@@ -105,6 +105,7 @@ class GeometrySettings(_Strict):
 
     @model_validator(mode="after")
     def _pillar_fits(self) -> GeometrySettings:
+        """The pillar lies inside the channel."""
         geo = self.to_geometry()
         if not geo.fits():  # building the shape checks that vertices go with 'polygon' only
             x0, y0, x1, y1 = geo.shape.bounds
@@ -258,6 +259,8 @@ class FlowSettings(_Strict):
 
     @model_validator(mode="after")
     def _patch_grid(self) -> FlowSettings:
+        """A patch divides dx a whole number of times (2 or more) and the depth into whole
+        (even with symmetry) nodes; no keep_3d with a patch."""
         if self.patch is None:
             return self
         if self.keep_3d:
@@ -278,6 +281,7 @@ class FlowSettings(_Strict):
 
     @model_validator(mode="after")
     def _reachable_tolerance(self) -> FlowSettings:
+        """float32 populations cannot resolve a tolerance below 1e-7."""
         if self.precision == "float32" and self.tolerance < FLOAT32_MIN_TOLERANCE:
             raise ValueError(
                 f"tolerance = {self.tolerance:g} is below what float32 populations can "

@@ -42,6 +42,7 @@ __all__ = [
     "RUNS_DIR",
     "SWEEP_COLUMNS",
     "TRAJ_DIR",
+    "VOLATILE_COLUMNS",
     "PartWriter",
     "clean_temporaries",
     "compact",
@@ -98,6 +99,10 @@ COLUMN_DOCS: dict[str, tuple[str, str]] = {c.name: (c.unit, c.doc) for c in _COL
 #: Columns written only when some row of the part has a non-zero value; read as 0
 #: where a part lacks them.
 ONLY_WHEN_SET = ("round",)
+
+#: Columns that differ between two runs of the same sweep (timing and bookkeeping);
+#: leave them out to compare results run by run.
+VOLATILE_COLUMNS = ("wall_time", "cpu_time", "worker", "finished_at", "attempts")
 
 _seq = 0
 

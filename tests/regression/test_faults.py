@@ -22,7 +22,13 @@ import psutil
 import pytest
 
 from fibersweep.sweep.lock import LOCK_FILE
-from fibersweep.sweep.store import RUNS_DIR, list_parts, read_runs, read_trajectories
+from fibersweep.sweep.store import (
+    RUNS_DIR,
+    VOLATILE_COLUMNS,
+    list_parts,
+    read_runs,
+    read_trajectories,
+)
 
 SWEEP = """
 sweep:
@@ -31,7 +37,6 @@ sweep:
   length: [0.8, 1.0]
 """
 N_RUNS = 36
-VOLATILE = ["wall_time", "cpu_time", "worker", "finished_at", "attempts"]
 EXIT = {"SIGKILL": -signal.SIGKILL, "SIGTERM": 143, "SIGINT": 130}
 
 
@@ -66,7 +71,7 @@ def _run(cfg: Path) -> subprocess.Popen:
 
 
 def _physics(df: pd.DataFrame) -> pd.DataFrame:
-    return df.drop(columns=VOLATILE).sort_values("id").reset_index(drop=True)
+    return df.drop(columns=list(VOLATILE_COLUMNS)).sort_values("id").reset_index(drop=True)
 
 
 def _pool(proc: subprocess.Popen) -> list[psutil.Process]:

@@ -23,7 +23,13 @@ import pytest
 from typer.testing import CliRunner
 
 from fibersweep.cli import app
-from fibersweep.sweep.store import RUNS_DIR, list_parts, read_runs, read_trajectories
+from fibersweep.sweep.store import (
+    RUNS_DIR,
+    VOLATILE_COLUMNS,
+    list_parts,
+    read_runs,
+    read_trajectories,
+)
 
 # Points around the separatrix (y/h ~ 0.32 on this grid, sub-grid pillar) plus far ones: all
 # four classes appear on this grid (trapping at theta0 = 8, y0 = 0.30 and -8, 0.33;
@@ -35,7 +41,6 @@ sweep:
   length: [1.0]
 """
 # Columns that depend on when/where a run happened, not on its physics.
-VOLATILE = ["wall_time", "cpu_time", "worker", "finished_at", "attempts"]
 
 runner = CliRunner()
 
@@ -54,7 +59,7 @@ def _config(tmp: Path, cache: Path, name: str, extra: str = "", sweep: str = SWE
 
 
 def _physics(df: pd.DataFrame) -> pd.DataFrame:
-    return df.drop(columns=VOLATILE).sort_values("id").reset_index(drop=True)
+    return df.drop(columns=list(VOLATILE_COLUMNS)).sort_values("id").reset_index(drop=True)
 
 
 def _invoke(*args: str):

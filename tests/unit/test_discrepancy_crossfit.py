@@ -159,7 +159,7 @@ def test_shared_points_keep_the_pooled_value_with_the_halves():
     # (seeds 7, 8, 9; about as often as before the fix: 31 against 33 % on 40 other
     # data sets); read on the same 7 values (0, 0.5, ..., 3) for both halves and all
     # fibers, in 0, 3, 3 %. Stated: shared values <= 10 %, the searches >= 15 % (the
-    # diagnosis, not a target: see docs/discrepancy.md, "Fit uncertainty").
+    # diagnosis, not a target: see docs/validation/discrepancy.md, "Fit uncertainty").
     rng = np.random.default_rng(7)
     grid = np.linspace(0.0, 3.0, 7)
     shared, searched = [], []

@@ -444,7 +444,8 @@ def _refit_coverage(
 
 
 def test_pooled_refit_brackets_a_shift_effects_root_near_the_range_end():
-    # As on the simulator (scripts/study_coverage.py: every friction miss had a truth of
+    # As on the simulator (scripts/studies/discrepancy/study_coverage.py: every friction miss had a
+    # truth of
     # 0.89-0.97, 28 of 32 intervals open at the top): the halves 0.70 and 0.76 for a
     # truth of 0.93, refit range [0.45, 1.0]. Brent's 3 steps stop at 0.87 with the
     # loss still falling; without the bracket the estimate sat there in all 60 data

@@ -189,7 +189,8 @@ def test_noise_law_of_a_derived_position_matches_frame_noise():
     """Linear interpolation between two frames, each with error σ, at a uniform fraction f:
     sd = σ sqrt(E[(1-f)² + f²]) = σ sqrt(2/3) on a level track. Monte Carlo with 4000 tracks,
     within 4 %; the registry's y_out law (0.012 h_obs) is this for σ = 1 µm (0.0109 h_obs)
-    plus the slope term of tilted tracks (measured 0.0115, scripts/track_signatures.py)."""
+    plus the slope term of tilted tracks (measured 0.0115,
+    scripts/studies/discrepancy/track_signatures.py)."""
     rng = np.random.default_rng(1)
     sigma, errs = 1.0, []
     for _ in range(4000):

@@ -1,7 +1,7 @@
 """The single-fiber examples of the docs do what the text says they do.
 
 The README's ``simulate ... --plot vault.png`` start must pole-vault, and the
-trapped example of docs/validation.md must be trapped, on the grid of
+trapped example of docs/validation/source.md must be trapped, on the grid of
 configs/quick.yaml (dx = 4 µm). The starts are read from the docs themselves, so
 an edit of either the docs or the physics that breaks the claim fails here.
 """
@@ -37,8 +37,8 @@ def _start(doc: str, plot: str) -> FiberStart:
     ("doc", "plot", "expected"),
     [
         ("README.md", "vault.png", "Pole-vaulting"),
-        ("docs/validation.md", "vault.png", "Pole-vaulting"),
-        ("docs/validation.md", "trap.png", "Trapping"),
+        ("docs/validation/source.md", "vault.png", "Pole-vaulting"),
+        ("docs/validation/source.md", "trap.png", "Trapping"),
     ],
 )
 def test_documented_start_has_documented_class(doc, plot, expected, flow_cache_dir):

@@ -68,6 +68,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("fibersweep.results",),
     ("fibersweep.discrepancy",),
     ("fibersweep.cli", "fibersweep.__main__"),
+    # the reference pages read the command line, the config schema and the columns
+    ("fibersweep.docgen",),
 )
 
 #: Arrows that run up the layers on purpose, each with the reason the

@@ -13,10 +13,9 @@ from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.power import analyse_power
 from fibersweep.discrepancy.report_figures import next_figure
 from fibersweep.discrepancy.simulate import Simulator
+from fibersweep.discrepancy.synth import STUDY_BOX as BOX
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.plots.style import paper_style
-
-BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
 
 
 def _starts(n: int, seed: int) -> np.ndarray:

@@ -14,12 +14,11 @@ from fibersweep.config import Config, load_config
 from fibersweep.discrepancy.library import LIBRARY
 from fibersweep.discrepancy.report import write_report
 from fibersweep.discrepancy.schema import validate_measured
+from fibersweep.discrepancy.synth import STUDY_BOX as BOX
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
 from fibersweep.fiber.settings import ContactSettings, FiberSettings
 
-# Starts around the pillar (the contact window of the SPEC and beyond).
-BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
 FAST = dict(
     copies=3, fit_copies=2, candidates=2, fit_evals=4, refits=1, n_perm=1999,
     power_fibers=0, next_copies=0,

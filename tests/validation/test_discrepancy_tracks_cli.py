@@ -42,31 +42,37 @@ def test_synth_tracks_then_discrepancy_with_trajectories(tmp_path, config):
     assert "t_transit" in (out / "report.md").read_text()
 
 
-def test_hidden_friction_with_tracks_runs_the_whole_workflow(tmp_path, coarse_field):
-    """A small hidden-effect data set with tracks through gap, signatures and fit (reduced)."""
+def test_hidden_effect_with_tracks_runs_the_whole_workflow(tmp_path, coarse_field):
+    """A small hidden-effect data set with tracks through gap, signatures and fit (reduced).
+
+    The hidden effect is one every fiber's track shows: a 10 % faster flow shortens the
+    transit past the pillar by about 9 % against 1 % timing noise, so t_transit's gap
+    test sits at the smallest p its permutations can give on every seed tried (Holm
+    0.024 with 999 permutations on seeds 1-3). (Friction 1.0, which acts only on the
+    fibers that touch the pillar, put t_transit's Holm p at 0.024, 0.50, 0.044, 0.040
+    and 0.56 on seeds 1, 2, 3, 5, 6: a verdict within its own noise of 0.05.) With 4999
+    permutations that floor lies ten times below alpha."""
     from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
     from fibersweep.discrepancy.schema import validate_measured
-    from fibersweep.discrepancy.synth import synthesize_with_tracks
+    from fibersweep.discrepancy.synth import STUDY_BOX, synthesize_with_tracks
     from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
     from fibersweep.fiber.settings import FiberSettings
 
-    box = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
     table, tracks, _ = synthesize_with_tracks(
-        coarse_field, FiberSettings(), box, 16, {"friction": 1.0}, seed=1, workers=1,
+        coarse_field, FiberSettings(), STUDY_BOX, 16, {"inlet_speed": 0.1}, seed=1, workers=1,
         progress=False, fps=100.0,
     )  # fmt: skip
     data = validate_measured(table)
     data = with_tracks(data, validate_trajectories(tracks, data.table, "t"), coarse_field.geometry)
     settings = DiscrepancySettings(
         copies=2, fit_copies=2, candidates=1, fit_evals=3, refits=1, pairs=0, power_fibers=0,
-        next_copies=0, workers=1, seed=1, effects=("friction", "inlet_speed"), n_perm=999,
+        next_copies=0, workers=1, seed=1, effects=("friction", "inlet_speed"), n_perm=4999,
     )  # fmt: skip
     res = run_discrepancy(data, coarse_field, FiberSettings(), settings, progress=False)
     for name in track_observables():
         assert name in res.gap.gaps and res.gap.gaps[name].test.n > 0
-    # strong friction shows on the tracks (theta_out, t_transit; measured for this seed)
-    assert set(res.gap.flagged) & set(track_observables())
-    assert set(res.verdict.effects) <= {"friction"}  # never the wrong name
+    assert "t_transit" in res.gap.flagged, res.gap.flagged  # the track shows the faster flow
+    assert set(res.verdict.effects) <= {"inlet_speed"}  # never the wrong name
 
 
 def test_tracks_for_only_some_fibers_exit_2_naming_the_field(tmp_path, config):

@@ -164,7 +164,7 @@ def test_bent_fiber_relaxes_at_the_bending_rate(coarse_field, method):
 def test_stiff_limit_agrees_with_rigid(coarse_field, start, method):
     """At E = 26 MPa (the source's value) the ROS2 bead-spring run gives the rigid
     model's class, and δ within 0.01 (the rigid/bead-spring agreement the project
-    requires of the fixed-step model, docs/validation.md)."""
+    requires of the fixed-step model, docs/validation/fiber-models.md)."""
     r = simulate(coarse_field, FiberSettings(x0=1100.0), start)
     st = FiberSettings(model="bead-spring", integrator=method, x0=1100.0)
     b = simulate(coarse_field, st, start)

@@ -2,7 +2,7 @@
 
 Small channel (W 400, L 800, H 40 µm, h_obs 75 µm, as the tests' small field).
 Tolerances: the separatrix within 0.002 h_obs (below the dx = 2 µm placement
-spread of 0.003, docs/fidelity.md), the peak speed near the pillar within 1 %,
+spread of 0.003, docs/validation/flow.md), the peak speed near the pillar within 1 %,
 the midplane field within 1 % (relative L2 over the fluid nodes within 40 µm of
 the pillar's bounding box); and the L2 error must fall as the patch grows.
 """

@@ -4,7 +4,7 @@ A shorter, narrower channel than SPEC's (W 400 µm, L_ch 800 µm; same pillar an
 depth) at dx = 4, 2, 1 µm with the interpolated pillar. The flux separatrix and
 the flux below the pillar must converge at close to the formal second order,
 and the traced separatrix at dx = 1 µm must lie within 0.002 h_obs of its
-Richardson (p = 2) extrapolation. Measured (docs/fidelity.md): observed orders
+Richardson (p = 2) extrapolation. Measured (docs/validation/flow.md): observed orders
 2.03 and 2.04; traced 0.3160, 0.3206, 0.3228, extrapolated 0.3235.
 """
 

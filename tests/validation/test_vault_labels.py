@@ -4,10 +4,11 @@
 of the default field (configs/quick.yaml), each labelled by eye from its
 chronophotograph (docs/figures/vault-labels); the trajectories are stored, so the rules
 are judged without solving anything. The bounds are the measured agreement
-(docs/fidelity.md, ``python scripts/vault_labels.py compare``) less about two binomial
-standard errors (sqrt(p(1-p)/100) <= 0.05 on the design set), so a rule change that costs
-a few runs fails here and is looked at again. The default rule was chosen on the design
-set and is confirmed on the holdout set, which no rule or setting was chosen on.
+(docs/validation/fiber-models.md, ``python scripts/studies/fidelity/vault_labels.py compare``) less
+about two binomial standard errors (sqrt(p(1-p)/100) <= 0.05 on the design set), so a
+rule change that costs a few runs fails here and is looked at again. The default rule was
+chosen on the design set and is confirmed on the holdout set, which no rule or setting was
+chosen on.
 """
 
 from __future__ import annotations
@@ -78,7 +79,7 @@ def test_every_rule_agrees_on_runs_without_a_swap(judged):
 
 
 def test_the_default_rule_is_confirmed_on_the_holdout_set(holdout):
-    """Measured on the 40 held-out runs: switch 39, head-speed 22 (docs/fidelity.md).
+    """Measured on the 40 held-out runs: switch 39, head-speed 22 (docs/validation/fiber-models.md).
 
     Bounds: switch at least 0.90 (0.975 less three standard errors, sqrt(.975*.025/40)
     = 0.025); head-speed at most 0.70 (0.55 plus two, sqrt(.25/40) = 0.079); the default
