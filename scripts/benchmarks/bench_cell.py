@@ -13,7 +13,7 @@ against the stepper); by default each tree uses the threads it would choose.
 ``--pull`` times this tree's pull stepper as "old" (the AA stepper against the
 pull stepper, everything else equal) instead of another checkout.
 
-    python3 scripts/benchmarks/bench_cell.py (--old PATH_OF_OLD_CHECKOUT | --pull) [--dx 2] [--pairs 3]
+    python3 scripts/benchmarks/bench_cell.py (--old OLD_CHECKOUT | --pull) [--dx 2] [--pairs 3]
 """
 
 from __future__ import annotations
