@@ -32,8 +32,8 @@ from pathlib import Path
 import numpy as np
 from study_coverage import wilson
 
-from fibersweep.discrepancy.fit import Fit, score_interval
-from fibersweep.discrepancy.stats import conformal_quantile
+from fibersweep.discrepancy.estimate import Fit, score_interval
+from fibersweep.discrepancy.scores import conformal_quantile
 
 
 def load(out: Path) -> list[tuple[dict, Fit]]:

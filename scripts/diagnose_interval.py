@@ -36,22 +36,22 @@ import numpy as np
 from scipy.stats import t as student_t
 from study_coverage import BOX, SEED0, SINGLES, hidden, limit
 
+from fibersweep.discrepancy.candidates import get_candidates
 from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.crossfit import fold_fits, refit_bounds
-from fibersweep.discrepancy.fit import (
-    Fit,
-    _fiber_t,
-    _merged,
-    _slope_t,
-    fit_effect,
-    per_fiber_loss,
-)
+from fibersweep.discrepancy.estimate import Fit, _fiber_t, _slope_t
+from fibersweep.discrepancy.estimate import merged_profile as _merged
+from fibersweep.discrepancy.fit import fit_effect, fold_fits, per_fiber_loss, refit_bounds
 from fibersweep.discrepancy.gap import value_matrices
-from fibersweep.discrepancy.library import get_candidates
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
-from fibersweep.discrepancy.workflow import DiscrepancySettings, Run, noise_floor, plan_budget, rank
+from fibersweep.discrepancy.workflow import (
+    DiscrepancySettings,
+    Run,
+    noise_floor,
+    plan_budget,
+    rank,
+)
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.settings import FlowSettings

@@ -26,7 +26,7 @@ from pathlib import Path
 import pandas as pd
 
 from fibersweep.discrepancy import simulate as sim_mod
-from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
+from fibersweep.discrepancy.measured import validate_trajectories, with_tracks
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.synth import synthesize_with_tracks
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy

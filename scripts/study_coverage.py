@@ -45,16 +45,22 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import binomtest
 
+from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
 from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.crossfit import fold_fits, pooled_refit
-from fibersweep.discrepancy.fit import score_interval
+from fibersweep.discrepancy.estimate import score_interval
+from fibersweep.discrepancy.fit import fold_fits, pooled_refit
 from fibersweep.discrepancy.gap import assess_gap, value_matrices
-from fibersweep.discrepancy.library import LIBRARY, get_candidates
-from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit, pair_refits, pair_weights
+from fibersweep.discrepancy.pairs import SelectionInput, joint_fit, pair_refits, pair_weights
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
-from fibersweep.discrepancy.workflow import DiscrepancySettings, Run, noise_floor, plan_budget, rank
+from fibersweep.discrepancy.workflow import (
+    DiscrepancySettings,
+    Run,
+    noise_floor,
+    plan_budget,
+    rank,
+)
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.settings import FlowSettings

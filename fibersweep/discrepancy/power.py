@@ -51,6 +51,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import norm
 
+from fibersweep.discrepancy.candidates import Candidate
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.gap import (
@@ -59,7 +60,6 @@ from fibersweep.discrepancy.gap import (
     feature_vector,
     value_matrices,
 )
-from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.scores import transform
 
@@ -440,8 +440,7 @@ def limit_intervals(
 ) -> list[EffectPower]:
     """Each limit with a 95 % percentile interval from a bootstrap over the simulated starts.
 
-    The limits come from one set of simulated starts, and one set can be far off:
-    on 8 sets of 40 starts the pillar_hydro limit at N = 100 ranged 0.09-0.55.
+    The limits come from one set of simulated starts, and one set can be far off.
     Resampling the simulated fibers with replacement (the same rows for every
     copy, effect and magnitude, so each resample is one other set of starts
     drawn from the same ones) and repeating the whole read-out (z-vectors at
@@ -482,7 +481,7 @@ def limit_intervals(
             eb = _read_out(e, z_full, z_half)
             lim = _limit(eb, by[e.name], n, n_sim, z_crit, power)
             lims[i].append(math.inf if lim is None else abs(lim))
-            # (z, gamma) as before refinement existed; a refined read-out adds z_against
+            # (z, gamma) read at the probe; a refined read-out adds z_against
             reads[i].append((eb.z, eb.gamma) if e.read_at is None
                             else (eb.z, eb.gamma, eb.z_against))  # fmt: skip
     out = []

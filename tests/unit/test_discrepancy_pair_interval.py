@@ -14,10 +14,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.crossfit import fold_fits
-from fibersweep.discrepancy.fit import score_interval
-from fibersweep.discrepancy.library import LIBRARY
-from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit, pair_refits
+from fibersweep.discrepancy.candidates import LIBRARY
+from fibersweep.discrepancy.estimate import score_interval
+from fibersweep.discrepancy.fit import fold_fits
+from fibersweep.discrepancy.pairs import SelectionInput, joint_fit, pair_refits
 
 TRUTH = {"friction": 0.5, "inlet_speed": 0.05}
 SD_DELTA, SD_LOG_T = 0.02, 0.02
@@ -145,7 +145,7 @@ def test_plan_counts_the_pair_refits():
     # per pair: each member's refit is the other member alone (its value 0), the two
     # folds' values, refit_evals Brent steps and up to INTERVAL_EVALS evaluations for the
     # interval's ends on all fibers, fit_copies copies each
-    from fibersweep.discrepancy.library import get_candidates
+    from fibersweep.discrepancy.candidates import get_candidates
     from fibersweep.discrepancy.settings import INTERVAL_EVALS, DiscrepancySettings, plan_budget
 
     plan = plan_budget(100, DiscrepancySettings(), get_candidates())

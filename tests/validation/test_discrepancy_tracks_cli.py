@@ -44,7 +44,7 @@ def test_synth_tracks_then_discrepancy_with_trajectories(tmp_path, config):
 
 def test_hidden_friction_with_tracks_runs_the_whole_workflow(tmp_path, coarse_field):
     """A small hidden-effect data set with tracks through gap, signatures and fit (reduced)."""
-    from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
+    from fibersweep.discrepancy.measured import validate_trajectories, with_tracks
     from fibersweep.discrepancy.schema import validate_measured
     from fibersweep.discrepancy.synth import synthesize_with_tracks
     from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
