@@ -12,7 +12,7 @@ From the stored profiles, :func:`summarise` compares the estimators on the
 values a Brent search of the workflow would evaluate (a random subset of the
 grid) and on the whole grid: the argmin of the mean loss (the value the
 workflow reported) and the zero of the mean loss slope
-(:func:`fibersweep.discrepancy.fit.slope_estimate`).
+(:func:`fibersweep.discrepancy.estimate.slope_estimate`).
 
 Usage::
 

@@ -12,7 +12,7 @@ then read
   their midpoints (the interval's read-out before 2026-11-27; still the
   estimate's, ``fit._slope_t``);
 - ``per-fiber``: each fiber's slope interpolated between its midpoint slopes,
-  then T (``fit._fiber_t``, the interval's read-out now);
+  then T (``estimate._fiber_t``, the interval's read-out now);
 - ``at truth``: from the two evaluations at the truth (the test itself, with
   no interpolation).
 

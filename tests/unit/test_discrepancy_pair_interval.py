@@ -5,7 +5,7 @@ simulator: friction moves δ and slows the pass a little, a faster inlet only sp
 it up), δ and t_pass observed with noise and each copy drawn with noise of its own
 (common random numbers across values), 60 fibers in two folds, 2 fit copies, the
 workflow's joint fit (2 rounds, 5 Brent steps) on each fold and
-:func:`pairfit.pair_refits` (3 Brent steps), as :func:`select.forward_pairs` runs
+:func:`pairs.pair_refits` (3 Brent steps), as :func:`pairs.forward_pairs` runs
 them.
 """
 
@@ -98,7 +98,7 @@ def test_pair_intervals_cover_the_truth():
     # to within 2 standard errors of their mean over the 100 sets (measured: within
     # 1). With inlet_speed refitted first, friction held at its folds' mean (0.062
     # low), inlet_speed came out 0.0025 low (7 standard errors) and covered 0.90 and
-    # 0.79 (seeds 40, 41): pairfit.pair_refits' order.
+    # 0.79 (seeds 40, 41): pairs.pair_refits' order.
     rng = np.random.default_rng(40)
     vals = {m: [] for m in TRUTH}
     cover = {m: [] for m in TRUTH}
