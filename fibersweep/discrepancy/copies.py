@@ -175,7 +175,7 @@ class CopyMaker:
         # (k, effects) -> observed-like outcomes of the fibers simulated so far (index: fiber)
         self._cache: dict[tuple, pd.DataFrame] = {}
         # runs a cache keyed by the exact set of rows would have made (no per-fiber
-        # reuse): the study script reports the saving
+        # reuse), so a caller can report what the reuse saves
         self._whole: set[tuple] = set()
         self.runs_without_reuse = 0
 

@@ -9,7 +9,7 @@ The gap tests of :func:`gap.assess_gap` give a z-score per test of the family
 averaged over the copies k, this is the expected z-vector at that magnitude
 and number of fibers.
 
-Scaling (the approximation this rests on, checked by the study): the z of a
+Scaling (the approximation this rests on, checked in docs/discrepancy.md): the z of a
 test grows as ``sqrt(N)`` with the number of fibers, and as ``m ** gamma`` with
 the magnitude, gamma read off the two probes (1 for a shift, 2 for a spread
 whose variance grows as m², clipped to [0.5, 3]). A power law is only good
@@ -30,8 +30,7 @@ model's never rejects) and ``Phi(|z_j| - z_crit)`` for a two-sided residual
 with ``P(detect) >= power`` is the detection limit; the fibers needed for a
 magnitude m follow from the same formula. Detection is the first gate only:
 naming needs the held-out improvement too (half of the fibers fit, the other
-half test), so the limit to *name* an effect is higher; the study measures by
-how much.
+half test), so the limit to *name* an effect is higher.
 
 Look-alikes: the per-fiber effect of a magnitude (copy with the effect minus
 the same copy without, averaged over copies, each observable component
