@@ -177,8 +177,8 @@ def discrepancy(
     with _errors():
         cfg = _load(config, overrides)
         _channel_only(cfg, "discrepancy")
+        from fibersweep.discrepancy.measured import load_measured
         from fibersweep.discrepancy.report import write_report
-        from fibersweep.discrepancy.schema import load_measured
         from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
         from fibersweep.flow.cache import get_flow_field
 
@@ -250,12 +250,11 @@ def power_cmd(
         cfg = _load(config, overrides)
         _channel_only(cfg, "power")
         from fibersweep.atomic import atomic_write
-        from fibersweep.discrepancy.copies import CopyMaker
-        from fibersweep.discrepancy.library import LIBRARY, get_candidates
-        from fibersweep.discrepancy.noise import NoiseModel
+        from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
+        from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
+        from fibersweep.discrepancy.measured import load_measured
         from fibersweep.discrepancy.observables import scored
         from fibersweep.discrepancy.power import analyse_power
-        from fibersweep.discrepancy.schema import load_measured
         from fibersweep.discrepancy.simulate import Simulator
         from fibersweep.errors import InputError
         from fibersweep.flow.cache import get_flow_field

@@ -1,11 +1,16 @@
-"""For an unexplained gap: the measurement that would most reduce the doubt.
+"""Advice of the report: what to try, and the measurement that would most reduce the doubt.
 
-Pure functions of the report's JSON summary (:func:`report.summary`). The doubt of
-an "unexplained" verdict is whether the candidate that helped most out of sample
-is there. Two numbers answer *how many more fibers* and one table *which starts*:
+Pure functions of the report's JSON summary (:func:`.report.summary`).
+:func:`advice_lines` says, for an unexplained gap, which candidates helped out of
+sample and by how much, what to try next, and, when the gap is unexplained or
+not seen, which effects may be present unseen (the power analysis).
+
+The doubt of an "unexplained" verdict is whether the candidate that helped most
+out of sample is there. Two numbers answer *how many more fibers* and one table
+*which starts* (:func:`next_measurement`):
 
 - at the starts where its prediction and the model's part most (what to measure
-  next, :mod:`.nextmeasure`), the fibers that would confirm or rule it out;
+  next, :mod:`.followup`), the fibers that would confirm or rule it out;
 - at starts like the measured ones, from the power curve (:mod:`.power`), the
   fibers that would detect a gap of its size, with the 95 % interval over the
   simulated starts, and the fibers that would make its held-out improvement
@@ -19,7 +24,9 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["next_measurement"]
+from fibersweep.discrepancy.gap import GAP_UNIT
+
+__all__ = ["advice_lines", "next_measurement"]
 
 
 def _n(x: Any) -> str:
@@ -93,4 +100,61 @@ def next_measurement(s: dict[str, Any]) -> list[str]:
             f"From the power curve, at starts like the measured ones, for {lead['effect']} = "
             f"{lead['value']:.3g}: " + "; ".join(parts) + "."
         )
+    return out
+
+
+def advice_lines(s: dict[str, Any]) -> list[str]:
+    """What to try when the gap is unexplained (or not seen), one sentence per line.
+
+    Parameters
+    ----------
+    s : dict
+        The summary (:func:`.report.summary`, JSON-safe); uses ``verdict``,
+        ``heldout``, ``sets``, ``power`` and what :func:`next_measurement` uses.
+    """
+    v = s["verdict"]
+    out = []
+    if v["kind"] == "unexplained":
+        helped = [h for h in s["heldout"] if h["significant"]]
+        for h in helped:
+            parts = [
+                f"{o} {100 * r:.0f} %"
+                for o, r in h["gap_removed"].items()
+                if r is not None and r > 0.1
+            ]
+            out.append(
+                f"{h['effect']} = {h['value']:.3g} helped out of sample (improvement "
+                f"{h['improvement']['mean']:.2g} {GAP_UNIT} per fiber, p Holm "
+                f"{h['p_holm']:.2g}) and removed "
+                + (", ".join(parts) if parts else "no observable's gap by more than 10 %")
+                + " of the gap, but leaves a significant gap."
+            )
+        for st in s["sets"]:
+            out.append(
+                f"{st['set']} was tried together: contributions "
+                + ", ".join(
+                    f"{m} {st['gains'][m]['mean']:.2g} (p Holm {st['p_holm'][m]:.2g})"
+                    for m in st["values"]
+                )
+                + ("; it still leaves a significant gap." if st["significant"] else ".")
+            )
+        if not helped:
+            out.append("No library effect improved the held-out fibers significantly.")
+        out.append(
+            "Try: an effect outside the library (the region and observable above say where "
+            "to look), a check of the measurement-noise model (a wrong noise level shows as "
+            "a gap everywhere), or more fibers (see the power analysis)."
+        )
+        out += next_measurement(s)
+    if v["kind"] in ("unexplained", "no significant gap") and s.get("power"):
+        hidden = [
+            f"{e['effect']} ({e['direction']}) up to {e['limit_ci'][1]:.3g}"
+            for e in s["power"]["effects"]
+            if e.get("limit_ci") and e["limit_ci"][1] is not None
+        ]
+        if hidden:
+            out.append(
+                "May be present unseen (the upper end of each detection limit's 95 % "
+                "interval over the simulated starts): " + ", ".join(hidden) + "."
+            )
     return out

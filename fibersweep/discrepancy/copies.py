@@ -1,9 +1,18 @@
-"""Jittered model copies of the measured fibers, with common random numbers.
+"""Jittered model copies of the measured fibers: the measurement model and the copy maker.
 
-Copy k of fiber i always uses the same jittered start, the same run seed and
-the same measurement-noise draws, whatever effect is switched on. Comparing
-effect values on the same draws removes most of the noise from a fit (common
-random numbers), and copies of different k are independent.
+Measurement model (:class:`NoiseModel`): noise on measured starts and on
+observed outcomes. The same model makes synthetic measurements (``fibersweep
+synth``) and the model's jittered copies; the gap tests are exact when it
+describes the real measurement. Why jittering the *measured* start is right:
+with a start distribution that is flat on the scale of the noise, the true
+start given the measured one is ``measured + N(0, σ²)``, so the model's copies
+``f(measured + ε')`` and the observation ``f(true)`` are exchangeable.
+
+Copies (:class:`CopyMaker`): copy k of fiber i always uses the same jittered
+start, the same run seed and the same measurement-noise draws, whatever effect
+is switched on. Comparing effect values on the same draws removes most of the
+noise from a fit (common random numbers), and copies of different k are
+independent.
 
 Runs are kept per fiber: a copy asked for rows some of which were already
 simulated for the same (k, effects) simulates only the missing ones (a fiber's
@@ -15,16 +24,129 @@ effect's fold value, the final copies) reuses those runs.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.noise import NoiseModel
-from fibersweep.discrepancy.observables import noise_draws
+from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws
 from fibersweep.discrepancy.simulate import Simulator
+from fibersweep.errors import InputError
 
-__all__ = ["CopyMaker"]
+__all__ = ["CopyMaker", "NoiseModel", "crossfit_copies"]
+
+
+def _default_outcome_sd(tracks: bool = True) -> dict[str, float]:
+    return {
+        n: o.noise.sd
+        for n, o in OBSERVABLES.items()
+        if o.noise is not None and (tracks or not o.track)
+    }
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """Standard deviations of the measurement errors (Gaussian, independent).
+
+    Attributes
+    ----------
+    theta0 : float
+        Start angle [deg].
+    y0 : float
+        Start lateral position [/h_obs].
+    length : float
+        Fiber length [/l_obs].
+    outcome : mapping name -> float
+        Error of each observable with a noise law, in its unit (relative for a
+        log-normal law), e.g. ``delta`` [/h_obs], ``theta_c`` [deg], ``t_pass``
+        [-], ``dwell`` [s]; observables left out get their registry default
+        (:mod:`fibersweep.discrepancy.observables`). The track observables' are
+        listed only when given (so reports without tracks are unchanged).
+    """
+
+    theta0: float = 1.0
+    y0: float = 0.01
+    length: float = 0.01
+    outcome: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        valid = _default_outcome_sd()
+        unknown = [k for k in self.outcome if k not in valid]
+        if unknown:
+            raise InputError(
+                f"noise: no measurement noise law for {', '.join(unknown)}; "
+                f"valid: {', '.join(valid)}"
+            )
+        sd = _default_outcome_sd(tracks=False)
+        sd.update({k: float(v) for k, v in self.outcome.items()})
+        object.__setattr__(self, "outcome", sd)
+        for name, v in self.as_dict().items():
+            if not (np.isfinite(v) and v >= 0):
+                raise InputError(f"noise.{name}: must be a finite number >= 0, got {v!r}")
+
+    def __hash__(self) -> int:  # the outcome dict is never mutated after __post_init__
+        return hash((self.theta0, self.y0, self.length, tuple(self.outcome.items())))
+
+    def sd(self, name: str) -> float:
+        """Standard deviation of the start column or observable ``name``."""
+        if name in ("theta0", "y0", "length"):
+            return float(getattr(self, name))
+        if name not in self.outcome and name in OBSERVABLES and OBSERVABLES[name].track:
+            return _default_outcome_sd()[name]
+        return self.outcome[name]
+
+    def as_dict(self) -> dict[str, float]:
+        """Flat ``{name: sd}``: the start columns, then the observables (for reports)."""
+        return {"theta0": self.theta0, "y0": self.y0, "length": self.length, **self.outcome}
+
+    def jitter_starts(self, starts: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Measured-like starts: ``starts`` plus start noise.
+
+        Parameters
+        ----------
+        starts : ndarray, shape (n, 3)
+            theta0 [deg], y0 [/h], length [/l_obs].
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+            Lengths are kept positive (reflected at a small floor).
+        """
+        s = np.asarray(starts, dtype=np.float64)
+        if s.ndim != 2 or s.shape[1] != 3:
+            raise ValueError(f"starts must have shape (n, 3), got {s.shape}")
+        sd = np.array([self.theta0, self.y0, self.length])
+        out = s + rng.standard_normal(s.shape) * sd
+        out[:, 2] = np.abs(out[:, 2] - 0.05) + 0.05
+        return out
+
+    def observe(self, outcomes: pd.DataFrame, z: Mapping[str, np.ndarray]) -> pd.DataFrame:
+        """Outcomes as a measurement would report them (each observable's noise law).
+
+        Observables without a noise law (class, contact) are observed without
+        error. NaN stays NaN. The draws come per observable name
+        (:func:`~fibersweep.discrepancy.observables.noise_draws`) for every row
+        whether or not a value is defined, so the random stream depends neither
+        on the outcomes nor on the other observables (common random numbers).
+
+        Parameters
+        ----------
+        outcomes : DataFrame, n rows
+            Outcome columns (others are kept as they are).
+        z : mapping name -> ndarray, shape (n,)
+            Standard normal draws of each observable with a noise law present.
+        """
+        out = outcomes.copy()
+        n = len(out)
+        for name, o in OBSERVABLES.items():
+            if o.noise is None or name not in out:
+                continue
+            zn = np.asarray(z[name], dtype=np.float64)
+            if zn.shape != (n,):
+                raise ValueError(f"z[{name!r}] must have shape ({n},), got {zn.shape}")
+            out[name] = o.noise.apply(out[name].to_numpy(dtype=np.float64), self.sd(name), zn)
+        return out
 
 
 class CopyMaker:
@@ -52,8 +174,8 @@ class CopyMaker:
         self._draws: dict[int, tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]] = {}
         # (k, effects) -> observed-like outcomes of the fibers simulated so far (index: fiber)
         self._cache: dict[tuple, pd.DataFrame] = {}
-        # what a cache keyed by the exact set of rows would have simulated (the design
-        # before per-fiber reuse), for the benchmark ratio in scripts/study_discrepancy.py
+        # runs a cache keyed by the exact set of rows would have made (no per-fiber
+        # reuse), so a caller can report what the reuse saves
         self._whole: set[tuple] = set()
         self.runs_without_reuse = 0
 
@@ -96,9 +218,7 @@ class CopyMaker:
         """Outcomes of copies ``ks`` for the given rows, the missing runs as one batch.
 
         The outcomes equal those of :meth:`copy` called per k (a run depends only
-        on its start, seed and effects). One batch instead of one per copy was
-        measured at 0.89-1.07x the wall time: the pool already keeps both
-        workers busy, so this is for the callers' brevity, not for speed.
+        on its start, seed and effects).
 
         Returns
         -------
@@ -131,3 +251,27 @@ class CopyMaker:
                 have = self._cache.get((k, eff))
                 self._cache[(k, eff)] = out if have is None else pd.concat([have, out])
         return [self._cache[(k, eff)].loc[idx].reset_index(drop=True) for k in ks]
+
+
+def crossfit_copies(
+    maker: CopyMaker,
+    folds: Sequence[np.ndarray],
+    effects_per_fold: Sequence[Mapping[str, float]],
+    copies: int,
+    desc: str,
+) -> list[pd.DataFrame]:
+    """Copies 0..copies-1 of every fiber, fold f simulated with ``effects_per_fold[f]``.
+
+    Returns
+    -------
+    list of DataFrame, each with one row per fiber in the original order.
+    """
+    order = np.argsort(np.concatenate(folds))
+    per_fold = [
+        maker.copies(range(copies), dict(eff), held, desc=desc)
+        for held, eff in zip(folds, effects_per_fold, strict=True)
+    ]
+    return [
+        pd.concat([p[k] for p in per_fold], ignore_index=True).iloc[order].reset_index(drop=True)
+        for k in range(copies)
+    ]

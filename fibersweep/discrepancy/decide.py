@@ -17,15 +17,14 @@ sample, it beats the baseline by more than the noise floor allows. Then:
   -> "ambiguous between A and B" (both are consistent with the data);
 - otherwise the best candidate is named.
 
-More than one effect (forward selection, :mod:`.select`): when the best
+More than one effect (forward selection, :mod:`.pairs`): when the best
 single effect leaves a gap, partners are added to the significant single
 effects that leave one (joint fit on the same folds) and scored out of sample.
 A set ``{A, B}`` is named when each member's contribution is significant (the
 pair beats A alone and beats B alone on the held-out fibers, one Holm family
 over all these tests), the pair leaves no significant gap, and no single effect
 explains the gap on its own. Where the best single effect is partial a weaker
-one may still leave no gap (issue 30, hidden friction + inlet_speed, N = 100:
-pillar_hydro alone left none); that single and an explaining set, or two
+one may still leave no gap; that single and an explaining set, or two
 explaining sets, make the verdict "ambiguous" between them. A weaker single
 that explains with no set that does is not named ("unexplained"): where the
 best single is partial the gap may hold two effects it looks like. No set that
@@ -38,8 +37,7 @@ out-of-sample improvement above is what guards against over-fitting.
 
 A random effect (start noise, Brownian motion) widens the outcomes; its
 per-fiber score improvement carries its own Monte Carlo noise and is often not
-significant where the effect is plain (issue 30: start_noise 2.5 hidden,
-held-out improvement p_Holm 0.44). It has a second, *spread* route: the held-out
+significant where the effect is plain. It has a second, *spread* route: the held-out
 spread test (:func:`dispersion.spread_test`: the baseline is over-dispersed and
 the effect's cross-fitted copies reduce the observations' dispersion scores),
 one more member of the same Holm family per random candidate. It counts only
@@ -64,7 +62,7 @@ import numpy as np
 
 from fibersweep.discrepancy.dispersion import SpreadTest
 from fibersweep.discrepancy.gap import GapResult, paired_improvement
-from fibersweep.discrepancy.stats import PermTest, boot_p, bootstrap_mean_ci, holm
+from fibersweep.discrepancy.scores import PermTest, boot_p, bootstrap_mean_ci, holm
 
 __all__ = ["HeldOut", "SetHeldOut", "Verdict", "adequate", "evaluate_heldout", "decide"]
 
@@ -131,7 +129,7 @@ class SetHeldOut:
     values : dict name -> float
         Quoted value of each member: when the set is significant, each member
         refitted on all fibers with the other at the mean of its folds' fits
-        (:func:`pairfit.pair_refits`, as a single effect's pooled refit); else the
+        (:func:`.pairs.pair_refits`, as a single effect's pooled refit); else the
         mean of the two folds' fits.
     fold_values : dict name -> (float, float)
         The value used to score each fold (fitted on the other one).
@@ -148,7 +146,7 @@ class SetHeldOut:
     final : GapResult or None
         Gap on all fibers with the set at ``values`` (None when not checked).
     intervals : dict name -> (lo, hi, open_lo, open_hi)
-        95 % score-test interval of each member's refit (:func:`fit.score_interval`;
+        95 % score-test interval of each member's refit (:func:`.estimate.score_interval`;
         empty when the set was not refitted).
     """
 

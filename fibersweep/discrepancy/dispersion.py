@@ -19,12 +19,12 @@ continuous observables: 1 on average under exchangeability, larger for
 over-dispersion, smaller for under-dispersion (a measurement that always
 sits in the middle of its copies).
 
-The test is the permutation test of :mod:`.stats` on that matrix (column 0
+The test is the permutation test of :mod:`.scores` on that matrix (column 0
 against a random column per fiber), so its null distribution is exact,
 whatever the dependence between a fiber's observables; it is one-sided
 (over-dispersion), the direction a missing random effect produces.
 
-Naming a random effect (issue 30): :func:`spread_test` asks, on the held-out
+Naming a random effect: :func:`spread_test` asks, on the held-out
 fibers, whether the baseline is over-dispersed (the test above) *and* the
 effect's cross-fitted copies reduce the observations' dispersion scores (a
 paired bootstrap over fibers); an intersection-union test, so its p is the
@@ -32,13 +32,9 @@ larger of the two. A third, two-sided test against the effect's copies is a
 gate: an effect fitted too wide on the other half leaves the held-out data
 under-dispersed. The per-fiber scores have mean exactly 1 under
 exchangeability for any number of copies, so the two ensembles need not be the
-same size.
-
-A first version compared ``|mean D_base - 1| - |mean D_effect - 1|`` by a
-bootstrap; at a right value the second term sits near its kink, whose
-bootstrap is biased upward, and on the stand-in of
-``tests/unit/test_discrepancy_spread.py`` it named start_noise = 2 (twice
-the detection limit) in only 167 of 200 data sets.
+same size. The reduction is a paired difference of the two scores, not of their
+distances from 1: at a right value ``|mean D_effect - 1|`` sits at its kink,
+whose bootstrap is biased upward.
 """
 
 from __future__ import annotations
@@ -50,13 +46,13 @@ import numpy as np
 from scipy.stats import ttest_1samp
 
 from fibersweep.discrepancy.observables import OBSERVABLES
-from fibersweep.discrepancy.scores import transform
-from fibersweep.discrepancy.stats import (
+from fibersweep.discrepancy.scores import (
     PermTest,
     boot_p,
     bootstrap_mean_ci,
     holm,
     permutation_test,
+    transform,
 )
 
 __all__ = [
@@ -185,7 +181,7 @@ def dispersion_test(
 
 @dataclass(frozen=True)
 class SpreadTest:
-    """Held-out evidence that a random effect matches the data's spread (issue 30).
+    """Held-out evidence that a random effect matches the data's spread.
 
     Attributes
     ----------

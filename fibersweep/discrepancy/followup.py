@@ -1,28 +1,252 @@
 """After the verdict: the power analysis and what to measure next, when they apply.
 
-- verdict "no significant gap" or "unexplained": :func:`power.analyse_power` on
+- verdict "no significant gap" or "unexplained": :func:`.power.analyse_power` on
   the measured starts (which effects could be present below which magnitudes,
   how many fibers would name the leading candidate);
 - verdict ambiguous, two significant candidates left unexplained, or a fit
-  whose halves disagree by more than a factor 2: :func:`nextmeasure.discriminate`
-  between the two hypotheses.
+  whose halves disagree by more than a factor 2 (:func:`next_hypotheses`):
+  :func:`discriminate` between the two hypotheses.
 
-Both run within what the budget leaves; otherwise the report says why not.
+Both run within what the budget leaves (:func:`followup`); otherwise the
+report says why not.
+
+What to measure next
+--------------------
+Two hypotheses (e.g. the two effects of an ambiguous verdict at their fitted
+values, or one effect at its two fold values when the halves disagree) are
+simulated at a grid of candidate starts (θ0, y0, L spanning the measured
+range) with the same copies (common random numbers, measurement noise
+included). Per start and observable component the *discrimination* is
+
+    D = |mean_k (x_A,k - x_B,k)| / s
+
+(its square debiased by the variance of that mean over the k copies), with s
+the component's spread among the copies of both hypotheses (noise of one
+measured fiber). A start's discrimination is the root sum of squares over
+its components (independent evidence). A fiber measured at a start with
+discrimination D contributes a z of D; n such fibers give D sqrt(n), so
+
+    n = ceil(((z_{1 - alpha/2} + z_power) / D)²)
+
+fibers at the best starts settle the question (a two-sided test at alpha with
+the target power). The estimate is optimistic for categorical observables
+near a class boundary (a small start error flips the class): the copies'
+spread includes that start noise, so s accounts for it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.stats import norm
 
-from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.candidates import Candidate
+from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.decide import HeldOut, Verdict
-from fibersweep.discrepancy.library import Candidate
+from fibersweep.discrepancy.observables import OBSERVABLES
+from fibersweep.discrepancy.power import analyse_power, standardised_values
+from fibersweep.discrepancy.settings import DiscrepancySettings, Plan
 from fibersweep.discrepancy.simulate import Simulator
 
-__all__ = ["next_hypotheses", "followup", "POWER_BOOT"]
+__all__ = [
+    "POWER_BOOT",
+    "Discrimination",
+    "Suggestion",
+    "component_names",
+    "discriminate",
+    "followup",
+    "next_hypotheses",
+    "start_grid",
+]
+
+
+def component_names(observables: Sequence[str]) -> list[str]:
+    """Names of the columns of :func:`power.standardised_values` (e.g. 'class=Above')."""
+    out = []
+    for name in (o for o in OBSERVABLES if o in observables and OBSERVABLES[o].scored):
+        o = OBSERVABLES[name]
+        out += [f"{name}={c}" for c in o.categories] if o.categorical else [name]
+    return out
+
+
+@dataclass(frozen=True)
+class Suggestion:
+    """One start worth measuring.
+
+    Attributes
+    ----------
+    theta0, y0, length : float
+        Start [deg], [/h_obs], [/l_obs].
+    d : float
+        Discrimination (standardised prediction difference) of one fiber there.
+    observable : str
+        The component that discriminates most there.
+    a, b : float
+        The two hypotheses' mean predictions of that component (its scoring scale).
+    """
+
+    theta0: float
+    y0: float
+    length: float
+    d: float
+    observable: str
+    a: float
+    b: float
+
+
+@dataclass(frozen=True)
+class Discrimination:
+    """Where two hypotheses differ most.
+
+    Attributes
+    ----------
+    labels : (str, str)
+        The hypotheses, e.g. ('inlet_speed = -0.06', 'off_midplane = 0.1').
+    grid : ndarray, shape (g, 3)
+        Candidate starts.
+    d : ndarray, shape (g,)
+        Discrimination of one fiber at each start.
+    best : list of Suggestion
+        The best starts, most discriminating first.
+    fibers_needed : int or None
+        Fibers at the best starts that settle it (None when nothing discriminates).
+    fibers_needed_measured : int or None
+        The same at the measured starts (their mean D²).
+    simulations : int
+    """
+
+    labels: tuple[str, str]
+    grid: np.ndarray
+    d: np.ndarray
+    best: list[Suggestion]
+    fibers_needed: int | None
+    fibers_needed_measured: int | None
+    simulations: int
+
+
+def start_grid(starts: np.ndarray, n_theta: int = 5, n_y: int = 8, n_len: int = 3) -> np.ndarray:
+    """A regular grid spanning the measured starts; an axis that does not vary keeps its value.
+
+    Returns
+    -------
+    ndarray, shape (g, 3)
+        theta0 [deg], y0 [/h_obs], length [/l_obs].
+    """
+    s = np.asarray(starts, dtype=np.float64)
+    axes = []
+    for j, k in enumerate((n_theta, n_y, n_len)):
+        lo, hi = float(np.nanmin(s[:, j])), float(np.nanmax(s[:, j]))
+        axes.append(np.linspace(lo, hi, k) if hi - lo > 1e-9 else np.array([lo]))
+    g = np.meshgrid(*axes, indexing="ij")
+    return np.column_stack([a.ravel() for a in g])
+
+
+def _needed(d: float, alpha: float, power: float) -> int | None:
+    if not np.isfinite(d) or d <= 1e-9:
+        return None
+    z = norm.ppf(1 - alpha / 2) + norm.ppf(power)
+    return int(math.ceil((z / d) ** 2))
+
+
+def _label(effects: Mapping[str, float]) -> str:
+    return " + ".join(f"{k} = {v:.3g}" for k, v in effects.items()) or "baseline"
+
+
+def discriminate(
+    sim: Simulator,
+    noise: NoiseModel,
+    hypotheses: tuple[Mapping[str, float], Mapping[str, float]],
+    starts: np.ndarray,
+    observables: Sequence[str],
+    seed: int = 0,
+    copies: int = 2,
+    grid: np.ndarray | None = None,
+    top: int = 8,
+    alpha: float = 0.05,
+    power: float = 0.8,
+) -> Discrimination:
+    """Rank candidate starts by how well one fiber there separates the hypotheses.
+
+    Parameters
+    ----------
+    sim : Simulator
+    noise : NoiseModel
+        Measurement model (start and outcome noise) of the copies.
+    hypotheses : (mapping, mapping)
+        The two sets of effects to separate.
+    starts : ndarray, shape (n, 3)
+        Measured starts (the grid spans them; also scored for the comparison).
+    observables : sequence of str
+        Observables that would be measured.
+    copies : int
+        Copies per hypothesis and start (>= 2).
+    """
+    if copies < 2:
+        raise ValueError(f"copies must be >= 2, got {copies}")
+    g = start_grid(starts) if grid is None else np.asarray(grid, dtype=np.float64)
+    pts = np.vstack([g, np.asarray(starts, dtype=np.float64)])
+    used0 = sim.used
+    maker = CopyMaker(pts, noise, seed + 104729, sim)
+    xa = np.stack(standardised_values(
+        maker.copies(range(copies), dict(hypotheses[0]), desc="next: A"), observables
+    ))  # fmt: skip
+    xb = np.stack(standardised_values(
+        maker.copies(range(copies), dict(hypotheses[1]), desc="next: B"), observables
+    ))  # fmt: skip
+    both = np.concatenate([xa, xb], axis=0)  # (2 copies, points, components)
+    # per-component noise of one fiber: spread of the copies around their hypothesis' mean
+    with warnings.catch_warnings():  # a component undefined at a start: NaN, as meant
+        warnings.simplefilter("ignore", RuntimeWarning)
+        resid = np.concatenate([xa - np.nanmean(xa, 0), xb - np.nanmean(xb, 0)], axis=0)
+    s = np.sqrt(np.nanmean(resid**2, axis=(0, 1)) * copies / (copies - 1))
+    floor = np.nanstd(both, axis=(0, 1)) * 0.05  # no component counts as noiseless
+    s = np.maximum(np.where(np.isfinite(s), s, 0.0), floor)
+    # paired (common random numbers) per-copy differences; their mean squared, less the
+    # noise of that mean (its variance), is an unbiased estimate of the squared shift
+    with np.errstate(invalid="ignore", divide="ignore"):
+        delta = (xa - xb) / s
+        cnt = np.isfinite(delta).sum(axis=0)
+        mean = np.where(cnt > 0, np.nansum(delta, axis=0) / np.maximum(cnt, 1), np.nan)
+        ss = np.nansum((delta - mean) ** 2, axis=0)
+        var = np.where(cnt > 1, ss / np.maximum(cnt - 1, 1) / np.maximum(cnt, 1), 0.0)
+    diff = np.where(np.isfinite(mean), mean, 0.0)
+    d2 = np.clip(diff**2 - np.where(np.isfinite(var), var, 0.0), 0.0, None)
+    d_all = np.sqrt(d2.sum(axis=1))
+    ng = len(g)
+    d, d_meas = d_all[:ng], d_all[ng:]
+    names = component_names(observables)
+    order = np.argsort(-d)[:top]
+    best = []
+    for i in order:
+        j = int(np.argmax(d2[i]))
+        best.append(
+            Suggestion(
+                float(g[i, 0]),
+                float(g[i, 1]),
+                float(g[i, 2]),
+                float(d[i]),
+                names[j],
+                float(np.nanmean(xa[:, i, j])),
+                float(np.nanmean(xb[:, i, j])),
+            )  # fmt: skip
+        )
+    d_top = float(np.sqrt(np.mean(d[order] ** 2))) if len(order) else 0.0
+    d_m = float(np.sqrt(np.mean(d_meas**2))) if len(d_meas) else 0.0
+    return Discrimination(
+        labels=(_label(hypotheses[0]), _label(hypotheses[1])),
+        grid=g,
+        d=d,
+        best=best,
+        fibers_needed=_needed(d_top, alpha, power),
+        fibers_needed_measured=_needed(d_m, alpha, power),
+        simulations=sim.used - used0,
+    )
+
 
 #: Bootstrap resamples of the simulated starts behind each detection limit's interval
 #: (no new runs; about a minute of scoring with all seven effects on 40 starts).
@@ -71,7 +295,7 @@ def next_hypotheses(
     if verdict.kind == "unexplained" and heldout:
         # the doubt of an unexplained gap: is the candidate that helped most there or
         # not? The starts where its prediction departs most from the model as it is
-        # test it fastest (issue 30: which starts, how many more fibers)
+        # test it fastest
         best = max(heldout, key=lambda h: h.improvement[0])
         v = best.value if best.value != 0.0 else _mean_nonzero(fold_values.get(best.name, []))
         if v != 0.0:
@@ -99,8 +323,8 @@ def followup(
     candidates: Sequence[Candidate],
     maker: CopyMaker,
     sim: Simulator,
-    plan: Any,
-    s: Any,
+    plan: Plan,
+    s: DiscrepancySettings,
     obs: tuple[str, ...],
     rng: np.random.Generator,
 ) -> dict[str, Any]:
@@ -108,9 +332,9 @@ def followup(
 
     Parameters
     ----------
-    plan : workflow.Plan
+    plan : Plan
         Its ``copies`` (the ensemble the power analysis scales to).
-    s : workflow.DiscrepancySettings
+    s : DiscrepancySettings
         ``power_fibers``, ``next_copies``, ``noise``, ``seed``, ``alpha``.
 
     Returns
@@ -119,9 +343,6 @@ def followup(
         ``power`` (PowerResult), ``next`` (Discrimination) and ``next_reason``,
         or ``power_skipped`` / ``next_skipped`` with the reason.
     """
-    from fibersweep.discrepancy.nextmeasure import discriminate, start_grid
-    from fibersweep.discrepancy.power import analyse_power
-
     out: dict[str, Any] = {}
     if s.power_fibers and verdict.kind in ("no significant gap", "unexplained"):
         n_sim = min(s.power_fibers, maker.n)

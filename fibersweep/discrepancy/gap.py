@@ -2,13 +2,13 @@
 
 Input is a value matrix per observable (column 0 observed, then the model's
 copies; see :mod:`fibersweep.discrepancy.scores`). For each observable two
-permutation tests of :mod:`fibersweep.discrepancy.stats` (noise floor = the
-model's own copies) are run: the proper score (does the observation sit worse
-than a copy?) and the signed residual per component (is it shifted?). A shift
-that is small against the spread of the copies, e.g. every contact a few per
-cent slower, is seen by the signed test long before the score's; a spread is
-seen only by the score. All p-values of both kinds, over all observables, are
-Holm-corrected together: one family-wise error rate for "there is a gap".
+permutation tests (noise floor = the model's own copies) are run: the proper
+score (does the observation sit worse than a copy?) and the signed residual per
+component (is it shifted?). A shift that is small against the spread of the
+copies, e.g. every contact a few per cent slower, is seen by the signed test
+long before the score's; a spread is seen only by the score. All p-values of
+both kinds, over all observables, are Holm-corrected together: one family-wise
+error rate for "there is a gap".
 Descriptive measures (confusion matrix, Wasserstein distance of δ, mismatch
 rates, paired residuals) go to the report.
 """
@@ -23,16 +23,18 @@ import pandas as pd
 from scipy.stats import wasserstein_distance
 
 from fibersweep.discrepancy.observables import OBSERVABLES, has_tracks, scored
-from fibersweep.discrepancy.scores import residual_matrix, score_matrix
-from fibersweep.discrepancy.stats import (
+from fibersweep.discrepancy.scores import (
     PermTest,
     bootstrap_mean_ci,
     excess,
     holm,
     permutation_test,
+    residual_matrix,
+    score_matrix,
 )
 
 __all__ = [
+    "GAP_UNIT",
     "ObservableGap",
     "GapResult",
     "value_matrices",
@@ -42,7 +44,13 @@ __all__ = [
     "feature_one_sided",
     "weighted_loss",
     "combined_excess",
+    "observable_weights",
+    "paired_improvement",
 ]
+
+#: Unit of the gap in every table and figure: an observable's excess score divided by the
+#: spread of the copies' own scores (:func:`observable_weights`; 0: as good as a copy).
+GAP_UNIT = "copy-spread units"
 
 
 def value_matrices(
@@ -216,7 +224,7 @@ def assess_gap(
 def _feature_parts(gap: GapResult) -> list[tuple[np.ndarray, bool]]:
     """The blocks of :func:`feature_vector`, each with whether its tests are one-sided."""
     # the track observables' components only when the gap has them (tracks measured):
-    # without tracks the vector is the same as before they existed
+    # without tracks, no track components: vectors of data sets without tracks compare
     names = scored(tracks=has_tracks(gap.gaps))
     parts = []
     for name in names:

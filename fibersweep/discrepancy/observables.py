@@ -1,13 +1,23 @@
-"""The observables of the discrepancy workflow: one registry entry per measured quantity.
+"""The observables of the discrepancy workflow: what one is, and the registry of them all.
 
-Every module of the workflow iterates :data:`OBSERVABLES` instead of naming
-quantities: the schema validates the columns it lists (range, NaN rule, unit
-hint), the simulator extracts them from a :class:`~fibersweep.fiber.result.RunResult`,
-the measurement model applies their noise law, ``synth`` writes them, the scores
-and gap tests compare them on their scoring scale, and the report lists them.
-A new observable is one new :class:`~fibersweep.discrepancy.observable.Observable`
-in ``_REGISTRY`` below (what an entry holds, and how its values are encoded, is in
-:mod:`fibersweep.discrepancy.observable`).
+An :class:`Observable` is one measured quantity of a fiber and everything the
+workflow needs to know of it: its kind, unit, plausible range and NaN rule,
+noise law, scoring scale and how it is read from a run. Every module of the
+workflow iterates :data:`OBSERVABLES` instead of naming quantities: the schema
+validates the columns it lists, the simulator extracts them from a
+:class:`~fibersweep.fiber.result.RunResult`, the measurement model applies
+their noise law, ``synth`` writes them, the scores and gap tests compare them
+on their scoring scale, and the report lists them. A new observable is one new
+entry in ``_REGISTRY`` below.
+
+Values in outcome tables (simulated copies) and measured tables
+-----------------------------------------------------------------
+- ``class`` kind: the category name (one of ``categories``), None/'' when undefined;
+- ``binary`` kind: 0.0 / 1.0 (measured tables: bool), NaN when undefined;
+- ``continuous`` kind: a float in ``unit``, NaN when undefined.
+
+:meth:`Observable.values` turns any of these into the float matrix the scores
+use (category index for class kinds), the only place where a category is encoded.
 
 Track observables (``track=True``: ``y_out``, ``theta_out``, ``t_transit``) are
 derived from the measured trajectories (``discrepancy --trajectories``) and
@@ -27,26 +37,234 @@ from __future__ import annotations
 import hashlib
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from types import MappingProxyType
+from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.observable import NoiseLaw, Observable, log_scale
 from fibersweep.fiber.result import CLASSES, RunResult
 
 __all__ = [
-    "Observable",
+    "Condition",
+    "Kind",
     "NoiseLaw",
+    "Observable",
     "OBSERVABLES",
+    "has_tracks",
+    "log_scale",
+    "noise_draws",
     "scored",
+    "stream_key",
     "table_columns",
     "track_observables",
-    "has_tracks",
-    "stream_key",
-    "noise_draws",
-    "log_scale",
 ]
+
+Kind = Literal["class", "binary", "continuous"]
+#: Conditions for a quantity to exist: the fiber is not Trapping; it touched the pillar.
+Condition = Literal["not_trapped", "contact"]
+
+
+@dataclass(frozen=True)
+class NoiseLaw:
+    """Measurement error of a continuous observable (Gaussian, independent per fiber).
+
+    Attributes
+    ----------
+    kind : {'additive', 'lognormal', 'reflected'}
+        ``x + sd z``; ``x exp(sd z)`` (sd is a relative error); ``|x + sd z|``
+        (a non-negative quantity, reflected at 0).
+    sd : float
+        Default standard deviation, in the observable's unit (relative for lognormal).
+    """
+
+    kind: Literal["additive", "lognormal", "reflected"]
+    sd: float
+
+    def apply(self, x: np.ndarray, sd: float, z: np.ndarray) -> np.ndarray:
+        """Noisy values, shape of ``x``; NaN stays NaN.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n,)
+            True values [unit of the observable].
+        sd : float
+            Standard deviation to use (the noise model's, defaults to ``self.sd``).
+        z : ndarray, shape (n,)
+            Standard normal draws.
+        """
+        x = np.asarray(x, dtype=np.float64)
+        if self.kind == "additive":
+            return x + sd * z
+        if self.kind == "lognormal":
+            return x * np.exp(sd * z)
+        return np.abs(x + sd * z)
+
+
+def _identity(v: np.ndarray) -> np.ndarray:
+    return v
+
+
+def log_scale(v: np.ndarray) -> np.ndarray:
+    """Natural log of positive values, NaN elsewhere (scoring scale of times)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(v > 0, np.log(np.where(v > 0, v, 1.0)), np.nan)
+
+
+@dataclass(frozen=True)
+class Observable:
+    """One measured quantity of a fiber and everything the workflow needs to know of it.
+
+    Attributes
+    ----------
+    name : str
+        Column name in measured and outcome tables.
+    kind : {'class', 'binary', 'continuous'}
+        Scored by the fair Brier score over ``categories`` (class, binary) or the fair CRPS
+        on the ``transform`` scale (continuous).
+    unit : str
+        Unit of the values ('' for categories), e.g. 'h_obs', 'deg', 's'.
+    description : str
+        One line for messages and the report.
+    extract : callable RunResult -> value, or None
+        The value of a successful run (NaN or '' where undefined); None for a
+        track observable (its value comes from
+        :func:`fibersweep.discrepancy.tracks.track_values`).
+    defined : tuple of {'not_trapped', 'contact'}
+        Where the quantity exists: every condition holds (``()``: always). NaN is
+        accepted only outside it (and anywhere for 'contact' when the table has
+        no contact column).
+    strict : bool
+        A value given where the quantity does not exist is an error.
+    required : bool
+        The measured table must have this column.
+    scored : bool
+        Compared by the workflow (False: a column only used to derive another).
+    noise : NoiseLaw or None
+        Measurement error (None: observed without error).
+    transform : callable ndarray -> ndarray
+        Scale on which a continuous observable is scored and its residual taken.
+    bounds : (float, float) or None
+        Plausible range [unit] (inclusive); outside points to a unit error.
+    lower_open : bool
+        The lower bound itself is out of range (times > 0).
+    unit_hint : str
+        How the column must be given, appended to a range error.
+    angle : str
+        For an angle, its name in messages (e.g. 'contact angle'): degrees are
+        expected, radians caught, converted with ``angle_unit``; '' otherwise.
+    categories : tuple
+        Category labels of a class or binary observable.
+    derived_from : tuple of str
+        Measured columns this observable is computed from (then it is not a table
+        column itself): see ``derive`` and ``underive``.
+    derive : callable mapping -> ndarray, optional
+        Values from the ``derived_from`` columns (validated floats).
+    underive : callable (table, values) -> None, optional
+        Writes measured-like ``values`` back into the ``derived_from`` columns of
+        an outcome table (``synth``).
+    measures : tuple of {'wasserstein', 'ratio'}
+        Extra descriptive measures for the report (distance of the distributions,
+        median ratio observed / model).
+    track : bool
+        Derived from the trajectories (not a fibers-table column); scored only
+        when the measured data has tracks.
+    """
+
+    name: str
+    kind: Kind
+    unit: str
+    description: str
+    extract: Callable[[RunResult], Any] | None = None
+    defined: tuple[Condition, ...] = ()
+    strict: bool = True
+    required: bool = False
+    scored: bool = True
+    noise: NoiseLaw | None = None
+    transform: Callable[[np.ndarray], np.ndarray] = _identity
+    bounds: tuple[float, float] | None = None
+    lower_open: bool = False
+    unit_hint: str = ""
+    angle: str = ""
+    categories: tuple[str, ...] = ()
+    derived_from: tuple[str, ...] = ()
+    derive: Callable[[Mapping[str, np.ndarray]], np.ndarray] | None = None
+    underive: Callable[[pd.DataFrame, np.ndarray], None] | None = None
+    measures: tuple[str, ...] = ()
+    track: bool = False
+
+    @property
+    def categorical(self) -> bool:
+        """Scored by the fair Brier score over categories."""
+        return self.kind in ("class", "binary")
+
+    @property
+    def width(self) -> int:
+        """Components of the signed residual: categories, or 1."""
+        return len(self.categories) if self.categorical else 1
+
+    def defined_mask(self, trapped: np.ndarray, contact: np.ndarray | None) -> np.ndarray | None:
+        """Where the quantity exists, shape (n,) bool; None when it cannot be told.
+
+        Parameters
+        ----------
+        trapped : ndarray, shape (n,), bool
+            Fibers of class Trapping.
+        contact : ndarray, shape (n,), bool, or None
+            Fibers that touched the pillar; None when contact was not measured.
+        """
+        mask = np.ones(len(trapped), dtype=bool)
+        if "not_trapped" in self.defined:
+            mask &= ~np.asarray(trapped, dtype=bool)
+        if "contact" in self.defined:
+            if contact is None:
+                return None
+            mask &= np.asarray(contact, dtype=bool)
+        return mask
+
+    def outcome(self, result: RunResult | None, tracks: Mapping[str, float] | None = None) -> Any:
+        """Value in an outcome table: extracted from an ok run, missing otherwise.
+
+        Parameters
+        ----------
+        result : RunResult or None
+            None for a failed run.
+        tracks : mapping name -> float, optional
+            The run's track values (:func:`fibersweep.discrepancy.tracks.track_values`);
+            a track observable is NaN without them.
+        """
+        if result is None:
+            return None if self.kind == "class" else math.nan
+        if self.extract is None:
+            return float(tracks.get(self.name, math.nan)) if tracks else math.nan
+        v = self.extract(result)
+        return v if self.kind == "class" else float(v)
+
+    def values(self, column: pd.Series | np.ndarray | Sequence[Any]) -> np.ndarray:
+        """Float values for scoring, shape (n,): category index or value; NaN undefined.
+
+        Parameters
+        ----------
+        column : Series or array, shape (n,)
+            Class names (class kind), bool or 0/1 (binary), floats (continuous);
+            None, '' or NaN where undefined.
+        """
+        if self.kind == "class":
+            lookup = {c: float(i) for i, c in enumerate(self.categories)}
+            return np.array([lookup.get(v, np.nan) for v in column], dtype=np.float64)
+        s = pd.Series(column)
+        if s.dtype == object:
+            s = pd.to_numeric(s.map(lambda v: float(v) if v is not None else np.nan))
+        return s.to_numpy(dtype=np.float64)
+
+    def to_table(self, outcome: pd.Series) -> np.ndarray:
+        """Outcome-table values as a measured table writes them (class names, bool contact)."""
+        if self.kind == "class":
+            return np.array([v if isinstance(v, str) else "" for v in outcome], dtype=object)
+        if self.kind == "binary":
+            return outcome.to_numpy(dtype=np.float64) > 0.5
+        return outcome.to_numpy(dtype=np.float64)
 
 
 def _dwell(cols: Mapping[str, np.ndarray]) -> np.ndarray:
@@ -163,9 +381,8 @@ _REGISTRY: dict[str, Observable] = {
             derive=_dwell,
             underive=_undwell,
         ),
-        # Track observables (docs/trajectories.md): chosen by their signature strength
-        # (scripts/track_signatures.py); noise laws: the measured error of the derived value
-        # for tracks with 1 µm / 1.5° per-frame noise at 100 fps (0.0115 h_obs, 1.16°, 2.8 ms)
+        # Track observables (docs/trajectories.md); noise laws: the error of the derived
+        # value for tracks with 1 µm / 1.5° per-frame noise at 100 fps
         Observable(
             "y_out",
             "continuous",

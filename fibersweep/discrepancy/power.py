@@ -9,7 +9,7 @@ The gap tests of :func:`gap.assess_gap` give a z-score per test of the family
 averaged over the copies k, this is the expected z-vector at that magnitude
 and number of fibers.
 
-Scaling (the approximation this rests on, checked by the study): the z of a
+Scaling (the approximation this rests on, checked in docs/discrepancy.md): the z of a
 test grows as ``sqrt(N)`` with the number of fibers, and as ``m ** gamma`` with
 the magnitude, gamma read off the two probes (1 for a shift, 2 for a spread
 whose variance grows as m², clipped to [0.5, 3]). A power law is only good
@@ -30,8 +30,7 @@ model's never rejects) and ``Phi(|z_j| - z_crit)`` for a two-sided residual
 with ``P(detect) >= power`` is the detection limit; the fibers needed for a
 magnitude m follow from the same formula. Detection is the first gate only:
 naming needs the held-out improvement too (half of the fibers fit, the other
-half test), so the limit to *name* an effect is higher; the study measures by
-how much.
+half test), so the limit to *name* an effect is higher.
 
 Look-alikes: the per-fiber effect of a magnitude (copy with the effect minus
 the same copy without, averaged over copies, each observable component
@@ -51,6 +50,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import norm
 
+from fibersweep.discrepancy.candidates import Candidate
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.gap import (
@@ -59,7 +59,6 @@ from fibersweep.discrepancy.gap import (
     feature_vector,
     value_matrices,
 )
-from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.scores import transform
 
@@ -440,8 +439,7 @@ def limit_intervals(
 ) -> list[EffectPower]:
     """Each limit with a 95 % percentile interval from a bootstrap over the simulated starts.
 
-    The limits come from one set of simulated starts, and one set can be far off:
-    on 8 sets of 40 starts the pillar_hydro limit at N = 100 ranged 0.09-0.55.
+    The limits come from one set of simulated starts, and one set can be far off.
     Resampling the simulated fibers with replacement (the same rows for every
     copy, effect and magnitude, so each resample is one other set of starts
     drawn from the same ones) and repeating the whole read-out (z-vectors at
@@ -482,7 +480,7 @@ def limit_intervals(
             eb = _read_out(e, z_full, z_half)
             lim = _limit(eb, by[e.name], n, n_sim, z_crit, power)
             lims[i].append(math.inf if lim is None else abs(lim))
-            # (z, gamma) as before refinement existed; a refined read-out adds z_against
+            # (z, gamma) read at the probe; a refined read-out adds z_against
             reads[i].append((eb.z, eb.gamma) if e.read_at is None
                             else (eb.z, eb.gamma, eb.z_against))  # fmt: skip
     out = []

@@ -4,7 +4,8 @@ Files written into the output directory (each atomically):
 
 - ``summary.json``: verdict, gaps, ranking, fits (per half), held-out before/after,
   sets of effects tried, power analysis, what to measure next; for scripts;
-- ``report.md``: the same for people, with the figures (:mod:`.report_text`);
+- ``report.md``: the same for people, with the figures (:mod:`.report_text`)
+  and the advice (:mod:`.advice`);
 - figures (:mod:`.report_figures`): ``phase_before_after.png``,
   ``residual_map.png``, ``gap_before_after.png``, ``next_measure.png``;
 - ``updated_config.yaml`` (named effect or set) or ``updated_config.<set>.yaml``
@@ -26,19 +27,19 @@ from typing import Any
 
 import numpy as np
 import yaml
+from scipy.stats import norm
 
 from fibersweep.atomic import atomic_write
-from fibersweep.discrepancy.advice import next_measurement
+from fibersweep.discrepancy.advice import advice_lines
+from fibersweep.discrepancy.candidates import LIBRARY
 from fibersweep.discrepancy.dispersion import dispersion_test
-from fibersweep.discrepancy.gap import GapResult, value_matrices
-from fibersweep.discrepancy.library import LIBRARY
+from fibersweep.discrepancy.gap import GAP_UNIT, GapResult, value_matrices
 from fibersweep.discrepancy.observables import scored
+from fibersweep.discrepancy.report_figures import figures
+from fibersweep.discrepancy.report_text import markdown
 from fibersweep.discrepancy.workflow import DiscrepancyResult
 
-__all__ = ["summary", "write_report", "GAP_UNIT"]
-
-#: Unit of the gap in every table and figure.
-GAP_UNIT = "copy-spread units"
+__all__ = ["GAP_UNIT", "fibers_to_name", "summary", "write_report"]
 
 #: Stages whose failed runs are failures of the analysis itself (the baseline model);
 #: runs under a probed or fitted effect that fail are outcomes of that effect.
@@ -107,8 +108,6 @@ def fibers_to_name(per_fiber: np.ndarray, k: int, alpha: float, power: float = 0
     at alpha / k (Holm's first step over k candidates) reaches the power when
     ``sqrt(n) mu / sigma >= z_{1-alpha/k} + z_power``. None when mu <= 0.
     """
-    from scipy.stats import norm
-
     d = np.asarray(per_fiber, dtype=np.float64)
     d = d[np.isfinite(d)]
     if len(d) < 2 or d.mean() <= 0:
@@ -215,56 +214,6 @@ def _next_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
         "fibers_needed_at_measured_starts": nx.fibers_needed_measured,
         "simulations": nx.simulations,
     }
-
-
-def _advice(s: dict[str, Any]) -> list[str]:
-    """What to try when the gap is unexplained (or not seen)."""
-    v = s["verdict"]
-    out = []
-    if v["kind"] == "unexplained":
-        helped = [h for h in s["heldout"] if h["significant"]]
-        for h in helped:
-            parts = [
-                f"{o} {100 * r:.0f} %"
-                for o, r in h["gap_removed"].items()
-                if r is not None and r > 0.1
-            ]
-            out.append(
-                f"{h['effect']} = {h['value']:.3g} helped out of sample (improvement "
-                f"{h['improvement']['mean']:.2g} {GAP_UNIT} per fiber, p Holm "
-                f"{h['p_holm']:.2g}) and removed "
-                + (", ".join(parts) if parts else "no observable's gap by more than 10 %")
-                + " of the gap, but leaves a significant gap."
-            )
-        for st in s["sets"]:
-            out.append(
-                f"{st['set']} was tried together: contributions "
-                + ", ".join(
-                    f"{m} {st['gains'][m]['mean']:.2g} (p Holm {st['p_holm'][m]:.2g})"
-                    for m in st["values"]
-                )
-                + ("; it still leaves a significant gap." if st["significant"] else ".")
-            )
-        if not helped:
-            out.append("No library effect improved the held-out fibers significantly.")
-        out.append(
-            "Try: an effect outside the library (the region and observable above say where "
-            "to look), a check of the measurement-noise model (a wrong noise level shows as "
-            "a gap everywhere), or more fibers (see the power analysis)."
-        )
-        out += next_measurement(s)
-    if v["kind"] in ("unexplained", "no significant gap") and s.get("power"):
-        hidden = [
-            f"{e['effect']} ({e['direction']}) up to {e['limit_ci'][1]:.3g}"
-            for e in s["power"]["effects"]
-            if e.get("limit_ci") and e["limit_ci"][1] is not None
-        ]
-        if hidden:
-            out.append(
-                "May be present unseen (the upper end of each detection limit's 95 % "
-                "interval over the simulated starts): " + ", ".join(hidden) + "."
-            )
-    return out
 
 
 def summary(res: DiscrepancyResult) -> dict[str, Any]:
@@ -390,7 +339,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
             "noise": res.settings.noise.as_dict(),
         },
     }
-    out["advice"] = _advice(_clean(out))
+    out["advice"] = advice_lines(_clean(out))
     return _clean(out)
 
 
@@ -405,9 +354,6 @@ def write_report(
         The input config as a plain mapping (``Config.model_dump(mode='json')``);
         the updated config(s) are this with ``fiber.effects`` set.
     """
-    from fibersweep.discrepancy.report_figures import figures
-    from fibersweep.discrepancy.report_text import markdown
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     s = summary(res)

@@ -18,16 +18,16 @@ from pathlib import Path
 
 import numpy as np
 
-from fibersweep.discrepancy.gap import GapResult, combined_excess
+from fibersweep.discrepancy.followup import Discrimination
+from fibersweep.discrepancy.gap import GAP_UNIT, GapResult, combined_excess
 from fibersweep.discrepancy.localise import binned_map
-from fibersweep.discrepancy.nextmeasure import Discrimination
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.workflow import DiscrepancyResult
 from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, paper_style, save_figure, subplots
 
 __all__ = ["figures", "fitted_label", "next_figure"]
 
-UNIT = "copy-spread units"
+UNIT = GAP_UNIT
 AXES = {"theta0": r"$\theta_0$ [deg]", "y0": r"$y_0/h_{obs}$", "length": r"$L/l_{obs}$"}
 
 

@@ -26,7 +26,7 @@ def _ci(d: dict[str, Any] | None, spec: str = ".2g") -> str:
 
 
 def _score_text(observed: list[str] | tuple[str, ...] = ()) -> str:
-    # the track observables only when tracks were measured (the text is unchanged without)
+    # the track observables only when tracks were measured
     names = scored(tracks=has_tracks(observed))
     cat = [n for n in names if OBSERVABLES[n].categorical]
     logs = [n for n in names if OBSERVABLES[n].transform is log_scale]

@@ -1,4 +1,4 @@
-"""Measured-fiber data: the schema, a validating loader and an atomic writer.
+"""The measured-fiber table: its schema, its validation and an atomic writer.
 
 Schema (one row per measured fiber; Parquet ``.parquet`` or CSV ``.csv``)
 ------------------------------------------------------------------------
@@ -24,8 +24,8 @@ theta_c, y_c and t_contact without contact); a value given where it does not
 exist is an error for the strict ones. Leave a column out entirely if it was
 not measured.
 
-Trajectories (optional second table): their schema and checks are in
-:mod:`fibersweep.discrepancy.measured_tracks`; :func:`load_measured` reads them.
+Reading a table from disk, with its optional trajectories (their schema and
+checks), is :func:`fibersweep.discrepancy.measured.load_measured`.
 
 Validation never drops a row or a column: every problem raises
 :class:`InputError` that names the column, the rule and the offending rows
@@ -37,7 +37,7 @@ theta0 when every |theta0| is below 0.2 with a non-zero spread (the source study
 ±10° is ±0.17 rad); an angle observable (theta_c) when at least three values
 are given and every one is at most π in size (contact angles in degrees spread
 over tens of degrees); the trajectories' theta when their first samples match theta0
-converted to radians far better than theta0 itself (measured_tracks).
+converted to radians far better than theta0 itself (:mod:`.measured`).
 ``angle_unit = 'deg'``
 states degrees and turns the guess off.
 """
@@ -56,13 +56,13 @@ import pandas as pd
 from fibersweep.atomic import atomic_path
 from fibersweep.discrepancy.observables import OBSERVABLES, Observable, table_columns
 from fibersweep.errors import InputError
-from fibersweep.units import Geometry
 
 __all__ = [
     "START_COLUMNS",
     "OBSERVED_COLUMNS",
     "MeasuredData",
-    "load_measured",
+    "read_table",
+    "rows_text",
     "validate_measured",
     "write_table",
 ]
@@ -135,7 +135,8 @@ def rows_text(mask: np.ndarray | pd.Series) -> str:
     return f"row{'s' if len(idx) > 1 else ''} {shown}{more}"
 
 
-def _read_table(path: Path) -> pd.DataFrame:
+def read_table(path: Path) -> pd.DataFrame:
+    """A ``.parquet`` or ``.csv`` table; InputError when unreadable or of another format."""
     suffix = path.suffix.lower()
     try:
         if suffix == ".parquet":
@@ -408,49 +409,6 @@ def _check_consistency(
         late &= vals["t_contact"] > vals["t_pass"]
         if late.any():
             problems.append(f"t_contact: later than t_pass in {rows_text(late)}")
-
-
-def load_measured(
-    path: str | Path,
-    trajectories: str | Path | None = None,
-    ignore_extra: bool = False,
-    geometry: Geometry | None = None,
-) -> MeasuredData:
-    """Read and validate a measured-fiber table (and optionally its trajectories).
-
-    Parameters
-    ----------
-    path : path
-        ``.parquet`` or ``.csv`` file following the schema in the module docstring.
-    trajectories : path, optional
-        ``.parquet`` or ``.csv`` trajectory table; the track observables are
-        derived from it (:func:`~fibersweep.discrepancy.measured_tracks.with_tracks`).
-    ignore_extra : bool
-        Ignore columns the schema does not know instead of raising.
-    geometry : Geometry, optional
-        Channel and pillar of the model, the frame of the tracks (required with
-        ``trajectories``).
-
-    Raises
-    ------
-    InputError
-        Unreadable file or any schema violation (naming columns and rows).
-    """
-    p = Path(path)
-    if not p.exists():
-        raise InputError(f"{p}: no such file")
-    data = validate_measured(_read_table(p), source=str(p), ignore_extra=ignore_extra)
-    if trajectories is not None:
-        tp = Path(trajectories)
-        if not tp.exists():
-            raise InputError(f"{tp}: no such file")
-        if geometry is None:
-            raise ValueError("load_measured: trajectories need the model's geometry")
-        from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
-
-        traj = validate_trajectories(_read_table(tp), data.table, str(tp))
-        data = with_tracks(data, traj, geometry, str(tp))
-    return data
 
 
 def write_table(df: pd.DataFrame, path: str | Path) -> Path:

@@ -1,13 +1,12 @@
-"""Per-fiber scores of an observation against an ensemble of model copies.
+"""Per-fiber scores of an observation against model copies, and the tests on them.
 
+Scores
+------
 Everything here works on a value matrix ``V`` of shape (n, m): row i is fiber
 i, column 0 its observed value and columns 1..m-1 the model's jittered copies
 (NaN / -1 where undefined, e.g. δ of a trapped fiber). For each entry the
 *leave-one-out* score of ``V[i, j]`` against the other members of row i is
-computed, giving a score matrix ``S`` of the same shape. Under the null
-hypothesis "the observation is one more draw of the model's copies", the
-columns of a row are exchangeable, so column 0 is a uniformly random pick among
-them; this is what :mod:`fibersweep.discrepancy.stats` permutes.
+computed, giving a score matrix ``S`` of the same shape.
 
 Scores (lower is better, all proper):
 
@@ -23,24 +22,42 @@ Scores (lower is better, all proper):
 
 Both are unbiased at every ensemble size, so comparing two models on a few
 copies each favours the one whose outcome distribution is right, whatever its
-spread. The log-loss of a smoothed frequency, used before, is not: with 8
-copies, an observation that is one class with probability 0.9 scored better
-against copies that always give that class than against copies drawn from the
-true distribution, so effects that spread outcomes (start noise) were fitted
-too small.
+spread (a biased score, such as the log-loss of a smoothed frequency, favours
+copies sharper than the truth, and fits effects that spread outcomes too small).
+
+Tests
+-----
+The null hypothesis of every gap test is exchangeability within each fiber:
+the observation is one more draw of what the model's jittered copies are
+(same start noise, same measurement noise). Then column 0 of a score matrix
+is a uniformly random pick among the row's columns, independently per fiber,
+and the exact conditional null distribution of any statistic of column 0 is
+obtained by drawing, for every fiber, a random column instead
+(:func:`permutation_test`). This is the noise floor: it comes from the model's
+own copies, not from a tuned threshold. Holm's correction, bootstrap intervals
+and p-values, and a split-conformal quantile complete the toolbox.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from fibersweep.discrepancy.observables import OBSERVABLES, Observable
 
 __all__ = [
-    "crps_fair_loo",
+    "PermTest",
+    "boot_p",
+    "bootstrap_mean_ci",
     "brier_fair_loo",
-    "score_matrix",
+    "conformal_quantile",
+    "crps_fair_loo",
+    "excess",
+    "holm",
+    "permutation_test",
     "residual_matrix",
+    "score_matrix",
     "transform",
 ]
 
@@ -174,3 +191,154 @@ def residual_matrix(name: str, V: np.ndarray) -> np.ndarray:
     R = X - loo
     R[~fin | (n_def < 2)] = np.nan
     return R[:, :, None]
+
+
+@dataclass(frozen=True)
+class PermTest:
+    """One-sided permutation test of ``nanmean_i S[i, 0]`` being too large.
+
+    Attributes
+    ----------
+    statistic : float
+        Observed mean score (column 0), NaN if no fiber is defined.
+    null_mean, null_sd : float
+        Mean and standard deviation of the permutation distribution.
+    p_value : float
+        (1 + #{null >= observed}) / (1 + B); 1.0 when undefined.
+    z : float
+        (statistic - null_mean) / null_sd (0 when the null has no spread).
+    n : int
+        Fibers with a defined observed score.
+    """
+
+    statistic: float
+    null_mean: float
+    null_sd: float
+    p_value: float
+    z: float
+    n: int
+
+
+def permutation_test(
+    S: np.ndarray, rng: np.random.Generator, n_perm: int = 4999, two_sided: bool = False
+) -> PermTest:
+    """Test whether column 0 of ``S`` scores worse than a random column per row.
+
+    Parameters
+    ----------
+    S : ndarray, shape (n, m)
+        Leave-one-out scores (or signed residuals with ``two_sided``), NaN where undefined.
+    rng : numpy.random.Generator
+    n_perm : int
+        Random designations drawn.
+    two_sided : bool
+        Test |statistic - null_mean| instead of the upper tail.
+    """
+    S = np.asarray(S, dtype=np.float64)
+    n, m = S.shape
+    defined = np.isfinite(S[:, 0])
+    if n == 0 or not defined.any() or m < 2:
+        return PermTest(np.nan, np.nan, np.nan, 1.0, 0.0, 0)
+    obs = float(np.nanmean(S[:, 0]))
+    pick = rng.integers(0, m, size=(n_perm, n))
+    draws = S[np.arange(n)[None, :], pick]
+    with np.errstate(invalid="ignore"):
+        cnt = np.isfinite(draws).sum(axis=1)
+        null = np.where(cnt > 0, np.nansum(draws, axis=1) / np.maximum(cnt, 1), np.nan)
+    null = null[np.isfinite(null)]
+    mu = float(null.mean())
+    sd = float(null.std(ddof=1)) if len(null) > 1 else 0.0
+    if two_sided:
+        hits = np.abs(null - mu) >= abs(obs - mu) - 1e-12 * max(1.0, abs(obs))
+    else:
+        hits = null >= obs - 1e-12 * max(1.0, abs(obs))
+    p = (1.0 + hits.sum()) / (1.0 + len(null))
+    z = (obs - mu) / sd if sd > 0 else 0.0
+    return PermTest(obs, mu, sd, float(p), float(z), int(defined.sum()))
+
+
+def holm(p_values: np.ndarray | list[float]) -> np.ndarray:
+    """Holm-Bonferroni adjusted p-values (controls the family-wise error rate).
+
+    Parameters
+    ----------
+    p_values : array_like, shape (k,)
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        Adjusted p-values in the input order; reject where adjusted <= alpha.
+    """
+    p = np.asarray(p_values, dtype=np.float64)
+    k = len(p)
+    order = np.argsort(p)
+    adj_sorted = np.maximum.accumulate((k - np.arange(k)) * p[order])
+    out = np.empty(k)
+    out[order] = np.minimum(adj_sorted, 1.0)
+    return out
+
+
+def bootstrap_mean_ci(
+    x: np.ndarray, rng: np.random.Generator, n_boot: int = 2000, level: float = 0.95
+) -> tuple[float, float, float]:
+    """Mean of the finite entries of ``x`` and its percentile bootstrap interval.
+
+    Returns
+    -------
+    (mean, lo, hi) : tuple of float
+        NaNs when ``x`` has no finite entry.
+    """
+    v = np.asarray(x, dtype=np.float64)
+    v = v[np.isfinite(v)]
+    if len(v) == 0:
+        return (np.nan, np.nan, np.nan)
+    idx = rng.integers(0, len(v), size=(n_boot, len(v)))
+    means = v[idx].mean(axis=1)
+    a = (1.0 - level) / 2.0
+    return float(v.mean()), float(np.quantile(means, a)), float(np.quantile(means, 1.0 - a))
+
+
+def excess(S: np.ndarray) -> np.ndarray:
+    """Per-fiber excess score: observed minus the row's mean over all members.
+
+    Its expectation is zero under the null; positive means the observation
+    sits worse than the model's own copies. Shape (n,), NaN where undefined.
+    """
+    S = np.asarray(S, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        cnt = np.isfinite(S).sum(axis=1)
+        mean = np.where(cnt > 0, np.nansum(S, axis=1) / np.maximum(cnt, 1), np.nan)
+    return S[:, 0] - mean
+
+
+def boot_p(d: np.ndarray, rng: np.random.Generator, n_boot: int = 4000) -> float:
+    """One-sided bootstrap p-value of mean(d) <= 0 over the finite entries of d."""
+    d = np.asarray(d, dtype=np.float64)
+    d = d[np.isfinite(d)]
+    if len(d) == 0:
+        return 1.0
+    means = d[rng.integers(0, len(d), size=(n_boot, len(d)))].mean(axis=1)
+    return float((1 + np.sum(means <= 0.0)) / (1 + n_boot))
+
+
+def conformal_quantile(scores: np.ndarray, level: float = 0.95) -> float:
+    """Split-conformal quantile: the k-th smallest of n scores, k = ceil((n + 1) level).
+
+    If a new score is exchangeable with the n calibration scores, it is at most
+    this value with probability at least ``level`` (and below (k + 1) / (n + 1)
+    when the scores have no ties). Used to calibrate the score test's critical
+    value on simulated data sets (:data:`.estimate.CRIT_SCALE`).
+
+    Parameters
+    ----------
+    scores : ndarray, shape (n,)
+    level : float
+
+    Returns
+    -------
+    float
+        inf when k > n (too few scores for the level).
+    """
+    s = np.sort(np.asarray(scores, dtype=float))
+    k = int(np.ceil((len(s) + 1) * level))
+    return float(s[k - 1]) if k <= len(s) else float("inf")

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from fibersweep.discrepancy.library import Candidate
-from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.candidates import Candidate
+from fibersweep.discrepancy.copies import NoiseModel
 from fibersweep.errors import InputError
 
 __all__ = [
@@ -23,27 +23,23 @@ __all__ = [
 ]
 
 #: Most evaluations a searched pooled refit adds after its search to read its 95 %
-#: interval's ends (:func:`fit.fit_effect`, ``close_interval``): the range end when
+#: interval's ends (:func:`.fit.fit_effect`, ``close_interval``): the range end when
 #: the interval is open, then its two ends.
 INTERVAL_EVALS = 3
 
 #: Significant single effects, each leaving a gap, that forward selection adds
-#: partners to (:func:`workflow.pairs`), best held-out improvement first. The
+#: partners to (:func:`.workflow.pairs`), best held-out improvement first. The
 #: ``pairs`` of a plan are shared out among them in turn, so the cost is the same
-#: as with one. Two: with one, a hidden friction + inlet_speed (N = 100, seed 9201)
-#: was never tried, its best single (pillar_hydro, improvement 0.81 [0.04, 1.6])
-#: barely ahead of inlet_speed (0.56 [0.32, 0.80]).
+#: as with one. Two: the single effect that helps most out of sample may be a
+#: look-alike of the pair's true first member, barely ahead of it.
 PAIR_FIRSTS = 2
 
 #: Largest shortfall of a signature's cosine below the best one's for the effect to
 #: be fitted beyond the ``candidates`` best (``DiscrepancySettings.tied`` more at
-#: most; :func:`fit.choose_candidates`). The four slowing effects (friction,
-#: pillar_hydro, off_midplane, inlet_speed) match a slowing gap within 0.1-0.2 of
-#: each other, in an order the noise of N = 100 fibers sets: over 11 data sets with
-#: slowing effects hidden (N = 100, seeds 9201-9302, singles and friction +
-#: inlet_speed pairs), a hidden one's cosine lay up to 0.18 below the best
-#: (pillar_hydro = 0.3, seed 9301: fifth, 0.71 against 0.89, never fitted; a
-#: pair's friction fourth twice, 0.15 and 0.13 below).
+#: most; :func:`.signatures.choose_candidates`). The four slowing effects
+#: (friction, pillar_hydro, off_midplane, inlet_speed) match a slowing gap within
+#: 0.1-0.2 of each other, in an order that the noise of a hundred fibers sets, and
+#: an effect that is not fitted is never named.
 TIE_COSINE = 0.2
 
 
@@ -55,44 +51,37 @@ class DiscrepancySettings:
     ----------
     copies : int
         Jittered baseline copies per fiber (the noise floor); also the copies
-        per held-out evaluation. 8 by default: the per-fiber improvement of a
-        spread effect (start noise) scored against 4 copies was too noisy to be
-        confirmed out of sample at N = 60 (p_Holm 0.16); with 8 it was (5e-4).
+        per held-out evaluation. 8 by default: against fewer copies the
+        per-fiber improvement of a spread effect (start noise) is too noisy to
+        be confirmed out of sample.
     fit_copies : int
         Copies per fiber per fit evaluation.
     random_fit_copies, random_copies : int or None
         The same two counts for an effect that draws random numbers per run
         (``Candidate.random``: start noise, Brownian motion), whose copies carry
-        Monte Carlo noise of their own. Measured on start noise 3 at N = 100
-        (seeds 2 and 3, disjoint sets of copies): with 2 fit copies a half was
-        fitted to 0 in 9 of 20 sets, with 4 in 4 of 10, with 8 in 0 of 5; a
-        half at 0 leaves its fibers unimproved and the held-out test not
-        significant. With 8 held-out copies the Monte Carlo noise was half the
-        variance of the per-fiber improvement (p 0.02 at the true value),
-        with 16 p 0.003-0.007. Only for the candidate whose signature matches
-        the gap best (see :class:`Plan`). None: ``copies`` and 2 x ``copies``.
+        Monte Carlo noise of their own: with the usual fit copies a half is
+        often fitted to 0, which leaves its fibers unimproved, and with the
+        usual held-out copies that noise dominates the per-fiber improvement.
+        Only for the candidate whose signature matches the gap best (see
+        :class:`Plan`). None: ``copies`` and 2 x ``copies``.
     candidates : int
         Effects fitted (the best-matching signatures).
     tied : int
         Most effects fitted beyond ``candidates`` whose signature matches the gap
-        within ``TIE_COSINE`` of the best (0: none). 2: a hidden pillar_hydro
-        (N = 100, seed 9301) ranked fifth, 0.18 below the best.
+        within ``TIE_COSINE`` of the best (0: none).
     fit_evals : int
         Simulated evaluations per 1D fit.
     refits : int
         Significant candidates refitted on all fibers for the adequacy check.
     pairs : int
         Pairs tried by forward selection (0: none), shared out in turn among the
-        ``PAIR_FIRSTS`` best significant single effects that leave a gap. 3: a
-        hidden friction = 0.25 + inlet_speed = -0.015 (N = 100, seed 9201) was
-        the third pair in that order (inlet_speed's second partner) and was
-        named; with 2 the verdict was "unexplained".
+        ``PAIR_FIRSTS`` best significant single effects that leave a gap.
     power_fibers : int
         Fibers simulated by the power analysis when the verdict is "no significant
         gap" or "unexplained" (:mod:`.power`; 0: none).
     next_copies : int
         Copies per hypothesis and start of what-to-measure-next
-        (:mod:`.nextmeasure`; 0: none), run when the verdict is ambiguous or a
+        (:mod:`.followup`; 0: none), run when the verdict is ambiguous or a
         fit is weakly identified.
     alpha : float
         Family-wise error rate of every test.
@@ -109,13 +98,6 @@ class DiscrepancySettings:
     noise : NoiseModel
     n_perm : int
         Permutations per gap test.
-    fit_grid : bool
-        Fit each half at the same ``fit_evals + 1`` values, fixed before the data
-        (:func:`crossfit.shared_values`), instead of a Brent search, and refit on
-        all fibers from the two halves' profiles side by side plus ``refit_evals``
-        values around their estimate (:func:`crossfit.shared_pooled_refit`). Off by
-        default: measured on stand-ins only (docs/discrepancy.md, *Fit
-        uncertainty*), not yet on the simulator.
     """
 
     copies: int = 8
@@ -138,7 +120,6 @@ class DiscrepancySettings:
     effects: tuple[str, ...] | None = None
     noise: NoiseModel = field(default_factory=NoiseModel)
     n_perm: int = 4999
-    fit_grid: bool = False
 
     @property
     def n_random_fit_copies(self) -> int:
@@ -181,19 +162,16 @@ class Plan:
     """How many simulations each step may use.
 
     ``pair_rounds``: coordinate-descent rounds of a pair's joint fit
-    (:func:`pairfit.joint_fit`). ``random``: 1 when the library holds an
+    (:func:`.pairs.joint_fit`). ``random``: 1 when the library holds an
     effect that draws random numbers (``Candidate.random``). Such an effect
     gets ``random_fit_copies`` / ``random_copies`` instead of ``fit_copies`` /
     ``copies`` in its single fits, held-out scores and refit when its
     signature matches the gap best (the *lead* candidate). As a side candidate
     it keeps the usual copies: Brownian runs are the costliest of the library,
-    and fitted with the extra copies as the third candidate of a hidden
-    inlet_speed (signature cosine 0.12) they took an N = 100 analysis from
-    about 5 to 25 minutes. ``shared``: the halves are fitted at shared values
-    (``DiscrepancySettings.fit_grid``), so a refit's starting values cost nothing.
-    ``tied``: most effects fitted beyond ``candidates`` when their signatures tie
-    with the best (``DiscrepancySettings.tied``); the costs count them all
-    (``fitted``).
+    and the extra copies for a side candidate that matches the gap poorly
+    would cost several times the whole analysis. ``tied``: most effects fitted
+    beyond ``candidates`` when their signatures tie with the best
+    (``DiscrepancySettings.tied``); the costs count them all (``fitted``).
     """
 
     copies: int
@@ -207,7 +185,6 @@ class Plan:
     random: int = 0
     random_fit_copies: int = 2
     random_copies: int = 8
-    shared: bool = False
     tied: int = 0
 
     @property
@@ -231,7 +208,7 @@ class Plan:
         interval around them: the same number of evaluated values as a half's fit.
         At a half's value the fibers it scores hold their cross-fitted copies; the
         other half's fibers are simulated (a half's value is the score test's zero,
-        in general not a point its fit simulated: :mod:`.crossfit`), so the two
+        in general not a point its fit simulated: :mod:`.fit`), so the two
         starting values cost one evaluation on all fibers (:meth:`cost`).
         """
         return max(1, self.fit_evals - 2)
@@ -239,12 +216,7 @@ class Plan:
     @property
     def _closing(self) -> int:
         """Evaluations on all fibers a searched refit may add for its interval's ends."""
-        return 0 if self.shared or self.refit_evals < 2 else INTERVAL_EVALS
-
-    @property
-    def _starts(self) -> int:
-        """Evaluations on all fibers a refit's starting values cost (see :meth:`cost`)."""
-        return 0 if self.shared else 1
+        return 0 if self.refit_evals < 2 else INTERVAL_EVALS
 
     def cost(self, n: int) -> dict[str, int]:
         """Most runs per step for n fibers (two folds of n/2 for the fits)."""
@@ -256,10 +228,9 @@ class Plan:
             "fits": 2 * self.fitted * (self.fit_evals + 1) * self.fit_copies * half,
             "heldout": self.fitted * self.copies * n,
             # + 1: the halves' values on the fibers their cross-fitted copies did not cover
-            # (shared values: the halves' profiles are the pooled one's, no such runs)
             # + the interval's ends (fit.fit_effect, close_interval)
             "refits": self.refits * n * (
-                (self.refit_evals + self._starts + self._closing) * self.fit_copies + self.copies
+                (self.refit_evals + 1 + self._closing) * self.fit_copies + self.copies
             ),
             # per pair: joint fits on both folds, pair_rounds 1D fits each (+1: side
             # check; + the other member alone), cross-fitted copies, final copies
@@ -267,7 +238,7 @@ class Plan:
             * (
                 2 * self.pair_rounds * (self.fit_evals + 2) * self.fit_copies * half
                 + 3 * self.copies * n  # + the partner alone when it had no single fit
-                # each member refitted on all fibers (pairfit.pair_refits): the other
+                # each member refitted on all fibers (pairs.pair_refits): the other
                 # member alone (its value 0), both folds' values, the Brent steps
                 + 2 * (1 + 2 + self.refit_evals + self._closing) * self.fit_copies * n
             ),
@@ -276,7 +247,7 @@ class Plan:
             * (
                 2 * (self.fit_evals + 1) * (self.random_fit_copies - self.fit_copies) * half
                 + (self.random_copies - self.copies) * n
-                + (self.refit_evals + self._starts + self._closing)
+                + (self.refit_evals + 1 + self._closing)
                 * (self.random_fit_copies - self.fit_copies)
                 * n
             ),
@@ -302,7 +273,7 @@ def plan_budget(n: int, s: DiscrepancySettings, candidates: list[Candidate]) -> 
         min(s.pairs, len(candidates) * (len(candidates) - 1) // 2),
         random=int(any(c.random for c in candidates)),
         random_fit_copies=s.n_random_fit_copies, random_copies=s.n_random_copies,
-        shared=s.fit_grid, tied=min(s.tied, len(candidates) - n_cand),
+        tied=min(s.tied, len(candidates) - n_cand),
     )  # fmt: skip
     if s.budget is None:
         return plan

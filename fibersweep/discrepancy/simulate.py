@@ -144,8 +144,7 @@ class Simulator:
     tracks : bool
         Keep every run's trajectory and derive the track observables
         (:mod:`fibersweep.discrepancy.tracks`), for measured tracks. False (the
-        default) leaves them NaN and saves ~9 % of the run time
-        (scripts/bench_track_record.py).
+        default) leaves them NaN and saves about 9 % of the run time.
     executor : str
         Executor name from :data:`fibersweep.sweep.executors.EXECUTORS`
         ('local' or 'dask').

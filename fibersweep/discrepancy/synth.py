@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
-from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.copies import NoiseModel
+from fibersweep.discrepancy.measured import validate_trajectories, with_tracks
 from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator

@@ -5,7 +5,7 @@ x, y, angle) into the time, lateral position and angle at which the centre
 first crosses given x stations; :func:`track_values` applies it at the
 stations of the track observables. The same two functions serve the measured
 tracks (``fibersweep discrepancy --trajectories``, in
-:mod:`fibersweep.discrepancy.schema`) and the model's runs
+:mod:`fibersweep.discrepancy.measured`) and the model's runs
 (:func:`fibersweep.discrepancy.simulate.outcome_row`, from
 ``RunResult.trajectory``), so both sides are derived identically.
 
@@ -32,24 +32,12 @@ there (NaN).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 
 import numpy as np
-import pandas as pd
 
-from fibersweep.discrepancy.observables import OBSERVABLES, track_observables
-from fibersweep.errors import InputError
-from fibersweep.fiber.effects.pillar_scale import scaled_track
 from fibersweep.units import Geometry
 
-__all__ = [
-    "STATIONS",
-    "measured_track_values",
-    "nominal_track",
-    "station_crossings",
-    "station_positions",
-    "track_values",
-]
+__all__ = ["STATIONS", "station_crossings", "station_positions", "track_values"]
 
 #: Station names, in the order of :func:`station_positions`.
 STATIONS = ("in", "out", "far")
@@ -150,98 +138,3 @@ def track_values(
         out[f"theta_{name}"] = float(ths[k])
     out["t_transit"] = float(ts[2] - ts[0])
     return out
-
-
-def values_of(mapping: Mapping[str, float], names: tuple[str, ...]) -> list[float]:
-    """``mapping[name]`` for each name (NaN where absent)."""
-    return [float(mapping.get(n, math.nan)) for n in names]
-
-
-#: Positions of a ``pillar_scale`` run as a camera sees them; the effect applies it
-#: itself (:meth:`~fibersweep.fiber.effects.pillar_scale.PillarScale.transform_result`),
-#: kept here under its old name.
-nominal_track = scaled_track
-
-
-def measured_track_values(
-    traj: pd.DataFrame, fibers: pd.DataFrame, geometry: Geometry, source: str
-) -> pd.DataFrame:
-    """Track observables of measured fibers from their validated trajectories.
-
-    Parameters
-    ----------
-    traj : pandas.DataFrame
-        Validated trajectories (``measured_tracks.validate_trajectories``):
-        ``fiber_id`` (str), ``t`` [s], ``x``, ``y`` [µm, channel frame], ``theta`` [deg].
-    fibers : pandas.DataFrame
-        Validated fibers table: ``fiber_id``, ``length`` [/l_obs], ``class``.
-    geometry : Geometry
-        Channel and pillar of the model (the frame of the tracks).
-    source : str
-        Name used in messages.
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per fiber (the order of ``fibers``), one column per track observable
-        of the registry; NaN for Trapping.
-
-    Raises
-    ------
-    InputError
-        A fiber without a track (tracks must be given for every fiber or none), or a
-        fiber that is not Trapping whose track does not cross a station (wrong
-        frame, a track that starts too late or stops too early), or a value out of
-        its plausible range; each names the field and the fibers.
-    """
-    names = track_observables()
-    ids = fibers["fiber_id"].astype(str).to_numpy()
-    groups = {k: g for k, g in traj.groupby("fiber_id", sort=False)}
-    lacking = [i for i in ids if i not in groups]
-    if lacking:
-        raise InputError(
-            f"{source}: trajectories.fiber_id: no track for {len(lacking)} of {len(ids)} fibers "
-            f"({_few(lacking)}); give a track for every fiber of the table, or leave "
-            "--trajectories out"
-        )
-    trapped = (fibers["class"] == "Trapping").to_numpy()
-    lengths = fibers["length"].to_numpy(dtype=np.float64)
-    rows = []
-    for i, fid in enumerate(ids):
-        if trapped[i]:
-            rows.append([math.nan] * len(names))
-            continue
-        g = groups[fid]
-        v = track_values(
-            g["t"].to_numpy(), g["x"].to_numpy(), g["y"].to_numpy(), g["theta"].to_numpy(),
-            geometry, float(lengths[i]),
-        )  # fmt: skip
-        rows.append(values_of(v, names))
-    out = pd.DataFrame(rows, columns=list(names), index=fibers.index)
-    gone = out.isna().any(axis=1).to_numpy() & ~trapped
-    if gone.any():
-        xs = station_positions(geometry, geometry.pillar_base_length)
-        raise InputError(
-            f"{source}: trajectories: the track of {gone.sum()} fiber(s) that are not Trapping "
-            f"({_few(ids[gone])}) does not cross every station: the centre must go from "
-            f"upstream of the pillar (x < {xs[0]:.1f} µm) to one fiber length past it "
-            f"(x > {xs[1]:.1f} µm + the length). Tracks are in µm in the model's channel frame "
-            f"(pillar from x = {xs[0]:.1f} to {xs[1]:.1f} µm, base line y = "
-            f"{geometry.base_center[1]:.1f} µm, flow along +x)"
-        )
-    for name in names:
-        lo, hi = OBSERVABLES[name].bounds or (-math.inf, math.inf)
-        v = out[name].to_numpy()
-        bad = np.isfinite(v) & ((v < lo) | (v > hi))
-        if bad.any():
-            raise InputError(
-                f"{source}: trajectories: {name} out of range [{lo:g}, {hi:g}] for "
-                f"{_few(ids[bad])} (e.g. {v[bad][0]:.4g}); {OBSERVABLES[name].unit_hint}"
-            )
-    return out
-
-
-def _few(ids, most: int = 5) -> str:
-    ids = [str(i) for i in ids]
-    more = f" and {len(ids) - most} more" if len(ids) > most else ""
-    return f"fiber_id {', '.join(ids[:most])}{more}"

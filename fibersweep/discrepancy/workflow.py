@@ -8,8 +8,9 @@ few on each half and scores each half with the value fitted on the other
 (two-fold cross-fitting: every fiber is held out once), compares with the
 baseline and decides; (6) when the best single effect leaves a gap, it tries
 adding other candidates to the significant ones that helped most and leave one
-(:mod:`.select`, forward selection). The simulation count is planned up front
-and never exceeds ``budget``.
+(:mod:`.pairs`, forward selection); (7) after the verdict, the power analysis
+and what to measure next (:mod:`.followup`). The simulation count is planned up
+front and never exceeds ``budget``.
 
 Each step is a stage function over a frozen :class:`State` that returns a new
 state (:func:`noise_floor`, :func:`rank`, :func:`cross_fit`, :func:`refit`,
@@ -28,14 +29,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.crossfit import (
-    fold_fits,
-    pooled_refit,
-    shared_fold_fits,
-    shared_pooled_refit,
-    shared_values,
-)
+from fibersweep.discrepancy.candidates import Candidate, get_candidates
+from fibersweep.discrepancy.copies import CopyMaker, crossfit_copies
 from fibersweep.discrepancy.decide import (
     HeldOut,
     SetHeldOut,
@@ -45,13 +40,8 @@ from fibersweep.discrepancy.decide import (
     evaluate_heldout,
 )
 from fibersweep.discrepancy.dispersion import dispersion_test, spread_test
-from fibersweep.discrepancy.fit import (
-    Fit,
-    Signature,
-    choose_candidates,
-    rank_effects,
-    score_interval,
-)
+from fibersweep.discrepancy.estimate import Fit, score_interval
+from fibersweep.discrepancy.fit import fold_fits, pooled_refit
 from fibersweep.discrepancy.followup import followup
 from fibersweep.discrepancy.gap import (
     GapResult,
@@ -63,18 +53,22 @@ from fibersweep.discrepancy.gap import (
     value_matrices,
     weighted_loss,
 )
-from fibersweep.discrepancy.library import get_candidates
 from fibersweep.discrepancy.localise import FEATURES, Region, find_region
 from fibersweep.discrepancy.observables import has_tracks
-from fibersweep.discrepancy.pairfit import SelectionInput, pair_weights, rank_partners
+from fibersweep.discrepancy.pairs import SelectionInput, forward_pairs, pair_trials, pair_weights
 from fibersweep.discrepancy.schema import MeasuredData
-from fibersweep.discrepancy.select import crossfit_copies, forward_pairs, pair_trials
 from fibersweep.discrepancy.settings import (
     PAIR_FIRSTS,
     TIE_COSINE,
     DiscrepancySettings,
     Plan,
     plan_budget,
+)
+from fibersweep.discrepancy.signatures import (
+    Signature,
+    choose_candidates,
+    rank_effects,
+    rank_partners,
 )
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
@@ -169,7 +163,7 @@ class Run:
 
     settings: DiscrepancySettings
     plan: Plan
-    candidates: list[Any]
+    candidates: list[Candidate]
     observed: pd.DataFrame
     observables: tuple[str, ...]
     folds: list[np.ndarray]
@@ -180,7 +174,7 @@ class Run:
     def n(self) -> int:
         return len(self.observed)
 
-    def candidate(self, name: str) -> Any:
+    def candidate(self, name: str) -> Candidate:
         return next(c for c in self.candidates if c.name == name)
 
 
@@ -207,8 +201,6 @@ class State:
     chosen : tuple of Signature
         The candidates fitted.
     fits : tuple of Fit
-    fold_fits : dict of str -> tuple of Fit
-        Each fitted effect's two halves' fits (fold 0's value first).
     fold_values : dict of str -> list of float
         Each fitted effect's value on each fold.
     eff_values : dict
@@ -235,7 +227,6 @@ class State:
     chosen: tuple[Signature, ...] = ()
     lead: str = ""
     fits: tuple[Fit, ...] = ()
-    fold_fits: dict[str, tuple[Fit, ...]] = field(default_factory=dict)
     fold_values: dict[str, list[float]] = field(default_factory=dict)
     eff_values: dict[str, Any] = field(default_factory=dict)
     heldout: tuple[HeldOut, ...] = ()
@@ -289,21 +280,14 @@ def cross_fit(st: State) -> State:
     run, plan, s = st.run, st.run.plan, st.run.settings
     fits: list[Fit] = []
     fold_values: dict[str, list[float]] = {}
-    by_name: dict[str, tuple[Fit, ...]] = {}
     for sg in st.chosen:
         cand = run.candidate(sg.name)
         base = st.base[: plan.fit_copies_of(cand, cand.name == st.lead)]
-        # each half's value is the score test's zero, as the pooled refit's (crossfit.py)
-        if s.fit_grid:
-            vals = shared_values(cand, float(np.sign(sg.probe)), plan.fit_evals + 1)
-            per_fold = shared_fold_fits(cand, run.maker, run.observed, base, run.folds,
-                                        run.observables, st.w_gap, vals)  # fmt: skip
-        else:
-            per_fold = fold_fits(cand, run.maker, run.observed, base, run.folds,
-                                 run.observables, st.w_gap, plan.fit_evals,
-                                 side=float(np.sign(sg.probe)))  # fmt: skip
+        # each half's value is the score test's zero, as the pooled refit's (fit.py)
+        per_fold = fold_fits(cand, run.maker, run.observed, base, run.folds,
+                             run.observables, st.w_gap, plan.fit_evals,
+                             side=float(np.sign(sg.probe)))  # fmt: skip
         fits += per_fold
-        by_name[sg.name] = tuple(per_fold)
         fold_values[sg.name] = [f.value for f in per_fold]
     base_scores = weighted_loss(st.values, st.w_gap)
     eff_scores, eff_values, residuals, fitted = {}, {}, {}, {}
@@ -336,7 +320,6 @@ def cross_fit(st: State) -> State:
     return replace(
         st,
         fits=st.fits + tuple(fits),
-        fold_fits=by_name,
         fold_values=kept,
         eff_values=eff_values,
         heldout=tuple(heldout),
@@ -366,13 +349,9 @@ def refit(st: State) -> State:
     for h in sig[: plan.refits]:
         cand = run.candidate(h.name)
         base = st.base[: plan.fit_copies_of(cand, cand.name == st.lead)]
-        if s.fit_grid:  # the halves' profiles side by side, refined around their estimate
-            halves = st.fold_fits[h.name]
-            fit = shared_pooled_refit(cand, run.maker, run.observed, base, halves, run.folds,
-                                      run.observables, st.w_gap, plan.refit_evals)  # fmt: skip
-        else:  # both halves' values evaluated first, then a search around them
-            fit = pooled_refit(cand, run.maker, run.observed, base, st.fold_values[h.name],
-                               run.observables, st.w_gap, plan.refit_evals)  # fmt: skip
+        # both halves' values evaluated first, then a search around them
+        fit = pooled_refit(cand, run.maker, run.observed, base, st.fold_values[h.name],
+                           run.observables, st.w_gap, plan.refit_evals)  # fmt: skip
         fits.append(fit)
         intervals[h.name] = score_interval(fit)
         if fit.value == 0.0:
@@ -408,14 +387,12 @@ def refit(st: State) -> State:
 
 
 def pairs(st: State) -> State:
-    """(7) forward selection when the best significant single effect leaves a gap.
+    """(6b) forward selection when the best significant single effect leaves a gap.
 
-    Each first member must be significant alone: started from one that is not, the
-    step named a wrong pair (friction = 0.25 hidden, N = 100: pillar_hydro, p_Holm
-    0.53 alone, + inlet_speed undoing pillar_hydro's slowing). Partners are added to
-    the ``PAIR_FIRSTS`` significant singles that leave a gap, best held-out
+    Each first member must be significant alone (see :mod:`.pairs`). Partners are
+    added to the ``PAIR_FIRSTS`` significant singles that leave a gap, best held-out
     improvement first, the plan's pairs taken from their rankings in turn
-    (:func:`select.pair_trials`).
+    (:func:`.pairs.pair_trials`).
     """
     run, plan, s = st.run, st.run.plan, st.run.settings
     helped = sorted((h for h in st.heldout if h.significant), key=lambda h: -h.improvement[0])

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fibersweep.discrepancy.library import LIBRARY
+from fibersweep.discrepancy.candidates import LIBRARY
 from fibersweep.discrepancy.synth import STUDY_BOX
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.settings import FlowSettings

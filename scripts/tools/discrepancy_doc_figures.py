@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from fibersweep.config import Config
-from fibersweep.discrepancy.nextmeasure import discriminate, start_grid
-from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.copies import NoiseModel
+from fibersweep.discrepancy.followup import discriminate, start_grid
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.report import write_report
 from fibersweep.discrepancy.report_figures import next_figure

@@ -9,8 +9,8 @@ kept, in order, with its stage label; with the synthesised tables and the
 verdict they go to OUT (Parquet + JSON). ``scripts/tools/compare_runs.py --snapshot A
 B`` then compares two such folders exactly.
 
-Uses only the public API that existed before the run-path refactor (issue 31), so
-the same script runs on the old and the new tree.
+To compare two versions whose module layout differs, run each tree's own copy of
+this script (``scripts/bench_discrepancy_ab.py`` does so, and times them).
 
 Usage:  python scripts/tools/snapshot_discrepancy.py OUT [--n 60] [--seed 3] [--workers 2]
                                                   [--cache DIR]
@@ -26,7 +26,7 @@ from pathlib import Path
 import pandas as pd
 
 from fibersweep.discrepancy import simulate as sim_mod
-from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
+from fibersweep.discrepancy.measured import validate_trajectories, with_tracks
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.synth import STUDY_BOX as BOX
 from fibersweep.discrepancy.synth import synthesize_with_tracks

@@ -12,9 +12,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fibersweep.discrepancy.crossfit import fold_fits, pooled_refit, refit_bounds
-from fibersweep.discrepancy.fit import Fit, fit_effect, score_interval, slope_estimate
-from fibersweep.discrepancy.library import LIBRARY
+from fibersweep.discrepancy.candidates import LIBRARY
+from fibersweep.discrepancy.estimate import Fit, score_interval, slope_estimate
+from fibersweep.discrepancy.fit import fit_effect, fold_fits, pooled_refit, refit_bounds
 
 TRUTH = 0.6
 CAND = LIBRARY["pillar_hydro"]
@@ -226,108 +226,12 @@ def test_signed_halves_find_the_side_and_the_value_whichever_side_the_signature_
     assert np.sqrt(np.mean((pooled + 0.04) ** 2)) < 0.006
 
 
-def test_shared_values_are_geometric_towards_zero_and_fixed_before_the_data():
-    from fibersweep.discrepancy.crossfit import shared_values
-
-    assert shared_values(CAND, 1.0, 6) == pytest.approx([3 / 32, 3 / 16, 3 / 8, 3 / 4, 1.5, 3])
-    signed = LIBRARY["inlet_speed"]  # [-0.3, 0.3]: the signature's side, one check beyond 0
-    assert shared_values(signed, -1.0, 5) == pytest.approx([-0.3, -0.15, -0.075, -0.0375, 0.06])
-    assert shared_values(signed, 0.0, 4) == pytest.approx([-0.3, -0.15, 0.15, 0.3])
-
-
-def _shared_case(kind: str, seed: int, m: int):
-    """Halves' values and pooled (value, lo, hi) with shared values, as the workflow runs
-    them (6 values: fit_evals 5 + 1; 3 refinement values on all fibers)."""
-    from fibersweep.discrepancy.crossfit import (
-        shared_fold_fits,
-        shared_pooled_refit,
-        shared_values,
-    )
-
-    rng = np.random.default_rng(seed)
-    n, sig, obs = (60, 0.02, "delta") if kind == "delta" else (100, 0.05, "class")
-    halves, pooled = [], []
-    for _ in range(m):
-        x = rng.uniform(0.0, 0.5, n)
-        model = (_Shift if kind == "delta" else _Class)(x, sig, rng)
-        d = x + 0.1 * TRUTH + sig * rng.standard_normal(n)
-        observed = (pd.DataFrame({"delta": d}) if kind == "delta"
-                    else pd.DataFrame({"class": np.where(d > 0.3, "Above", "Below")}))  # fmt: skip
-        perm = rng.permutation(n)
-        folds = [np.sort(perm[: n // 2]), np.sort(perm[n // 2 :])]
-        base = [model.copy(k) for k in range(2)]
-        vals = shared_values(CAND, 1.0, 6)
-        fits = shared_fold_fits(CAND, model, observed, base, folds, [obs], {obs: 1.0}, vals)
-        if not any(f.value for f in fits):
-            continue
-        p = shared_pooled_refit(CAND, model, observed, base, fits, folds, [obs], {obs: 1.0}, 3)
-        lo, hi, _, _ = score_interval(p)
-        halves.append([f.value for f in fits])
-        pooled.append((p.value, lo, hi))
-    return np.array(halves), np.array(pooled)
-
-
-def test_shared_values_on_a_smooth_loss_match_the_searches():
-    # δ with copy noise (as test_halves_are_as_precise...), 100 data sets, seed 3.
-    # Measured with shared values: halves' RMSE 0.034 (searches: 0.039), pooled 0.031
-    # (0.034), pooled outside the halves' span by more than 0.03 in 3 % (0 %), coverage
-    # 0.96 (0.95), 18.0 runs per fiber (19.9). Stated: halves < 0.045, pooled < 0.04,
-    # outside <= 8 %, coverage 0.95 within the binomial 3 sd of 100 draws (0.07).
-    halves, pooled = _shared_case("delta", 3, 100)
-    assert np.sqrt(np.mean((halves - TRUTH) ** 2)) < 0.045
-    assert np.sqrt(np.mean((pooled[:, 0] - TRUTH) ** 2)) < 0.04
-    out = (pooled[:, 0] < halves.min(1) - 0.03) | (pooled[:, 0] > halves.max(1) + 0.03)
-    assert out.mean() <= 0.08
-    assert abs(((pooled[:, 1] <= TRUTH) & (TRUTH <= pooled[:, 2])).mean() - 0.95) <= 0.07
-    assert np.all((pooled[:, 1] <= pooled[:, 0]) & (pooled[:, 0] <= pooled[:, 2]))
-
-
-def test_shared_values_of_a_random_effect_quote_the_dispersion_root():
-    # start_noise = 2.5 on the spread stand-in of test_discrepancy_fit (60 fibers, 8
-    # copies), 40 data sets: the pooled value is the dispersion root over the halves'
-    # dispersion scores side by side and the refinement (10 values). Measured: mean 2.51,
-    # RMSE 0.44, coverage 0.90, halves' RMSE 0.73 (the searches: 2.51, 0.43, 0.85, 0.57).
-    # Stated: mean within 0.3 of 2.5, coverage >= 0.80 (0.95 less the binomial 3 sd of
-    # 40 draws, 0.10, and 0.05 for an interval read between few values), value inside.
-    from test_discrepancy_fit import _spread_case
-
-    from fibersweep.discrepancy.crossfit import (
-        shared_fold_fits,
-        shared_pooled_refit,
-        shared_values,
-    )
-
-    cand = LIBRARY["start_noise"]
-    rng = np.random.default_rng(21)
-    vals, hits = [], 0
-    for _ in range(40):
-        model, observed, base = _spread_case(rng)
-        perm = rng.permutation(60)
-        folds = [np.sort(perm[:30]), np.sort(perm[30:])]
-        grid = shared_values(cand, 1.0, 6)
-        fits = shared_fold_fits(cand, model, observed, base, folds, ["delta"], {"delta": 1.0}, grid)
-        p = shared_pooled_refit(
-            cand, model, observed, base, fits, folds, ["delta"], {"delta": 1.0}, 3
-        )
-        assert len(p.dispersion) >= 2
-        lo, hi, _, _ = score_interval(p)
-        assert lo <= p.value <= hi
-        vals.append(p.value)
-        hits += lo <= 2.5 <= hi
-    assert abs(np.mean(vals) - 2.5) < 0.3
-    assert hits / 40 >= 0.80
-
-
-def test_plan_counts_the_refits_starting_values_unless_the_fit_values_are_shared():
-    from fibersweep.discrepancy.library import get_candidates
+def test_plan_counts_the_refits_starting_values_and_interval_ends():
+    from fibersweep.discrepancy.candidates import get_candidates
     from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
 
     cands = get_candidates(["friction", "inlet_speed"])
-    searched = plan_budget(100, DiscrepancySettings(), cands)
-    shared = plan_budget(100, DiscrepancySettings(fit_grid=True), cands)
+    plan = plan_budget(100, DiscrepancySettings(), cands)
     # 2 refits x ((3 Brent steps + 1 for the halves' values + at most 3 for the
-    # interval's ends) x 2 fit copies + 8 copies) x 100 fibers; shared values: the
-    # halves' profiles are the pooled refit's, no search and no interval steps
-    assert searched.cost(100)["refits"] == 2 * ((3 + 1 + 3) * 2 + 8) * 100
-    assert shared.cost(100)["refits"] == 2 * (3 * 2 + 8) * 100
-    assert searched.cost(100)["fits"] == shared.cost(100)["fits"]
+    # interval's ends) x 2 fit copies + 8 copies) x 100 fibers
+    assert plan.cost(100)["refits"] == 2 * ((3 + 1 + 3) * 2 + 8) * 100

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
 from fibersweep.discrepancy.decide import decide, evaluate_heldout
-from fibersweep.discrepancy.fit import Signature, choose_candidates
 from fibersweep.discrepancy.gap import assess_gap
-from fibersweep.discrepancy.library import LIBRARY, get_candidates
+from fibersweep.discrepancy.signatures import Signature, choose_candidates
 from fibersweep.discrepancy.workflow import DiscrepancySettings, plan_budget
 from fibersweep.errors import InputError
 

@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from fibersweep.discrepancy.candidates import LIBRARY
 from fibersweep.discrepancy.fit import fit_effect
-from fibersweep.discrepancy.library import LIBRARY
 
 
 class _ShiftModel:
@@ -56,7 +56,7 @@ def test_signed_fit_recovers_the_value_whichever_side_the_signature_said(side):
 
 
 def _quadratic_fit(mu: np.ndarray, grid: np.ndarray):
-    from fibersweep.discrepancy.fit import Fit
+    from fibersweep.discrepancy.estimate import Fit
 
     prof = tuple((float(v), (v - mu) ** 2) for v in grid)
     return Fit("friction", float(mu.mean()), 0.0, 0.0, (), prof)
@@ -69,7 +69,7 @@ def test_score_interval_of_a_quadratic_profile_matches_the_analytic_one():
     # read-out grid's step (0.6 / 400) on each end.
     from scipy.stats import t as student_t
 
-    from fibersweep.discrepancy.fit import score_interval
+    from fibersweep.discrepancy.estimate import score_interval
 
     rng = np.random.default_rng(3)
     n = 50
@@ -82,7 +82,7 @@ def test_score_interval_of_a_quadratic_profile_matches_the_analytic_one():
     assert not open_lo and not open_hi
     # the 95 % interval's default critical value is CRIT_SCALE x Student's quantile
     # (calibrated on simulated data sets): the same half-width times CRIT_SCALE
-    from fibersweep.discrepancy.fit import CRIT_SCALE
+    from fibersweep.discrepancy.estimate import CRIT_SCALE
 
     lo, hi, _, _ = score_interval(fit)
     assert lo == pytest.approx(mu.mean() - CRIT_SCALE * half, abs=0.6 / 400)
@@ -100,7 +100,7 @@ def test_score_interval_of_a_quadratic_profile_is_analytic_on_any_evaluated_valu
     # midpoints, as before, is exact only where neighbouring slopes have equal spread.)
     from scipy.stats import t as student_t
 
-    from fibersweep.discrepancy.fit import score_interval
+    from fibersweep.discrepancy.estimate import score_interval
 
     rng = np.random.default_rng(13)
     n = 30
@@ -117,7 +117,7 @@ def test_score_interval_with_every_value_rejected_is_open_toward_the_falling_los
     # The truth far beyond the evaluated values: every fiber's loss still falls at the
     # highest one, every value is rejected. The interval is the fit's value, open at the
     # top (the truth lies beyond), not a closed point.
-    from fibersweep.discrepancy.fit import score_interval
+    from fibersweep.discrepancy.estimate import score_interval
 
     mu = np.random.default_rng(6).normal(1.5, 0.05, 40)
     fit = _quadratic_fit(mu, np.linspace(0.0, 0.6, 5))
@@ -131,7 +131,7 @@ def test_score_interval_with_every_value_rejected_is_open_toward_the_falling_los
 
 def test_score_interval_is_open_where_the_evaluated_values_stop():
     # the minimum at the edge of the searched range: the test cannot reject beyond it
-    from fibersweep.discrepancy.fit import score_interval
+    from fibersweep.discrepancy.estimate import score_interval
 
     mu = np.random.default_rng(5).normal(0.55, 0.1, 40)
     lo, hi, open_lo, open_hi = score_interval(_quadratic_fit(mu, np.linspace(0.0, 0.6, 5)))
@@ -141,7 +141,7 @@ def test_score_interval_is_open_where_the_evaluated_values_stop():
 def test_score_interval_covers_the_truth_at_its_level():
     # 200 data sets of 40 fibers: the 95 % interval with Student's quantile (the test
     # itself, exact for normal per-fiber minima) covers the true 0.3 in 90-99 % of them
-    from fibersweep.discrepancy.fit import score_interval
+    from fibersweep.discrepancy.estimate import score_interval
 
     rng = np.random.default_rng(4)
     grid = np.linspace(0.0, 0.6, 5)
@@ -172,7 +172,7 @@ class _NoisyShift:
 def _covered(model_cls, n: int, sigma: float, seed: int, observe, name: str) -> int:
     """Of 100 data sets (n fibers, shift 0.08, noise sigma on the data and the copies),
     how many fits' score intervals contain 0.08 (2 copies, 5 Brent evaluations)."""
-    from fibersweep.discrepancy.fit import score_interval
+    from fibersweep.discrepancy.estimate import score_interval
 
     rng = np.random.default_rng(seed)
     hits = 0
@@ -225,7 +225,7 @@ def test_score_interval_always_holds_the_fitted_value():
     # 0.4 is significant, so the accepted stretch nearest 0.4 ends below it; the
     # interval is widened to hold the reported value (seen in the study: inlet_speed
     # -0.05, seed 3, value -0.0498 outside [-0.0568, -0.0510]).
-    from fibersweep.discrepancy.fit import Fit, score_interval
+    from fibersweep.discrepancy.estimate import Fit, score_interval
 
     rng = np.random.default_rng(2)
     n = 40
@@ -247,7 +247,7 @@ def test_score_interval_accepts_a_flat_stretch_where_no_fiber_changes():
     # [0.15, 0.25] every fiber's slope shrinks in the same proportion, so T keeps its
     # (rejecting) value up to the flat midpoint 0.25: each end lies between the midpoints
     # around 0.2 / 0.4, up to one step of the grid T is read on (0.6 / 399).
-    from fibersweep.discrepancy.fit import Fit, score_interval
+    from fibersweep.discrepancy.estimate import Fit, score_interval
 
     rng = np.random.default_rng(8)
     n = 30
@@ -263,7 +263,7 @@ def test_slope_estimate_of_a_quadratic_profile_is_its_minimiser():
     # per-fiber loss (v - mu_i)^2: the mean slope between evaluated values is linear in
     # the midpoint with the same spread everywhere, so the zero of T is mean(mu) exactly,
     # whatever the evaluated values. Tolerance: the read-out grid's step (0.6 / 400).
-    from fibersweep.discrepancy.fit import slope_estimate
+    from fibersweep.discrepancy.estimate import slope_estimate
 
     rng = np.random.default_rng(3)
     mu = rng.normal(0.3, 0.1, 50)
@@ -277,7 +277,7 @@ def _lucky_profile(rng: np.random.Generator, truth: float, xs: np.ndarray, n: in
     """Quadratic per-fiber losses around ``truth`` (spread 0.5), plus the step of one fiber
     whose two copies switch branch (contact or not): its loss drops by 40 past 0.85,
     30 times a typical fiber's change, so the best evaluated value is the one past it."""
-    from fibersweep.discrepancy.fit import Fit
+    from fibersweep.discrepancy.estimate import Fit
 
     mu = rng.normal(truth, 0.5, n)
     L = (xs[:, None] - mu[None, :]) ** 2
@@ -292,7 +292,7 @@ def test_slope_estimate_is_not_pulled_to_one_fibers_lucky_step():
     # makes 0.902 the best evaluated value, the value reported before. The estimate
     # stays within 0.1 of the truth on average over 200 data sets (measured bias +0.07;
     # the best evaluated value: 0.30) and inside the interval reported with it.
-    from fibersweep.discrepancy.fit import score_interval, slope_estimate
+    from fibersweep.discrepancy.estimate import score_interval, slope_estimate
 
     rng = np.random.default_rng(11)
     xs = np.array([0.0, 0.558, 0.64, 0.71, 0.902, 1.2])
@@ -309,7 +309,7 @@ def test_slope_estimate_is_not_pulled_to_one_fibers_lucky_step():
 
 
 def test_slope_estimate_keeps_a_baseline_fit_at_zero():
-    from fibersweep.discrepancy.fit import Fit, slope_estimate
+    from fibersweep.discrepancy.estimate import Fit, slope_estimate
 
     prof = tuple((v, np.full(10, 1.0 + v)) for v in (0.0, 0.2, 0.4))
     assert slope_estimate(Fit("friction", 0.0, 1.0, 1.0, (), prof)) == 0.0
@@ -349,7 +349,7 @@ def test_random_effect_is_fitted_where_the_data_are_as_spread_as_its_copies():
     # interval from the t test of that score. Stated: mean within 0.3 of 2.5 (measured
     # 2.53, sd 0.45), coverage of the 95 % interval 0.85-1.0 (measured 57 of 60;
     # binomial 3 sd of 60 draws at 0.95 is 0.08), no fit at 0.
-    from fibersweep.discrepancy.fit import score_interval
+    from fibersweep.discrepancy.estimate import score_interval
 
     rng = np.random.default_rng(21)
     vals, hits = [], 0
@@ -378,8 +378,8 @@ def test_pooled_refit_brackets_a_random_effects_root():
     # coverage >= 0.70 (3 binomial sd of 60 draws below the 0.85 measured) and the mean
     # within 0.25 of the truth; without it, coverage <= 0.10. The root beyond 2.95 (the
     # range's end) stays out of reach: 7 of 60 still sat at the end.
-    from fibersweep.discrepancy.crossfit import refit_bounds
-    from fibersweep.discrepancy.fit import score_interval
+    from fibersweep.discrepancy.estimate import score_interval
+    from fibersweep.discrepancy.fit import refit_bounds
 
     cand = LIBRARY["start_noise"]
     halves = [1.4, 1.7]
@@ -422,8 +422,8 @@ def _refit_coverage(
     """Pooled refits of 60 stand-in data sets (40 fibers, 2 copies, 3 Brent steps): the
     mean quoted value, how many 95 % score intervals hold ``truth``, the fits. ``close``:
     the steps after the search that read the interval's ends (off: the bracket alone)."""
-    from fibersweep.discrepancy.crossfit import refit_bounds
-    from fibersweep.discrepancy.fit import score_interval
+    from fibersweep.discrepancy.estimate import score_interval
+    from fibersweep.discrepancy.fit import refit_bounds
 
     cand = LIBRARY["friction"]
     rng = np.random.default_rng(seed)
@@ -461,7 +461,7 @@ def test_pooled_refit_brackets_a_shift_effects_root_near_the_range_end():
 
 
 def test_shift_bracket_keeps_the_step_for_brent_when_the_root_is_bracketed():
-    from fibersweep.discrepancy.crossfit import refit_bounds
+    from fibersweep.discrepancy.fit import refit_bounds
 
     # A truth between the halves (0.6; halves 0.55, 0.65): the root is bracketed by
     # Brent's steps in most data sets and the kept step goes back to Brent, which repeats
@@ -505,7 +505,8 @@ def test_interval_step_evaluates_only_closed_ends_no_value_is_near():
     # The interval's closed ends are evaluated unless an evaluated value lies within a
     # twentieth of the evaluated range (it would be merged with it): a quadratic profile
     # evaluated at 0, 0.3, 0.6 has its ends at mean(mu) ± t SE, both far from them.
-    from fibersweep.discrepancy.fit import _unread_ends, score_interval
+    from fibersweep.discrepancy.estimate import score_interval
+    from fibersweep.discrepancy.fit import _unread_ends
 
     mu = np.random.default_rng(9).normal(0.3, 0.2, 40)
     fit = _quadratic_fit(mu, np.array([0.0, 0.3, 0.6]))

@@ -13,8 +13,9 @@ import pandas as pd
 import pytest
 
 from fibersweep.discrepancy import observables as obs_mod
+from fibersweep.discrepancy.copies import NoiseModel
 from fibersweep.discrepancy.gap import describe, value_matrices
-from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.measured import load_measured
 from fibersweep.discrepancy.observables import (
     OBSERVABLES,
     NoiseLaw,
@@ -24,7 +25,7 @@ from fibersweep.discrepancy.observables import (
     stream_key,
     table_columns,
 )
-from fibersweep.discrepancy.schema import load_measured, validate_measured, write_table
+from fibersweep.discrepancy.schema import validate_measured, write_table
 from fibersweep.discrepancy.scores import residual_matrix, score_matrix
 from fibersweep.discrepancy.simulate import _failed, outcome_row
 from fibersweep.discrepancy.synth import measured_table

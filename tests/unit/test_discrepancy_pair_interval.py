@@ -5,7 +5,7 @@ simulator: friction moves δ and slows the pass a little, a faster inlet only sp
 it up), δ and t_pass observed with noise and each copy drawn with noise of its own
 (common random numbers across values), 60 fibers in two folds, 2 fit copies, the
 workflow's joint fit (2 rounds, 5 Brent steps) on each fold and
-:func:`pairfit.pair_refits` (3 Brent steps), as :func:`select.forward_pairs` runs
+:func:`pairs.pair_refits` (3 Brent steps), as :func:`pairs.forward_pairs` runs
 them.
 """
 
@@ -14,10 +14,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.crossfit import fold_fits
-from fibersweep.discrepancy.fit import score_interval
-from fibersweep.discrepancy.library import LIBRARY
-from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit, pair_refits
+from fibersweep.discrepancy.candidates import LIBRARY
+from fibersweep.discrepancy.estimate import score_interval
+from fibersweep.discrepancy.fit import fold_fits
+from fibersweep.discrepancy.pairs import SelectionInput, joint_fit, pair_refits
 
 TRUTH = {"friction": 0.5, "inlet_speed": 0.05}
 SD_DELTA, SD_LOG_T = 0.02, 0.02
@@ -98,7 +98,7 @@ def test_pair_intervals_cover_the_truth():
     # to within 2 standard errors of their mean over the 100 sets (measured: within
     # 1). With inlet_speed refitted first, friction held at its folds' mean (0.062
     # low), inlet_speed came out 0.0025 low (7 standard errors) and covered 0.90 and
-    # 0.79 (seeds 40, 41): pairfit.pair_refits' order.
+    # 0.79 (seeds 40, 41): pairs.pair_refits' order.
     rng = np.random.default_rng(40)
     vals = {m: [] for m in TRUTH}
     cover = {m: [] for m in TRUTH}
@@ -145,7 +145,7 @@ def test_plan_counts_the_pair_refits():
     # per pair: each member's refit is the other member alone (its value 0), the two
     # folds' values, refit_evals Brent steps and up to INTERVAL_EVALS evaluations for the
     # interval's ends on all fibers, fit_copies copies each
-    from fibersweep.discrepancy.library import get_candidates
+    from fibersweep.discrepancy.candidates import get_candidates
     from fibersweep.discrepancy.settings import INTERVAL_EVALS, DiscrepancySettings, plan_budget
 
     plan = plan_budget(100, DiscrepancySettings(), get_candidates())

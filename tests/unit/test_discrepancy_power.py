@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from fibersweep.discrepancy.nextmeasure import _needed, component_names, start_grid
+from fibersweep.discrepancy.followup import _needed, component_names, start_grid
 from fibersweep.discrepancy.power import EffectPower, detect_probability
 
 
@@ -94,8 +94,8 @@ def test_limit_interval_from_resampled_starts_holds_the_limit():
     # two magnitudes add a spread that more starts do not remove; not asserted.)
     import pandas as pd
 
+    from fibersweep.discrepancy.candidates import Candidate
     from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, value_matrices
-    from fibersweep.discrepancy.library import Candidate
     from fibersweep.discrepancy.power import _gamma, _limit, _z_of, limit_intervals
 
     cand = Candidate("pillar_scale", -0.2, 0.2, (0.1,), 0.08, "")
@@ -159,7 +159,7 @@ def test_power_states_the_dispersion_tests_limit_of_a_random_effect():
     # dispersion test's limit exists and lies within the range, as the gap family's
     # does (measured: family 1.19, dispersion test 1.90 on this Gaussian stand-in, where
     # the fair CRPS sees a spread well); a shift effect has none.
-    from fibersweep.discrepancy.library import LIBRARY
+    from fibersweep.discrepancy.candidates import LIBRARY
     from fibersweep.discrepancy.power import analyse_power
 
     pw = analyse_power(_StandInMaker(60, 1, _spread), [LIBRARY["start_noise"], LIBRARY["friction"]],
@@ -178,7 +178,7 @@ def test_a_limit_far_below_the_probes_is_read_again_where_it_lies(seed):
     # within 15 % of the reference (measured 0-1 % over seeds 1-3, 3 read-outs each),
     # at 180 more runs (3 copies x 60 fibers) per read-out. The bootstrap over the
     # starts re-reads both refined magnitudes and holds the refined limit.
-    from fibersweep.discrepancy.library import Candidate
+    from fibersweep.discrepancy.candidates import Candidate
     from fibersweep.discrepancy.power import analyse_power
 
     def limit(probe, refine, n_boot=0):

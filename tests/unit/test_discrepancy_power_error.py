@@ -12,8 +12,8 @@ import pandas as pd
 import pytest
 from scipy.stats import norm
 
+from fibersweep.discrepancy.candidates import Candidate
 from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, value_matrices
-from fibersweep.discrepancy.library import Candidate
 from fibersweep.discrepancy.power import (
     EffectPower,
     PowerResult,

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from fibersweep.discrepancy.report import _advice
+from fibersweep.discrepancy.advice import advice_lines as _advice
 from fibersweep.discrepancy.report_text import _power
 
 

@@ -6,7 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fibersweep.discrepancy.schema import load_measured, validate_measured, write_table
+from fibersweep.discrepancy.measured import load_measured
+from fibersweep.discrepancy.schema import validate_measured, write_table
 from fibersweep.errors import InputError
 from fibersweep.units import Geometry
 

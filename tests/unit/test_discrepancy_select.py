@@ -8,7 +8,7 @@ import pytest
 
 from fibersweep.discrepancy.decide import SetHeldOut, decide, evaluate_heldout
 from fibersweep.discrepancy.gap import assess_gap
-from fibersweep.discrepancy.stats import boot_p
+from fibersweep.discrepancy.scores import boot_p
 
 
 def _gap(shift: float, seed: int):
@@ -134,7 +134,7 @@ def test_pair_weights_add_what_the_first_effect_leaves():
     # baseline: a strong t_pass shift (Holm-significant) and a class-like moderate shift in
     # "delta" that Holm over the family may leave out; after the first effect the t_pass
     # gap is gone and "delta" is still shifted: the forward step must score "delta".
-    from fibersweep.discrepancy.pairfit import pair_weights
+    from fibersweep.discrepancy.pairs import pair_weights
 
     rng = np.random.default_rng(8)
     n, m = 60, 6
@@ -182,7 +182,7 @@ class _PairModel:
 
 
 def _pair_input(model, n, rounds):
-    from fibersweep.discrepancy.pairfit import SelectionInput
+    from fibersweep.discrepancy.pairs import SelectionInput
 
     observed = pd.DataFrame(
         {"delta": model.x + 0.05, "t_pass": model.t * 1.02 / 1.05}
@@ -200,8 +200,8 @@ def test_joint_fit_refits_the_first_member():
     # inlet_speed stays 40 % off; refitted (2 rounds), both come within the stated
     # tolerances of the truth (friction 0.5 +- 0.05, inlet_speed 0.05 +- 0.006:
     # 8 Brent steps on [0, 1] and [0, 0.3], 2 copies with 1 % noise, 40 fibers).
-    from fibersweep.discrepancy.library import LIBRARY
-    from fibersweep.discrepancy.pairfit import joint_fit
+    from fibersweep.discrepancy.candidates import LIBRARY
+    from fibersweep.discrepancy.pairs import joint_fit
 
     n = 40
     model = _PairModel(n)
@@ -222,9 +222,8 @@ def test_partners_are_ranked_by_the_gap_the_first_effect_leaves():
     # the gap left has a delta shift only: the effect whose signature shifts delta ranks
     # first, the one that moves t_pass the other way has no positive match, the first
     # effect itself is never its own partner
-    from fibersweep.discrepancy.fit import Signature
     from fibersweep.discrepancy.gap import feature_vector
-    from fibersweep.discrepancy.pairfit import rank_partners
+    from fibersweep.discrepancy.signatures import Signature, rank_partners
 
     rng = np.random.default_rng(9)
     n, m = 60, 6
@@ -255,10 +254,11 @@ def test_forward_step_stops_at_the_first_pair_that_explains_the_gap(finish_round
     # the step could have tried (the untried two counted with p = 1).
     from dataclasses import replace
 
+    from fibersweep.discrepancy.candidates import LIBRARY
+    from fibersweep.discrepancy.copies import crossfit_copies
     from fibersweep.discrepancy.gap import value_matrices
-    from fibersweep.discrepancy.library import LIBRARY
-    from fibersweep.discrepancy.select import crossfit_copies, forward_pairs
-    from fibersweep.discrepancy.stats import holm
+    from fibersweep.discrepancy.pairs import forward_pairs
+    from fibersweep.discrepancy.scores import holm
 
     n = 60
     model = _PairModel(n)
@@ -342,8 +342,8 @@ def test_pair_values_are_not_brents_golden_section_points():
     # 0.004 (the golden point misses it by 0.0062).
     from dataclasses import replace
 
-    from fibersweep.discrepancy.library import LIBRARY
-    from fibersweep.discrepancy.pairfit import joint_fit
+    from fibersweep.discrepancy.candidates import LIBRARY
+    from fibersweep.discrepancy.pairs import joint_fit
 
     n = 40
     model = _PairModel(n)
@@ -389,8 +389,8 @@ def test_a_weaker_single_and_a_pair_that_both_explain_are_ambiguous():
 def test_pairs_are_taken_in_turn_from_each_first_member():
     # two first members with their ranked partners: the plan's pairs alternate
     # between them in rounds, and a set met twice (A + B, then B + A) is tried once
-    from fibersweep.discrepancy.library import LIBRARY
-    from fibersweep.discrepancy.select import pair_trials
+    from fibersweep.discrepancy.candidates import LIBRARY
+    from fibersweep.discrepancy.pairs import pair_trials
 
     L = LIBRARY
     q1 = [(L["pillar_hydro"], L[b], "in1") for b in ("off_midplane", "inlet_speed", "friction")]

@@ -56,8 +56,7 @@ def test_batches_run_on_every_executor_with_the_same_results(uniform_field, exec
 def test_copies_reuse_the_runs_of_a_subset_and_equal_a_fresh_full_copy(uniform_field):
     # a copy of rows {1, 3} and then of all 5 fibers simulates 5 runs in all, and the full
     # copy equals one made in one batch by a fresh maker (same draws: common random numbers)
-    from fibersweep.discrepancy.copies import CopyMaker
-    from fibersweep.discrepancy.noise import NoiseModel
+    from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 
     starts = np.array([[0.0, -2.0, 1.0], [5.0, -1.5, 0.8], [0.0, 1.0, 1.0],
                        [-5.0, 2.5, 1.2], [2.0, 0.5, 0.9]])  # fmt: skip
@@ -80,8 +79,7 @@ def test_copies_reuse_the_runs_of_a_subset_and_equal_a_fresh_full_copy(uniform_f
 def test_several_copies_are_one_batch_and_equal_copy_by_copy(uniform_field):
     # copies 0..2 of rows {0, 2, 4} after copy 1 of row 2: one batch of the 8 missing
     # runs, and every table equals the one a fresh maker makes copy by copy
-    from fibersweep.discrepancy.copies import CopyMaker
-    from fibersweep.discrepancy.noise import NoiseModel
+    from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 
     starts = np.array([[0.0, -2.0, 1.0], [5.0, -1.5, 0.8], [0.0, 1.0, 1.0],
                        [-5.0, 2.5, 1.2], [2.0, 0.5, 0.9]])  # fmt: skip

@@ -15,9 +15,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from fibersweep.discrepancy.candidates import get_candidates
 from fibersweep.discrepancy.decide import decide
 from fibersweep.discrepancy.dispersion import shift_test, spread_test
-from fibersweep.discrepancy.library import get_candidates
 from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
 from fibersweep.discrepancy.workflow import Run, cross_fit, noise_floor, rank, refit
 

@@ -8,8 +8,15 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from fibersweep.discrepancy.scores import brier_fair_loo, crps_fair_loo, residual_matrix
-from fibersweep.discrepancy.stats import bootstrap_mean_ci, excess, holm, permutation_test
+from fibersweep.discrepancy.scores import (
+    bootstrap_mean_ci,
+    brier_fair_loo,
+    crps_fair_loo,
+    excess,
+    holm,
+    permutation_test,
+    residual_matrix,
+)
 
 
 def _crps_normal(y: float) -> float:
@@ -128,7 +135,7 @@ def test_conformal_quantile_covers_a_new_draw_at_its_level():
     # the factor a data set's interval needs, as on the simulator): n = 40, k = 39,
     # bounds [0.95, 0.976]. 4000 repetitions: binomial sd 0.0035; stated band
     # [0.94, 0.985] (3 sd beyond each bound).
-    from fibersweep.discrepancy.stats import conformal_quantile
+    from fibersweep.discrepancy.scores import conformal_quantile
 
     rng = np.random.default_rng(11)
     hits = 0

@@ -10,19 +10,18 @@ import pandas as pd
 import pytest
 
 from fibersweep.analysis.trajectory import Trajectory
-from fibersweep.discrepancy.measured_tracks import validate_trajectories, with_tracks
-from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.copies import NoiseModel
+from fibersweep.discrepancy.measured import (
+    measured_track_values,
+    validate_trajectories,
+    with_tracks,
+)
 from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws, scored, track_observables
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import frames, outcome_row
-from fibersweep.discrepancy.tracks import (
-    measured_track_values,
-    nominal_track,
-    station_crossings,
-    station_positions,
-    track_values,
-)
+from fibersweep.discrepancy.tracks import station_crossings, station_positions, track_values
 from fibersweep.errors import InputError
+from fibersweep.fiber.effects.pillar_scale import scaled_track as nominal_track
 from fibersweep.fiber.result import FiberStart, RunResult
 from fibersweep.units import Geometry
 

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from fibersweep.analysis.classify import RULES
-from fibersweep.discrepancy.library import LIBRARY, get_candidates
+from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.errors import InputError
 from fibersweep.fiber.effects import EFFECTS, build_effects, get_effect

@@ -5,10 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.library import get_candidates
-from fibersweep.discrepancy.nextmeasure import discriminate
-from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.candidates import get_candidates
+from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
+from fibersweep.discrepancy.followup import discriminate
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.power import analyse_power
 from fibersweep.discrepancy.report_figures import next_figure

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from fibersweep.config import Config, load_config
-from fibersweep.discrepancy.library import LIBRARY
+from fibersweep.discrepancy.candidates import LIBRARY
 from fibersweep.discrepancy.report import write_report
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.synth import STUDY_BOX as BOX
@@ -212,19 +212,3 @@ def test_realistic_hidden_pair_is_named_as_a_pair(coarse_field, tmp_path):
     write_report(res, tmp_path, Config().model_dump(mode="json"))
     cfg = load_config(tmp_path / "updated_config.yaml")
     assert cfg.fiber.effects == pytest.approx(v.effects)
-
-
-@pytest.mark.slow
-def test_hidden_inlet_speed_with_shared_fit_values(coarse_field):
-    # the opt-in shared values (DiscrepancySettings.fit_grid) on the fast case above:
-    # named, within 0.02 of the truth (25 %), within its planned runs
-    effects = ("inlet_speed", "friction", "pillar_scale")
-    res = _run(coarse_field, {"inlet_speed": 0.08}, 20, seed=12, effects=effects, fit_grid=True,
-               **FAST)  # fmt: skip
-    assert res.verdict.kind == "named", res.verdict.text
-    assert res.verdict.effects["inlet_speed"] == pytest.approx(0.08, abs=0.02)
-    assert res.simulations <= res.plan.total(20)
-    a, b = res.extra["fold_values"]["inlet_speed"]
-    lo, hi, *_ = res.extra["intervals"]["inlet_speed"]
-    assert lo <= res.verdict.effects["inlet_speed"] <= hi
-    assert min(a, b) - 0.006 <= res.verdict.effects["inlet_speed"] <= max(a, b) + 0.006

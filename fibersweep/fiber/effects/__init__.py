@@ -23,7 +23,7 @@ Interface (see :class:`Effect`): override only the hooks you need.
 
 Built-in dynamic effects: ``friction``, ``pillar_hydro``, ``off_midplane``,
 ``brownian`` (each module documents what its value means). A fittable effect
-also gets one line in :data:`fibersweep.discrepancy.library.LIBRARY`.
+also gets one line in :data:`fibersweep.discrepancy.candidates.LIBRARY`.
 """
 
 from __future__ import annotations

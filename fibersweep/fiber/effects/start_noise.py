@@ -3,7 +3,7 @@
 A nuisance effect: the fiber really starts from the nominal start plus
 Gaussian noise of standard deviation k x (1°, 0.01 h_obs, 0.01 l_obs) on
 (θ0, y0/h_obs, L/l_obs) — the discrepancy workflow's default measurement
-noise (:class:`fibersweep.discrepancy.noise.NoiseModel`) — drawn from the
+noise (:class:`fibersweep.discrepancy.copies.NoiseModel`) — drawn from the
 run's seeded generator. With measurements that already carry that noise, the
 total start error is sqrt(1 + k²) times the assumed one.
 """

@@ -1,6 +1,6 @@
 """Calibrate the score test's critical value on simulated data sets, and check it on others.
 
-The 95 % interval of a refitted value (:func:`fibersweep.discrepancy.fit.score_interval`)
+The 95 % interval of a refitted value (:func:`fibersweep.discrepancy.estimate.score_interval`)
 is the stretch where the score test's |T| stays below ``scale`` x Student's quantile.
 With ``scale`` = 1 it covered 34 of 40 hidden single effects at N = 20 (per-fiber
 slopes are step-like, and T between evaluated values is an interpolation). This
@@ -33,8 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fibersweep.discrepancy.fit import Fit, score_interval
-from fibersweep.discrepancy.stats import conformal_quantile
+from fibersweep.discrepancy.estimate import Fit, score_interval
+from fibersweep.discrepancy.scores import conformal_quantile
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import wilson  # noqa: E402

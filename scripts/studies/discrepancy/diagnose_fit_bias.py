@@ -12,7 +12,7 @@ From the stored profiles, :func:`summarise` compares the estimators on the
 values a Brent search of the workflow would evaluate (a random subset of the
 grid) and on the whole grid: the argmin of the mean loss (the value the
 workflow reported) and the zero of the mean loss slope
-(:func:`fibersweep.discrepancy.fit.slope_estimate`).
+(:func:`fibersweep.discrepancy.estimate.slope_estimate`).
 
 Usage::
 
@@ -32,11 +32,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.dispersion import dispersion_test
-from fibersweep.discrepancy.fit import Fit, per_fiber_loss
+from fibersweep.discrepancy.estimate import Fit
+from fibersweep.discrepancy.fit import per_fiber_loss
 from fibersweep.discrepancy.gap import assess_gap, observable_weights, value_matrices
-from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
@@ -107,8 +107,9 @@ def workflow_fits(
     Returns [half 0, half 1, refit argmin, refit slope estimate, interval lo, hi, seed]
     and the refit.
     """
-    from fibersweep.discrepancy.fit import fit_effect, score_interval, slope_estimate
-    from fibersweep.discrepancy.library import LIBRARY
+    from fibersweep.discrepancy.candidates import LIBRARY
+    from fibersweep.discrepancy.estimate import score_interval, slope_estimate
+    from fibersweep.discrepancy.fit import fit_effect
 
     cand = LIBRARY[name]
     n = len(observed)
@@ -132,7 +133,7 @@ def workflow_fits(
 
 
 def summarise(path: str, n_sub: int = 6, n_rep: int = 400) -> str:
-    from fibersweep.discrepancy.fit import score_interval, slope_estimate
+    from fibersweep.discrepancy.estimate import score_interval, slope_estimate
 
     d = np.load(path)
     grid, P, truth = d["grid"], d["profiles"], float(d["truth"])

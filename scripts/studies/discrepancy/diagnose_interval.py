@@ -12,7 +12,7 @@ then read
   their midpoints (the interval's read-out before 2026-11-27; still the
   estimate's, ``fit._slope_t``);
 - ``per-fiber``: each fiber's slope interpolated between its midpoint slopes,
-  then T (``fit._fiber_t``, the interval's read-out now);
+  then T (``estimate._fiber_t``, the interval's read-out now);
 - ``at truth``: from the two evaluations at the truth (the test itself, with
   no interpolation).
 
@@ -37,22 +37,22 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import t as student_t
 
+from fibersweep.discrepancy.candidates import get_candidates
 from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.crossfit import fold_fits, refit_bounds
-from fibersweep.discrepancy.fit import (
-    Fit,
-    _fiber_t,
-    _merged,
-    _slope_t,
-    fit_effect,
-    per_fiber_loss,
-)
+from fibersweep.discrepancy.estimate import Fit, _fiber_t, _slope_t
+from fibersweep.discrepancy.estimate import merged_profile as _merged
+from fibersweep.discrepancy.fit import fit_effect, fold_fits, per_fiber_loss, refit_bounds
 from fibersweep.discrepancy.gap import value_matrices
-from fibersweep.discrepancy.library import get_candidates
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
-from fibersweep.discrepancy.workflow import DiscrepancySettings, Run, noise_floor, plan_budget, rank
+from fibersweep.discrepancy.workflow import (
+    DiscrepancySettings,
+    Run,
+    noise_floor,
+    plan_budget,
+    rank,
+)
 from fibersweep.fiber.settings import FiberSettings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))

@@ -18,9 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, value_matrices
-from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.power import _z_vector, ensemble_factor
 from fibersweep.discrepancy.simulate import Simulator

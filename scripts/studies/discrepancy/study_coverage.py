@@ -11,13 +11,13 @@ effect(s), with no candidate screening:
   gap is recorded and left out of the coverage (the workflow names nothing);
 - the signature of the true effect alone (:func:`workflow.rank`; it gives a signed
   effect's side and makes a random effect the lead, with its extra fit copies);
-- single and random: the halves' fits (:func:`crossfit.fold_fits`), the pooled refit
-  (:func:`crossfit.pooled_refit`) and its interval (:func:`fit.score_interval`), as
+- single and random: the halves' fits (:func:`fit.fold_fits`), the pooled refit
+  (:func:`fit.pooled_refit`) and its interval (:func:`estimate.score_interval`), as
   :func:`workflow.refit` runs them for a significant candidate;
 - pair: both members' halves, the first member's pooled refit and the gap it
-  leaves (the pair's loss weights, :func:`pairfit.pair_weights`), the joint fit on
-  each fold (:func:`pairfit.joint_fit`) and each member's refit with its interval
-  (:func:`pairfit.pair_refits`), as :func:`select.forward_pairs` runs them. The
+  leaves (the pair's loss weights, :func:`pairs.pair_weights`), the joint fit on
+  each fold (:func:`pairs.joint_fit`) and each member's refit with its interval
+  (:func:`pairs.pair_refits`), as :func:`pairs.forward_pairs` runs them. The
   first member is fixed (friction; the workflow takes the one that improved the
   held-out fibers most, which needs held-out copies this study does not make).
 
@@ -46,16 +46,22 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
 from fibersweep.discrepancy.copies import CopyMaker
-from fibersweep.discrepancy.crossfit import fold_fits, pooled_refit
-from fibersweep.discrepancy.fit import score_interval
+from fibersweep.discrepancy.estimate import score_interval
+from fibersweep.discrepancy.fit import fold_fits, pooled_refit
 from fibersweep.discrepancy.gap import assess_gap, value_matrices
-from fibersweep.discrepancy.library import LIBRARY, get_candidates
-from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit, pair_refits, pair_weights
+from fibersweep.discrepancy.pairs import SelectionInput, joint_fit, pair_refits, pair_weights
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
-from fibersweep.discrepancy.workflow import DiscrepancySettings, Run, noise_floor, plan_budget, rank
+from fibersweep.discrepancy.workflow import (
+    DiscrepancySettings,
+    Run,
+    noise_floor,
+    plan_budget,
+    rank,
+)
 from fibersweep.fiber.settings import FiberSettings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -149,7 +155,7 @@ def _pair(run: Run, st, cands, halves: dict, effects: dict) -> list[dict]:
         for f in range(2)
     ]
     fold = {m: [pf[m] for pf in per_fold] for m in PAIR}
-    values, ivs = pair_refits((second, first), fold, inp, maker)  # select._refitted
+    values, ivs = pair_refits((second, first), fold, inp, maker)  # pairs._checked
     return [_interval_row(m, effects[m], values[m], fold[m], ivs[m]) for m in PAIR]
 
 

@@ -42,11 +42,10 @@ from pathlib import Path
 
 import numpy as np
 
-from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
+from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.gap import value_matrices
-from fibersweep.discrepancy.library import LIBRARY, get_candidates
-from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.power import analyse_power
 from fibersweep.discrepancy.schema import validate_measured
@@ -140,7 +139,7 @@ def scenario(name: str) -> tuple[dict[str, float], str | None, set[str]]:
     """
     if name in SCENARIOS:
         return SCENARIOS[name]
-    from fibersweep.discrepancy.library import LIBRARY
+    from fibersweep.discrepancy.candidates import LIBRARY
 
     effects = {}
     for part in name.split("+"):
@@ -504,9 +503,6 @@ def main() -> None:
                          "with the best (settings.TIE_COSINE)")  # fmt: skip
     ap.add_argument("--fit-evals", type=int, default=5)
     ap.add_argument("--refits", type=int, default=2)
-    ap.add_argument("--fit-grid", action="store_true",
-                    help="fit both halves at shared values fixed before the data "
-                         "(DiscrepancySettings.fit_grid; off: Brent searches)")  # fmt: skip
     ap.add_argument("--pairs", type=int, default=3)
     ap.add_argument("--power-fibers", type=int, default=40,
                     help="fibers simulated by the power analyses (0: none)")  # fmt: skip
@@ -536,7 +532,7 @@ def main() -> None:
         tied=args.tied,
         random_fit_copies=args.random_fit_copies, random_copies=args.random_copies,
         fit_evals=args.fit_evals, refits=args.refits, pairs=args.pairs,
-        power_fibers=args.power_fibers, fit_grid=args.fit_grid,
+        power_fibers=args.power_fibers,
     )  # fmt: skip
     field = study_field(args.cache)
     out = Path(args.out)

@@ -27,10 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.gap import assess_gap, value_matrices
-from fibersweep.discrepancy.noise import NoiseModel
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.fiber.settings import FiberSettings

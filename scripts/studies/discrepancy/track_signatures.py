@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.config import axis_values, load_config
-from fibersweep.discrepancy.noise import NoiseModel
+from fibersweep.discrepancy.copies import NoiseModel
 from fibersweep.discrepancy.observables import log_scale, noise_draws
 from fibersweep.discrepancy.simulate import outcome_row
 from fibersweep.discrepancy.synth import parse_effects

@@ -1,59 +1,59 @@
-"""Forward selection: add a second effect to a significant single one, out of sample.
+"""Two effects together: fitting a pair, and forward selection out of sample.
 
 When the best single effect leaves a gap, other candidates B are added to the
 significant effects A that leave one (the ``settings.PAIR_FIRSTS`` that improved
-the held-out fibers most; each A must be significant alone: from a
-non-significant start the step once named a wrong pair, a wrong A plus a B that
-undid A's side effect; the set also needs each member's own contribution
-significant):
+the held-out fibers most; each A must be significant alone, since from a
+non-significant start a wrong A and a B that undoes A's side effect can look
+like a pair; the set also needs each member's own contribution significant):
 
 0. partners are ranked by their signature against the gap A leaves
-   (:func:`pairfit.rank_partners`), not against the whole gap, which A
+   (:func:`.signatures.rank_partners`), not against the whole gap, which A
    dominates; and the loss also scores the observables A leaves with a gap
-   (:func:`pairfit.pair_weights`): B's part of the gap often shows only once
-   A's is removed, and a loss blind to it can neither fit B nor see its
-   contribution. The plan's pairs are taken in turn from each A's ranking
-   (A1's best partner, A2's best, A1's second, ...; :func:`pair_trials`), a
-   set of two effects tried once;
+   (:func:`pair_weights`): B's part of the gap often shows only once A's is
+   removed, and a loss blind to it can neither fit B nor see its contribution.
+   The plan's pairs are taken in turn from each A's ranking (A1's best partner,
+   A2's best, A1's second, ...; :func:`pair_trials`), a set of two effects
+   tried once;
 1. joint fit, on the same two folds as the single fits, by coordinate descent
-   (:func:`pairfit.joint_fit`): B is fitted with A at its single value, then A
-   is refitted with B at that value, both on the training fold only;
+   (:func:`joint_fit`): B is fitted with A at its single value, then A is
+   refitted with B at that value, both on the training fold only;
 2. cross-fitted copies with both effects on score the held-out fold;
 3. each member's own contribution is the per-fiber improvement of the pair
    over the pair without it (over B alone for A, over A alone for B), tested
    by a one-sided bootstrap; the p-values of every member of every pair form
    one Holm family;
 4. a pair whose members both contribute significantly is refitted on all
-   fibers (:func:`pairfit.pair_refits`) and checked for adequacy there.
+   fibers (:func:`pair_refits`: each member with the other held fixed, the
+   same refit and score-test interval a single effect's quoted value gets)
+   and checked for adequacy there.
 
 Pairs are tried in that order, and the step stops after the round in which a
 pair explains the gap (significant contributions, no gap left): the other
 first member's pair of that round is still tried, so that two look-alike first
-members (off_midplane and inlet_speed, held-out improvements 1.02 and 1.00 with
-friction = 0.35 + inlet_speed = -0.04 hidden) give two explaining sets and an
-ambiguous verdict, not whichever came first. The Holm family is every member of
-every pair that may be tried, the untried ones counted with p = 1: Holm is
-monotone in the p-values, so stopping early never rejects more than trying
-every pair would.
+members give two explaining sets and an ambiguous verdict, not whichever came
+first. The Holm family is every member of every pair that may be tried, the
+untried ones counted with p = 1: Holm is monotone in the p-values, so stopping
+early never rejects more than trying every pair would.
 
-The rule of :func:`decide.decide` then names the pair when it leaves no
+The rule of :func:`.decide.decide` then names the pair when it leaves no
 significant gap and no single effect explains the gap. Two effects are the
-most this step adds: a third would need more fibers than the studies this was
-measured on (N <= 200) hold.
+most this step adds: a third would need far more fibers.
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.candidates import Candidate
+from fibersweep.discrepancy.copies import CopyMaker, crossfit_copies
 from fibersweep.discrepancy.decide import SetHeldOut
-from fibersweep.discrepancy.fit import Fit
+from fibersweep.discrepancy.estimate import Fit, score_interval
+from fibersweep.discrepancy.fit import fit_effect, pooled_refit
 from fibersweep.discrepancy.gap import (
     GapResult,
     assess_gap,
@@ -61,42 +61,226 @@ from fibersweep.discrepancy.gap import (
     value_matrices,
     weighted_loss,
 )
-from fibersweep.discrepancy.library import Candidate
-from fibersweep.discrepancy.pairfit import SelectionInput, joint_fit, pair_refits
-from fibersweep.discrepancy.stats import boot_p, bootstrap_mean_ci, holm
+from fibersweep.discrepancy.scores import boot_p, bootstrap_mean_ci, holm
 
-__all__ = ["PairTrial", "crossfit_copies", "forward_pairs", "pair_trials"]
+__all__ = [
+    "PairTrial",
+    "SelectionInput",
+    "forward_pairs",
+    "joint_fit",
+    "pair_refits",
+    "pair_trials",
+    "pair_weights",
+]
 
 log = logging.getLogger(__name__)
 
 
-def crossfit_copies(
+def pair_weights(
+    weights: Mapping[str, float], base_gap: GapResult, left: GapResult, alpha: float
+) -> dict[str, float]:
+    """Loss weights of the forward step.
+
+    The single-effect step scores only the observables with a significant gap at
+    baseline. A second effect often lives where the first one's gap hid it (a
+    friction class gap under an inlet-speed t_pass gap: Holm over the family
+    leaves it just above alpha), so the forward step also scores every observable
+    that the best single effect leaves with a gap, significant or only nominally
+    (raw p <= alpha, score or signed residual). The weights pick the loss; the
+    held-out tests stay what guards the names.
+
+    Parameters
+    ----------
+    weights : mapping observable -> float
+        :func:`.gap.observable_weights` of the baseline copies (all observables).
+    base_gap : GapResult
+        Gap against the baseline (all fibers).
+    left : GapResult
+        Gap left by the best single effect (at its pooled value when checked).
+    """
+    keep = set(base_gap.flagged) | set(left.flagged)
+    for g in left.gaps.values():
+        if g.test.p_value <= alpha or any(q <= alpha for q in g.bias_p):
+            keep.add(g.name)
+    return {o: (w if o in keep else 0.0) for o, w in weights.items()}
+
+
+@dataclass(frozen=True)
+class SelectionInput:
+    """What the forward step needs from the single-effect step.
+
+    Attributes
+    ----------
+    observed : DataFrame
+        Measured table (n rows).
+    folds : sequence of ndarray
+        The two folds of the cross-fitting.
+    fold_values : dict name -> [value scoring fold 0, value scoring fold 1]
+        Single-effect fits.
+    base_values : dict observable -> ndarray (n, 1 + copies)
+        :func:`.gap.value_matrices` of the baseline copies.
+    single_values : dict name -> (observable -> ndarray (n, 1 + copies))
+        The same with each single effect on (cross-fitted).
+    weights : dict observable -> float
+        Weights of the fit and decision loss of the pairs (:func:`pair_weights`).
+    observables : tuple of str
+    copies, fit_copies, fit_evals : int
+        The plan's copies per evaluation, copies per fit evaluation, Brent steps.
+    alpha : float
+    n_perm : int
+    rounds : int
+        Coordinate-descent rounds of the joint fit (1: the added effect only,
+        the first held at its single value; 2: then the first refitted too).
+    refit_evals : int
+        Brent steps of each member's pooled refit (:func:`pair_refits`; the
+        workflow passes :attr:`.settings.Plan.refit_evals`).
+    """
+
+    observed: pd.DataFrame
+    folds: Sequence[np.ndarray]
+    fold_values: Mapping[str, Sequence[float]]
+    base_values: Mapping[str, np.ndarray]
+    single_values: Mapping[str, Mapping[str, np.ndarray]]
+    weights: Mapping[str, float]
+    observables: tuple[str, ...]
+    copies: int
+    fit_copies: int
+    fit_evals: int
+    alpha: float
+    n_perm: int
+    rounds: int = 2
+    refit_evals: int = 3
+
+
+def joint_fit(
+    first: Candidate,
+    second: Candidate,
+    start: Mapping[str, float],
+    train: np.ndarray,
+    inp: SelectionInput,
     maker: CopyMaker,
-    folds: Sequence[np.ndarray],
-    effects_per_fold: Sequence[Mapping[str, float]],
-    copies: int,
-    desc: str,
-) -> list[pd.DataFrame]:
-    """Copies 0..copies-1 of every fiber, fold f simulated with ``effects_per_fold[f]``.
+    on_fit: Callable[[Fit], None] | None = None,
+) -> dict[str, float]:
+    """Fit both values of a pair on the training fibers by coordinate descent.
+
+    Round 1 fits ``second`` with ``first`` held at ``start[first]`` (its single
+    fit); round 2 refits ``first`` with ``second`` held at the value just found,
+    and so on for ``inp.rounds`` rounds. Each step is :func:`.fit.fit_effect` with
+    the other member fixed; its baseline point (the fitted member at 0) is the
+    other member alone, so a member that does not help goes back to 0 and the
+    pair's loss never increases from round to round (up to the copies' noise).
+
+    Parameters
+    ----------
+    start : mapping name -> float
+        Starting values; ``start[second]`` gives the sign a signed effect is
+        searched on first (0: both sides).
+    train : ndarray of int
+        Fibers of the training fold.
 
     Returns
     -------
-    list of DataFrame, each with one row per fiber in the original order.
+    dict name -> float : both fitted values.
     """
-    order = np.argsort(np.concatenate(folds))
-    per_fold = [
-        maker.copies(range(copies), dict(eff), held, desc=desc)
-        for held, eff in zip(folds, effects_per_fold, strict=True)
-    ]
-    return [
-        pd.concat([p[k] for p in per_fold], ignore_index=True).iloc[order].reset_index(drop=True)
-        for k in range(copies)
-    ]
+    obs = inp.observed.iloc[train].reset_index(drop=True)
+    cur = {c.name: float(start.get(c.name, 0.0)) for c in (first, second)}
+    order = [second, first]
+    for r in range(inp.rounds):
+        cand = order[r % 2]
+        other = order[(r + 1) % 2]
+        fixed = {other.name: cur[other.name]}
+        base_tr = maker.copies(
+            range(inp.fit_copies), fixed, train, desc=f"pair-fit {other.name} (+{cand.name})"
+        )
+        fit = fit_effect(
+            cand,
+            maker,
+            obs,
+            base_tr,
+            train,
+            inp.observables,
+            inp.weights,
+            inp.fit_evals,
+            side=float(np.sign(cur[cand.name])),
+            fixed=fixed,
+            stage="pair-fit",
+            # from round 2 on, the current pair was the previous step's best point:
+            # its runs are held, so it is a free starting value
+            known=[cur[cand.name]] if r > 0 else [],
+            # the folds' values are quoted for a pair that is not refitted: the score
+            # test's zero, not the best of Brent's golden-section points
+            estimate=True,
+        )
+        if on_fit is not None:
+            on_fit(fit)
+        cur[cand.name] = float(fit.value)
+    return cur
+
+
+def pair_refits(
+    members: Sequence[Candidate],
+    fold_values: Mapping[str, Sequence[float]],
+    inp: SelectionInput,
+    maker: CopyMaker,
+    on_fit: Callable[[Fit], None] | None = None,
+) -> tuple[dict[str, float], dict[str, tuple[float, float, bool, bool]]]:
+    """Each member of a pair refitted on all fibers, with its 95 % interval.
+
+    A single effect's quoted value is its pooled refit (:func:`.fit.pooled_refit`:
+    the two halves' values evaluated on all fibers, then a search around them, the
+    score test's zero) and its interval the score test over the fibers
+    (:func:`.estimate.score_interval`). A member of a pair gets the same two functions,
+    with the other member held fixed (``fixed``), so its loss profile is that of
+    one value on all fibers: one more round of :func:`joint_fit`'s coordinate
+    descent, on all fibers. The members are refitted in the given order, each with
+    the other at its latest value: its refit when it has one, else the mean of its
+    folds' fits. Give the member the joint fit's last round did *not* refit first
+    (the added one, fitted in round 1 against the first member's single value,
+    which has absorbed part of the added member's effect): refitted the other way
+    round, the added member is biased by the first member's biased fold values and
+    its interval under-covers. Each interval is conditional on the other member's value: it does not
+    carry that value's own uncertainty.
+
+    Parameters
+    ----------
+    members : sequence of Candidate
+        The pair, in the order they are refitted.
+    fold_values : mapping name -> (value scoring fold 0, value scoring fold 1)
+        The joint fits of the two folds.
+    inp : SelectionInput
+        Its ``weights`` (the pair's loss), ``fit_copies`` and ``refit_evals`` are used.
+    on_fit : callable, optional
+        Called with every refit (the report's fit table).
+
+    Returns
+    -------
+    values : dict name -> float
+        Each member's refitted value.
+    intervals : dict name -> (lo, hi, open_lo, open_hi)
+        :func:`.estimate.score_interval` of each refit.
+    """
+    held = {c.name: float(np.mean(fold_values[c.name])) for c in members}
+    intervals: dict[str, tuple[float, float, bool, bool]] = {}
+    for cand in members:
+        fixed = {n: v for n, v in held.items() if n != cand.name}
+        label = ", ".join(f"{n}={v:.4g}" for n, v in fixed.items())
+        # the value 0 of this member: the other member alone, on all fibers
+        base = maker.copies(range(inp.fit_copies), fixed, desc=f"pair-refit {label}")
+        fit = pooled_refit(cand, maker, inp.observed, base,
+                           [float(v) for v in fold_values[cand.name]], inp.observables,
+                           inp.weights, inp.refit_evals, fixed=fixed)  # fmt: skip
+        if on_fit is not None:
+            on_fit(fit)
+        held[cand.name] = float(fit.value)
+        intervals[cand.name] = score_interval(fit)
+        log.info("pair refit %s (with %s): %.4g %s", cand.name, label, fit.value,
+                 intervals[cand.name])  # fmt: skip
+    return held, intervals
 
 
 #: One pair to try: the first member (a significant single effect), the partner
 #: added to it, and the selection input (its loss weights follow the gap the first
-#: member leaves, :func:`pairfit.pair_weights`).
+#: member leaves, :func:`pair_weights`).
 PairTrial = tuple[Candidate, Candidate, SelectionInput]
 
 
@@ -264,7 +448,7 @@ def _checked(
     on_fit: Callable[[Fit], None] | None,
 ) -> tuple[SetHeldOut, tuple[GapResult, list[pd.DataFrame]]]:
     """Pair ``i`` with its members refitted on all fibers and their intervals
-    (:func:`pairfit.pair_refits`), as a significant single effect is refitted before
+    (:func:`pair_refits`), as a significant single effect is refitted before
     its adequacy check (the refitted values are the pair's quoted values), and the
     gap it leaves there with the copies that measured it. Called once per pair (the
     caller keeps the result in ``finals``)."""

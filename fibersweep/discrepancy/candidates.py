@@ -1,9 +1,16 @@
-"""The effects the discrepancy workflow may name, with their search ranges.
+"""What the discrepancy workflow may name as the cause of a gap: its candidates.
 
-Each candidate is an effect of the registry (:mod:`fibersweep.fiber.effects`)
-with the interval its parameter is fitted in, the probe values used to read
-its signature, and a realistic magnitude (used by the tests and the study).
-An unknown name fails loudly, listing the valid ones.
+A candidate is one parameter of the model that the workflow can switch on,
+fit and name, with the interval it is fitted in, the probe values its
+signature is read at, and a realistic magnitude (the report's power table,
+the tests). Every candidate is an effect of the effect registry
+(:mod:`fibersweep.fiber.effects`), listed in :data:`LIBRARY`, and is
+simulated by switching that effect on at a value (``{name: value}``,
+:meth:`fibersweep.discrepancy.simulate.Simulator.run`). The stages
+(signature, halves, pooled refit, held-out test, pairs, power, what to
+measure next, report) read a candidate's range, probes and ``random`` flag
+from its :class:`Candidate`. An unknown name fails loudly, listing the
+valid ones.
 """
 
 from __future__ import annotations
@@ -17,7 +24,7 @@ __all__ = ["Candidate", "LIBRARY", "get_candidates"]
 
 @dataclass(frozen=True)
 class Candidate:
-    """A fittable effect.
+    """A fittable parameter: a library effect and its search range.
 
     Attributes
     ----------
@@ -55,9 +62,7 @@ LIBRARY: dict[str, Candidate] = {
     c.name: c
     for c in (
         Candidate("friction", 0.0, 1.0, (0.5,), 0.5, "Coulomb coefficient on the pillar"),
-        # k = 1: the first-reflection (Faxén) drag itself; contact dwell +14-36 %. At 0.5
-        # (the source's "about 10 % slower") 60 fibers show only a t_pass shift, which a
-        # 2.5 % slower inlet explains as well (docs/discrepancy.md, the study)
+        # realistic 1: the first-reflection (Faxén) drag itself
         Candidate("pillar_hydro", 0.0, 3.0, (1.0,), 1.0, "multiplier on the Faxén pillar drag"),
         Candidate("off_midplane", 0.0, 0.35, (0.25,), 0.15, "offset from the midplane / depth"),
         # 1e3 x kT: rotational diffusion of ~25° over a ~1 s pass, already extreme
