@@ -140,7 +140,8 @@ class Simulator:
         Show one tqdm progress bar over all batches (the stage in its label,
         the ETA against ``planned``).
     planned : int or None
-        Runs the caller plans in total (the bar's length; default ``budget``).
+        Runs the caller knows will run (the bar's length; default ``budget``);
+        :meth:`expect` sets it stage by stage.
     tracks : bool
         Keep every run's trajectory and derive the track observables
         (:mod:`fibersweep.discrepancy.tracks`), for measured tracks. False (the
@@ -180,6 +181,7 @@ class Simulator:
         self.used_by_stage: dict[str, int] = {}  # runs per stage (first word of desc)
         self._batches = 0
         self._planned = planned if planned is not None else budget
+        self._later = 0  # runs later stages may add (said beside the bar)
         self._bar: Any = None
         # retries=0: a run that kills its worker is a failed run here, not re-run
         options: dict[str, Any] = {"keep": True}
@@ -202,6 +204,26 @@ class Simulator:
             finish(self._bar)  # a workflow that stops early ends at its real total
             self._bar = None
         self._executor.close()
+
+    def expect(self, runs: int, later: int = 0) -> None:
+        """Set the bar's length to the runs done plus ``runs`` the next stages will run.
+
+        Parameters
+        ----------
+        runs : int
+            Most runs of the stages that will run now, whatever their outcome.
+        later : int
+            Most runs of stages that run only on some outcomes (said beside the bar,
+            not counted in its length, so the estimate is of what will run).
+        """
+        self._planned = self.used + int(runs)
+        self._later = int(later)
+        if self._bar is not None:
+            self._bar.total = max(self._planned, self._bar.n)
+            self._bar.set_postfix_str(self._later_text(), refresh=True)
+
+    def _later_text(self) -> str:
+        return f"later stages: up to {self._later} more if needed" if self._later else ""
 
     @property
     def remaining(self) -> float:
@@ -280,6 +302,8 @@ class Simulator:
         }
         if self._bar is None and self.progress:
             self._bar = progress_bar(total=self._planned, unit="run")
+            if self._later:
+                self._bar.set_postfix_str(self._later_text(), refresh=False)
         bar = self._bar
         if bar is not None:
             if bar.total is not None and bar.n + n > bar.total:

@@ -475,9 +475,14 @@ def run_discrepancy(
     ) as sim:  # fmt: skip
         maker = CopyMaker(measured.starts, s.noise, s.seed, sim)
         run = Run(s, plan, candidates, observed, obs_names, folds, rng, maker)
+        # the bar counts what will run; a stage that runs only on some outcomes is said
+        cost = plan.cost(n)
+        sim.expect(cost["baseline"], later=plan.total(n) - cost["baseline"])
         st = noise_floor(run)
         if st.gap.any:
+            sim.expect(plan.total(n) - cost["baseline"] - cost["pairs"], later=cost["pairs"])
             st = pairs(refit(cross_fit(rank(st))))
+        sim.expect(0)  # follow-ups size their own batches
         heldout = list(st.heldout)
         verdict = decide(st.gap, heldout, st.region_text, rng, s.alpha, list(st.sets))
         extra = followup(verdict, heldout, st.fold_values, candidates, maker, sim, plan, s,

@@ -124,3 +124,30 @@ def test_a_workflow_that_stops_early_ends_its_bar_at_the_runs_it_used(uniform_fi
     lines = err.splitlines()
     assert "\r" not in err and "0/1150" in lines[0]
     assert lines[-1].startswith("screen effects") and "2/2" in lines[-1], lines
+
+
+def test_the_bar_counts_what_will_run_and_says_what_later_stages_may_add(
+    uniform_field, monkeypatch
+):
+    """The bar's length is the runs done plus those the next stages will run (not the
+    plan's worst case); the runs of stages that depend on an outcome are said beside it."""
+    import io
+
+    from fibersweep.discrepancy import simulate as simulate_mod
+    from fibersweep.progressbar import progress_bar
+
+    out = io.StringIO()
+    monkeypatch.setattr(
+        simulate_mod, "progress_bar", lambda **kw: progress_bar(file=out, **kw)
+    )
+    starts = np.zeros((3, 3)) + [0.0, -2.0, 1.0]
+    with Simulator(uniform_field, FiberSettings(), workers=1, planned=1000) as sim:
+        sim.expect(3, later=500)
+        sim.run(starts, {}, np.arange(3))
+        bar = sim._bar
+        assert bar.total == 3 and bar.n == 3  # not the 1000 planned at worst
+        assert "up to 500 more" in str(bar.postfix)
+        sim.expect(2)  # the next stage: 2 runs, nothing later
+        assert bar.total == 5 and not bar.postfix
+        sim.run(starts, {}, np.arange(3))  # a batch beyond what was said grows the bar
+        assert bar.total == 6 and bar.n == 6
