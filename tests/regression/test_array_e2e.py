@@ -12,6 +12,7 @@ from fibersweep.sweep.manifest import read_manifest
 from fibersweep.sweep.store import read_runs, read_trajectories
 
 
+@pytest.mark.ci
 @pytest.mark.slow  # two cell fields, eight runs, the figures: ~40 s of CPU
 def test_run_classify_and_sort_report_with_a_shift_axis(tmp_path):
     out = tmp_path / "res"

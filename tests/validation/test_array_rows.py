@@ -117,6 +117,7 @@ def test_one_pillar_of_a_sparse_array_as_the_channel_integrator():
         assert math.degrees(th_end) == pytest.approx(tr.theta[-1], abs=1e-6)
 
 
+@pytest.mark.ci
 @pytest.mark.slow
 def test_one_bead_fiber_is_a_steric_sphere():
     """One bead (a sphere of diameter D = 2a) in circle posts, G = 40 µm, ε = 0.1, dx = 2 µm.

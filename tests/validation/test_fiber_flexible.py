@@ -68,6 +68,7 @@ def _straight(setup, n):
     return np.column_stack([setup.x0 + s, np.full(n, setup.y0_abs)])
 
 
+@pytest.mark.ci
 @pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 def test_uniform_load_bends_as_euler_bernoulli(coarse_field, method):
@@ -121,6 +122,7 @@ def _slowest_bending_mode(k, q0):
     return float(lam[i]), vec[:, i].real.reshape(n, 2)
 
 
+@pytest.mark.ci
 @pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 def test_bent_fiber_relaxes_at_the_bending_rate(coarse_field, method):

@@ -294,6 +294,7 @@ def test_worked_examples_relative_to_separatrix_with_pillar_friction(coarse_fiel
     _worked_examples_relative_to_separatrix(coarse_field, FRICTION)
 
 
+@pytest.mark.ci
 @pytest.mark.slow
 def test_worked_examples_relative_to_separatrix_at_source_resolution(fine_field):
     _worked_examples_relative_to_separatrix(fine_field)
@@ -303,11 +304,13 @@ def test_classes_around_the_separatrix(coarse_field):
     _classes_around_the_separatrix(coarse_field)
 
 
+@pytest.mark.ci
 @pytest.mark.slow
 def test_classes_around_the_separatrix_at_source_resolution(fine_field):
     _classes_around_the_separatrix(fine_field)
 
 
+@pytest.mark.ci
 @pytest.mark.slow
 def test_friction_same_in_both_models(coarse_field):
     """With μ_f = 0.3 the worked examples get the same class in both models (the bead-spring

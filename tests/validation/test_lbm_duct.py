@@ -39,6 +39,7 @@ def test_duct_second_order_in_dx():
     assert order > 1.8, (e8, e16, order)
 
 
+@pytest.mark.ci
 @pytest.mark.slow
 def test_duct_second_order_fine():
     # Same at 16 -> 32 nodes; measured 8.7e-4 -> 2.0e-4 (order 2.1).
