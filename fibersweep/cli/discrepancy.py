@@ -2,6 +2,9 @@
 
 Effects are given the same way everywhere: ``--effect NAME[=VALUE]``, repeatable
 (``synth`` needs the value; ``discrepancy`` takes names only, it fits the values).
+Candidates from any setting: ``--candidate KEY=LO..HI`` or ``KEY=VALUE``,
+repeatable, for ``discrepancy`` and ``power``, and the config's
+``discrepancy.candidates`` (:mod:`fibersweep.discrepancy.declared`).
 """
 
 from __future__ import annotations
@@ -122,6 +125,54 @@ def _effect_names(effect: list[str] | None, effects: str | None) -> tuple[str, .
     return tuple(names) or None
 
 
+CandidateOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--candidate",
+        help="A setting as a candidate explanation, repeatable: KEY=LO..HI (fitted, log "
+        "scale over decades), KEY=VALUE (an alternative), or a switch with its parameter "
+        "(fiber.model=bead-spring-ros2,fiber.young_modulus=1e4..3e7); added to the config's "
+        "discrepancy.candidates.",
+    ),
+]
+
+
+def _declared(cfg, candidate: list[str] | None) -> tuple:
+    """Declared candidates: the config's ``discrepancy.candidates``, then ``--candidate``."""
+    from fibersweep.discrepancy.declared import parse_candidates
+
+    texts = list(cfg.discrepancy.candidates)
+    where = [f"discrepancy.candidates[{i}]:" for i in range(len(texts))]
+    texts += list(candidate or [])
+    where += ["--candidate"] * len(candidate or [])
+    return tuple(parse_candidates(texts, cfg.fiber, cfg.flow, where))
+
+
+def _plan_lines(n: int, settings) -> list[str]:
+    """The plan before it runs: runs in all, and what a costly (flexible) candidate adds."""
+    from fibersweep.discrepancy.settings import MODEL_COST, plan_budget
+
+    plan = plan_budget(n, settings, settings.candidates_of())
+    total = plan.total(n)
+    lines = [f"plan: at most {total} simulations for {n} fibers"]
+    extra = 0.0
+    for c in settings.declared:
+        model = dict(c.switch).get("fiber.model")
+        if model is None or MODEL_COST.get(model, 1.0) == 1.0:
+            continue
+        runs = plan.runs_of(n, c)
+        f = MODEL_COST[model]
+        extra += (f - 1.0) * runs
+        lines.append(
+            f"  {c.name} ({model}): up to {runs} of them, each about {f:g}x a rigid run"
+        )
+    if extra:
+        lines.append(
+            f"  time about {(total + extra) / total:.2g}x that of the same plan on rigid runs"
+        )
+    return lines
+
+
 @app.command()
 def discrepancy(
     measured: Annotated[Path, typer.Argument(help="Measured fibers (.parquet or .csv).")],
@@ -138,6 +189,7 @@ def discrepancy(
     effects: Annotated[
         str | None, typer.Option(help="Deprecated: comma-separated effects (use --effect).")
     ] = None,
+    candidate: CandidateOpt = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
     pairs: Annotated[
         int, typer.Option(help="Pairs of effects tried (0: single effects only).")
@@ -184,16 +236,49 @@ def discrepancy(
             power_fibers=40 if power else 0, next_copies=2 if next_ else 0,
             workers=workers or cfg.run.workers,
             executor=cfg.run.executor, scheduler=cfg.run.scheduler,
-            effects=names,
+            effects=names, declared=_declared(cfg, candidate),
         )  # fmt: skip
+        for line in _plan_lines(len(data), settings):
+            typer.echo(line)
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
-        res = run_discrepancy(data, field, cfg.fiber, settings)
+        res = run_discrepancy(data, field, cfg.fiber, settings, flow=cfg.flow,
+                              cache_dir=cfg.run.cache_dir)  # fmt: skip
         s = write_report(res, output, cfg.model_dump(mode="json"))
     typer.echo(f"verdict: {s['verdict']['kind']}: {s['verdict']['text']}")
     typer.echo(f"simulations: {s['simulations']} in {s['seconds']:.0f} s")
     typer.echo(f"wrote {output / 'report.md'} and {output / 'summary.json'}")
     for c in s["updated_configs"]:
         typer.echo(f"wrote {output / c}")
+
+
+def _limit_in_unit(cand, e) -> dict:
+    """A declared candidate's detection limit in its setting's unit, and as a sentence."""
+    if cand.is_effect:
+        return {}
+    if cand.categorical:
+        if e.limit is not None:
+            text = f"detected with {cand.key} = {cand.choice}"
+        else:
+            text = f"{cand.key} = {cand.choice} not detected with these fibers"
+        return {"setting": text, "unit": cand.unit, "limit_setting": None}
+    if e.limit is None:
+        return {
+            "setting": "not detected within its range", "unit": cand.unit, "limit_setting": None
+        }
+    value = cand.setting(e.limit)
+    ci = None
+    if e.limit_ci is not None:
+        ends = [cand.setting(x) if x is not None else None for x in e.limit_ci]
+        ci = ends[::-1] if cand.scale == "rigid" else ends
+    if cand.scale == "rigid":
+        text = f"flexibility detected for {cand.key} <= {cand.show_value(e.limit)}"
+    else:
+        side = "above" if e.probe > 0 else "below"
+        text = f"detected {side} {cand.key} = {cand.show_value(e.limit)}"
+    if ci is not None:
+        text += " [" + ", ".join(f"{x:.3g}" if x is not None else "out of range" for x in ci)
+        text += "]"
+    return {"setting": text, "unit": cand.unit, "limit_setting": value, "limit_ci_setting": ci}
 
 
 @app.command("power")
@@ -212,6 +297,7 @@ def power_cmd(
         list[str] | None,
         typer.Option("--effect", help="Library effect to analyse, repeatable (default: all)."),
     ] = None,
+    candidate: CandidateOpt = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
     boot: Annotated[
         int,
@@ -241,7 +327,7 @@ def power_cmd(
     with _errors():
         cfg = _load(config, overrides)
         from fibersweep.atomic import atomic_write
-        from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
+        from fibersweep.discrepancy.candidates import get_candidates
         from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
         from fibersweep.discrepancy.measured import load_measured
         from fibersweep.discrepancy.observables import scored
@@ -252,7 +338,10 @@ def power_cmd(
 
         if n < 8 or simulate < 8:
             raise InputError(f"--n and --simulate must be >= 8, got {n} and {simulate}")
-        cands = get_candidates(_effect_names(effect, None))
+        declared = _declared(cfg, candidate)
+        names = _effect_names(effect, None)
+        # declared candidates alone: the library only when --effect names some of it
+        cands = [*(get_candidates(names) if names or not declared else []), *declared]
         rng = np.random.default_rng([seed, 17])
         if measured is not None:
             starts = load_measured(measured).starts
@@ -267,13 +356,15 @@ def power_cmd(
             field, cfg.fiber, workers=workers or cfg.run.workers, executor=cfg.run.executor,
             scheduler=cfg.run.scheduler, planned=3 * min(simulate, len(starts)) * (
                 1 + 3 * sum(len(c.probes) for c in cands)), tracks=False,
+            candidates=cands, flow=cfg.flow, cache_dir=cfg.run.cache_dir,
         ) as sim:  # fmt: skip
             maker = CopyMaker(starts, NoiseModel(), seed, sim)
             pw = analyse_power(maker, cands, n, obs, rng, n_sim=simulate, alpha=alpha,
                                n_boot=boot)  # fmt: skip
         rows = []
+        by_name = {c.name: c for c in cands}
         for e in pw.effects:
-            real = float(np.copysign(LIBRARY[e.name].realistic, e.probe))
+            real = float(np.copysign(by_name[e.name].realistic, e.probe))
             rows.append(
                 {
                     "effect": e.name, "probe": e.probe, "limit": e.limit, "gamma": e.gamma,
@@ -281,6 +372,7 @@ def power_cmd(
                     "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
                     "dispersion_limit": e.dispersion_limit,
                     "realistic": real, "fibers_for_realistic": pw.fibers_needed(e.name, real),
+                    **_limit_in_unit(by_name[e.name], e),
                 }
             )  # fmt: skip
         out = {
@@ -292,6 +384,11 @@ def power_cmd(
         atomic_write(output / "power.json", json.dumps(out, indent=2))
     typer.echo(f"detection limits at N = {n} (power {pw.power:g}, alpha {alpha:g}):")
     for r in rows:
+        if "setting" in r:
+            need = r["fibers_for_realistic"]
+            more = f" (at its probe: {need} fibers)" if need else ""
+            typer.echo(f"  {r['effect']}: {r['setting']}{more}")
+            continue
         lim = f"{r['limit']:.3g}" if r["limit"] is not None else "not within its range"
         if r["limit_ci"] is not None:
             lo, hi = (f"{x:.3g}" if x is not None else "out of range" for x in r["limit_ci"])

@@ -1,8 +1,13 @@
 """What the workflow cannot see: detection limits by simulation, and look-alike effects.
 
 For a set of starts (the measured ones, or drawn from a config's sweep box) and
-the measurement model, every library effect is switched on at its probe value
-``m_p`` and at ``m_p / 2``. Copy k of the fibers with the effect on plays the
+the measurement model, every candidate (library effect or declared setting) is
+switched on at its probe value ``m_p`` and at ``m_p / 2``, in the candidate's
+own value (:mod:`.candidates`; a declared stiffness's limit is the stiffest
+fiber detected, :meth:`.candidates.Candidate.setting` of it). An alternative
+(a categorical candidate) is on or off: it is simulated once and its "limit"
+is 1 when N fibers detect it with the power, else None (the fibers it needs
+follow from the same formula). Copy k of the fibers with the effect on plays the
 measurement; the baseline copies j != k (common random numbers) are the model.
 The gap tests of :func:`gap.assess_gap` give a z-score per test of the family
 (score per observable, one-sided; signed residual per component, two-sided);
@@ -552,7 +557,11 @@ def analyse_power(
     for cand in candidates:
         for mp in cand.probes:
             z_full, eff = _z_vector(maker, base, {cand.name: mp}, rows, observables, rng)
-            z_half, eff_h = _z_vector(maker, base, {cand.name: mp / 2}, rows, observables, rng)
+            if cand.categorical:  # an alternative has no half: it is on or off
+                z_half, eff_h = z_full, eff
+            else:
+                z_half, eff_h = _z_vector(maker, base, {cand.name: mp / 2}, rows, observables,
+                                          rng)  # fmt: skip
             z_full, z_half = z_full * ens, z_half * ens
             e = _read_out(EffectPower(cand.name, float(mp), (), 1.0, None, one_sided),
                           z_full, z_half)  # fmt: skip
@@ -654,7 +663,12 @@ def _refine(
 def _limit(
     e: EffectPower, cand: Candidate, n: int, n_sim: int, z_crit: float, power: float
 ) -> float | None:
-    """Smallest |m| in the probe's direction within the range with P(detect) >= power."""
+    """Smallest |m| in the probe's direction within the range with P(detect) >= power.
+
+    An alternative (categorical): 1 when it is detected with the power, else None.
+    """
+    if cand.categorical:
+        return 1.0 if e.detect(1.0, n, n_sim, z_crit) >= power else None
     edge = cand.hi if e.probe > 0 else cand.lo
     if e.detect(edge, n, n_sim, z_crit) < power:
         return None

@@ -204,6 +204,7 @@ def _fits(s: dict[str, Any]) -> list[str]:
             f"| {'yes' if h['explains'] else 'no'} |"
         )
     lines += _spread_lines(s["heldout"])
+    lines += _declared_lines(s)
     if s["sets"]:
         lines += [
             "",
@@ -230,6 +231,37 @@ def _fits(s: dict[str, Any]) -> list[str]:
             lines.append(
                 f"| {st['set']} | {vals} | {gains} | {ps} | {'yes' if st['explains'] else 'no'} |"
             )
+    return lines
+
+
+def _declared_lines(s: dict[str, Any]) -> list[str]:
+    """Declared candidates: what each is, and its fitted value in the setting's unit."""
+    if not s.get("declared"):
+        return []
+    lines = [
+        "",
+        "### Candidates declared from the config's settings",
+        "",
+        "A declared candidate is fitted on its own scale (0: the config's value; a stiffness "
+        "with a model switch: 0 is the rigid model, larger is softer); the table above shows "
+        "that scale, this one the setting itself.",
+        "",
+        "| candidate | what | final value [95 % CI], in the setting's unit |",
+        "|---|---|---|",
+    ]
+    held = {h["effect"]: h for h in s["heldout"]}
+    for c in s["declared"]:
+        h = held.get(c["name"])
+        if h is None:
+            value = "not fitted (signature did not match)"
+        else:
+            value = h["setting"]
+            ci = h.get("interval95_setting")
+            if ci:
+                value += f" [{_f(ci[0])}, {_f(ci[1])}]"
+        switch = ", ".join(f"{k} = {v}" for k, v in c["switch"].items())
+        what = c["note"] + (f" (with {switch})" if switch else "")
+        lines.append(f"| {c['name']} | {what} | {value} |")
     return lines
 
 
