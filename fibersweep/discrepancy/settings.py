@@ -36,10 +36,12 @@ INTERVAL_EVALS = 3
 PAIR_FIRSTS = 2
 
 #: Time of a run of each fiber model relative to a rigid run, for the plan's estimate
-#: of a declared candidate that switches the model (:meth:`Plan.runs_of`). Measured on
-#: configs/quick.yaml, 16 starts of its sweep box, E = 5.6e5 Pa (the probe of
-#: fiber.young_modulus=1e4..3e7) against rigid, one core each (scripts/bench_candidate_cost.py).
-MODEL_COST = {"rigid": 1.0, "bead-spring": 3.0, "bead-spring-ros2": 2.0}
+#: of a declared candidate that switches the model (:meth:`Plan.runs_of`).
+#: bead-spring-ros2: 1.31, measured on configs/quick.yaml, 12 starts of its sweep box,
+#: E = 5.6e5 Pa (the probe of fiber.young_modulus=1e4..3e7) against rigid, one worker,
+#: two rounds (scripts/bench_candidate_cost.py). bead-spring (fixed step): 3, an upper
+#: estimate, not measured (``--model bead-spring`` of the same script measures it).
+MODEL_COST = {"rigid": 1.0, "bead-spring": 3.0, "bead-spring-ros2": 1.3}
 
 #: Largest shortfall of a signature's cosine below the best one's for the effect to
 #: be fitted beyond the ``candidates`` best (``DiscrepancySettings.tied`` more at
