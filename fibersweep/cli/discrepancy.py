@@ -168,7 +168,7 @@ def _plan_lines(n: int, settings) -> list[str]:
         )
     if extra:
         lines.append(
-            f"  time about {(total + extra) / total:.2g}x that of the same plan on rigid runs"
+            f"  time about {(total + extra) / total:.2f}x that of the same plan on rigid runs"
         )
     return lines
 
