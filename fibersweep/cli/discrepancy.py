@@ -251,36 +251,6 @@ def discrepancy(
         typer.echo(f"wrote {output / c}")
 
 
-def _limit_in_unit(cand, e) -> dict:
-    """A declared candidate's detection limit in its setting's unit, and as a sentence."""
-    if cand.is_effect:
-        return {}
-    if cand.categorical:
-        if e.limit is not None:
-            text = f"detected with {cand.key} = {cand.choice}"
-        else:
-            text = f"{cand.key} = {cand.choice} not detected with these fibers"
-        return {"setting": text, "unit": cand.unit, "limit_setting": None}
-    if e.limit is None:
-        return {
-            "setting": "not detected within its range", "unit": cand.unit, "limit_setting": None
-        }
-    value = cand.setting(e.limit)
-    ci = None
-    if e.limit_ci is not None:
-        ends = [cand.setting(x) if x is not None else None for x in e.limit_ci]
-        ci = ends[::-1] if cand.scale == "rigid" else ends
-    if cand.scale == "rigid":
-        text = f"flexibility detected for {cand.key} <= {cand.show_value(e.limit)}"
-    else:
-        side = "above" if e.probe > 0 else "below"
-        text = f"detected {side} {cand.key} = {cand.show_value(e.limit)}"
-    if ci is not None:
-        text += " [" + ", ".join(f"{x:.3g}" if x is not None else "out of range" for x in ci)
-        text += "]"
-    return {"setting": text, "unit": cand.unit, "limit_setting": value, "limit_ci_setting": ci}
-
-
 @app.command("power")
 def power_cmd(
     config: ConfigArg,
@@ -295,7 +265,11 @@ def power_cmd(
     ] = 40,
     effect: Annotated[
         list[str] | None,
-        typer.Option("--effect", help="Library effect to analyse, repeatable (default: all)."),
+        typer.Option(
+            "--effect",
+            help="Library effect to analyse, repeatable (default: all of them, or none "
+            "when --candidate is given).",
+        ),
     ] = None,
     candidate: CandidateOpt = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
@@ -313,11 +287,15 @@ def power_cmd(
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
-    """Smallest magnitude of each library effect the discrepancy workflow would detect.
+    """Smallest magnitude of each candidate the discrepancy workflow would detect.
 
     By simulation at CONFIG's model, for N fibers with starts uniform in the sweep
     box (or MEASURED's starts), with the look-alike effects these observables
-    cannot separate.
+    cannot separate. The candidates: every library effect by default; with
+    --candidate only the declared ones (each limit in its setting's unit), plus
+    the library effects that --effect names. Unlike `discrepancy`, where a declared
+    candidate is added to the library, the question here is the power for what
+    was declared, and each candidate costs its own runs.
     """
     import json
 
@@ -331,7 +309,7 @@ def power_cmd(
         from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
         from fibersweep.discrepancy.measured import load_measured
         from fibersweep.discrepancy.observables import scored
-        from fibersweep.discrepancy.power import analyse_power
+        from fibersweep.discrepancy.power import analyse_power, limit_in_unit
         from fibersweep.discrepancy.simulate import Simulator
         from fibersweep.errors import InputError
         from fibersweep.flow.cache import get_flow_field
@@ -372,7 +350,7 @@ def power_cmd(
                     "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
                     "dispersion_limit": e.dispersion_limit,
                     "realistic": real, "fibers_for_realistic": pw.fibers_needed(e.name, real),
-                    **_limit_in_unit(by_name[e.name], e),
+                    **limit_in_unit(by_name[e.name], e),
                 }
             )  # fmt: skip
         out = {

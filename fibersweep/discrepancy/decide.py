@@ -288,6 +288,7 @@ def decide(
     alpha: float,
     sets: Sequence[SetHeldOut] = (),
     show: Callable[[Mapping[str, float]], str] | None = None,
+    declared: Sequence[str] = (),
 ) -> Verdict:
     """Apply the decision rule of the module docstring.
 
@@ -305,6 +306,9 @@ def decide(
     show : callable, optional
         ``{name: value} -> text`` for the verdict (each value in its candidate's
         unit, :func:`.candidates.show_values`); default ``name = value``.
+    declared : sequence of str
+        Names of the declared candidates (``--candidate``): an unexplained verdict
+        says that neither the library nor these improved the held-out fibers.
     """
     show = show or _values_text
     if not gap.any:
@@ -337,8 +341,8 @@ def decide(
             {},
             top_obs,
             region,
-            f"Unexplained gap {_where(region)}, observable {top_obs}: no effect of the library "
-            "improves the held-out fibers significantly.",
+            f"Unexplained gap {_where(region)}, observable {top_obs}: "
+            f"{_none_of(declared)} improves the held-out fibers significantly.",
         )
     best = max(sig, key=lambda h: h.improvement[0])
     if not best.explains:
@@ -422,6 +426,14 @@ def _spread_verdict(good: Sequence[HeldOut], top_obs: str, region: str) -> Verdi
         f"p_Holm {h.spread_p_holm:.2g}; no significant gap nor dispersion left).",
         ({h.name: h.value},),
     )
+
+
+def _none_of(declared: Sequence[str]) -> str:
+    """'no effect of the library' (and, when declared, 'nor the declared candidate X')."""
+    if not declared:
+        return "no effect of the library"
+    many = "candidates" if len(declared) > 1 else "candidate"
+    return f"no effect of the library nor the declared {many} {', '.join(declared)}"
 
 
 def _values_text(values: Mapping[str, float]) -> str:

@@ -51,6 +51,7 @@ import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -77,6 +78,7 @@ __all__ = [
     "standardised_values",
     "detect_probability",
     "limit_intervals",
+    "limit_in_unit",
     "percentile_interval",
 ]
 
@@ -680,3 +682,58 @@ def _limit(
         else:
             lo = mid
     return math.copysign(hi, e.probe)
+
+
+def limit_in_unit(cand: Candidate, e: EffectPower) -> dict[str, Any]:
+    """A declared candidate's detection limit in its setting's unit ({} for an effect).
+
+    Returns
+    -------
+    dict
+        ``setting``: the limit as a sentence ("flexibility detected for
+        fiber.young_modulus <= 5.1e+05 Pa [2.09e+05, 4.25e+06]"); ``unit``;
+        ``limit_setting`` and ``limit_ci_setting``: the limit and its 95 % interval
+        in the unit, low end first (None where not within the range);
+        ``unseen``: what may be present unseen, from the interval's end farther
+        from the baseline ("flexibility of fiber.young_modulus >= 1.4e+06 Pa").
+        A stiffness of the ``rigid`` scale runs backwards: a larger value is a
+        softer fiber, so its limit is the stiffest fiber detected.
+    """
+    if cand.is_effect:
+        return {}
+    if cand.categorical:
+        seen = e.limit is not None
+        text = (f"detected with {cand.key} = {cand.choice}" if seen
+                else f"{cand.key} = {cand.choice} not detected with these fibers")  # fmt: skip
+        unseen = None if seen else f"{cand.key} = {cand.choice}"
+        return {"setting": text, "unit": cand.unit, "limit_setting": None, "unseen": unseen}
+    if e.limit is None:
+        return {
+            "setting": "not detected within its range", "unit": cand.unit,
+            "limit_setting": None, "unseen": f"{cand.key} anywhere in its range",
+        }  # fmt: skip
+    value = cand.setting(e.limit)
+    ci = None
+    unseen = None
+    if e.limit_ci is not None:
+        ends = [cand.setting(x) if x is not None else None for x in e.limit_ci]
+        ci = ends[::-1] if cand.scale == "rigid" else ends
+        far = e.limit_ci[1]
+        if cand.scale == "rigid":
+            unseen = (f"flexibility of {cand.key} >= {cand.show_value(far)}" if far is not None
+                      else f"flexibility of {cand.key} anywhere in its range")  # fmt: skip
+        else:
+            unseen = (f"{cand.key} up to {cand.show_value(far)}" if far is not None
+                      else f"{cand.key} anywhere in its range")  # fmt: skip
+    if cand.scale == "rigid":
+        text = f"flexibility detected for {cand.key} <= {cand.show_value(e.limit)}"
+    else:
+        side = "above" if e.probe > 0 else "below"
+        text = f"detected {side} {cand.key} = {cand.show_value(e.limit)}"
+    if ci is not None:
+        text += " [" + ", ".join(f"{x:.3g}" if x is not None else "out of range" for x in ci)
+        text += "]"
+    return {
+        "setting": text, "unit": cand.unit, "limit_setting": value,
+        "limit_ci_setting": ci, "unseen": unseen,
+    }  # fmt: skip

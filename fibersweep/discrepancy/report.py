@@ -36,6 +36,7 @@ from fibersweep.discrepancy.candidates import LIBRARY, Candidate
 from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.gap import GAP_UNIT, GapResult, value_matrices
 from fibersweep.discrepancy.observables import scored
+from fibersweep.discrepancy.power import limit_in_unit
 from fibersweep.discrepancy.report_figures import figures
 from fibersweep.discrepancy.report_text import markdown
 from fibersweep.discrepancy.workflow import DiscrepancyResult
@@ -122,8 +123,10 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
     if pw is None:
         return None
     effects = []
+    declared = {c.name: c for c in res.settings.declared}
     for e in pw.effects:
         real = math.copysign(LIBRARY[e.name].realistic, e.probe) if e.name in LIBRARY else None
+        unit = limit_in_unit(declared[e.name], e) if e.name in declared else {}
         effects.append(
             {
                 "effect": e.name,
@@ -136,6 +139,7 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
                 "dispersion_limit": e.dispersion_limit,
                 "realistic": real,
                 "fibers_for_realistic": pw.fibers_needed(e.name, real) if real else None,
+                **unit,
             }
         )
     lead = None
@@ -145,6 +149,7 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
             lead = {
                 "effect": h.name,
                 "value": h.value,
+                **_in_unit(declared.get(h.name), h.value, None),
                 "fibers_to_detect": pw.fibers_needed(h.name, h.value),
                 "fibers_to_detect_ci": pw.fibers_needed_ci(h.name, h.value),
                 "fibers_to_name": fibers_to_name(

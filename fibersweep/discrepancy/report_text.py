@@ -234,6 +234,12 @@ def _fits(s: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _shown(h: dict[str, Any]) -> str:
+    """``effect = value`` of a held-out or leading entry; a declared candidate's value in
+    its setting's unit (its ``setting`` text)."""
+    return h.get("setting") or f"{h['effect']} = {h['value']:.3g}"
+
+
 def _declared_lines(s: dict[str, Any]) -> list[str]:
     """Declared candidates: what each is, and its fitted value in the setting's unit."""
     if not s.get("declared"):
@@ -345,6 +351,9 @@ def _power(s: dict[str, Any]) -> list[str]:
             else f"[{_f(ci[0]) if ci[0] is not None else 'out of range'}, "
             f"{_f(ci[1]) if ci[1] is not None else 'out of range'}]"
         )
+        if e.get("setting"):  # a declared candidate: its limit in the setting's unit
+            lim = e["setting"]
+            ci_txt = "–"
         lines.append(
             f"| {e['effect']} | {e['direction']} | {lim} | {ci_txt} | {_f(e['realistic'])} "
             f"| {_f(e['fibers_for_realistic'], 'd') if e['fibers_for_realistic'] else '> 100000'} |"
@@ -377,7 +386,7 @@ def _power(s: dict[str, Any]) -> list[str]:
     if lead:
         lines += [
             "",
-            f"Leading candidate {lead['effect']} = {lead['value']:.3g}: about "
+            f"Leading candidate {_shown(lead)}: about "
             f"{_f(lead['fibers_to_detect'], 'd')} fibers would detect a gap of this size"
             f"{_fibers_ci(lead.get('fibers_to_detect_ci'))}; "
             f"about {_f(lead['fibers_to_name'], 'd')} would make its held-out improvement "
@@ -451,4 +460,3 @@ def _spread_lines(heldout: list[dict[str, Any]]) -> list[str]:
             + f": {'significant' if sp['significant'] else 'not significant'}."
         )
     return [""] + out if out else []
-

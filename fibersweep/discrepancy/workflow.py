@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -491,10 +492,14 @@ def run_discrepancy(
             st = pairs(refit(cross_fit(rank(st))))
         heldout = list(st.heldout)
         by_name = {c.name: c for c in candidates}
+
+        def show(vals: Mapping[str, float]) -> str:
+            return show_values(dict(vals), by_name)
+
         verdict = decide(st.gap, heldout, st.region_text, rng, s.alpha, list(st.sets),
-                         show=lambda vals: show_values(vals, by_name))  # fmt: skip
+                         show=show, declared=[c.name for c in s.declared])  # fmt: skip
         extra = followup(verdict, heldout, st.fold_values, candidates, maker, sim, plan, s,
-                         obs_names, rng)  # fmt: skip
+                         obs_names, rng, show=show)  # fmt: skip
         used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
         extra["runs_by_stage"] = dict(sim.used_by_stage)
         extra["seconds_by_stage"] = {k: round(v, 1) for k, v in sim.seconds_by_stage.items()}
