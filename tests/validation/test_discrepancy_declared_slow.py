@@ -37,7 +37,7 @@ def _analyse(field, truth_fiber, n, seed, declared, cache=None, truth_field=None
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("E", "seed"), [(3e5, 9501), (1e5, 9502)])
+@pytest.mark.parametrize(("E", "seed"), [(3e5, 9501), (1e5, 9502)], ids=["E3e5", "E1e5"])
 def test_flexible_fibers_are_named_with_an_interval_holding_their_stiffness(
     coarse_field, E, seed
 ):
@@ -55,7 +55,8 @@ def test_flexible_fibers_are_named_with_an_interval_holding_their_stiffness(
 def test_without_the_candidate_flexible_data_name_no_library_effect(coarse_field):
     truth = FiberSettings(model="bead-spring-ros2", young_modulus=3e5)
     res, _ = _analyse(coarse_field, truth, 100, 9501, [])
-    assert res.verdict.kind != "named", res.verdict.text
+    # a library effect named (alone or as an alternative) would be a wrong name
+    assert res.verdict.kind not in ("named", "ambiguous"), res.verdict.text
 
 
 @pytest.mark.slow
