@@ -7,6 +7,9 @@ no other candidate may be named, and without the candidate declared the verdict
 names nothing (the library does not hold the truth). False alarms: 20 data sets
 without any effect, N = 60, candidates declared; at most 3 named (P(X >= 4) = 1.6 %
 for a binomial(20, 0.05): an alarm rate at alpha fails this test in 1.6 % of runs).
+
+Each test makes its own data and runs on its own; select one with -k: E3e5, E1e5,
+without_the_candidate, smooth_pillar, coarser_flow_grid, false_alarms.
 """
 
 from __future__ import annotations
