@@ -15,7 +15,6 @@ these, without any new simulation:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from itertools import pairwise
 
 import numpy as np
 from scipy.stats import t as student_t
@@ -265,19 +264,6 @@ def slope_estimate(fit: Fit, level: float = 0.95, grid: int = 400) -> float:
     interval :func:`score_interval` reports around it holds it. A fit that kept
     the baseline (value 0) stays at 0.
 
-    Λ integrates a t statistic, not the loss: a long stretch of small but
-    consistent slopes can outweigh a short stretch where the loss falls steeply
-    with a larger spread over the fibers (a yes/no observable flipping for some
-    fibers while the others move a little). Where Λ has several local minima
-    (basins), the mean loss decides between them, through the same per-fiber t
-    statistic: the estimate moves from Λ's deepest basin to another when that
-    basin's best evaluated value beats the deepest basin's by a paired t over the
-    fibers beyond :data:`CRIT_SCALE` times Student's quantile at ``level``
-    (:func:`_better_basin`). A step set by one fiber (paired t near 1) never moves
-    it. On 50 flexible fibers (E = 1e5 Pa, a rigid config with the stiffness
-    declared) Λ's deepest point was the baseline 0, although the loss at the
-    other basin's best value was 2.5 lower (paired t −4.9).
-
     Returns
     -------
     float
@@ -292,64 +278,7 @@ def slope_estimate(fit: Fit, level: float = 0.95, grid: int = 400) -> float:
     v = np.linspace(x[0], x[-1], grid)
     Tv = np.interp(v, mid, np.clip(T, -1e6, 1e6))
     lam = np.concatenate([[0.0], np.cumsum(0.5 * (Tv[1:] + Tv[:-1]) * np.diff(v))])
-    return float(v[_better_basin(v, lam, x, L, level)])
-
-
-def _better_basin(v: np.ndarray, lam: np.ndarray, x: np.ndarray, L: np.ndarray,
-                  level: float) -> int:  # fmt: skip
-    """Index into ``v`` of the estimate: Λ's deepest minimum, or another basin's.
-
-    Parameters
-    ----------
-    v, lam : ndarray, shape (grid,)
-        Values and the pseudo-loss Λ there (:func:`slope_estimate`).
-    x : ndarray, shape (k,)
-        Evaluated values (sorted, merged).
-    L : ndarray, shape (k, n)
-        Per-fiber losses at ``x``.
-    level : float
-        Of the paired test between basins (critical value :data:`CRIT_SCALE` times
-        Student's quantile, as :func:`score_interval`'s).
-
-    Returns
-    -------
-    int
-        The minimiser of Λ in the basin chosen: the deepest, unless another
-        basin's best evaluated value has a mean loss lower by a paired t beyond
-        the critical value (the most significant such basin).
-    """
-    best = int(np.argmin(lam))
-    d = np.diff(lam)
-    # local minima of Λ (the ends included) and the maxima between them
-    lo_end = [0] if d[0] > 0 else []
-    hi_end = [len(lam) - 1] if d[-1] < 0 else []
-    inner = [i + 1 for i in range(len(d) - 1) if d[i] < 0 <= d[i + 1]]
-    minima = sorted(set(lo_end + inner + hi_end + [best]))
-    if len(minima) < 2:
-        return best
-    tops = [0] + [int(a + np.argmax(lam[a : b + 1])) for a, b in pairwise(minima)]
-    tops.append(len(lam) - 1)
-    n = L.shape[1]
-    crit = CRIT_SCALE * float(student_t.ppf(0.5 + level / 2.0, max(n - 1, 1)))
-
-    def best_evaluated(j: int) -> int | None:
-        inside = np.flatnonzero((x >= v[tops[j]]) & (x <= v[tops[j + 1]]))
-        return None if len(inside) == 0 else int(inside[np.argmin(L[inside].mean(axis=1))])
-
-    home = best_evaluated(minima.index(best))
-    if home is None:
-        return best
-    choice, t_best = best, -crit
-    for j, m in enumerate(minima):
-        k = best_evaluated(j)
-        if m == best or k is None or k == home:
-            continue
-        diff = L[k] - L[home]
-        sd = float(diff.std(ddof=1)) if n > 1 else 0.0
-        t = float(diff.mean()) / (sd / np.sqrt(n)) if sd > 0 else 0.0
-        if t < t_best:
-            choice, t_best = m, t
-    return choice
+    return float(v[int(np.argmin(lam))])
 
 
 def _dispersion_t(fit: Fit) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
