@@ -2,6 +2,9 @@
 
 Effects are given the same way everywhere: ``--effect NAME[=VALUE]``, repeatable
 (``synth`` needs the value; ``discrepancy`` takes names only, it fits the values).
+Candidates from any setting: ``--candidate KEY=LO..HI`` or ``KEY=VALUE``,
+repeatable, for ``discrepancy`` and ``power``, and the config's
+``discrepancy.candidates`` (:mod:`fibersweep.discrepancy.declared`).
 """
 
 from __future__ import annotations
@@ -131,6 +134,51 @@ def _effect_names(effect: list[str] | None) -> tuple[str, ...] | None:
     return tuple(names) or None
 
 
+CandidateOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--candidate",
+        help="A setting as a candidate explanation, repeatable: KEY=LO..HI (fitted, log "
+        "scale over decades), KEY=VALUE (an alternative), or a switch with its parameter "
+        "(fiber.model=bead-spring,fiber.young_modulus=1e4..3e7); added to the config's "
+        "discrepancy.candidates.",
+    ),
+]
+
+
+def _declared(cfg, candidate: list[str] | None) -> tuple:
+    """Declared candidates: the config's ``discrepancy.candidates``, then ``--candidate``."""
+    from fibersweep.discrepancy.declared import parse_candidates
+
+    texts = list(cfg.discrepancy.candidates)
+    where = [f"discrepancy.candidates[{i}]:" for i in range(len(texts))]
+    texts += list(candidate or [])
+    where += ["--candidate"] * len(candidate or [])
+    return tuple(parse_candidates(texts, cfg.fiber, cfg.flow, where))
+
+
+def _plan_lines(n: int, settings) -> list[str]:
+    """The plan before it runs: runs in all, and what a costly (flexible) candidate adds."""
+    from fibersweep.discrepancy.settings import plan_budget, switch_cost
+
+    plan = plan_budget(n, settings, settings.candidates_of())
+    total = plan.total(n)
+    lines = [f"plan: at most {total} simulations for {n} fibers"]
+    extra = 0.0
+    for c in settings.declared:
+        model, f = switch_cost(c.switch)
+        if f == 1.0:
+            continue
+        runs = plan.runs_of(n, c)
+        extra += (f - 1.0) * runs
+        lines.append(f"  {c.name} ({model}): up to {runs} of them, each about {f:g}x a rigid run")
+    if extra:
+        lines.append(
+            f"  time about {(total + extra) / total:.2f}x that of the same plan on rigid runs"
+        )
+    return lines
+
+
 @app.command(rich_help_panel=MEASURED)
 def discrepancy(
     measured: Annotated[Path, typer.Argument(help="Measured fibers (.parquet or .csv).")],
@@ -144,6 +192,7 @@ def discrepancy(
         list[str] | None,
         typer.Option("--effect", help="Library effect to consider, repeatable (default: all)."),
     ] = None,
+    candidate: CandidateOpt = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
     pairs: Annotated[
         int, typer.Option(help="Pairs of effects tried (0: single effects only).")
@@ -192,10 +241,13 @@ def discrepancy(
             power_fibers=40 if power else 0, next_copies=2 if next_ else 0,
             workers=workers or cfg.run.workers,
             executor=cfg.run.executor, scheduler=cfg.run.scheduler,
-            effects=names,
+            effects=names, declared=_declared(cfg, candidate),
         )  # fmt: skip
+        for line in _plan_lines(len(data), settings):
+            typer.echo(line)
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
-        res = run_discrepancy(data, field, cfg.fiber, settings)
+        res = run_discrepancy(data, field, cfg.fiber, settings, flow=cfg.flow,
+                              cache_dir=cfg.run.cache_dir)  # fmt: skip
         s = write_report(res, output, cfg.model_dump(mode="json"))
     typer.echo(f"verdict: {s['verdict']['kind']}: {s['verdict']['text']}")
     typer.echo(f"simulations: {s['simulations']} in {s['seconds']:.0f} s")
@@ -218,8 +270,13 @@ def power_cmd(
     ] = 40,
     effect: Annotated[
         list[str] | None,
-        typer.Option("--effect", help="Library effect to analyse, repeatable (default: all)."),
+        typer.Option(
+            "--effect",
+            help="Library effect to analyse, repeatable (default: all of them, or none "
+            "when --candidate is given).",
+        ),
     ] = None,
+    candidate: CandidateOpt = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
     boot: Annotated[
         int,
@@ -235,11 +292,15 @@ def power_cmd(
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
-    """Smallest magnitude of each library effect the discrepancy workflow would detect.
+    """Smallest magnitude of each candidate the discrepancy workflow would detect.
 
     By simulation at CONFIG's model, for N fibers with starts uniform in the sweep
     box (or MEASURED's starts), with the look-alike effects these observables
-    cannot separate.
+    cannot separate. The candidates: every library effect by default; with
+    --candidate only the declared ones (each limit in its setting's unit), plus
+    the library effects that --effect names. Unlike `discrepancy`, where a declared
+    candidate is added to the library, the question here is the power for what
+    was declared, and each candidate costs its own runs.
     """
     import json
 
@@ -250,18 +311,21 @@ def power_cmd(
         cfg = _load(config, overrides)
         _channel_only(cfg, "power")
         from fibersweep.atomic import atomic_write
-        from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
+        from fibersweep.discrepancy.candidates import get_candidates
         from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
         from fibersweep.discrepancy.measured import load_measured
         from fibersweep.discrepancy.observables import scored
-        from fibersweep.discrepancy.power import analyse_power
+        from fibersweep.discrepancy.power import analyse_power, limit_in_unit
         from fibersweep.discrepancy.simulate import Simulator
         from fibersweep.errors import InputError
         from fibersweep.flow.cache import get_flow_field
 
         if n < 8 or simulate < 8:
             raise InputError(f"--n and --simulate must be >= 8, got {n} and {simulate}")
-        cands = get_candidates(_effect_names(effect))
+        declared = _declared(cfg, candidate)
+        names = _effect_names(effect)
+        # declared candidates alone: the library only when --effect names some of it
+        cands = [*(get_candidates(names) if names or not declared else []), *declared]
         rng = np.random.default_rng([seed, 17])
         if measured is not None:
             starts = load_measured(measured).starts
@@ -276,13 +340,15 @@ def power_cmd(
             field, cfg.fiber, workers=workers or cfg.run.workers, executor=cfg.run.executor,
             scheduler=cfg.run.scheduler, planned=3 * min(simulate, len(starts)) * (
                 1 + 3 * sum(len(c.probes) for c in cands)), tracks=False,
+            candidates=cands, flow=cfg.flow, cache_dir=cfg.run.cache_dir,
         ) as sim:  # fmt: skip
             maker = CopyMaker(starts, NoiseModel(), seed, sim)
             pw = analyse_power(maker, cands, n, obs, rng, n_sim=simulate, alpha=alpha,
                                n_boot=boot)  # fmt: skip
         rows = []
+        by_name = {c.name: c for c in cands}
         for e in pw.effects:
-            real = float(np.copysign(LIBRARY[e.name].realistic, e.probe))
+            real = float(np.copysign(by_name[e.name].realistic, e.probe))
             rows.append(
                 {
                     "effect": e.name, "probe": e.probe, "limit": e.limit, "gamma": e.gamma,
@@ -290,6 +356,7 @@ def power_cmd(
                     "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
                     "dispersion_limit": e.dispersion_limit,
                     "realistic": real, "fibers_for_realistic": pw.fibers_needed(e.name, real),
+                    **limit_in_unit(by_name[e.name], e),
                 }
             )  # fmt: skip
         out = {
@@ -301,6 +368,11 @@ def power_cmd(
         atomic_write(output / "power.json", json.dumps(out, indent=2))
     typer.echo(f"detection limits at N = {n} (power {pw.power:g}, alpha {alpha:g}):")
     for r in rows:
+        if "setting" in r:
+            need = r["fibers_for_realistic"]
+            more = f" (at its probe: {need} fibers)" if need else ""
+            typer.echo(f"  {r['effect']}: {r['setting']}{more}")
+            continue
         lim = f"{r['limit']:.3g}" if r["limit"] is not None else "not within its range"
         if r["limit_ci"] is not None:
             lo, hi = (f"{x:.3g}" if x is not None else "out of range" for x in r["limit_ci"])

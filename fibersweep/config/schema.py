@@ -108,6 +108,17 @@ class RunSettings(_Strict):
         return self
 
 
+class DiscrepancySection(_Strict):
+    """Settings of ``fibersweep discrepancy`` and ``fibersweep power`` kept with the config."""
+
+    candidates: list[str] = Field(
+        default_factory=list,
+        description="candidate explanations from any setting, besides the library's effects: "
+        "KEY=LO..HI (fitted), KEY=VALUE (an alternative), or a model switch with its "
+        "parameter (docs/discrepancy.md, 'Is my fiber flexible?')",
+    )
+
+
 class Config(_Strict):
     """A whole fibersweep config."""
 
@@ -115,6 +126,7 @@ class Config(_Strict):
     fiber: FiberSettings = FiberSettings()
     sweep: SweepSettings = SweepSettings()
     run: RunSettings = RunSettings()
+    discrepancy: DiscrepancySection = DiscrepancySection()
 
     @field_validator("sweep")
     @classmethod

@@ -40,6 +40,12 @@ def _range(ci: Any) -> str:
     return f" (95 % over the simulated starts: {_n(lo)} to {_n(hi)})"
 
 
+def _shown(h: dict[str, Any]) -> str:
+    """``effect = value`` of a held-out or leading entry; a declared candidate's value in
+    its setting's unit (its ``setting`` text)."""
+    return h.get("setting") or f"{h['effect']} = {h['value']:.3g}"
+
+
 def next_measurement(s: dict[str, Any]) -> list[str]:
     """Advice lines naming the starts and the number of fibers (see the module docstring).
 
@@ -97,8 +103,9 @@ def next_measurement(s: dict[str, Any]) -> list[str]:
                 f"about {int(name)} would name it (held-out improvement significant{more})"
             )
         out.append(
-            f"From the power curve, at starts like the measured ones, for {lead['effect']} = "
-            f"{lead['value']:.3g}: " + "; ".join(parts) + "."
+            f"From the power curve, at starts like the measured ones, for {_shown(lead)}: "
+            + "; ".join(parts)
+            + "."
         )
     return out
 
@@ -123,7 +130,7 @@ def advice_lines(s: dict[str, Any]) -> list[str]:
                 if r is not None and r > 0.1
             ]
             out.append(
-                f"{h['effect']} = {h['value']:.3g} helped out of sample (improvement "
+                f"{_shown(h)} helped out of sample (improvement "
                 f"{h['improvement']['mean']:.2g} {GAP_UNIT} per fiber, p Holm "
                 f"{h['p_holm']:.2g}) and removed "
                 + (", ".join(parts) if parts else "no observable's gap by more than 10 %")
@@ -138,19 +145,28 @@ def advice_lines(s: dict[str, Any]) -> list[str]:
                 )
                 + ("; it still leaves a significant gap." if st["significant"] else ".")
             )
+        declared = [c["name"] for c in s.get("declared") or []]
         if not helped:
-            out.append("No library effect improved the held-out fibers significantly.")
+            out.append(
+                "No library effect"
+                + (f" nor declared candidate ({', '.join(declared)})" if declared else "")
+                + " improved the held-out fibers significantly."
+            )
+        beyond = "the library and the declared candidates" if declared else "the library"
         out.append(
-            "Try: an effect outside the library (the region and observable above say where "
-            "to look), a check of the measurement-noise model (a wrong noise level shows as "
-            "a gap everywhere), or more fibers (see the power analysis)."
+            f"Try: an effect or setting outside {beyond} (the region and observable above "
+            "say where to look; any setting can be declared with --candidate), a check of "
+            "the measurement-noise model (a wrong noise level shows as a gap everywhere), "
+            "or more fibers (see the power analysis)."
         )
         out += next_measurement(s)
     if v["kind"] in ("unexplained", "no significant gap") and s.get("power"):
         hidden = [
-            f"{e['effect']} ({e['direction']}) up to {e['limit_ci'][1]:.3g}"
+            e["unseen"]
+            if e.get("unseen")
+            else f"{e['effect']} ({e['direction']}) up to {e['limit_ci'][1]:.3g}"
             for e in s["power"]["effects"]
-            if e.get("limit_ci") and e["limit_ci"][1] is not None
+            if e.get("unseen") or (e.get("limit_ci") and e["limit_ci"][1] is not None)
         ]
         if hidden:
             out.append(

@@ -55,7 +55,7 @@ The first gate ("is there a gap at all?") is the family-wise test of
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -287,6 +287,8 @@ def decide(
     rng: np.random.Generator,
     alpha: float,
     sets: Sequence[SetHeldOut] = (),
+    show: Callable[[Mapping[str, float]], str] | None = None,
+    declared: Sequence[str] = (),
 ) -> Verdict:
     """Apply the decision rule of the module docstring.
 
@@ -301,7 +303,14 @@ def decide(
     sets : sequence of SetHeldOut
         Sets of effects tried by forward selection (only used when no single
         effect explains the gap).
+    show : callable, optional
+        ``{name: value} -> text`` for the verdict (each value in its candidate's
+        unit, :func:`.candidates.show_values`); default ``name = value``.
+    declared : sequence of str
+        Names of the declared candidates (``--candidate``): an unexplained verdict
+        says that neither the library nor these improved the held-out fibers.
     """
+    show = show or _values_text
     if not gap.any:
         return Verdict(
             "no significant gap",
@@ -318,8 +327,8 @@ def decide(
         # explains is then as consistent with the data as the set
         lone = sorted((h for h in sig if h.explains), key=lambda h: -h.improvement[0])
         if lone:
-            return _mixed_verdict(lone, good_sets, top_obs, region)
-        return _set_verdict(good_sets, top_obs, region)
+            return _mixed_verdict(lone, good_sets, top_obs, region, show)
+        return _set_verdict(good_sets, top_obs, region, show)
     spread = sorted(
         (h for h in heldout if h.spread_significant and h.explains and h.spread is not None),
         key=lambda h: h.spread_p_holm,
@@ -332,8 +341,8 @@ def decide(
             {},
             top_obs,
             region,
-            f"Unexplained gap {_where(region)}, observable {top_obs}: no effect of the library "
-            "improves the held-out fibers significantly.",
+            f"Unexplained gap {_where(region)}, observable {top_obs}: "
+            f"{_none_of(declared)} improves the held-out fibers significantly.",
         )
     best = max(sig, key=lambda h: h.improvement[0])
     if not best.explains:
@@ -360,7 +369,7 @@ def decide(
             obs,
             region,
             f"Unexplained gap {_where(region)}, observable {obs}: the best effect, "
-            f"{best.name} = {best.value:.4g}, improves the held-out fibers but leaves "
+            f"{show({best.name: best.value})}, improves the held-out fibers but leaves "
             f"{' and '.join(what) or 'a significant gap'}.{also}",
         )
     # A rival that also leaves no significant gap is just as consistent with the data.
@@ -375,8 +384,8 @@ def decide(
             {best.name: best.value, other.name: other.value},
             top_obs,
             region,
-            f"Ambiguous between {best.name} = {best.value:.3g} and {other.name} = "
-            f"{other.value:.3g}: with either, no significant gap is left.",
+            f"Ambiguous between {show({best.name: best.value})} and "
+            f"{show({other.name: other.value})}: with either, no significant gap is left.",
             ({best.name: best.value}, {other.name: other.value}),
         )
     return Verdict(
@@ -384,7 +393,7 @@ def decide(
         {best.name: best.value},
         top_obs,
         region,
-        f"{best.name} = {best.value:.3g} explains the gap (held-out improvement "
+        f"{show({best.name: best.value})} explains the gap (held-out improvement "
         f"{best.improvement[0]:.2g} [{best.improvement[1]:.2g}, {best.improvement[2]:.2g}], "
         "no significant gap left).",
         ({best.name: best.value},),
@@ -419,19 +428,31 @@ def _spread_verdict(good: Sequence[HeldOut], top_obs: str, region: str) -> Verdi
     )
 
 
+def _none_of(declared: Sequence[str]) -> str:
+    """'no effect of the library' (and, when declared, 'nor the declared candidate X')."""
+    if not declared:
+        return "no effect of the library"
+    many = "candidates" if len(declared) > 1 else "candidate"
+    return f"no effect of the library nor the declared {many} {', '.join(declared)}"
+
+
 def _values_text(values: Mapping[str, float]) -> str:
     return " + ".join(f"{n} = {v:.3g}" for n, v in values.items())
 
 
 def _mixed_verdict(
-    lone: Sequence[HeldOut], good: Sequence[SetHeldOut], top_obs: str, region: str
+    lone: Sequence[HeldOut],
+    good: Sequence[SetHeldOut],
+    top_obs: str,
+    region: str,
+    show: Callable[[Mapping[str, float]], str] = _values_text,
 ) -> Verdict:
     """Ambiguous between single effects and sets of effects that each explain the gap."""
     alts = tuple({h.name: h.value} for h in lone) + tuple(dict(st.values) for st in good)
     union: dict[str, float] = {}
     for a in alts:
         union.update(a)
-    parts = [_values_text(a) if len(a) == 1 else f"({_values_text(a)})" for a in alts]
+    parts = [show(a) if len(a) == 1 else f"({show(a)})" for a in alts]
     return Verdict(
         "ambiguous",
         union,
@@ -443,7 +464,12 @@ def _mixed_verdict(
     )
 
 
-def _set_verdict(good: Sequence[SetHeldOut], top_obs: str, region: str) -> Verdict:
+def _set_verdict(
+    good: Sequence[SetHeldOut],
+    top_obs: str,
+    region: str,
+    show: Callable[[Mapping[str, float]], str] = _values_text,
+) -> Verdict:
     """Named set, or ambiguous between sets that each explain the gap."""
     best = good[0]
     if len(good) > 1:
@@ -457,7 +483,7 @@ def _set_verdict(good: Sequence[SetHeldOut], top_obs: str, region: str) -> Verdi
             top_obs,
             region,
             "Ambiguous between "
-            + " and ".join(f"({_values_text(a)})" for a in alts)
+            + " and ".join(f"({show(a)})" for a in alts)
             + ": with either set, no significant gap is left.",
             alts,
         )
@@ -467,7 +493,7 @@ def _set_verdict(good: Sequence[SetHeldOut], top_obs: str, region: str) -> Verdi
         dict(best.values),
         top_obs,
         region,
-        f"{_values_text(best.values)} together explain the gap: each member's own held-out "
+        f"{show(best.values)} together explain the gap: each member's own held-out "
         f"contribution is significant ({gains}) and no significant gap is left.",
         (dict(best.values),),
     )

@@ -16,6 +16,9 @@ and its value is the one the report quotes with its 95 % interval. All three
 values are the *same estimator*: the score test's zero
 (:func:`.estimate.slope_estimate`; for a random effect the dispersion root,
 :func:`.estimate.dispersion_root`), i.e. ``fit_effect(..., estimate=True)``.
+A categorical candidate (an alternative value, ``Candidate.categorical``) is
+not scanned: its value is 1 where the alternative scores better than the
+baseline on the fit fibers, else 0, and its held-out improvement decides.
 With one estimator the pooled value sits near the mean of the halves' (exactly
 there for a quadratic per-fiber loss and halves of equal size), and the
 halves' spread says how well the value is identified.
@@ -226,6 +229,14 @@ def fit_effect(
 
     for v in known:
         loss(v)
+    if cand.categorical:
+        # an alternative is compared with the config's value, never scanned: its value
+        # is 1 where it scores better than the baseline on these fibers, else 0
+        budget[0] = max(budget[0], 1)
+        loss(1.0)
+        best = 1.0 if seen[1.0] < seen[0.0] else 0.0
+        profile = tuple((float(u), per[u]) for u in sorted(per))
+        return Fit(cand.name, best, seen[best], seen[0.0], tuple(sorted(seen.items())), profile)
     lo, hi = bounds if bounds is not None else (cand.lo, cand.hi)
     if check_side:
         # Brent then searches the better half with the evaluations it was given.

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -169,6 +169,7 @@ def discriminate(
     top: int = 8,
     alpha: float = 0.05,
     power: float = 0.8,
+    show: Callable[[Mapping[str, float]], str] | None = None,
 ) -> Discrimination:
     """Rank candidate starts by how well one fiber there separates the hypotheses.
 
@@ -185,7 +186,11 @@ def discriminate(
         Observables that would be measured.
     copies : int
         Copies per hypothesis and start (>= 2).
+    show : callable, optional
+        ``{name: value} -> text`` for the two labels (each value in its
+        candidate's unit); default ``name = value``.
     """
+    label = show or _label
     if copies < 2:
         raise ValueError(f"copies must be >= 2, got {copies}")
     g = start_grid(starts) if grid is None else np.asarray(grid, dtype=np.float64)
@@ -238,7 +243,7 @@ def discriminate(
     d_top = float(np.sqrt(np.mean(d[order] ** 2))) if len(order) else 0.0
     d_m = float(np.sqrt(np.mean(d_meas**2))) if len(d_meas) else 0.0
     return Discrimination(
-        labels=(_label(hypotheses[0]), _label(hypotheses[1])),
+        labels=(label(hypotheses[0]) or "baseline", label(hypotheses[1]) or "baseline"),
         grid=g,
         d=d,
         best=best,
@@ -264,7 +269,10 @@ def _weak(values: list[float]) -> bool:
 
 
 def next_hypotheses(
-    verdict: Verdict, heldout: list[HeldOut], fold_values: dict[str, list[float]]
+    verdict: Verdict,
+    heldout: list[HeldOut],
+    fold_values: dict[str, list[float]],
+    show: Callable[[Mapping[str, float]], str] | None = None,
 ) -> tuple[dict[str, float], dict[str, float], str] | None:
     """The two hypotheses what-to-measure-next should separate, and why (None: nothing).
 
@@ -275,7 +283,10 @@ def next_hypotheses(
     against the candidate that helped most out of sample (at its value, or the
     mean of its nonzero fold values), so the report says at which starts, and
     with how many fibers, that candidate would be confirmed or ruled out.
+    ``show``: ``{name: value} -> text`` for the reason (each value in its
+    candidate's unit, :func:`.candidates.show_values`); default ``name = value``.
     """
+    show = show or _label
     if verdict.kind == "ambiguous" and len(verdict.alternatives) >= 2:
         a, b = verdict.alternatives[:2]
         return dict(a), dict(b), "the verdict is ambiguous"
@@ -291,7 +302,11 @@ def next_hypotheses(
         name = max(heldout, key=lambda h: h.improvement[0]).name
     if name is not None and name in fold_values and _weak(fold_values[name]):
         v0, v1 = fold_values[name]
-        return {name: v0}, {name: v1}, f"the two halves fit {name} = {v0:.3g} and {v1:.3g}"
+        return (
+            {name: v0},
+            {name: v1},
+            f"the two halves fit {show({name: v0})} and {show({name: v1})}",
+        )
     if verdict.kind == "unexplained" and heldout:
         # the doubt of an unexplained gap: is the candidate that helped most there or
         # not? The starts where its prediction departs most from the model as it is
@@ -303,7 +318,7 @@ def next_hypotheses(
                 {},
                 {best.name: v},
                 (
-                    f"the gap is unexplained; {best.name} = {v:.3g} helped most out of sample "
+                    f"the gap is unexplained; {show({best.name: v})} helped most out of sample "
                     f"(p Holm {best.p_holm:.2g}): these starts test it against the model as it is"
                 ),
             )
@@ -327,6 +342,7 @@ def followup(
     s: DiscrepancySettings,
     obs: tuple[str, ...],
     rng: np.random.Generator,
+    show: Callable[[Mapping[str, float]], str] | None = None,
 ) -> dict[str, Any]:
     """Power analysis and what-to-measure-next, when they apply and the budget allows.
 
@@ -336,6 +352,9 @@ def followup(
         Its ``copies`` (the ensemble the power analysis scales to).
     s : DiscrepancySettings
         ``power_fibers``, ``next_copies``, ``noise``, ``seed``, ``alpha``.
+    show : callable, optional
+        ``{name: value} -> text`` (each value in its candidate's unit) for the
+        reason and the hypotheses' labels.
 
     Returns
     -------
@@ -354,7 +373,7 @@ def followup(
             )  # fmt: skip
         else:
             out["power_skipped"] = f"the budget leaves {sim.remaining} runs, it needs {cost}"
-    hyp = next_hypotheses(verdict, heldout, fold_values) if s.next_copies else None
+    hyp = next_hypotheses(verdict, heldout, fold_values, show) if s.next_copies else None
     if hyp is not None:
         a, b, why = hyp
         grid = start_grid(maker.starts)
@@ -362,7 +381,7 @@ def followup(
         if cost <= sim.remaining:
             out["next"] = discriminate(
                 sim, s.noise, (a, b), maker.starts, obs, seed=s.seed,
-                copies=s.next_copies, grid=grid, alpha=s.alpha,
+                copies=s.next_copies, grid=grid, alpha=s.alpha, show=show,
             )  # fmt: skip
             out["next_reason"] = why
         else:

@@ -259,7 +259,11 @@ def pair_refits(
     intervals : dict name -> (lo, hi, open_lo, open_hi)
         :func:`.estimate.score_interval` of each refit.
     """
-    held = {c.name: float(np.mean(fold_values[c.name])) for c in members}
+    # an alternative (categorical) is on or off: on when either fold chose it
+    held = {
+        c.name: float(max(fold_values[c.name]) if c.categorical else np.mean(fold_values[c.name]))
+        for c in members
+    }
     intervals: dict[str, tuple[float, float, bool, bool]] = {}
     for cand in members:
         fixed = {n: v for n, v in held.items() if n != cand.name}
@@ -272,7 +276,9 @@ def pair_refits(
         if on_fit is not None:
             on_fit(fit)
         held[cand.name] = float(fit.value)
-        intervals[cand.name] = score_interval(fit)
+        intervals[cand.name] = (
+            (fit.value, fit.value, False, False) if cand.categorical else score_interval(fit)
+        )
         log.info("pair refit %s (with %s): %.4g %s", cand.name, label, fit.value,
                  intervals[cand.name])  # fmt: skip
     return held, intervals

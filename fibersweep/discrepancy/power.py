@@ -1,8 +1,13 @@
 """What the workflow cannot see: detection limits by simulation, and look-alike effects.
 
 For a set of starts (the measured ones, or drawn from a config's sweep box) and
-the measurement model, every library effect is switched on at its probe value
-``m_p`` and at ``m_p / 2``. Copy k of the fibers with the effect on plays the
+the measurement model, every candidate (library effect or declared setting) is
+switched on at its probe value ``m_p`` and at ``m_p / 2``, in the candidate's
+own value (:mod:`.candidates`; a declared stiffness's limit is the stiffest
+fiber detected, :meth:`.candidates.Candidate.setting` of it). An alternative
+(a categorical candidate) is on or off: it is simulated once and its "limit"
+is 1 when N fibers detect it with the power, else None (the fibers it needs
+follow from the same formula). Copy k of the fibers with the effect on plays the
 measurement; the baseline copies j != k (common random numbers) are the model.
 The gap tests of :func:`gap.assess_gap` give a z-score per test of the family
 (score per observable, one-sided; signed residual per component, two-sided);
@@ -45,6 +50,7 @@ import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -71,6 +77,7 @@ __all__ = [
     "standardised_values",
     "detect_probability",
     "limit_intervals",
+    "limit_in_unit",
     "percentile_interval",
 ]
 
@@ -551,7 +558,11 @@ def analyse_power(
     for cand in candidates:
         for mp in cand.probes:
             z_full, eff = _z_vector(maker, base, {cand.name: mp}, rows, observables, rng)
-            z_half, eff_h = _z_vector(maker, base, {cand.name: mp / 2}, rows, observables, rng)
+            if cand.categorical:  # an alternative has no half: it is on or off
+                z_half, eff_h = z_full, eff
+            else:
+                z_half, eff_h = _z_vector(maker, base, {cand.name: mp / 2}, rows, observables,
+                                          rng)  # fmt: skip
             z_full, z_half = z_full * ens, z_half * ens
             e = _read_out(EffectPower(cand.name, float(mp), (), 1.0, None, one_sided),
                           z_full, z_half)  # fmt: skip
@@ -653,7 +664,12 @@ def _refine(
 def _limit(
     e: EffectPower, cand: Candidate, n: int, n_sim: int, z_crit: float, power: float
 ) -> float | None:
-    """Smallest |m| in the probe's direction within the range with P(detect) >= power."""
+    """Smallest |m| in the probe's direction within the range with P(detect) >= power.
+
+    An alternative (categorical): 1 when it is detected with the power, else None.
+    """
+    if cand.categorical:
+        return 1.0 if e.detect(1.0, n, n_sim, z_crit) >= power else None
     edge = cand.hi if e.probe > 0 else cand.lo
     if e.detect(edge, n, n_sim, z_crit) < power:
         return None
@@ -665,3 +681,58 @@ def _limit(
         else:
             lo = mid
     return math.copysign(hi, e.probe)
+
+
+def limit_in_unit(cand: Candidate, e: EffectPower) -> dict[str, Any]:
+    """A declared candidate's detection limit in its setting's unit ({} for an effect).
+
+    Returns
+    -------
+    dict
+        ``setting``: the limit as a sentence ("flexibility detected for
+        fiber.young_modulus <= 5.1e+05 Pa [2.09e+05, 4.25e+06]"); ``unit``;
+        ``limit_setting`` and ``limit_ci_setting``: the limit and its 95 % interval
+        in the unit, low end first (None where not within the range);
+        ``unseen``: what may be present unseen, from the interval's end farther
+        from the baseline ("flexibility of fiber.young_modulus >= 1.4e+06 Pa").
+        A stiffness of the ``rigid`` scale runs backwards: a larger value is a
+        softer fiber, so its limit is the stiffest fiber detected.
+    """
+    if cand.is_effect:
+        return {}
+    if cand.categorical:
+        seen = e.limit is not None
+        text = (f"detected with {cand.key} = {cand.choice}" if seen
+                else f"{cand.key} = {cand.choice} not detected with these fibers")  # fmt: skip
+        unseen = None if seen else f"{cand.key} = {cand.choice}"
+        return {"setting": text, "unit": cand.unit, "limit_setting": None, "unseen": unseen}
+    if e.limit is None:
+        return {
+            "setting": "not detected within its range", "unit": cand.unit,
+            "limit_setting": None, "unseen": f"{cand.key} anywhere in its range",
+        }  # fmt: skip
+    value = cand.setting(e.limit)
+    ci = None
+    unseen = None
+    if e.limit_ci is not None:
+        ends = [cand.setting(x) if x is not None else None for x in e.limit_ci]
+        ci = ends[::-1] if cand.scale == "rigid" else ends
+        far = e.limit_ci[1]
+        if cand.scale == "rigid":
+            unseen = (f"flexibility of {cand.key} >= {cand.show_value(far)}" if far is not None
+                      else f"flexibility of {cand.key} anywhere in its range")  # fmt: skip
+        else:
+            unseen = (f"{cand.key} up to {cand.show_value(far)}" if far is not None
+                      else f"{cand.key} anywhere in its range")  # fmt: skip
+    if cand.scale == "rigid":
+        text = f"flexibility detected for {cand.key} <= {cand.show_value(e.limit)}"
+    else:
+        side = "above" if e.probe > 0 else "below"
+        text = f"detected {side} {cand.key} = {cand.show_value(e.limit)}"
+    if ci is not None:
+        text += " [" + ", ".join(f"{x:.3g}" if x is not None else "out of range" for x in ci)
+        text += "]"
+    return {
+        "setting": text, "unit": cand.unit, "limit_setting": value,
+        "limit_ci_setting": ci, "unseen": unseen,
+    }  # fmt: skip

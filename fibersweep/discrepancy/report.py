@@ -30,11 +30,13 @@ import yaml
 from scipy.stats import norm
 
 from fibersweep.atomic import atomic_write
+from fibersweep.config.loading import apply_overrides
 from fibersweep.discrepancy.advice import advice_lines
-from fibersweep.discrepancy.candidates import LIBRARY
+from fibersweep.discrepancy.candidates import LIBRARY, Candidate
 from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.gap import GAP_UNIT, GapResult, value_matrices
 from fibersweep.discrepancy.observables import scored
+from fibersweep.discrepancy.power import limit_in_unit
 from fibersweep.discrepancy.report_figures import figures
 from fibersweep.discrepancy.report_text import markdown
 from fibersweep.discrepancy.workflow import DiscrepancyResult
@@ -121,8 +123,10 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
     if pw is None:
         return None
     effects = []
+    declared = {c.name: c for c in res.settings.declared}
     for e in pw.effects:
         real = math.copysign(LIBRARY[e.name].realistic, e.probe) if e.name in LIBRARY else None
+        unit = limit_in_unit(declared[e.name], e) if e.name in declared else {}
         effects.append(
             {
                 "effect": e.name,
@@ -135,6 +139,7 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
                 "dispersion_limit": e.dispersion_limit,
                 "realistic": real,
                 "fibers_for_realistic": pw.fibers_needed(e.name, real) if real else None,
+                **unit,
             }
         )
     lead = None
@@ -144,6 +149,7 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
             lead = {
                 "effect": h.name,
                 "value": h.value,
+                **_in_unit(declared.get(h.name), h.value, None),
                 "fibers_to_detect": pw.fibers_needed(h.name, h.value),
                 "fibers_to_detect_ci": pw.fibers_needed_ci(h.name, h.value),
                 "fibers_to_name": fibers_to_name(
@@ -216,6 +222,26 @@ def _next_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
     }
 
 
+def _in_unit(cand: Candidate | None, value: float, interval: Any) -> dict[str, Any]:
+    """A declared candidate's value and interval in its setting's unit ({} for an effect)."""
+    if cand is None:
+        return {}
+    out: dict[str, Any] = {"setting": cand.show(value)}
+    if interval is not None and not cand.categorical:
+        lo, hi = cand.interval(interval[0], interval[1])
+        out["interval95_setting"] = [lo, hi]
+    return out
+
+
+def _declared_dict(c: Candidate) -> dict[str, Any]:
+    """What a declared candidate is: its setting, scale, range (in its unit) and switch."""
+    lo, hi = c.interval(c.lo, c.hi)
+    return {
+        "name": c.name, "key": c.key, "scale": c.scale, "unit": c.unit,
+        "range": [lo, hi], "switch": dict(c.switch), "note": c.note,
+    }  # fmt: skip
+
+
 def summary(res: DiscrepancyResult) -> dict[str, Any]:
     """JSON-ready summary of a workflow result."""
     v = res.verdict
@@ -224,12 +250,14 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
     ho = []
     fold = res.extra.get("fold_values", {})
     intervals = res.extra.get("intervals", {})
+    declared = {c.name: c for c in res.settings.declared}
     for h in res.heldout:
         after = _gap_dict(h.residual, w)
         ho.append(
             {
                 "effect": h.name,
                 "value": h.value,
+                **_in_unit(declared.get(h.name), h.value, intervals.get(h.name)),
                 "halves": fold.get(h.name),
                 "interval95": list(intervals[h.name][:2]) if h.name in intervals else None,
                 # True where the test did not reject up to the refit's search bound
@@ -313,6 +341,7 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
             }
             for f in res.fits
         ],
+        "declared": [_declared_dict(c) for c in res.settings.declared],
         "heldout_gap_before": before,
         "heldout": ho,
         "sets": sets,
@@ -360,15 +389,21 @@ def write_report(
     v = res.verdict
     made = figures(res, out)
     configs = []
+    declared = {c.name: c for c in res.settings.declared}
     if config_data is not None and v.kind in ("named", "ambiguous"):
         for alt in v.alternatives or ({k: val} for k, val in v.effects.items()):
             data = json.loads(json.dumps(config_data))
             fiber = data.setdefault("fiber", {})
-            fiber["effects"] = {
-                **(fiber.get("effects") or {}),
-                **{k: float(val) for k, val in alt.items()},
-            }
-            tag = "+".join(alt)
+            effects = {k: float(val) for k, val in alt.items() if k not in declared}
+            if effects:
+                fiber["effects"] = {**(fiber.get("effects") or {}), **effects}
+            over = {}
+            for k, val in alt.items():
+                if k in declared:
+                    over.update(declared[k].overrides(val))
+            if over:  # a declared candidate: its setting, as a KEY=VALUE override would
+                data = apply_overrides(data, {}, [f"{k}={json.dumps(x)}" for k, x in over.items()])
+            tag = "+".join(alt).replace("/", "_")
             fname = "updated_config.yaml" if v.kind == "named" else f"updated_config.{tag}.yaml"
             atomic_write(out / fname, yaml.safe_dump(data, sort_keys=False))
             configs.append(fname)

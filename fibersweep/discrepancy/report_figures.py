@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.discrepancy.candidates import show_values
 from fibersweep.discrepancy.followup import Discrimination
 from fibersweep.discrepancy.gap import GAP_UNIT, GapResult, combined_excess
 from fibersweep.discrepancy.localise import binned_map
@@ -36,13 +37,15 @@ def fitted_label(res: DiscrepancyResult) -> tuple[str | None, str, GapResult | N
 
     The named effect or set; for an ambiguous verdict its first alternative; else
     the best held-out candidate (labelled "not named"); (None, 'no effect fitted',
-    None) when nothing was fitted.
+    None) when nothing was fitted. Values in their candidate's unit
+    (:func:`.candidates.show_values`: a declared stiffness in Pa).
     """
     v = res.verdict
+    declared = {c.name: c for c in res.settings.declared}
     if v.kind in ("named", "ambiguous") and v.alternatives:
         alt = v.alternatives[0]
         key = " + ".join(alt)
-        text = " + ".join(f"{k} = {x:.3g}" for k, x in alt.items())
+        text = show_values(dict(alt), declared)
         gap = None
         if len(alt) == 1:
             gap = next((h.residual for h in res.heldout if h.name == key), None)
@@ -52,7 +55,8 @@ def fitted_label(res: DiscrepancyResult) -> tuple[str | None, str, GapResult | N
         return key, f"{text} ({tag})", gap
     if res.heldout:
         h = max(res.heldout, key=lambda h: h.improvement[0])
-        return h.name, f"{h.name} = {h.value:.3g} (best candidate, not named)", h.residual
+        text = show_values({h.name: h.value}, declared)
+        return h.name, f"{text} (best candidate, not named)", h.residual
     return None, "no effect fitted", None
 
 

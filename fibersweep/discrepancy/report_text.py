@@ -204,6 +204,7 @@ def _fits(s: dict[str, Any]) -> list[str]:
             f"| {'yes' if h['explains'] else 'no'} |"
         )
     lines += _spread_lines(s["heldout"])
+    lines += _declared_lines(s)
     if s["sets"]:
         lines += [
             "",
@@ -230,6 +231,43 @@ def _fits(s: dict[str, Any]) -> list[str]:
             lines.append(
                 f"| {st['set']} | {vals} | {gains} | {ps} | {'yes' if st['explains'] else 'no'} |"
             )
+    return lines
+
+
+def _shown(h: dict[str, Any]) -> str:
+    """``effect = value`` of a held-out or leading entry; a declared candidate's value in
+    its setting's unit (its ``setting`` text)."""
+    return h.get("setting") or f"{h['effect']} = {h['value']:.3g}"
+
+
+def _declared_lines(s: dict[str, Any]) -> list[str]:
+    """Declared candidates: what each is, and its fitted value in the setting's unit."""
+    if not s.get("declared"):
+        return []
+    lines = [
+        "",
+        "### Candidates declared from the config's settings",
+        "",
+        "A declared candidate is fitted on its own scale (0: the config's value; a stiffness "
+        "with a model switch: 0 is the rigid model, larger is softer); the table above shows "
+        "that scale, this one the setting itself.",
+        "",
+        "| candidate | what | final value [95 % CI], in the setting's unit |",
+        "|---|---|---|",
+    ]
+    held = {h["effect"]: h for h in s["heldout"]}
+    for c in s["declared"]:
+        h = held.get(c["name"])
+        if h is None:
+            value = "not fitted (signature did not match)"
+        else:
+            value = h["setting"]
+            ci = h.get("interval95_setting")
+            if ci:
+                value += f" [{_f(ci[0])}, {_f(ci[1])}]"
+        switch = ", ".join(f"{k} = {v}" for k, v in c["switch"].items())
+        what = c["note"] + (f" (with {switch})" if switch else "")
+        lines.append(f"| {c['name']} | {what} | {value} |")
     return lines
 
 
@@ -313,6 +351,9 @@ def _power(s: dict[str, Any]) -> list[str]:
             else f"[{_f(ci[0]) if ci[0] is not None else 'out of range'}, "
             f"{_f(ci[1]) if ci[1] is not None else 'out of range'}]"
         )
+        if e.get("setting"):  # a declared candidate: its limit in the setting's unit
+            lim = e["setting"]
+            ci_txt = "–"
         lines.append(
             f"| {e['effect']} | {e['direction']} | {lim} | {ci_txt} | {_f(e['realistic'])} "
             f"| {_f(e['fibers_for_realistic'], 'd') if e['fibers_for_realistic'] else '> 100000'} |"
@@ -345,7 +386,7 @@ def _power(s: dict[str, Any]) -> list[str]:
     if lead:
         lines += [
             "",
-            f"Leading candidate {lead['effect']} = {lead['value']:.3g}: about "
+            f"Leading candidate {_shown(lead)}: about "
             f"{_f(lead['fibers_to_detect'], 'd')} fibers would detect a gap of this size"
             f"{_fibers_ci(lead.get('fibers_to_detect_ci'))}; "
             f"about {_f(lead['fibers_to_name'], 'd')} would make its held-out improvement "
@@ -419,4 +460,3 @@ def _spread_lines(heldout: list[dict[str, Any]]) -> list[str]:
             + f": {'significant' if sp['significant'] else 'not significant'}."
         )
     return [""] + out if out else []
-

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from fibersweep.discrepancy.candidates import Candidate
+from fibersweep.discrepancy.candidates import LIBRARY, Candidate, get_candidates
 from fibersweep.discrepancy.copies import NoiseModel
 from fibersweep.errors import InputError
 
@@ -18,6 +18,7 @@ __all__ = [
     "Plan",
     "plan_budget",
     "INTERVAL_EVALS",
+    "MODEL_COST",
     "PAIR_FIRSTS",
     "TIE_COSINE",
 ]
@@ -33,6 +34,41 @@ INTERVAL_EVALS = 3
 #: as with one. Two: the single effect that helps most out of sample may be a
 #: look-alike of the pair's true first member, barely ahead of it.
 PAIR_FIRSTS = 2
+
+#: Time of a run of each fiber integrator relative to a rigid run, for the plan's
+#: estimate of a declared candidate that switches the model (:meth:`Plan.runs_of`).
+#: ros2: 1.31, measured on configs/quick.yaml, 12 starts of its sweep box,
+#: E = 5.6e5 Pa (the probe of fiber.young_modulus=1e4..3e7) against rigid, one worker,
+#: two rounds (scripts/benchmarks/bench_candidate_cost.py). bdf2 (fixed step): 3, an
+#: upper estimate, not measured (``--model bead-spring`` of the same script measures
+#: it). ros34pw2 is taken as ros2's (one LU per step; more stages, larger steps).
+MODEL_COST = {"midpoint": 1.0, "bdf2": 3.0, "ros2": 1.3, "ros34pw2": 1.3}
+
+
+def switch_cost(switch: tuple[tuple[str, object], ...]) -> tuple[str, float]:
+    """The model a candidate's switch runs (with its integrator) and its run's cost.
+
+    Parameters
+    ----------
+    switch : tuple of (key, value)
+        Settings a candidate sets (``fiber.model``, ``fiber.integrator``).
+
+    Returns
+    -------
+    (str, float)
+        ``"model/integrator"`` (``""`` when the switch keeps the config's model) and
+        the time of one of its runs relative to a rigid run (:data:`MODEL_COST`).
+    """
+    from fibersweep.fiber.settings import FiberSettings
+
+    sw = dict(switch)
+    if "fiber.model" not in sw:
+        return "", 1.0
+    st = FiberSettings.model_validate(
+        {"model": sw["fiber.model"], **({"integrator": sw["fiber.integrator"]}
+                                        if "fiber.integrator" in sw else {})}
+    )  # fmt: skip
+    return f"{st.model}/{st.integrator}", MODEL_COST.get(st.integrator, 1.0)
 
 #: Largest shortfall of a signature's cosine below the best one's for the effect to
 #: be fitted beyond the ``candidates`` best (``DiscrepancySettings.tied`` more at
@@ -95,6 +131,9 @@ class DiscrepancySettings:
         Dask scheduler address (dask only; None starts a local cluster).
     effects : tuple of str or None
         Library subset to consider (None = all).
+    declared : tuple of Candidate
+        Candidates from any setting (:mod:`.declared`), considered besides the
+        library's; a name that is also a library effect is refused.
     noise : NoiseModel
     n_perm : int
         Permutations per gap test.
@@ -118,6 +157,7 @@ class DiscrepancySettings:
     executor: str = "local"
     scheduler: str | None = None
     effects: tuple[str, ...] | None = None
+    declared: tuple[Candidate, ...] = ()
     noise: NoiseModel = field(default_factory=NoiseModel)
     n_perm: int = 4999
 
@@ -155,6 +195,16 @@ class DiscrepancySettings:
                 raise InputError(f"discrepancy.{name}: invalid value {getattr(self, name)!r}")
         if self.budget is not None and self.budget < 1:
             raise InputError(f"discrepancy.budget: must be >= 1, got {self.budget}")
+        for c in self.declared:
+            if c.is_effect or c.name in LIBRARY:
+                raise InputError(
+                    f"discrepancy.candidates: {c.name} is a library effect; "
+                    f"consider it with --effect {c.name}"
+                )
+
+    def candidates_of(self) -> list[Candidate]:
+        """The candidates considered: the library's (``effects``), then the declared ones."""
+        return [*get_candidates(self.effects), *self.declared]
 
 
 @dataclass(frozen=True)
@@ -255,6 +305,21 @@ class Plan:
 
     def total(self, n: int) -> int:
         return sum(self.cost(n).values())
+
+    def runs_of(self, n: int, cand: Candidate) -> int:
+        """Most runs one candidate takes for n fibers: its probes, both halves' fits,
+        held-out copies and pooled refit (pairs not counted).
+
+        What a costly candidate (a flexible model, :data:`MODEL_COST`) adds to the
+        time of an analysis is about ``(MODEL_COST - 1) * runs_of``.
+        """
+        half = (n + 1) // 2
+        return (
+            len(cand.probes) * half
+            + 2 * (self.fit_evals + 1) * self.fit_copies * half
+            + self.copies * n
+            + n * ((self.refit_evals + 1 + self._closing) * self.fit_copies + self.copies)
+        )
 
 
 def plan_budget(n: int, s: DiscrepancySettings, candidates: list[Candidate]) -> Plan:

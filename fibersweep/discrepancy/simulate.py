@@ -16,19 +16,31 @@ records its trajectory (:data:`TRACK_SAMPLES` samples at least, whatever the
 config's ``record`` says: it changes no other outcome) so that the track
 observables (:mod:`fibersweep.discrepancy.tracks`) are in every outcome table;
 without, they are NaN and the runs skip that cost (~9 %).
+
+Declared candidates (:mod:`.declared`): a batch's ``effects`` may name them
+besides library effects. Their values are applied to the config's settings as
+overrides (:func:`.declared.apply_values`); each distinct setting is made once
+(a flow setting's field found in its cache or solved there) and travels with
+the batch (:attr:`fibersweep.sweep.worker.RunBatch.setting`), so the pool
+never restarts. A batch holds one setting; a batch of a flexible model is cut
+into finer chunks (:data:`FLEXIBLE_CHUNKS`) so that its slow runs spread over
+the workers instead of one worker finishing a long chunk alone.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Mapping
+import time
+from collections.abc import Mapping, Sequence
 from functools import partial
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from fibersweep.discrepancy.candidates import Candidate
+from fibersweep.discrepancy.declared import apply_values
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.tracks import track_values
 from fibersweep.errors import FibersweepError, InputError
@@ -37,7 +49,14 @@ from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 from fibersweep.progressbar import finish, progress_bar
 from fibersweep.sweep.executors import EXECUTORS, make_executor
-from fibersweep.sweep.worker import RunBatch, WorkerSpec, init_worker, run_batch, setting_for_field
+from fibersweep.sweep.worker import (
+    RunBatch,
+    SettingSpec,
+    WorkerSpec,
+    init_worker,
+    run_batch,
+    setting_for_field,
+)
 from fibersweep.units import Geometry
 
 __all__ = ["OUTCOME_COLUMNS", "TRACK_SAMPLES", "Simulator", "BudgetExhausted", "outcome_row"]
@@ -51,6 +70,10 @@ OUTCOME_COLUMNS = tuple(OBSERVABLES)
 #: sample per ~2 ms, ~1.2 µm of travel; linear interpolation at a station then errs
 #: by far less than the 1 µm measurement noise).
 TRACK_SAMPLES = 1000
+
+#: Chunks per worker of a batch whose fiber model is not rigid (4 otherwise): a
+#: flexible run costs more and varies more, so finer chunks keep the workers busy.
+FLEXIBLE_CHUNKS = 16
 
 
 class BudgetExhausted(FibersweepError):
@@ -151,6 +174,14 @@ class Simulator:
         ('local' or 'dask').
     scheduler : str or None
         Dask scheduler address (dask executor only).
+    candidates : sequence of Candidate
+        Declared candidates a batch may name (:mod:`.declared`); library effects
+        need none.
+    flow : FlowSettings, optional
+        The field's settings (for a declared flow candidate; default: the
+        field's cache entry).
+    cache_dir : str or Path, optional
+        Flow cache where a declared flow candidate's field is found or solved.
 
     Use as a context manager so the workers are shut down.
     """
@@ -166,6 +197,9 @@ class Simulator:
         scheduler: str | None = None,
         planned: int | None = None,
         tracks: bool = False,
+        candidates: Sequence[Candidate] = (),
+        flow: Any = None,
+        cache_dir: Any = None,
     ) -> None:
         if workers < 1:
             raise InputError(f"workers must be >= 1, got {workers}")
@@ -179,6 +213,11 @@ class Simulator:
         self.failed = 0
         self.failed_by_stage: dict[str, int] = {}
         self.used_by_stage: dict[str, int] = {}  # runs per stage (first word of desc)
+        self.seconds_by_stage: dict[str, float] = {}  # wall time per stage
+        self.declared = {c.name: c for c in candidates if not c.is_effect}
+        self._flow = flow
+        self._cache_dir = cache_dir
+        self._variants: dict[tuple, tuple[SettingSpec, FiberSettings]] = {}
         self._batches = 0
         self._planned = planned if planned is not None else budget
         self._later = 0  # runs later stages may add (said beside the bar)
@@ -224,6 +263,36 @@ class Simulator:
 
     def _later_text(self) -> str:
         return f"later stages: up to {self._later} more if needed" if self._later else ""
+
+    def variant(self, values: Mapping[str, float]) -> tuple[SettingSpec | None, FiberSettings]:
+        """The setting of declared candidate values (None and the config's for none on).
+
+        Made once per distinct set of values; a changed flow setting's field is
+        found in the flow cache or solved and stored there.
+        """
+        on = tuple(sorted((n, float(v)) for n, v in values.items() if float(v) != 0.0))
+        if not on:
+            return None, self.settings
+        if on not in self._variants:
+            from fibersweep.flow.settings import FlowSettings
+
+            flow = self._flow
+            if flow is None:
+                meta = (self.field.meta or {}).get("settings")
+                flow = FlowSettings.model_validate(meta) if meta else FlowSettings()
+            label = ", ".join(self.declared[n].show(v) for n, v in on)
+            fiber, new_flow = apply_values(self.declared, dict(on), self.settings, flow, label)
+            field = self.field
+            if new_flow != flow:
+                if self._cache_dir is None:
+                    raise InputError(f"{label}: a flow candidate needs the flow cache folder")
+                from fibersweep.flow.cache import get_flow_field
+
+                log.info("flow field of %s (solved once, then cached)", label)
+                field, _ = get_flow_field(new_flow, self._cache_dir)
+            sid = f"candidate-{len(self._variants)}"
+            self._variants[on] = (setting_for_field(field, fiber, sid), fiber)
+        return self._variants[on]
 
     @property
     def remaining(self) -> float:
@@ -274,7 +343,9 @@ class Simulator:
                 f"starts (n, 3) and seeds (n,) expected: {starts.shape}, {seeds.shape}"
             )
         effects = {k: float(v) for k, v in (effects or {}).items() if float(v) != 0.0}
-        build_effects({**self.settings.effects, **effects})  # unknown names fail here
+        spec, fiber = self.variant({k: v for k, v in effects.items() if k in self.declared})
+        effects = {k: v for k, v in effects.items() if k not in self.declared}
+        build_effects({**fiber.effects, **effects})  # unknown names fail here
         n = len(starts)
         if n > self.remaining:
             raise BudgetExhausted(
@@ -282,7 +353,8 @@ class Simulator:
                 f"{self.budget} are left"
             )
         rows: list[dict[str, Any] | None] = [None] * n
-        n_chunks = max(1, min(n, 4 * self.workers))
+        per_worker = 4 if fiber.model == "rigid" else FLEXIBLE_CHUNKS
+        n_chunks = max(1, min(n, per_worker * self.workers))
         chunks = [c for c in np.array_split(np.arange(n), n_chunks) if len(c)]
         self._batches += 1
         reduce = partial(batch_outcome, tracks=self.tracks, fps=fps)
@@ -297,6 +369,7 @@ class Simulator:
                 keep_track,
                 TRACK_SAMPLES,
                 reduce,
+                setting=spec,
             )  # fmt: skip
             for k, c in enumerate(chunks)
         }
@@ -309,6 +382,7 @@ class Simulator:
             if bar.total is not None and bar.n + n > bar.total:
                 bar.total = bar.n + n  # more than planned: grow (the ETA stays honest)
             bar.set_description_str(desc[:40])
+        t0 = time.perf_counter()
         outcomes = (
             (o.key, o.value, o.error)
             for o in self._executor.run(
@@ -325,6 +399,8 @@ class Simulator:
         self.used += n
         stage = desc.split(" ")[0]
         self.used_by_stage[stage] = self.used_by_stage.get(stage, 0) + n
+        dt = time.perf_counter() - t0
+        self.seconds_by_stage[stage] = self.seconds_by_stage.get(stage, 0.0) + dt
         df = pd.DataFrame(rows)
         nf = int((df["status"] != "ok").sum())
         if nf:
@@ -333,7 +409,7 @@ class Simulator:
             # under a probed or fitted effect (e.g. strong Brownian motion hitting the
             # time limit) a failure is an outcome of that effect, not of the analysis
             log.log(
-                logging.INFO if effects else logging.WARNING,
+                logging.INFO if effects or spec is not None else logging.WARNING,
                 "%s: %d of %d runs failed (%s)",
                 desc,
                 nf,

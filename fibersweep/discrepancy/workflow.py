@@ -23,13 +23,14 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from fibersweep.discrepancy.candidates import Candidate, get_candidates
+from fibersweep.discrepancy.candidates import Candidate, show_values
 from fibersweep.discrepancy.copies import CopyMaker, crossfit_copies
 from fibersweep.discrepancy.decide import (
     HeldOut,
@@ -150,7 +151,7 @@ class Run:
     settings : DiscrepancySettings
     plan : Plan
     candidates : list of Candidate
-        The library effects considered.
+        The candidates considered: library effects and declared settings.
     observed : DataFrame
         Measured fibers, index 0..n-1.
     observables : tuple of str
@@ -353,7 +354,10 @@ def refit(st: State) -> State:
         fit = pooled_refit(cand, run.maker, run.observed, base, st.fold_values[h.name],
                            run.observables, st.w_gap, plan.refit_evals)  # fmt: skip
         fits.append(fit)
-        intervals[h.name] = score_interval(fit)
+        # an alternative is named or not: its "interval" is the alternative itself
+        intervals[h.name] = (
+            (fit.value, fit.value, False, False) if cand.categorical else score_interval(fit)
+        )
         if fit.value == 0.0:
             final[h.name] = (0.0, st.gap)
             continue
@@ -420,7 +424,10 @@ def pairs(st: State) -> State:
             refit_evals=plan.refit_evals,
         )
         first = run.candidate(h.name)
-        ranked = rank_partners(h.name, list(st.signatures), left, plan.pairs)
+        # two candidates that set one setting cannot be on together
+        clash = {c.name for c in run.candidates if c.conflicts(first)}
+        sigs = [sg for sg in st.signatures if sg.name not in clash or sg.name == first.name]
+        ranked = rank_partners(h.name, sigs, left, plan.pairs)
         queues.append([(first, run.candidate(name), inp) for name in ranked])
     fits: list[Fit] = []
     trials = pair_trials(queues, plan.pairs)
@@ -439,6 +446,8 @@ def run_discrepancy(
     fiber: FiberSettings,
     settings: DiscrepancySettings | None = None,
     progress: bool = True,
+    flow: Any = None,
+    cache_dir: Any = None,
 ) -> DiscrepancyResult:
     """Run the whole workflow (see the module docstring): the stages in turn, then the verdict.
 
@@ -453,10 +462,13 @@ def run_discrepancy(
     settings : DiscrepancySettings
     progress : bool
         tqdm progress bars.
+    flow : FlowSettings, optional
+        The field's settings, and ``cache_dir`` the flow cache: where a declared
+        flow candidate's field is found or solved (:class:`.simulate.Simulator`).
     """
     s = settings or DiscrepancySettings()
     t0 = time.perf_counter()
-    candidates = get_candidates(s.effects)
+    candidates = s.candidates_of()
     n = len(measured)
     if n < 8:
         raise InputError(f"measured: {n} fibers are too few for a held-out split (need >= 8)")
@@ -471,7 +483,7 @@ def run_discrepancy(
     with Simulator(
         field_, fiber, workers=s.workers, budget=s.budget, progress=progress,
         executor=s.executor, scheduler=s.scheduler, planned=plan.total(n),
-        tracks=has_tracks(obs_names),
+        tracks=has_tracks(obs_names), candidates=candidates, flow=flow, cache_dir=cache_dir,
     ) as sim:  # fmt: skip
         maker = CopyMaker(measured.starts, s.noise, s.seed, sim)
         run = Run(s, plan, candidates, observed, obs_names, folds, rng, maker)
@@ -484,11 +496,18 @@ def run_discrepancy(
             st = pairs(refit(cross_fit(rank(st))))
         sim.expect(0)  # follow-ups size their own batches
         heldout = list(st.heldout)
-        verdict = decide(st.gap, heldout, st.region_text, rng, s.alpha, list(st.sets))
+        by_name = {c.name: c for c in candidates}
+
+        def show(vals: Mapping[str, float]) -> str:
+            return show_values(dict(vals), by_name)
+
+        verdict = decide(st.gap, heldout, st.region_text, rng, s.alpha, list(st.sets),
+                         show=show, declared=[c.name for c in s.declared])  # fmt: skip
         extra = followup(verdict, heldout, st.fold_values, candidates, maker, sim, plan, s,
-                         obs_names, rng)  # fmt: skip
+                         obs_names, rng, show=show)  # fmt: skip
         used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
         extra["runs_by_stage"] = dict(sim.used_by_stage)
+        extra["seconds_by_stage"] = {k: round(v, 1) for k, v in sim.seconds_by_stage.items()}
         extra["runs_without_reuse"] = maker.runs_without_reuse
 
     return DiscrepancyResult(

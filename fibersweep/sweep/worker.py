@@ -193,6 +193,10 @@ class RunBatch:
         name); None returns ``RunResult.row()``.
     settings : str
         Settings id of the :class:`WorkerSpec` the runs use ('' for its single one).
+    setting : SettingSpec or None
+        A setting of its own instead (the discrepancy workflow's declared
+        candidates: settings made while it runs, so not in the pool's spec); its
+        field is mapped once per process like the spec's.
     """
 
     key: str
@@ -204,12 +208,15 @@ class RunBatch:
     samples: int = 0
     reduce: Callable[[Any, Any], Any] | None = None
     settings: str = ""
+    setting: SettingSpec | None = None
 
 
 #: The worker's set-up: its spec, that spec's settings and parsed fiber settings.
 _SETUP: dict[str, Any] = {}
 #: Per-process flow-field cache, by cache key: mapped once, kept across specs.
 _FIELDS: dict[str, Any] = {}
+#: Fiber settings of the batches' own settings (:attr:`RunBatch.setting`), by JSON.
+_FIBERS: dict[str, Any] = {}
 
 
 def _worker_name() -> str:
@@ -449,7 +456,15 @@ def run_batch(task: RunBatch) -> list[tuple[int, Any]]:
     """Run a :class:`RunBatch` in this worker: ``(position, reduce(record, field))`` per run."""
     from fibersweep.fiber.result import FiberStart
 
-    field, base = _setting(task.settings)
+    if task.setting is not None:
+        from fibersweep.fiber.settings import FiberSettings
+
+        spec = task.setting
+        if spec.fiber_json not in _FIBERS:
+            _FIBERS[spec.fiber_json] = FiberSettings.model_validate_json(spec.fiber_json)
+        field, base = field_for(spec), _FIBERS[spec.fiber_json]
+    else:
+        field, base = _setting(task.settings)
     fiber = batch_settings(base, task.effects, task.keep_track, task.samples)
     out = []
     for i, s, seed in zip(task.idx, task.starts, task.seeds, strict=True):

@@ -132,3 +132,30 @@ def test_power_command_writes_limits(tmp_path, config):
     assert "detection limits at N = 100" in r.output
     # each limit with its 95 % interval over the simulated starts (--boot 30 by default)
     assert all(len(e["limit_ci"]) == 2 for e in p["effects"])
+
+
+def test_a_candidate_that_is_an_effect_exits_2_naming_the_option(tmp_path, config):
+    runner = CliRunner()
+    r = runner.invoke(app, ["power", str(config), "--candidate", "fiber.effects.friction=0.3"])
+    assert r.exit_code == 2, r.output
+    assert "--candidate fiber.effects.friction=0.3" in r.output and "--effect friction" in r.output
+    cfg = tmp_path / "withcand.yaml"
+    cfg.write_text(config.read_text() + "discrepancy:\n  candidates: ['friction=0..1']\n")
+    r = runner.invoke(app, ["power", str(cfg)])
+    assert r.exit_code == 2 and "discrepancy.candidates[0]" in r.output, r.output
+
+
+def test_power_reports_a_declared_candidate_in_its_own_terms(tmp_path, config):
+    """``power --candidate KEY=VALUE``: the alternative alone (no --effect), 8 fibers."""
+    runner = CliRunner()
+    out = tmp_path / "pw"
+    r = runner.invoke(
+        app,
+        ["power", str(config), "--n", "100", "--simulate", "8", "--boot", "0",
+         "--candidate", "fiber.contact.chi=2.5", "-o", str(out)],
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    rows = json.loads((out / "power.json").read_text())["effects"]
+    assert [row["effect"] for row in rows] == ["fiber.contact.chi=2.5"]
+    assert "fiber.contact.chi = 2.5" in rows[0]["setting"]
+    assert "fiber.contact.chi=2.5:" in r.output
