@@ -86,7 +86,7 @@ def main() -> None:
         return
     if (args.old is None) == (not args.pull):
         ap.error("give one of --old PATH and --pull")
-    new = Path(__file__).resolve().parent.parent
+    new = Path(__file__).resolve().parents[2]
     print(f"cell of configs/array.yaml at dx = {args.dx} µm; {os.cpu_count()} cpus; threads "
           f"{args.threads or 'each tree its own'}")  # fmt: skip
     ratios = []

@@ -1,14 +1,17 @@
 #!/usr/bin/env python3
 """Discrepancy wall time of two source trees, measured alternately in one run, as a ratio.
 
-Runs each tree's own ``scripts/snapshot_discrepancy.py`` (its public API may differ)
+Runs each tree's own snapshot script (``scripts/tools/snapshot_discrepancy.py``, or
+``scripts/snapshot_discrepancy.py`` in a tree of the former layout; its API may differ)
 with ``PYTHONPATH`` set to that tree, A B A B ..., on the same flow-field cache, and
 reads the workflow's wall time from each snapshot's ``timing.json``. Prints every
 time, the ratio B / A of each pair and their median, and whether the two trees
 simulated the same batches and reached the same verdict (bit for bit).
 
-Usage:  python scripts/bench_discrepancy_ab.py OLD_TREE NEW_TREE [--n 20] [--pairs 3]
-                                                [--cache DIR] [--out DIR]
+Usage:  python scripts/benchmarks/bench_discrepancy_ab.py [OLD_TREE [NEW_TREE]] [--n 20]
+            [--pairs 3] [--cache DIR] [--out DIR]
+
+A tree not given is this repository (the smoke pass compares it with itself).
 """
 
 from __future__ import annotations
@@ -23,11 +26,19 @@ from pathlib import Path
 
 import pandas as pd
 
+REPO = Path(__file__).resolve().parents[2]
+
+#: a smoke pass (scripts/benchmarks/run.py --smoke): this tree against itself, 8 fibers
+SMOKE = ["--n", "8", "--pairs", "1", "--cache", "{cache}", "--out", "{tmp}"]
+
 
 def snapshot(tree: Path, out: Path, n: int, cache: Path) -> float:
     """Run ``tree``'s snapshot script into ``out``; the workflow's wall time [s]."""
     env = {**os.environ, "PYTHONPATH": str(tree)}
-    cmd = [sys.executable, str(tree / "scripts" / "snapshot_discrepancy.py"), str(out),
+    script = tree / "scripts" / "tools" / "snapshot_discrepancy.py"
+    if not script.exists():
+        script = tree / "scripts" / "snapshot_discrepancy.py"
+    cmd = [sys.executable, str(script), str(out),
            "--n", str(n), "--cache", str(cache)]  # fmt: skip
     subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL)
     return float(json.loads((out / "timing.json").read_text())["discrepancy_s"])
@@ -42,8 +53,8 @@ def same(a: Path, b: Path) -> bool:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("old", type=Path)
-    ap.add_argument("new", type=Path)
+    ap.add_argument("old", type=Path, nargs="?", default=REPO)
+    ap.add_argument("new", type=Path, nargs="?", default=REPO)
     ap.add_argument("--n", type=int, default=20, help="measured fibers of each check")
     ap.add_argument("--pairs", type=int, default=3, help="A B pairs")
     ap.add_argument("--cache", type=Path, default=Path(".fibersweep-cache"))

@@ -181,7 +181,7 @@ def child(args: argparse.Namespace) -> None:
 
 def against(args: argparse.Namespace) -> None:
     """This tree and ``args.against``, alternately in fresh processes: ratios this/other."""
-    here = Path(__file__).resolve().parent.parent
+    here = Path(__file__).resolve().parents[2]  # the repository
     trees = {"this": here, "other": args.against.resolve()}
     argv = [sys.executable, str(Path(__file__).resolve()), "--child", "--dx", str(args.dx),
             "--cache", str(Path(args.cache).resolve()), "--repeat", str(args.repeat),
