@@ -2,7 +2,7 @@
 
 Usage::
 
-    python3 scripts/bandpass_map.py run OUT [--geometries G0 G1 ...] [--moduli ...]
+    python3 scripts/bandpass_map.py run OUT [--geometries G0 G1 G2 G4] [--moduli ...]
         [--fractions ...] [--count N] [--rows R] [--spacing B] [--cores C]
         [--refine-runs M] [--contact rough|smooth] [--time-scale K] [--deadline S]
     python3 scripts/bandpass_map.py summary OUT
@@ -13,7 +13,8 @@ ROS2 bead-spring fiber of ``configs/array-flexible.yaml`` swept over
 ``fiber.young_modulus`` and the lengths ``--fractions`` × period_x, with
 ``--count`` seeded random starts per length and, with ``--refine-runs``, the sort
 report's length refinement, ``sweep.refine``) and runs ``fibersweep run`` on every
-geometry at once, ``--cores`` workers shared among them, BLAS pinned to one thread
+geometry at once, ``--cores`` workers shared among them in proportion to their
+expected cost (long fibers dominate: CPU ∝ L^2.7), BLAS pinned to one thread
 per worker (the kernel's W = M J product is slower threaded: scripts/bench_spacing.py).
 With ``--deadline`` [s] the runs still going are stopped then (the stored runs are
 kept; a later ``run`` into the same OUT resumes them) and the summary is written from
@@ -54,6 +55,10 @@ G2    40      120       120       80   same pillar, larger periods
 G3    80      120       120       40   G0's gap, larger pillar and periods
 G4    40      120       80        40   G0 with a longer period_x only
 ====  ======  ========  ========  ====
+
+Defaults: G0, G1, G2, G4; five moduli 10–100 kPa; nine lengths 0.2–2.05 period_x;
+six starts per length; b = a (``--spacing 0.5``, converged against b = a/2 at 10 kPa;
+docs/validation/bandpass.md).
 """
 
 from __future__ import annotations
@@ -61,6 +66,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -80,7 +86,15 @@ GEOMETRIES = {
 #: Default stiffnesses [Pa]: five, log-spaced over 10–100 kPa.
 MODULI = [1.0e4, 1.78e4, 3.16e4, 5.62e4, 1.0e5]
 #: Default lengths as fractions of period_x: from below the gap to beyond twice the period.
-FRACTIONS = [0.2, 0.35, 0.5, 0.65, 0.8, 1.0, 1.25, 1.6, 2.2]
+FRACTIONS = [0.2, 0.35, 0.5, 0.65, 0.8, 1.0, 1.25, 1.6, 2.05]
+#: Default geometries: four that separate gap, pillar, period_x and period_y (G0 against
+#: G4: period_x alone; against G1: pillar and gap at fixed periods; against G2: periods
+#: and gap at a fixed pillar).
+DEFAULT_GEOMETRIES = ["G0", "G1", "G2", "G4"]
+#: CPU seconds of one 20-row run at b = a, L = 80 µm, and the power of L it grows with
+#: (measured on the shipped array, 10–100 kPa: 1.5 s at 80 µm, 16 s at 176 µm, 58 s at
+#: 264 µm), to share the workers among geometries by their expected cost.
+COST_80, COST_POWER = 1.5, 2.7
 BEAD_RADIUS = 2.0  # [µm]
 BLAS_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -130,28 +144,50 @@ def config_of(geom: str, args: argparse.Namespace, workers: int) -> dict:
     }
 
 
+def expected_cpu(geom: str, fractions: list[float]) -> float:
+    """Expected CPU seconds of one start at every length of a geometry (b = a)."""
+    px = GEOMETRIES[geom]["period_x"]
+    return sum(COST_80 * (f * px / 80.0) ** COST_POWER for f in fractions)
+
+
+def workers_of(geoms: list[str], fractions: list[float], cores: int) -> dict[str, int]:
+    """Workers per geometry, at least one each, the rest in proportion to expected cost."""
+    cost = {g: expected_cpu(g, fractions) for g in geoms}
+    total = sum(cost.values())
+    share = {g: max(1, int(cores * cost[g] / total)) for g in geoms}
+    while sum(share.values()) < cores:  # hand out what rounding left to the costliest
+        g = max(geoms, key=lambda g: cost[g] / share[g])
+        share[g] += 1
+    return share
+
+
 def run(args: argparse.Namespace) -> None:
     """Write the configs, run every geometry at once, then summarise."""
     out = Path(args.out)
     (out / "configs").mkdir(parents=True, exist_ok=True)
-    n = len(args.geometries)
-    workers = max(1, args.cores // n)
+    share = workers_of(args.geometries, args.fractions, args.cores)
     env = dict(os.environ, **{v: "1" for v in BLAS_ENV})
     procs = {}
     t0 = time.time()
     for geom in args.geometries:
         path = out / "configs" / f"{geom}.yaml"
-        path.write_text(yaml.safe_dump(config_of(geom, args, workers), sort_keys=False))
+        cfg = config_of(geom, args, share[geom])
+        path.write_text(yaml.safe_dump(cfg, sort_keys=False))
         log = open(out / f"{geom}.log", "a")
-        cmd = ["fibersweep", "run", str(path)]
-        print(" ".join(cmd), f"(workers {workers})", flush=True)
-        procs[geom] = (subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT), log)
+        cmd = [sys.executable, "-m", "fibersweep", "run", str(path)]
+        est = expected_cpu(geom, args.fractions) * len(args.moduli) * args.count
+        print(" ".join(cmd), f"(workers {share[geom]}, expected ~{est:.0f} CPU s at b = a)",
+              flush=True)  # fmt: skip
+        # own process group, so that the deadline stops the sweep's workers with it
+        proc = subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT,
+                                start_new_session=True)  # fmt: skip
+        procs[geom] = (proc, log)
     while any(p.poll() is None for p, _ in procs.values()):
         if args.deadline and time.time() - t0 > args.deadline:
             for geom, (p, _) in procs.items():
                 if p.poll() is None:
                     print(f"{geom}: deadline reached, stopping", flush=True)
-                    p.terminate()
+                    os.killpg(p.pid, signal.SIGTERM)
             for p, _ in procs.values():
                 p.wait()
             break
@@ -359,7 +395,11 @@ def converge(dirs: list[str]) -> None:
     """Edges and trapped shares of maps that differ in bead spacing, side by side."""
     maps = []
     for d in dirs:
-        e = pd.read_csv(Path(d) / "edges.csv")
+        if not (Path(d) / "map.csv").exists():
+            print(f"{d}: no summary (no runs stored); left out")
+            continue
+        e = pd.read_csv(Path(d) / "edges.csv") if (Path(d) / "edges.csv").stat().st_size > 1 \
+            else pd.DataFrame(columns=["geometry", "E", "edge", "critical", "se"])
         t = pd.read_csv(Path(d) / "map.csv")
         sp = float(t["spacing"].iloc[0])
         maps.append((sp, e[e["edge"] != "other"], t))
@@ -394,14 +434,14 @@ def main() -> None:
     sub = ap.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run")
     r.add_argument("out")
-    r.add_argument("--geometries", nargs="+", default=["G0", "G1", "G2", "G3", "G4"],
+    r.add_argument("--geometries", nargs="+", default=DEFAULT_GEOMETRIES,
                    choices=sorted(GEOMETRIES))  # fmt: skip
     r.add_argument("--moduli", type=float, nargs="+", default=MODULI)
     r.add_argument("--fractions", type=float, nargs="+", default=FRACTIONS)
-    r.add_argument("--count", type=int, default=16, help="random starts per length")
+    r.add_argument("--count", type=int, default=6, help="random starts per length")
     r.add_argument("--seed", type=int, default=0)
     r.add_argument("--rows", type=int, default=20)
-    r.add_argument("--spacing", type=float, default=1.0, help="fiber.bead_spacing (b/2a)")
+    r.add_argument("--spacing", type=float, default=0.5, help="fiber.bead_spacing (b/2a)")
     r.add_argument("--contact", choices=["rough", "smooth"], default="rough")
     r.add_argument("--time-scale", type=float, default=1.0)
     r.add_argument("--refine-runs", type=int, default=0, help="sweep.refine max_runs (0: off)")
