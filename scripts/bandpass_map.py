@@ -398,8 +398,11 @@ def converge(dirs: list[str]) -> None:
         if not (Path(d) / "map.csv").exists():
             print(f"{d}: no summary (no runs stored); left out")
             continue
-        e = pd.read_csv(Path(d) / "edges.csv") if (Path(d) / "edges.csv").stat().st_size > 1 \
+        e = (
+            pd.read_csv(Path(d) / "edges.csv")
+            if (Path(d) / "edges.csv").stat().st_size > 1
             else pd.DataFrame(columns=["geometry", "E", "edge", "critical", "se"])
+        )
         t = pd.read_csv(Path(d) / "map.csv")
         sp = float(t["spacing"].iloc[0])
         maps.append((sp, e[e["edge"] != "other"], t))
