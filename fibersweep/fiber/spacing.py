@@ -19,7 +19,7 @@ b -> 0, the same fiber at every spacing:
   integral ∫ M(s_i − s) f(s) ds as b -> 0 (the overlapping-bead branch keeps the
   integrand bounded). The drag per unit length therefore converges; it differs
   from the touching chain's only in the O(1) constant beside ln(L/a)
-  (tests/validation/test_fiber_spacing.py measures both).
+  (tests/validation/test_chain_spacing.py measures both).
 - **Pillar contact.** The per-bead law (rough or smooth) is kept and its force
   scale multiplied by b/2a (:func:`bead_force_scale`), so that the force per
   unit length of fiber pressed on the pillar, and the depth at which a given
