@@ -54,11 +54,16 @@ def check_array_config(cfg: Any) -> None:
     if fiber.model != "rigid":
         from fibersweep.fiber.setup import MIN_BEADS
 
-        few = [float(L) for L in lengths if n_beads_of(float(L), fiber.bead_radius) < MIN_BEADS]
+        few = [
+            float(L)
+            for L in lengths
+            if n_beads_of(float(L), fiber.bead_radius, fiber.bead_spacing) < MIN_BEADS
+        ]
         if few:
+            n_few = n_beads_of(few[0], fiber.bead_radius, fiber.bead_spacing)
             raise FieldError(
                 "sweep.length",
-                f"L = {few[0]:g} µm is {n_beads_of(few[0], fiber.bead_radius)} bead(s); the "
+                f"L = {few[0]:g} µm is {n_few} bead(s); the "
                 f"{fiber.model} model needs at least {MIN_BEADS} (a sphere runs with the rigid "
                 "model)",
             )
@@ -74,10 +79,12 @@ def check_array_config(cfg: Any) -> None:
     pillar = array_pillar(array, fiber, cfg.flow.fluid.viscosity, cfg.flow.fluid.u_center)
     t = axis_values(cfg.sweep.theta0)
     for L in lengths:
-        n = n_beads_of(float(L), fiber.bead_radius)
+        n = n_beads_of(float(L), fiber.bead_radius, fiber.bead_spacing)
         for yi in y:
             for ti in t:
-                if not start_clear(array, pillar, n, fiber.bead_radius, float(yi), float(ti)):
+                if not start_clear(
+                    array, pillar, n, fiber.bead_radius, float(yi), float(ti), fiber.bead_spacing
+                ):
                     raise FieldError(
                         "sweep.y0",
                         f"the fiber of L = {L:g} µm at y0 = {yi:g} (fraction of period_y), "

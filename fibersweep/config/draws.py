@@ -44,8 +44,8 @@ def _clear_test(cfg: Any) -> Callable[[float, float, float], bool]:
         pillar = array_pillar(array, fiber, cfg.flow.fluid.viscosity, cfg.flow.fluid.u_center)
 
         def clear(t: float, y: float, L: float) -> bool:
-            n = n_beads_of(L, fiber.bead_radius)
-            return start_clear(array, pillar, n, fiber.bead_radius, y, t)
+            n = n_beads_of(L, fiber.bead_radius, fiber.bead_spacing)
+            return start_clear(array, pillar, n, fiber.bead_radius, y, t, fiber.bead_spacing)
 
         return clear
     from fibersweep.fiber.contact import make_pillar

@@ -7,7 +7,8 @@ read in the array's units:
 - ``theta0`` [deg] as in the channel;
 - ``y0``: lateral position of the centre as a fraction of ``period_y`` (0..1),
   in the gap between row −1 and row 0 (x in the middle of that gap);
-- ``length``: the fiber length L [µm]; the fiber has round(L / 2a) beads (1: a sphere).
+- ``length``: the fiber length L [µm]; the fiber has round(L / 2a) beads (1: a sphere),
+  or round((L − 2a)/b) + 1 at a bead spacing b (``fiber.bead_spacing``).
 
 The run crosses ``fiber.array_rows`` rows (it passes when its rear end is that
 many periods downstream of the start), or ends trapped or at ``fiber.step.t_max``.
@@ -32,15 +33,17 @@ from fibersweep.fiber import record as R
 from fibersweep.fiber.models import integrator_of
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
 from fibersweep.fiber.setup import MIN_BEADS
+from fibersweep.fiber.spacing import DEFAULT_SPACING, n_beads, offsets
 
 __all__ = ["array_run_kernel", "n_beads_of", "simulate_array", "start_clear", "start_x"]
 
 log = logging.getLogger(__name__)
 
 
-def n_beads_of(length: float, bead_radius: float) -> int:
-    """Beads of a fiber of length L [µm] with bead radius a [µm]: round(L / 2a), at least 1."""
-    return max(1, int(round(length / (2.0 * bead_radius))))
+def n_beads_of(length: float, bead_radius: float, spacing: float = DEFAULT_SPACING) -> int:
+    """Beads of a fiber of length L [µm] with bead radius a [µm] and ``fiber.bead_spacing``
+    ``spacing``: round(L / 2a) for touching beads, at least 1 (:func:`.spacing.n_beads`)."""
+    return n_beads(length, bead_radius, spacing)
 
 
 def start_x(array) -> float:
@@ -49,12 +52,19 @@ def start_x(array) -> float:
     return 0.5 * (x0 + x1 - array.period_x)
 
 
-def start_clear(array, pillar, n_beads: int, bead_radius: float, y0: float, theta0: float) -> bool:
+def start_clear(
+    array,
+    pillar,
+    n_beads: int,
+    bead_radius: float,
+    y0: float,
+    theta0: float,
+    spacing: float = DEFAULT_SPACING,
+) -> bool:
     """Whether a fiber started at lateral fraction ``y0``, angle ``theta0`` [deg] clears every
-    pillar by more than the contact cutoff ``pillar.r_cut`` [µm]."""
-    from fibersweep.fiber.mobility import fiber_offsets
-
-    s = fiber_offsets(n_beads, bead_radius)
+    pillar by more than the contact cutoff ``pillar.r_cut`` [µm] (beads ``spacing`` · 2a
+    apart)."""
+    s = offsets(n_beads, bead_radius, spacing)
     th = math.radians(theta0)
     bx = start_x(array) + s * math.cos(th)
     by = y0 * array.period_y + s * math.sin(th)
@@ -79,7 +89,7 @@ def array_run_kernel(field, settings, length: float, x_end: float | None = None)
     return array_kernel(
         field,
         settings,
-        n_beads_of(length, settings.bead_radius),
+        n_beads_of(length, settings.bead_radius, settings.bead_spacing),
         mu=field.viscosity,
         u_center=field.u_center,
         x_end=x_end,
@@ -144,7 +154,7 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
         raise InputError(
             f"length: L = {start.length} µm is shorter than one bead (2a = {2 * a} µm)"
         )
-    n = n_beads_of(start.length, a)
+    n = n_beads_of(start.length, a, settings.bead_spacing)
     if settings.model != "rigid" and n < MIN_BEADS:
         raise InputError(
             f"length: L = {start.length} µm is {n} bead(s); the {settings.model} model needs "
@@ -152,7 +162,7 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
         )
     effects = check_array_effects(settings)
     pillar = array_pillar(array, settings, field.viscosity, field.u_center)
-    if not start_clear(array, pillar, n, a, start.y0, start.theta0):
+    if not start_clear(array, pillar, n, a, start.y0, start.theta0, settings.bead_spacing):
         raise InputError(
             f"y0: the fiber at y0 = {start.y0} (fraction of period_y), theta0 = {start.theta0} "
             "deg touches a pillar at the start"
@@ -243,4 +253,5 @@ def _deformation(array, pillar, beads: np.ndarray, npil: np.ndarray, settings) -
         pillar.r_cut,
         settings.bead_radius,
         settings.young_modulus,
+        settings.bead_spacing,
     )

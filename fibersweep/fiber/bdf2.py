@@ -152,7 +152,7 @@ def run_bdf2(
     n = k.body.s.shape[0]
     # About one record row per 1e-4 s (and at every contact change).
     stride = max(1, int(round(1e-4 / k.params.dt)))
-    q = chain(n, k.params.a, x0, y0, th0, beads0)
+    q = chain(n, k.params.half_b, x0, y0, th0, beads0)
     qprev = q.copy()
     state = np.array([0.0, math.nan, 0.0, th0, 0.0])
     return R.collect(  # type: ignore[return-value]

@@ -1,9 +1,10 @@
 """The bead-spring fiber model: bead velocities and force Jacobians (docs/flexible.md).
 
-Energy (docs/model.md), t_i = r_i − r_{i−1}:
-    H = Σ_i (S/4a)(|t_i| − 2a)² + Σ_i (B/2a)(1 − t̂_{i+1}·t̂_i),
-S = E π a², B = E π a⁴/4 (:mod:`fibersweep.fiber.elastic`). The bead velocities
-(positions q = (x0, y0, x1, ...), 2n) are
+Energy (docs/model.md), t_i = r_i − r_{i−1}, beads b apart (2a by default,
+``fiber.bead_spacing``, :mod:`fibersweep.fiber.spacing`):
+    H = Σ_i (S/2b)(|t_i| − b)² + Σ_i (B/b)(1 − t̂_{i+1}·t̂_i),
+S = E π a², B = E π a⁴/4 (:mod:`fibersweep.fiber.elastic`, with its length scale b/2).
+The bead velocities (positions q = (x0, y0, x1, ...), 2n) are
 
     f(q) = u(q) + M(q) F(q),
 
@@ -64,7 +65,7 @@ def bead_velocity(frame, flow, pillar, body, p, w, bw, effects):
     mob = bw.mob
     n = x.shape[0]
     F.velocity(frame, flow, x, y, u)
-    elastic_forces(x, y, p.a, p.stretch, p.bend, fx, fy)
+    elastic_forces(x, y, p.half_b, p.stretch, p.bend, fx, fy)
     exclusion_forces(x, y, p.excl_gap, p.excl_cut, p.excl_eq, p.excl_fref, fx, fy)
     n_c, cx, cy = F.contact(frame, pillar, x, y, cfx, cfy, w.st, w.dist)
     any_c = n_c > 0
@@ -153,7 +154,7 @@ def force_jacobian(frame, pillar, p, w, bw):
     for i in range(n2):
         for j in range(n2):
             jac[i, j] = 0.0
-    elastic_jacobian(x, y, p.a, p.stretch, p.bend, jac)
+    elastic_jacobian(x, y, p.half_b, p.stretch, p.bend, jac)
     exclusion_jacobian(x, y, p.excl_gap, p.excl_cut, p.excl_eq, p.excl_fref, jac)
     h = 1e-6 * p.a
     s = np.empty((8, 1))
@@ -191,8 +192,8 @@ def force_jacobian_fd(frame, pillar, p, w, bw):
     gy = bw.cfy
     st = w.st
     n = x.shape[0]
-    a = p.a
-    h = 1e-6 * a
+    a = p.half_b  # the springs' length scale, b/2
+    h = 1e-6 * p.a
     for i in range(2 * n):
         for j in range(2 * n):
             jac[i, j] = 0.0
@@ -227,11 +228,12 @@ def force_jacobian_fd(frame, pillar, p, w, bw):
 
 
 def chain(
-    n: int, a: float, x0: float, y0: float, th0: float, beads0: np.ndarray | None = None
+    n: int, half_b: float, x0: float, y0: float, th0: float, beads0: np.ndarray | None = None
 ) -> np.ndarray:
-    """Start positions q (2n,) [µm]: ``beads0`` (n, 2), or a straight chain of n beads 2a apart
-    centred on (x0, y0) [µm] along the angle th0 [rad] (bead n−1 the head)."""
+    """Start positions q (2n,) [µm]: ``beads0`` (n, 2), or a straight chain of n beads
+    2 ``half_b`` apart (the bead spacing b [µm]) centred on (x0, y0) [µm] along the angle
+    th0 [rad] (bead n−1 the head)."""
     if beads0 is None:
-        s = fiber_offsets(n, a)
+        s = fiber_offsets(n, half_b)
         beads0 = np.column_stack([x0 + s * math.cos(th0), y0 + s * math.sin(th0)])
     return np.ascontiguousarray(beads0, dtype=np.float64).reshape(-1).copy()

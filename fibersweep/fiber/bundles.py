@@ -35,13 +35,13 @@ from typing import NamedTuple
 import numpy as np
 
 from fibersweep.fiber.contact import PillarArrays, contact_force_scale
-from fibersweep.fiber.exclusion import GAP
 from fibersweep.fiber.frame import CHANNEL
 from fibersweep.fiber.hooks import BASELINE
 from fibersweep.fiber.mobility import body_mobility
 from fibersweep.fiber.rosw import METHODS
 from fibersweep.fiber.settings import ROSENBROCK, FiberSettings
 from fibersweep.fiber.setup import Setup
+from fibersweep.fiber.spacing import exclusion_force_scale, exclusion_gap, spacing_um
 
 __all__ = [
     "DEFAULT_DT",
@@ -113,8 +113,10 @@ class Params(NamedTuple):
     pi_control : ros2, ros34pw2: PI step-size controller (step.controller == "pi")
     excl_gap : bead-spring self-exclusion: beads |i − j| >= excl_gap repel (0: off;
         :mod:`fibersweep.fiber.exclusion`)
-    excl_cut, excl_eq, excl_fref : its cutoff χ·2a [µm], r_eq = 2a [µm] and F_ref [pN],
-        those of the pillar contact
+    excl_cut, excl_eq, excl_fref : its cutoff χ·2a [µm], r_eq = 2a [µm] and pair force
+        scale [pN]: the pillar contact's F_ref times (b/2a)² (:mod:`fibersweep.fiber.spacing`)
+    half_b : half the bead spacing, b/2 [µm]: the elastic energy's length scale (a for the
+        touching chain; :mod:`fibersweep.fiber.spacing`)
     """
 
     a: float
@@ -142,6 +144,7 @@ class Params(NamedTuple):
     excl_cut: float = math.nan
     excl_eq: float = math.nan
     excl_fref: float = math.nan
+    half_b: float = math.nan
 
 
 class Work(NamedTuple):
@@ -252,6 +255,7 @@ def make_params(
     dt = st.step.dt if st.step.dt is not None else (DEFAULT_DT if fixed else math.nan)
     ros2 = integrator in ROSENBROCK
     excl = st.self_exclusion and st.model == "bead-spring"
+    frac = st.bead_spacing
     return Params(
         a=a,
         mu=mu,
@@ -277,10 +281,11 @@ def make_params(
         rosw=METHODS.get(integrator, 0),
         w_reuse=int(st.step.jacobian_reuse),
         pi_control=st.step.controller == "pi",
-        excl_gap=GAP if excl else 0,
+        excl_gap=exclusion_gap(frac) if excl else 0,
         excl_cut=st.contact.chi * 2.0 * a,
         excl_eq=2.0 * a,
-        excl_fref=contact_force_scale(st.contact, mu, a, u_center),
+        excl_fref=contact_force_scale(st.contact, mu, a, u_center) * exclusion_force_scale(frac),
+        half_b=0.5 * spacing_um(a, frac),
     )
 
 

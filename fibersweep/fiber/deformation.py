@@ -7,7 +7,8 @@ length Λ = Σ|t_i|, per recorded configuration:
   angle between t_i and t_{i+1} (the discrete turning angle);
 - end-to-end ratio |r_n − r_1| / Λ (1 for a straight fiber);
 - tension of a segment: the stretching spring's force along it,
-  T_i = (S / 2a)(|t_i| − 2a) [pN] (positive when stretched, S = E π a²);
+  T_i = (S / b)(|t_i| − b) [pN] (positive when stretched, S = E π a², b the bead
+  spacing: 2a for touching beads);
 - wrap angle: the turning of the tangent, Σ φ_i with signs, over the beads
   between the first and last bead within ``r_cut + a/2`` of the pillar's outline
   (the beads touching or hugging it), in degrees; 0 for a straight fiber and
@@ -25,6 +26,7 @@ import numba as nb
 import numpy as np
 
 from fibersweep.fiber.contact import shape_distance
+from fibersweep.fiber.spacing import spacing_um
 
 __all__ = ["DEFORMATION_FIELDS", "deformation"]
 
@@ -40,6 +42,8 @@ DEFORMATION_FIELDS = {
 @nb.njit(cache=True)
 def _scan(beads, contact, verts, circle, near, a, stretch):
     """(max κ [1/µm], min end-to-end ratio, max T [pN], max |wrap| [rad]) over the rows.
+
+    ``a``: half the bead spacing b/2 [µm] (the springs' rest length is 2a).
 
     ``beads`` (rows, n, 2) [µm]; ``contact`` (rows,) 1 where the row is in contact
     (the wrap angle is evaluated only there); ``near`` the distance to the outline
@@ -94,6 +98,7 @@ def deformation(
     r_cut: float,
     a: float,
     young_modulus: float,
+    spacing: float = 1.0,
 ) -> dict[str, float]:
     """The run's deformation observables (see the module docstring).
 
@@ -113,6 +118,8 @@ def deformation(
         Bead radius [µm].
     young_modulus : float
         E [Pa] (= pN/µm²).
+    spacing : float
+        ``fiber.bead_spacing``: bead spacing b as a fraction of 2a (1: touching beads).
 
     Returns
     -------
@@ -129,7 +136,7 @@ def deformation(
         np.ascontiguousarray(vertices, dtype=np.float64),
         np.ascontiguousarray(circle, dtype=np.float64),
         float(r_cut + 0.5 * a),
-        float(a),
+        0.5 * spacing_um(a, spacing),
         float(young_modulus * math.pi * a * a),
     )
     return {

@@ -2,6 +2,11 @@
 
 H = Σ_i (S/4a)(|t_i| − 2a)² + Σ_i (B/2a)(1 − t̂_{i+1}·t̂_i), t_i = r_i − r_{i−1},
 S = E π a² [pN], B = E π a⁴/4 [pN·µm²]; F = −∇H.
+
+The functions' length ``a`` is half the springs' rest length: the bead radius for
+the source's chain of touching beads, b/2 for beads b apart
+(:mod:`fibersweep.fiber.spacing`), where H is Σ (S/2b)(|t_i| − b)² + Σ (B/b)(1 − c_i),
+the discretised ∫ (S/2) ε² + (B/2) κ² ds with S and B the radius-a fiber's.
 """
 
 from __future__ import annotations

@@ -347,7 +347,7 @@ def run_rosenbrock(
         Record rows (record.COLS), bead positions (rows, n, 2) [µm], stop code.
     """
     n = k.body.s.shape[0]
-    q = chain(n, k.params.a, x0, y0, th0, beads0)
+    q = chain(n, k.params.half_b, x0, y0, th0, beads0)
     h0 = min(1e-5, k.params.dt_max)
     state = np.array([0.0, math.nan, th0, h0, 0.0])
     scratch = [np.zeros(2 * n) for _ in range(5)]

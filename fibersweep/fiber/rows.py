@@ -39,6 +39,7 @@ from fibersweep.fiber.effects import DynamicsContext, EffectSet, build_effects
 from fibersweep.fiber.effects.base import Effect
 from fibersweep.fiber.models import get_integrator
 from fibersweep.fiber.settings import FiberSettings
+from fibersweep.fiber.spacing import bead_force_scale
 
 __all__ = ["PAD", "array_kernel", "array_pillar", "check_array_effects", "run_array_fiber"]
 
@@ -71,9 +72,11 @@ def check_array_effects(settings: FiberSettings) -> EffectSet:
 
 
 def array_pillar(array, settings: FiberSettings, mu: float, u_center: float) -> Pillar:
-    """The cell's pillar with the channel's contact law (F_ref = 6πμa|u_center| unless set)."""
+    """The cell's pillar with the channel's contact law (F_ref = 6πμa|u_center| unless set;
+    per bead, times b/2a for a chain finer than touching beads, :mod:`.spacing`)."""
     a = settings.bead_radius
     f_ref = contact_force_scale(settings.contact, mu, a, u_center)
+    f_ref *= bead_force_scale(settings.bead_spacing)
     return make_pillar(array.cell_geometry, settings.contact, a, f_ref)
 
 

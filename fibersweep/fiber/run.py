@@ -27,12 +27,12 @@ from fibersweep.errors import InputError
 from fibersweep.fiber import record as R
 from fibersweep.fiber.bundles import Kernel, build_kernel
 from fibersweep.fiber.deformation import deformation
-from fibersweep.fiber.mobility import fiber_offsets
 from fibersweep.fiber.models import integrator_of
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
 from fibersweep.fiber.rigid import seed_numba
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.fiber.setup import Setup, prepare
+from fibersweep.fiber.spacing import offsets
 from fibersweep.flow.field import FlowField
 
 __all__ = ["simulate", "simulate_for", "simulate_reversible"]
@@ -86,6 +86,7 @@ def _result(
                 setup.pillar.r_cut,
                 st.bead_radius,
                 st.young_modulus,
+                st.bead_spacing,
             )
         )
     k = first_contact_index(traj)
@@ -101,7 +102,7 @@ def _result(
         idx = thin_indices(traj, st.record.samples, setup.u_center, st.classify)
         kept = take(traj, idx)
         if st.record.all_beads and kept.beads is None:
-            s = fiber_offsets(setup.n, st.bead_radius)
+            s = offsets(setup.n, st.bead_radius, st.bead_spacing)
             th = rec[idx, R.TH]
             bx = rec[idx, R.XC][:, None] + np.cos(th)[:, None] * s[None, :]
             by = rec[idx, R.YC][:, None] + np.sin(th)[:, None] * s[None, :]
@@ -207,7 +208,7 @@ def simulate_reversible(
     rec, beads, code = _integrate(setup, k, fwd.x_f, fwd.y_f, th_f, beads_f)
     if code < 0:
         return fwd, math.nan
-    s = fiber_offsets(setup.n, settings.bead_radius)
+    s = offsets(setup.n, settings.bead_radius, settings.bead_spacing)
     end = rec[-1]
     p0 = np.column_stack(
         [setup.x0 + s * math.cos(setup.th0), setup.y0_abs + s * math.sin(setup.th0)]

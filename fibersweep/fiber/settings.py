@@ -184,6 +184,15 @@ class FiberSettings(_Strict):
         description="bead-spring models: non-neighbouring beads repel with the pillar's "
         "contact law, so a fiber cannot pass through itself (docs/flexible.md)",
     )
+    bead_spacing: float = Field(
+        1.0,
+        gt=0.0,
+        le=1.0,
+        description="bead-spring model: distance between bead centres as a fraction of the "
+        "bead diameter 2a (1: touching beads, the source's chain; 0.5: b = a). Same radius, "
+        "S and B at every spacing; contact and self-exclusion scaled per bead "
+        "(docs/flexible.md)",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -246,6 +255,31 @@ class FiberSettings(_Strict):
             )
         return None if value == INTEGRATORS[model][0] else value
 
+    @field_validator("bead_spacing")
+    @classmethod
+    def _spacing_of_a_chain(cls, value: float, info: ValidationInfo) -> float:
+        """A bead spacing other than 2a is a bead-spring chain's: the rigid model's beads
+        touch (its body mobility is validated for that chain)."""
+        if value != 1.0 and info.data.get("model") == "rigid":
+            raise ValueError(
+                f"{value!r}: a bead spacing other than 1 (touching beads) needs "
+                "fiber.model: bead-spring; the rigid model's beads are 2a apart"
+            )
+        return value
+
+    @model_validator(mode="after")
+    def _spacing_without_effects(self) -> FiberSettings:
+        """The effects' per-bead forces and mobilities are written for touching beads; a
+        finer chain runs without them until each is scaled and validated per bead."""
+        active = sorted(k for k, v in self.effects.items() if v != 0.0)
+        if self.bead_spacing != 1.0 and active:
+            raise ValueError(
+                f"fiber.bead_spacing: {self.bead_spacing!r} with the effect(s) "
+                f"{', '.join(active)}: effects act per bead and are validated for touching "
+                "beads only; set bead_spacing: 1 or turn the effects off"
+            )
+        return self
+
     @property
     def resolved_integrator(self) -> str:
         """The integrator that runs: ``integrator``, or the model's default when unset."""
@@ -253,9 +287,9 @@ class FiberSettings(_Strict):
 
     @model_serializer(mode="wrap")
     def _defaults_left_out(self, handler: Any) -> dict[str, Any]:
-        """``array_rows``, ``self_exclusion`` and an unset ``integrator`` are written only away
-        from their defaults, so the dump, the run ids and the manifest of every config that
-        does not set them stay as before they existed."""
+        """``array_rows``, ``self_exclusion``, ``bead_spacing`` and an unset ``integrator`` are
+        written only away from their defaults, so the dump, the run ids and the manifest of
+        every config that does not set them stay as before they existed."""
         data = handler(self)
         if isinstance(data, dict):
             for key, default in _HIDDEN_DEFAULTS.items():
@@ -269,6 +303,7 @@ _HIDDEN_DEFAULTS: dict[str, Any] = {
     "array_rows": ARRAY_ROWS,
     "self_exclusion": True,
     "integrator": None,
+    "bead_spacing": 1.0,
 }
 
 

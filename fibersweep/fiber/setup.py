@@ -10,9 +10,9 @@ import numpy as np
 from fibersweep.errors import InputError
 from fibersweep.fiber.contact import Pillar, contact_force_scale, make_pillar
 from fibersweep.fiber.effects import DynamicsContext, EffectSet, build_effects
-from fibersweep.fiber.mobility import fiber_offsets
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.settings import FiberSettings
+from fibersweep.fiber.spacing import bead_force_scale, n_beads, offsets
 from fibersweep.flow.field import FlowField
 from fibersweep.units import Geometry
 
@@ -116,7 +116,7 @@ def check_start(
         _finite(name, float(getattr(start, name)))
     a = settings.bead_radius
     length_um = start.length * geo.pillar_base_length
-    n = int(round(length_um / (2.0 * a)))
+    n = n_beads(length_um, a, settings.bead_spacing)
     if start.length <= 0 or n < MIN_BEADS:
         raise InputError(
             f"length: L/l_obs = {start.length} is {length_um:.3g} µm, {n} bead(s) of "
@@ -133,7 +133,7 @@ def check_start(
     th0 = math.radians(start.theta0)
     if math.cos(th0) < 0.0:  # keep bead n-1 as the leading bead (the head)
         th0 += math.pi
-    s = fiber_offsets(n, a)
+    s = offsets(n, a, settings.bead_spacing)
     bx = x0 + s * math.cos(th0)
     by = y0_abs + s * math.sin(th0)
     if by.min() - a <= 0.0 or by.max() + a >= geo.width:
@@ -170,7 +170,7 @@ def prepare(
     if u_center == 0.0:
         raise InputError("u_center: the field has zero speed")
     f_ref = contact_force_scale(settings.contact, field.fluid.viscosity, a, u_center)
-    pillar = make_pillar(geo, settings.contact, a, f_ref)
+    pillar = make_pillar(geo, settings.contact, a, f_ref * bead_force_scale(settings.bead_spacing))
     place = check_start(geo, float(field.dx), settings, start, pillar)
     ctx = DynamicsContext(
         bead_radius=a,
