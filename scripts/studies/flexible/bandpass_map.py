@@ -2,7 +2,8 @@
 
 Usage::
 
-    python3 scripts/studies/flexible/bandpass_map.py run OUT [--geometries G0 G1 G2 G4] [--moduli ...]
+    python3 scripts/studies/flexible/bandpass_map.py run OUT [--geometries G0 G1 G2 G4]
+        [--moduli ...]
         [--fractions ...] [--count N] [--rows R] [--spacing B] [--cores C]
         [--refine-runs M] [--contact rough|smooth] [--time-scale K] [--deadline S]
     python3 scripts/studies/flexible/bandpass_map.py summary OUT
