@@ -56,6 +56,23 @@ class LocalOptions(ExecutorOptions):
     )
 
 
+#: Thread counts of the BLAS libraries numpy may use, read when a process loads numpy.
+BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def _one_blas_thread_per_worker() -> None:
+    """Spawned workers start with one BLAS thread each, unless the user chose a count.
+
+    Each worker is one core's share of the pool: a BLAS call that spreads over every
+    core (the bead-spring integrators' W = M J product does from 51 beads up) competes
+    with the other workers, and such runs took 13-50 s against 1 s with one thread.
+    The variables are read by a worker when it loads numpy, so they are set here, in
+    the environment the workers inherit, before the pool starts them.
+    """
+    for var in BLAS_THREAD_VARS:
+        os.environ.setdefault(var, "1")
+
+
 class LocalExecutor:
     """``concurrent.futures.ProcessPoolExecutor`` (spawned processes) with crash recovery.
 
@@ -134,6 +151,7 @@ class LocalExecutor:
         self, initializer: Callable[..., None] | None, initargs: tuple
     ) -> ProcessPoolExecutor:
         self.pools_started += 1
+        _one_blas_thread_per_worker()
         # spawn: no inherited locks or threads from the parent (fork is unsafe with threads).
         return ProcessPoolExecutor(
             max_workers=self.workers,

@@ -52,4 +52,9 @@ def square(job: Job) -> dict:
         else:
             os.close(fd)
             os._exit(4)
-    return {"x2": job.x**2, "pid": os.getpid(), "tag": _INIT.get("tag")}
+    return {
+        "x2": job.x**2,
+        "pid": os.getpid(),
+        "tag": _INIT.get("tag"),
+        "blas": {v: os.environ.get(v) for v in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")},
+    }
