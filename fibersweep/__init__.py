@@ -1,4 +1,10 @@
-"""fibersweep: rigid fibers meeting a triangular pillar in a shallow microchannel."""
+"""fibersweep: fibers, rigid or flexible, carried by a Stokes flow past pillars.
+
+One pillar in a shallow channel, or a tilted pillar array that sorts fibers by
+length: the flow is solved once (lattice Boltzmann, cached), then one fiber run
+per point of a sweep, stored as Parquet; ``fibersweep.load`` reads a results
+folder back with the unit and meaning of every column.
+"""
 
 from importlib.metadata import PackageNotFoundError, version
 

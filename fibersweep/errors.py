@@ -5,6 +5,7 @@ from __future__ import annotations
 __all__ = [
     "RUN_ERRORS",
     "FibersweepError",
+    "FieldError",
     "InputError",
     "ResultsError",
     "RunBug",
@@ -19,6 +20,20 @@ class FibersweepError(Exception):
 
 class InputError(FibersweepError, ValueError):
     """Bad input a user can fix (config, arguments, data files). CLI exit code 2."""
+
+
+class FieldError(ValueError):
+    """A check across several fields that fails at one of them.
+
+    Raised by model validators with the field's dotted ``path`` relative to the
+    model that raised it; the config loader reports the problem at that field's
+    line instead of at the model's.
+    """
+
+    def __init__(self, path: str | tuple, message: str) -> None:
+        super().__init__(message)
+        # a tuple keeps parts that hold dots themselves (a swept setting key)
+        self.path = tuple(path) if isinstance(path, tuple) else tuple(path.split("."))
 
 
 class SolverError(FibersweepError, RuntimeError):

@@ -21,12 +21,24 @@ from typing import Any
 
 from tqdm import tqdm
 
-__all__ = ["LINE_INTERVAL_S", "TTY_INTERVAL_S", "LineTqdm", "finish", "progress_bar"]
+__all__ = [
+    "LINE_INTERVAL_S",
+    "TTY_INTERVAL_S",
+    "WARMING_FORMAT",
+    "LineTqdm",
+    "finish",
+    "progress_bar",
+    "start_clock",
+    "WarmingBar",
+]
 
 #: Seconds between redraws of a live bar on a terminal [s].
 TTY_INTERVAL_S = 0.2
 #: Seconds between plain lines into a file [s] (docs/cli.md promises 10 s).
 LINE_INTERVAL_S = 10.0
+#: Bar format while the first units include start-up (compiling kernels): no rate, no
+#: remaining time, which that start-up would make meaningless (:func:`start_clock`).
+WARMING_FORMAT = "{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}{postfix}]"
 
 
 class LineTqdm(tqdm):
@@ -133,6 +145,74 @@ def progress_bar(
     # tqdm reads TQDM_<OPTION> as a default that an explicit argument would hide
     defaults = {k: v for k, v in defaults.items() if f"TQDM_{k.upper()}" not in os.environ}
     return cls(total=total, desc=desc, unit=unit, file=fp, **{**defaults, **kwargs})
+
+
+def start_clock(bar: tqdm | None) -> None:
+    """Count the bar's rate, and so its remaining time, from now on.
+
+    The units before (a sweep's first runs, which include the workers' start-up:
+    compiling the kernels on first use, up to a minute) are left out of the rate.
+    The elapsed time stays the true one, and the final line's overall rate
+    includes everything.
+    """
+    if bar is None or getattr(bar, "disable", False):
+        return
+    from tqdm.std import EMA
+
+    bar.smoothing = bar.smoothing or 0.3  # the average over all units would count start-up
+    bar._ema_dn = EMA(bar.smoothing)
+    bar._ema_dt = EMA(bar.smoothing)
+    bar.last_print_n = bar.n
+    bar.last_print_t = bar._time()
+
+
+class WarmingBar:
+    """A :func:`progress_bar` whose rate and remaining time start after its first ``warm``
+    units.
+
+    Until then it is drawn with :data:`WARMING_FORMAT` (no rate, no estimate) and
+    ``note`` as its postfix; after them :func:`start_clock` restarts the rate, and
+    the usual format returns once tqdm has measured a rate since. Everything else
+    is the bar's (``set_postfix_str``, ``close``, ``n``...).
+
+    Parameters
+    ----------
+    total : int
+        Units the bar counts.
+    warm : int
+        Units that include start-up (e.g. one run per worker).
+    note : str
+        Postfix shown until the first unit is done.
+    **kwargs
+        Further :func:`progress_bar` options.
+    """
+
+    def __init__(self, total: int, warm: int, note: str = "", **kwargs: Any) -> None:
+        self._bar = progress_bar(total=total, bar_format=WARMING_FORMAT, postfix=note or None,
+                                 **kwargs)  # fmt: skip
+        self._warm = max(1, int(warm))
+        self._done = 0
+        self._clock = False
+
+    def update(self, n: int = 1) -> None:
+        bar = self._bar
+        bar.update(n)
+        self._done += n
+        if not self._clock and self._done >= self._warm:
+            start_clock(bar)
+            self._clock = True
+        elif self._clock and bar.bar_format is not None and bar._ema_dt():
+            bar.bar_format = None  # a rate measured after start-up: show it, and the estimate
+            bar.refresh()
+
+    def close(self) -> None:
+        """Close the bar; its last line gives the overall rate, start-up included."""
+        if not getattr(self._bar, "disable", False):
+            self._bar.bar_format = None
+        self._bar.close()
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._bar, name)
 
 
 def finish(bar: tqdm | None) -> None:

@@ -5,6 +5,14 @@ table, the trajectories, the resolved settings, the provenance and, for every
 column, its unit and meaning (the Parquet field metadata each column carries).
 A folder whose class column mixes pole-vaulting rules logs a warning and lists
 it in ``warnings``.
+
+The units and meanings follow the geometry the results were made with: past one
+pillar in a channel, ``y0`` is in units of h_obs and ``length`` of l_obs; in a
+pillar array (``flow.array``), ``y0`` is a fraction of ``period_y`` and ``length``
+is in µm, and the channel's outcome columns (``class``, ``delta``...) are empty
+(:data:`ARRAY_COLUMNS`). For array results, :meth:`Results.fraction_summary` is
+the f summary per setting and length that ``sort-report`` prints: f over the
+runs that were not trapped, with the trapped share beside it.
 """
 
 from __future__ import annotations
@@ -19,9 +27,33 @@ import pyarrow.parquet as pq
 
 from fibersweep.errors import InputError
 
-__all__ = ["Results", "load_results"]
+__all__ = ["ARRAY_COLUMNS", "Results", "load_results"]
 
 log = logging.getLogger(__name__)
+
+#: Unit and meaning of the columns that differ in a pillar array's results.
+ARRAY_COLUMNS: dict[str, tuple[str, str]] = {
+    "y0": (
+        "period_y",
+        "start lateral position of the centre of mass, as a fraction of period_y (0..1), "
+        "in the gap before row 0",
+    ),
+    "length": ("µm", "fiber length L"),
+    "x_f": ("µm", "final centre-of-mass x, array frame (the unit cell's pillar at row 0)"),
+    "y_f": ("µm", "final centre-of-mass y, array frame"),
+    "class": ("", "not used in a pillar array (empty): the outcome is mode"),
+    "delta": ("", "not defined in a pillar array (NaN): see fraction and shift_per_row"),
+    "theta_c": ("deg", "not defined in a pillar array (NaN): see contacts"),
+    "y_c": ("", "not defined in a pillar array (NaN)"),
+    "t_contact": ("s", "not defined in a pillar array (NaN): see time_on_pillars"),
+    "t_pass": ("s", "not defined in a pillar array (NaN): see t_end"),
+    "fraction": (
+        "",
+        "shift_per_row / (shift period_y): 1 follows the tilt, 0 the flow; a trapped run's "
+        "counts only the rows before it stopped, so f summaries leave trapped runs out "
+        "(Results.fraction_summary, sort-report) and give their share",
+    ),
+}
 
 
 @dataclass(frozen=True)
@@ -51,6 +83,9 @@ class Results:
         The whole manifest.json.
     warnings : list of str
         What a reader should know (e.g. a class column that mixes rules).
+    geometry : str
+        ``'channel'`` (one pillar) or ``'array'`` (``flow.array``): what ``units`` and
+        ``docs`` describe.
     """
 
     path: Path
@@ -62,6 +97,32 @@ class Results:
     provenance: dict[str, Any]
     manifest: dict[str, Any] = field(repr=False)
     warnings: list[str] = field(default_factory=list)
+    geometry: str = "channel"
+
+    def fraction_summary(self) -> pd.DataFrame:
+        """The f summary of a pillar array's runs, per setting combination and length.
+
+        f (and the migration angle) are averaged over the runs that were **not
+        trapped**; the share that was trapped is the ``trapped`` column, and
+        ``moving`` counts the runs averaged. These are the numbers ``sort-report``
+        prints (with the stored modes; ``sort-report`` can re-label them with other
+        thresholds). Columns and their meaning:
+        :data:`fibersweep.sweep.sort_report.MIGRATION_DOCS`.
+
+        Raises
+        ------
+        InputError
+            The results are not a pillar array's.
+        """
+        from fibersweep.sweep.sort_report import migration_table, with_settings
+
+        if self.geometry != "array":
+            raise InputError(
+                f"{self.path}: fraction_summary is for pillar-array results (flow.array); "
+                "these are a channel's, summarised by class"
+            )
+        runs, _ = with_settings(self.runs[self.runs["mode"].notna()].copy(), self.manifest)
+        return migration_table(runs)
 
     def trajectory(self, run_id: str) -> pd.DataFrame:
         """Samples of one run, in time order (empty if it has none)."""
@@ -121,6 +182,11 @@ def load_results(results: str | Path, trajectories: bool = True) -> Results:
     runs = read_runs(out)
     traj = read_traj(out) if trajectories else pd.DataFrame(columns=["id", "sample"])
     units, docs = _field_docs(list_parts(out / RUNS_DIR) + list_parts(out / TRAJ_DIR)[-1:])
+    array = bool((man.get("config") or {}).get("flow", {}).get("array"))
+    if array:  # the store's column docs are the channel's: say what they are here
+        for c, (u, d) in ARRAY_COLUMNS.items():
+            if c in runs.columns:
+                units[c], docs[c] = u, d
     runs.attrs["units"] = {c: units[c] for c in runs.columns if c in units}
     traj.attrs["units"] = {c: units[c] for c in traj.columns if c in units}
     warnings = [w for w in [mixed_rules_message(runs, out)] if w]
@@ -136,4 +202,5 @@ def load_results(results: str | Path, trajectories: bool = True) -> Results:
         provenance=man.get("provenance", {}),
         manifest=man,
         warnings=warnings,
+        geometry="array" if array else "channel",
     )

@@ -1,7 +1,8 @@
 """Speed of the pillar-array pieces against the issue's targets (prints ratios).
 
 1. Unit-cell field at dx = 2 µm (100 µm periods, 40 µm deep, triangle 50 µm, ε = 0.1):
-   target under 60 s on 2 cores (Numba compiled beforehand on a coarse cell).
+   target under 60 s on 2 cores (Numba compiled beforehand on a coarse cell);
+   scripts/bench_cell.py times it against another checkout.
 2. One rigid fiber (L = 80 µm) through 50 rows: target under 2 s (compiled beforehand).
 3. A sweep of --starts starts over 10 lengths on 2 workers, rows 20, field included
    (``fibersweep run`` with ``flow.array`` and ``sweep.random``), extrapolated to 1000
@@ -44,14 +45,14 @@ def main() -> None:
                   "random": {"count": 1}},
     })  # fmt: skip
     arr = cfg.flow.array.to_array()
-    solve_cell(arr, 5.0, tolerance=1e-3)  # compile the kernels on a coarse cell
+    solve_cell(cfg.flow.model_copy(update={"dx": 5.0, "tolerance": 1e-3}))  # compile the kernels
     t0 = time.perf_counter()
-    sol = solve_cell(arr, 2.0)
+    sol = solve_cell(cfg.flow)
     t_field = time.perf_counter() - t0
     g = sol.grid
     print(f"1. unit cell {g.nx}x{g.ny}x{g.nz} (half depth), {sol.steps} steps (both solves), "
           f"{t_field:.1f} s -> {t_field / 60.0:.2f} of the 60 s target")  # fmt: skip
-    field = field_of(arr, sol, 600.0, "interpolated")
+    field = field_of(cfg.flow, sol)
     x0 = start_x(arr)
     warm = array_run_kernel(field, cfg.fiber, 80.0, x_end=x0 + 100.0)
     run_array_fiber(warm, "rigid", x0, 0.0, 0.0)  # compile

@@ -22,13 +22,31 @@ tighter tolerance than ROS2 for the same error). Errors are taken against the
 the largest bead error at a common time. It
 prints the ratios of the wall times (fixed/ros3, ros2/ros3, fixed/ros2),
 measured in the same run, and their min / median / max over the grid.
+
+With ``--against TREE`` (a checkout of another version), it times every (E, L)
+of the grid with each integrator of ``--integrators`` (fixed, ros2, ros3; tolerances
+at their defaults) in this tree and in TREE alternately (each first in turn),
+``--rounds`` times each in fresh processes (Numba compiled beforehand in each), and
+prints the ratio
+this/other of the median over rounds of each round's minimum of ``--repeat`` runs,
+and whether both took the same steps. ``--cpu`` times the process's CPU time instead
+of the wall clock (steadier when other work loads the cores). The settings are spelled so that every
+version reads them (the former model name ``bead-spring-ros2``).
+
+Usage: python scripts/bench_flexible.py --against /tmp/before [--rounds 3] [--repeat 3]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import os
+import statistics
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -128,6 +146,69 @@ def equal_accuracy(field, y0: float, moduli, lengths) -> None:
               f"max {max(v):.1f}")  # fmt: skip
 
 
+#: --against: each integrator as (model, step settings), in a spelling every version reads
+INTEGRATORS = {
+    "fixed": ("bead-spring", {}),
+    "ros2": ("bead-spring-ros2", {}),
+    "ros3": ("bead-spring-ros2", {"rosenbrock": "ros34pw2"}),
+}
+
+
+def child(args: argparse.Namespace) -> None:
+    """Timings of the tree on PYTHONPATH, as JSON {case: [minimum seconds, steps]}."""
+    field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
+    warm = FiberStart(0.0, 0.8, 0.5)
+    out = {}
+    for name in args.integrators:
+        model, step = INTEGRATORS[name]
+        simulate(field, _settings(model, 26e6, step), warm)  # compile
+        for E in args.moduli:
+            for L in args.lengths:
+                st = _settings(model, E, step)
+                times = []
+                clock = time.process_time if args.cpu else time.perf_counter
+                for _ in range(args.repeat):
+                    t0 = clock()
+                    r = simulate(field, st, FiberStart(0.0, args.y0, L))
+                    times.append(clock() - t0)
+                out[f"{name:5s} E = {E / 1e6:g} MPa, L/l = {L:g}"] = [min(times), r.n_steps]
+    print(json.dumps(out))
+
+
+def against(args: argparse.Namespace) -> None:
+    """This tree and ``args.against``, alternately in fresh processes: ratios this/other."""
+    here = Path(__file__).resolve().parent.parent
+    trees = {"this": here, "other": args.against.resolve()}
+    argv = [sys.executable, str(Path(__file__).resolve()), "--child", "--dx", str(args.dx),
+            "--cache", str(Path(args.cache).resolve()), "--repeat", str(args.repeat),
+            "--y0", str(args.y0), "--moduli", *map(str, args.moduli),
+            "--lengths", *map(str, args.lengths), "--integrators", *args.integrators,
+            *(["--cpu"] if args.cpu else [])]  # fmt: skip
+    times: dict[tuple[str, str], list[float]] = {}
+    steps: dict[tuple[str, str], int] = {}
+    for rnd in range(args.rounds):
+        order = list(trees.items())
+        for name, tree in order[:: 1 if rnd % 2 == 0 else -1]:  # each tree first in turn
+            env = {**os.environ, "PYTHONPATH": str(tree)}
+            run = subprocess.run(argv, cwd=tree, env=env, capture_output=True, text=True)
+            if run.returncode != 0:
+                raise SystemExit(f"{tree}: {run.stderr}")
+            for case, (t, n) in json.loads(run.stdout.strip().splitlines()[-1]).items():
+                times.setdefault((case, name), []).append(t)
+                steps[(case, name)] = n
+            print(f"round {rnd} {name} done", flush=True)
+    clock = "CPU" if args.cpu else "wall"
+    print(f"this: {trees['this']}\nother: {trees['other']}\n{args.rounds} rounds, each the "
+          f"minimum of {args.repeat} runs ({clock} time); ratio of the medians over rounds; "
+          f"y0/h = {args.y0}")  # fmt: skip
+    for case in dict.fromkeys(c for c, _ in times):
+        a = statistics.median(times[(case, "this")])
+        b = statistics.median(times[(case, "other")])
+        same = "same" if steps[(case, "this")] == steps[(case, "other")] else "DIFFERENT"
+        print(f"  {case:<32} this {a * 1e3:9.1f} ms  other {b * 1e3:9.1f} ms  "
+              f"ratio {a / b:.3f}  ({same} steps)")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dx", type=float, default=4.0)
@@ -139,7 +220,20 @@ def main() -> None:
     ap.add_argument("--reference-moduli", type=float, nargs="*", default=[26e6])
     ap.add_argument("--reference-lengths", type=float, nargs="*", default=[1.0])
     ap.add_argument("--equal-accuracy", action="store_true", help="only the matched-error table")
+    ap.add_argument("--against", type=Path, help="another checkout: before/after ratios")
+    ap.add_argument("--rounds", type=int, default=3, help="rounds per tree (--against)")
+    ap.add_argument("--repeat", type=int, default=3, help="runs per case and round (--against)")
+    ap.add_argument("--integrators", nargs="+", choices=list(INTEGRATORS),
+                    default=list(INTEGRATORS), help="--against: the integrators timed")  # fmt: skip
+    ap.add_argument("--cpu", action="store_true", help="--against: CPU time, not wall time")
+    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.child:
+        child(args)
+        return
+    if args.against is not None:
+        against(args)
+        return
     field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
     warm = FiberStart(0.0, 0.8, 0.5)
     for m in ("bead-spring", "bead-spring-ros2"):

@@ -29,7 +29,8 @@ import numpy as np
 
 from fibersweep.flow.cuts import pillar_cuts
 from fibersweep.flow.initial import duct_guess, velocity_gradient
-from fibersweep.flow.lbm import _rates, coarser_settings, lattice_of, solve_lattice
+from fibersweep.flow.lbm import coarser_settings, lattice_of, solve_lattice
+from fibersweep.flow.lbm import rates as solve_rates
 from fibersweep.flow.prolong import prolong
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.steppers import make_stepper
@@ -49,7 +50,7 @@ def _stepper(dx: float, boundary: str, precision: str):
     s = _settings(dx, boundary, precision)
     grid = lattice_of(s)
     cuts = pillar_cuts(grid, s.geometry.to_geometry().vertices, boundary)
-    tau, wp, wm, fx = _rates(s, grid)
+    tau, wp, wm, fx = solve_rates(s, grid)
     u0 = duct_guess(grid, fx / ((tau - 0.5) / 3.0))
     rho0 = np.zeros(u0.shape[1:])
     st = make_stepper(
@@ -100,7 +101,7 @@ def child_memory(dx: float, boundary: str, precision: str, threads: int) -> None
     Path("/proc/self/clear_refs").write_text("5")  # reset the peak (VmHWM) to now
     base = _vm_kb("VmRSS")
     fine_grid = lattice_of(s)
-    scale = _rates(s, fine_grid)[3] / coarse.report.force * (coarse.grid.dx / fine_grid.dx)
+    scale = solve_rates(s, fine_grid)[3] / coarse.report.force * (coarse.grid.dx / fine_grid.dx)
     start = list(prolong(coarse.u, coarse.rho, coarse.grid, fine_grid, scale))
     sol = solve_lattice(s, initial=start.pop(0), initial_rho=start.pop(0))
     peak = _vm_kb("VmHWM")

@@ -10,9 +10,13 @@ of resolution or model moves.
   exit status 1 on any difference;
 * ``--snapshot``: A and B are folders of ``scripts/snapshot_discrepancy.py``
   (the discrepancy workflow's every simulated batch, the synthesised tables and
-  the verdict), compared bit for bit the same way.
+  the verdict), compared bit for bit the same way;
+* ``--by-start``: match runs on their start (θ0, y0, length) and swept settings
+  instead of their id, for two fields whose keys differ (a change of the flow
+  solver changes every run id); with array runs also the transport mode and the
+  displaced fraction f, run by run and averaged per length.
 
-Usage:  python scripts/compare_runs.py RESULTS_A RESULTS_B [--exact | --snapshot]
+Usage:  python scripts/compare_runs.py RESULTS_A RESULTS_B [--exact | --snapshot | --by-start]
 """
 
 from __future__ import annotations
@@ -97,22 +101,44 @@ def snapshot(a: str, b: str) -> int:
     return bad + (va != vb)
 
 
-def summary(a_dir: str, b_dir: str) -> None:
-    """Class changes and the largest δ difference of runs with the same id."""
+def _start_key(runs: pd.DataFrame) -> list[str]:
+    """Columns that say which run it is: the start and every swept setting."""
+    return ["theta0", "y0", "length", *sorted(c for c in runs.columns if "." in c)]
+
+
+def summary(a_dir: str, b_dir: str, by_start: bool = False) -> None:
+    """Class (and mode) changes and the largest δ (and f) difference of matching runs."""
     a, b = read_runs(a_dir), read_runs(b_dir)
-    m = a.merge(b, on="id", suffixes=("_a", "_b"))
-    print(f"runs: {len(a)} in A, {len(b)} in B, {len(m)} with the same id")
+    key = _start_key(a) if by_start else ["id"]
+    m = a.merge(b, on=key, suffixes=("_a", "_b"))
+    same = "start" if by_start else "id"
+    print(f"runs: {len(a)} in A, {len(b)} in B, {len(m)} with the same {same}")
     changed = m[m["class_a"] != m["class_b"]]
     print(f"class changed: {len(changed)} of {len(m)}")
     if len(changed):
-        cols = ["theta0_a", "y0_a", "length_a", "class_a", "class_b"]
-        print(changed[cols].to_string(index=False))
+        cols = ["theta0", "y0", "length"] if by_start else ["theta0_a", "y0_a", "length_a"]
+        print(changed[[*cols, "class_a", "class_b"]].to_string(index=False))
     da, db = m["delta_a"].to_numpy(float), m["delta_b"].to_numpy(float)
     both = np.isfinite(da) & np.isfinite(db)
     nan_mismatch = int((np.isfinite(da) != np.isfinite(db)).sum())
     dmax = float(np.max(np.abs(da[both] - db[both]))) if both.any() else 0.0
     print(f"delta: max |A - B| = {dmax:.3g} h_obs over {int(both.sum())} runs; "
           f"NaN in one only: {nan_mismatch}")  # fmt: skip
+    if "mode_a" in m:
+        moved = m[m["mode_a"] != m["mode_b"]]
+        print(f"mode changed: {len(moved)} of {len(m)}")
+        if len(moved):
+            cols = [*key, "mode_a", "mode_b", "fraction_a", "fraction_b"]
+            print(moved[cols].to_string(index=False))
+        fa, fb = m["fraction_a"].to_numpy(float), m["fraction_b"].to_numpy(float)
+        ok = np.isfinite(fa) & np.isfinite(fb)
+        worst = float(np.max(np.abs(fa[ok] - fb[ok]))) if ok.any() else 0.0
+        print(f"f: max |A - B| = {worst:.3g} over {int(ok.sum())} runs")
+        group = [c for c in key if c not in ("theta0", "y0")]
+        per = m.groupby(group)[["fraction_a", "fraction_b"]].mean()
+        per["|A - B|"] = (per["fraction_a"] - per["fraction_b"]).abs()
+        print("mean f per length (and setting):")
+        print(per.to_string())
 
 
 def main() -> None:
@@ -122,12 +148,14 @@ def main() -> None:
     mode = ap.add_mutually_exclusive_group()
     mode.add_argument("--exact", action="store_true", help="every column, bit for bit")
     mode.add_argument("--snapshot", action="store_true", help="two discrepancy snapshots")
+    mode.add_argument("--by-start", action="store_true",
+                      help="match runs on start and swept settings, not id")  # fmt: skip
     args = ap.parse_args()
     if args.exact:
         sys.exit(1 if exact(args.a, args.b) else 0)
     if args.snapshot:
         sys.exit(1 if snapshot(args.a, args.b) else 0)
-    summary(args.a, args.b)
+    summary(args.a, args.b, by_start=args.by_start)
 
 
 if __name__ == "__main__":

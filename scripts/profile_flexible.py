@@ -1,4 +1,4 @@
-"""Where the time of a ``bead-spring-ros2`` pillar pass goes; prints a per-part table.
+"""Where the time of a Rosenbrock-W bead-spring pillar pass goes; prints a per-part table.
 
 Usage: python scripts/profile_flexible.py [--dx 4] [--cache .fibersweep-cache]
        [--young-modulus 26e6] [--length 1.0] [--y0 0.45] [--tolerance 0.01]
@@ -24,13 +24,14 @@ import time
 import numba as nb
 import numpy as np
 
-from fibersweep.fiber import implicit_beadspring as I
 from fibersweep.fiber import record as R
+from fibersweep.fiber import rosenbrock as I
 from fibersweep.fiber.beadspring import bead_velocity, force_jacobian, force_jacobian_fd
 from fibersweep.fiber.bundles import build_kernel
 from fibersweep.fiber.lu import lu_solve
 from fibersweep.fiber.mobility import fiber_offsets, rpy_fill
 from fibersweep.fiber.result import FiberStart
+from fibersweep.fiber.rosw import GAMMA2
 from fibersweep.fiber.run import simulate
 from fibersweep.fiber.settings import FiberSettings, StepSettings
 from fibersweep.fiber.setup import prepare
@@ -95,7 +96,7 @@ def _t_wmatrix(k, beads):
 @nb.njit  # not cached: a cache here would not see edits of the package kernels
 def _t_factor(k, reps, piv):
     for _ in range(reps):
-        I.system(k.bead, 1e-4, piv, I.GAMMA)
+        I.system(k.bead, 1e-4, piv, GAMMA2)
 
 
 @nb.njit  # not cached: a cache here would not see edits of the package kernels
@@ -112,7 +113,7 @@ def _t_np_solve(k, reps, b):
 
 
 def _run(k, setup):
-    """(accepted, rejected, beads (rows, n, 2), record rows) of a run, as run_bead_spring_ros2."""
+    """(accepted, rejected, beads (rows, n, 2), record rows) of a run, as run_rosenbrock."""
     n = setup.n
     s = fiber_offsets(n, k.params.a)
     th0 = setup.th0
@@ -121,9 +122,9 @@ def _run(k, setup):
     scratch = [np.zeros(2 * n) for _ in range(5)]
     recs, brecs = [], []
     while True:
-        rec = np.empty((I.CHUNK, R.NCOLS))
-        brec = np.empty((I.CHUNK, n, 2))
-        rows, code = I.integrate_implicit(q, state, k, rec, brec, *scratch)
+        rec = np.empty((R.CHUNK, R.NCOLS))
+        brec = np.empty((R.CHUNK, n, 2))
+        rows, code = I.integrate_rosenbrock(q, state, k, rec, brec, *scratch)
         recs.append(rec[:rows])
         brecs.append(brec[:rows])
         if code != R.CHUNK_FULL:
@@ -160,9 +161,10 @@ def main() -> None:
     stages = 2 if args.rosenbrock == "ros2" else 4
     field, _ = get_flow_field(FlowSettings(dx=args.dx), args.cache)
     st = FiberSettings(
-        model="bead-spring-ros2",
+        model="bead-spring",
+        integrator=args.rosenbrock,
         young_modulus=args.young_modulus,
-        step=StepSettings(tolerance=args.tolerance, rosenbrock=args.rosenbrock),
+        step=StepSettings(tolerance=args.tolerance),
     )
     start = FiberStart(0.0, args.y0, args.length)
     simulate(field, st, start)  # compile

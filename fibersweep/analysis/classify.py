@@ -39,14 +39,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from fibersweep.analysis.settings import ClassifySettings
 from fibersweep.analysis.trajectory import Trajectory
 from fibersweep.geometry import ConvexPolygon
 from fibersweep.units import Geometry
 
 __all__ = [
     "RULES",
+    "ClassifySettings",
     "Rule",
     "classify",
     "classify_all",
@@ -56,6 +57,54 @@ __all__ = [
     "pivot_points",
     "stopped_mask",
 ]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class ClassifySettings(_Strict):
+    """Thresholds of the classification and its pole-vaulting rule.
+
+    They live with the rules they parameterise: ``rule`` must name an entry of
+    :data:`RULES`, the registry that decides which rules exist.
+    """
+
+    head_blocked_speed: float = Field(
+        0.01, gt=0, description="head counts as blocked below this fraction of U_center"
+    )
+    trap_time: float = Field(
+        2.0, gt=0, description="in contact and stopped for this long [s] -> Trapping"
+    )
+    trap_speed: float = Field(
+        0.01, gt=0, description="'stopped' means COM speed below this fraction of U_center"
+    )
+    rule: str = Field(
+        "switch",
+        description=(
+            "pole-vaulting rule: switch (default: agrees best with a person's eye, "
+            "docs/fidelity.md), head-speed (the source's), pivot or corner"
+        ),
+    )
+    pivot_fraction: float = Field(
+        0.5, gt=0, description="pivot rule: the head moves less than this x L while turning 90°"
+    )
+    corner_fraction: float = Field(
+        0.3,
+        gt=0,
+        le=1,
+        description="corner rule: the head stays within this x L of a pillar corner ...",
+    )
+    corner_turn: float = Field(
+        90.0, gt=0, le=180, description="corner rule: ... while the fiber turns this much [deg]"
+    )
+
+    @field_validator("rule")
+    @classmethod
+    def _known_rule(cls, name: str) -> str:
+        if name not in RULES:
+            raise ValueError(f"unknown rule; valid: {', '.join(RULES)}")
+        return name
 
 
 def stopped_mask(traj: Trajectory, u_center: float, thresholds: ClassifySettings) -> np.ndarray:

@@ -15,8 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from fibersweep.analysis.classify import classify
-from fibersweep.analysis.settings import ClassifySettings
+from fibersweep.analysis.classify import ClassifySettings, classify
 from fibersweep.analysis.trajectory import CLASSES, Trajectory
 from fibersweep.units import Geometry
 

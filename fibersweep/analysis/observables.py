@@ -6,8 +6,7 @@ import math
 
 import numpy as np
 
-from fibersweep.analysis.classify import stopped_mask
-from fibersweep.analysis.settings import ClassifySettings
+from fibersweep.analysis.classify import ClassifySettings, stopped_mask
 from fibersweep.analysis.trajectory import Trajectory
 
 __all__ = [

@@ -14,13 +14,71 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
+import click
 import typer
+from typer.core import TyperGroup
 
 from fibersweep.errors import FibersweepError, InputError, Terminated
 
+#: What the tool does, as ``fibersweep --help`` and ``fibersweep.__doc__`` say it.
+ABOUT = (
+    "Fibers, rigid or flexible, carried by a Stokes flow past pillars: one pillar in a "
+    "shallow channel, or a tilted pillar array that sorts fibers by length. The flow is "
+    "solved once (lattice Boltzmann, cached); then one fiber run per point of a sweep "
+    "over starts, lengths and any setting, stored as Parquet; the commands below draw, "
+    "report and compare the results."
+)
+
+# Help panels, in the order ``fibersweep --help`` lists them (``rich_help_panel`` of
+# each command; a generated reference can group by the same attribute).
+SWEEP = "Sweeps"
+FIGURES = "Figures of a results folder"
+ARRAYS = "Pillar arrays"
+MEASURED = "Comparing with measurements"
+SETUP = "Setup"
+PANELS = (SWEEP, FIGURES, ARRAYS, MEASURED, SETUP)
+#: Order of the commands within their panels (others follow, as registered).
+ORDER = (
+    "run", "simulate", "classify", "check", "plot-phase", "plot-fractions", "plot-delta",
+    "plot-tracks", "animate", "explore", "sort-report", "synth", "discrepancy", "power",
+    "init", "config", "flow",
+)  # fmt: skip
+
+
+def short_help(cmd: click.Command) -> str:
+    """A command's one-line description, whole: its first paragraph, never cut."""
+    text = cmd.short_help or (cmd.help or "").split("\n\n")[0]
+    return " ".join(text.split())
+
+
+class GroupedHelp(TyperGroup):
+    """Lists the commands under their help panels, each description whole (wrapped).
+
+    Typer draws panels only with rich markup, which would read the units in
+    brackets of the help texts ([deg], [s]) as markup; this plain formatter reads
+    the same ``rich_help_panel`` attribute.
+    """
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        panels: dict[str, list[tuple[str, str]]] = {}
+        for name in self.list_commands(ctx):
+            cmd = self.get_command(ctx, name)
+            if cmd is None or cmd.hidden:
+                continue
+            panel = getattr(cmd, "rich_help_panel", None) or "Other commands"
+            panels.setdefault(panel, []).append((name, short_help(cmd)))
+        rank = {name: k for k, name in enumerate(ORDER)}
+        for rows in panels.values():
+            rows.sort(key=lambda r: rank.get(r[0], len(ORDER)))
+        for panel in [*[p for p in PANELS if p in panels], *[p for p in panels if p not in PANELS]]:
+            with formatter.section(panel):
+                formatter.write_dl(panels[panel])
+
+
 app = typer.Typer(
     name="fibersweep",
-    help="Parameter sweeps of rigid fibers meeting a triangular pillar in a shallow channel.",
+    help=ABOUT,
+    cls=GroupedHelp,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     add_completion=True,  # --install-completion / --show-completion (bash, zsh, fish, PowerShell)
@@ -34,6 +92,15 @@ Overrides = Annotated[
     typer.Argument(
         help="KEY=VALUE settings that replace the config's, e.g. fiber.contact.chi=1.2 "
         "flow.dx=2 'sweep.y0=[0.3, 0.4]' (values are YAML).",
+        show_default=False,
+    ),
+]
+#: Overrides of a command that runs one fiber (a sweep key would change nothing there).
+RunOverrides = Annotated[
+    list[str] | None,
+    typer.Argument(
+        help="KEY=VALUE settings that replace the config's, e.g. fiber.model=bead-spring-ros2 "
+        "fiber.young_modulus=1e4 flow.dx=2 (values are YAML).",
         show_default=False,
     ),
 ]
@@ -211,7 +278,7 @@ def main(
         ),
     ] = False,
 ) -> None:
-    """fibersweep: LBM flow once, many fiber runs, phase diagrams."""
+    """Fibers carried by a Stokes flow past pillars: sweeps, figures, reports."""
 
 
 #: Seconds the interpreter may take to shut down after a command has finished.

@@ -12,6 +12,7 @@ from typing import Annotated
 import typer
 
 from fibersweep.cli._app import (
+    MEASURED,
     ConfigArg,
     Overrides,
     Verbose,
@@ -21,6 +22,19 @@ from fibersweep.cli._app import (
     _setup_logging,
     app,
 )
+
+
+def _channel_only(cfg, command: str) -> None:
+    """The discrepancy workflow is the channel's: refuse a pillar array, naming what to use."""
+    from fibersweep.errors import InputError
+
+    if cfg.flow.array is not None:
+        raise InputError(
+            f"{command}: the discrepancy workflow compares fibers measured past one pillar in "
+            "a channel (class, δ, contact, exit position); a pillar array (flow.array) has "
+            "none of these observables. For an array: fibersweep run CONFIG, then fibersweep "
+            "sort-report RESULTS (migration, critical lengths, outlets)"
+        )
 
 
 def _sweep_box(cfg) -> dict[str, tuple[float, float]]:
@@ -33,7 +47,7 @@ def _sweep_box(cfg) -> dict[str, tuple[float, float]]:
     return box
 
 
-@app.command()
+@app.command(rich_help_panel=MEASURED)
 def synth(
     config: ConfigArg,
     overrides: Overrides = None,
@@ -57,7 +71,8 @@ def synth(
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
-    """Measured-like fibers from the model with hidden effects and measurement noise.
+    """Measured-like fibers past one pillar from the model, with hidden effects and
+    measurement noise.
 
     Starts are uniform in the range of CONFIG's sweep axes; the truth (effects,
     noise, true starts) goes to a separate JSON file. With --tracks, the
@@ -69,6 +84,7 @@ def synth(
     _setup_logging(verbose)
     with _errors():
         cfg = _load(config, overrides)
+        _channel_only(cfg, "synth")
         from fibersweep.discrepancy.schema import write_table
         from fibersweep.discrepancy.synth import parse_effects, synthesize_with_tracks
         from fibersweep.errors import InputError
@@ -100,8 +116,8 @@ def synth(
                     fg=typer.colors.YELLOW)  # fmt: skip
 
 
-def _effect_names(effect: list[str] | None, effects: str | None) -> tuple[str, ...] | None:
-    """Library subset from repeatable --effect NAME (and the deprecated --effects a,b)."""
+def _effect_names(effect: list[str] | None) -> tuple[str, ...] | None:
+    """Library subset from repeatable --effect NAME."""
     from fibersweep.errors import InputError
 
     names = []
@@ -112,17 +128,10 @@ def _effect_names(effect: list[str] | None, effects: str | None) -> tuple[str, .
                 f"--effect {item}: discrepancy fits the value; give the name only ({name})"
             )
         names.append(name.strip())
-    if effects:
-        typer.secho(
-            "--effects a,b is deprecated: use --effect a --effect b",
-            fg=typer.colors.YELLOW,
-            err=True,
-        )
-        names += [e.strip() for e in effects.split(",") if e.strip()]
     return tuple(names) or None
 
 
-@app.command()
+@app.command(rich_help_panel=MEASURED)
 def discrepancy(
     measured: Annotated[Path, typer.Argument(help="Measured fibers (.parquet or .csv).")],
     config: ConfigArg,
@@ -134,9 +143,6 @@ def discrepancy(
     effect: Annotated[
         list[str] | None,
         typer.Option("--effect", help="Library effect to consider, repeatable (default: all)."),
-    ] = None,
-    effects: Annotated[
-        str | None, typer.Option(help="Deprecated: comma-separated effects (use --effect).")
     ] = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
     pairs: Annotated[
@@ -165,16 +171,18 @@ def discrepancy(
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
-    """Where the model disagrees with MEASURED, which effect(s) explain it, and the gap left."""
+    """Where the model disagrees with fibers MEASURED past one pillar, which effects
+    explain it, and the gap left."""
     _setup_logging(verbose)
     with _errors():
         cfg = _load(config, overrides)
+        _channel_only(cfg, "discrepancy")
         from fibersweep.discrepancy.report import write_report
         from fibersweep.discrepancy.schema import load_measured
         from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
         from fibersweep.flow.cache import get_flow_field
 
-        names = _effect_names(effect, effects)
+        names = _effect_names(effect)
         data = load_measured(
             measured, trajectories, ignore_extra=ignore_extra_columns,
             geometry=cfg.flow.geometry.to_geometry(),
@@ -196,7 +204,7 @@ def discrepancy(
         typer.echo(f"wrote {output / c}")
 
 
-@app.command("power")
+@app.command("power", rich_help_panel=MEASURED)
 def power_cmd(
     config: ConfigArg,
     overrides: Overrides = None,
@@ -240,6 +248,7 @@ def power_cmd(
     _setup_logging(verbose)
     with _errors():
         cfg = _load(config, overrides)
+        _channel_only(cfg, "power")
         from fibersweep.atomic import atomic_write
         from fibersweep.discrepancy.copies import CopyMaker
         from fibersweep.discrepancy.library import LIBRARY, get_candidates
@@ -253,7 +262,7 @@ def power_cmd(
 
         if n < 8 or simulate < 8:
             raise InputError(f"--n and --simulate must be >= 8, got {n} and {simulate}")
-        cands = get_candidates(_effect_names(effect, None))
+        cands = get_candidates(_effect_names(effect))
         rng = np.random.default_rng([seed, 17])
         if measured is not None:
             starts = load_measured(measured).starts

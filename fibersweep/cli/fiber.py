@@ -1,7 +1,8 @@
-"""The ``simulate`` command (issue 3): one fiber past the pillar."""
+"""The ``simulate`` command: one fiber past the pillar, or through a pillar array."""
 
 from __future__ import annotations
 
+import math
 import typing
 from pathlib import Path
 from typing import Annotated
@@ -9,8 +10,9 @@ from typing import Annotated
 import typer
 
 from fibersweep.cli._app import (
+    SWEEP,
     ConfigArg,
-    Overrides,
+    RunOverrides,
     Verbose,
     _errors,
     _load,
@@ -19,21 +21,44 @@ from fibersweep.cli._app import (
     choices,
     flow_progress,
 )
-from fibersweep.fiber.settings import FiberSettings
+from fibersweep.errors import InputError
+from fibersweep.fiber.settings import LEGACY_MODELS, FiberSettings
 
-# the models FiberSettings accepts (the model registry matches them, tested)
-Model = choices("Model", typing.get_args(FiberSettings.model_fields["model"].annotation))
+# the models FiberSettings accepts (the model registry matches them, tested), and former names
+Model = choices(
+    "Model", (*typing.get_args(FiberSettings.model_fields["model"].annotation), *LEGACY_MODELS)
+)
 
 
-@app.command()
+#: Seconds above which making the kernels ready means they were compiled, not loaded.
+COMPILED_S = 2.0
+
+
+@app.command(rich_help_panel=SWEEP)
 def simulate(
     config: ConfigArg,
     theta0: Annotated[float, typer.Option("--theta0", help="Start angle from +x [deg].")],
-    y0: Annotated[float, typer.Option("--y0", help="Start lateral position y0/h_obs.")],
-    length: Annotated[float, typer.Option("--length", help="Fiber length L/l_obs.")],
+    y0: Annotated[
+        float,
+        typer.Option(
+            "--y0",
+            help="Start lateral position: y0/h_obs past one pillar; in a pillar array "
+            "(flow.array) a fraction of period_y in the gap before row 0.",
+        ),
+    ],
+    length: Annotated[
+        float,
+        typer.Option(
+            "--length", help="Fiber length: L/l_obs past one pillar; in a pillar array L [µm]."
+        ),
+    ],
     plot: Annotated[
         Path | None,
-        typer.Option("--plot", help="Write a chronophotograph (PNG/PDF/SVG by suffix)."),
+        typer.Option(
+            "--plot",
+            help="Write a chronophotograph (PNG/PDF/SVG by suffix); a flexible fiber is drawn "
+            "through all its beads.",
+        ),
     ] = None,
     model: Annotated[
         Model | None, typer.Option("--model", help="Fiber model.", show_default="fiber.model")
@@ -43,79 +68,159 @@ def simulate(
     ] = False,
     seed: Annotated[int | None, typer.Option("--seed", help="Seed of random effects.")] = None,
     verbose: Verbose = False,
-    overrides: Overrides = None,
+    overrides: RunOverrides = None,
 ) -> None:
-    """Run one fiber past the pillar and print its class, δ and contact data."""
-    import math
+    """Run one fiber and print what it did: past one pillar its class, δ and contact; through
+    a pillar array its mode, rows, shift per row, f and migration angle.
 
+    The fiber kernels are compiled on first use (then loaded from the disk cache); the
+    time that takes is said, apart from the run's.
+    """
     _setup_logging(verbose)
     with _errors():
         from fibersweep.fiber.result import FiberStart
         from fibersweep.fiber.run import simulate as run_one
         from fibersweep.fiber.run import simulate_reversible
         from fibersweep.flow.cache import get_flow_field
+        from fibersweep.plots.shapes import is_flexible
 
-        cfg = _load(config, overrides)
+        # --model is the override fiber.model=..., validated with the others (its integrator)
+        extra = [f"fiber.model={model.value}"] if model is not None else []
+        cfg = _load(config, [*(overrides or []), *extra])
         fiber = cfg.fiber
-        if model is not None:
-            fiber = fiber.model_copy(update={"model": model.value})
-        if plot is not None:
+        if plot is not None:  # the drawing needs the trajectory, and a bent fiber its beads
             rec = fiber.record.model_copy(
-                update={"trajectories": True, "samples": max(fiber.record.samples, 2000)}
+                update={
+                    "trajectories": True,
+                    "samples": max(fiber.record.samples, 2000),
+                    "all_beads": fiber.record.all_beads or is_flexible(fiber.model),
+                }
             )
             fiber = fiber.model_copy(update={"record": rec})
         with flow_progress():
             field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
+        array = getattr(field, "array", None)
         start = FiberStart(theta0=theta0, y0=y0, length=length)
+        if array is not None and reversible:
+            raise InputError("--reversible: not available in a pillar array (flow.array)")
+        ready_s = _ready(field, fiber)
+        if ready_s > COMPILED_S:
+            typer.echo(
+                f"first use: compiled the {fiber.model} kernels in {ready_s:.1f} s (cached on "
+                "disk: the next runs load them)"
+            )
         back = math.nan
         if reversible:
             res, back = simulate_reversible(field, fiber, start, rng_seed=seed)
         else:
             res = run_one(field, fiber, start, rng_seed=seed)
-
-        def f(v: float, fmt: str) -> str:
-            return "-" if not math.isfinite(v) else format(v, fmt)
-
-        typer.echo(
-            f"start: theta0 = {theta0:g}°, y0/h = {y0:g}, L/l_obs = {length:g} "
-            f"({res.n_beads} beads), model {fiber.model}, pillar {fiber.contact.pillar}"
-        )
-        if res.status != "ok":
-            typer.echo(f"status: failed ({res.reason})")
-        typer.echo(f"class: {res.cls or '-'}")
-        if math.isfinite(res.delta):
-            typer.echo(f"delta: {res.delta:.4f} h_obs (lateral displacement y_f - y0)")
+        if array is not None:
+            _echo_array(res, array, fiber)
         else:
-            typer.echo("delta: none (defined only for a fiber that passes the pillar)")
-        if res.contact:
-            typer.echo(
-                f"contact: yes, theta_c = {f(res.theta_c, '.2f')}°, y_c/h = {f(res.y_c, '.3f')}, "
-                f"t_contact = {f(res.t_contact, '.3f')} s"
-            )
-        else:
-            typer.echo("contact: no")
-        passed = (
-            f"t_pass: {res.t_pass:.3f} s"
-            if math.isfinite(res.t_pass)
-            else "t_pass: never (the centre of mass did not pass the pillar)"
-        )
-        typer.echo(
-            f"{passed}; final x = {f(res.x_f, '.1f')} µm, "
-            f"y = {f(res.y_f, '.1f')} µm, theta = {f(res.theta_f, '.1f')}°; "
-            f"min clearance {f(res.min_clearance, '.3f')} µm"
-        )
+            _echo_channel(res, fiber, reversible, back)
         if math.isfinite(res.min_end_to_end):
             typer.echo(
                 f"deformation: max curvature {res.max_curvature:.4f} 1/µm, min end-to-end "
                 f"{res.min_end_to_end:.3f} of the contour, max tension "
                 f"{res.max_tension:.3g} pN, max wrap {res.max_wrap:.1f}°"
             )
-        typer.echo(f"steps: {res.n_steps} in {res.wall_time:.2f} s")
+        typer.echo(f"steps: {res.n_steps} in {res.wall_time:.2f} s (the run alone)")
         if reversible:
-            typer.echo(f"reversed flow: returns within {f(back, '.3g')} µm of the start")
+            typer.echo(f"reversed flow: returns within {_f(back, '.3g')} µm of the start")
         if plot is not None:
-            from fibersweep.plots.chrono import chronophotograph
-
-            typer.echo(f"wrote {chronophotograph(res, field.geometry, plot)}")
+            typer.echo(f"wrote {_plot(res, field, fiber, plot)}")
     if res.status != "ok":
         raise typer.Exit(1)
+
+
+def _f(v: float, fmt: str) -> str:
+    return "-" if not math.isfinite(v) else format(v, fmt)
+
+
+def _ready(field, fiber) -> float:
+    """Seconds to make the fiber kernels ready (a short run): compiled on first use."""
+    import time
+
+    from fibersweep.sweep.worker import _warm
+
+    t0 = time.perf_counter()
+    _warm(field, fiber)
+    return time.perf_counter() - t0
+
+
+def _echo_channel(res, fiber, reversible: bool, back: float) -> None:
+    st = res.start
+    typer.echo(
+        f"start: theta0 = {st.theta0:g}°, y0/h = {st.y0:g}, L/l_obs = {st.length:g} "
+        f"({res.n_beads} beads), model {fiber.model} ({fiber.resolved_integrator}), "
+        f"pillar {fiber.contact.pillar}"
+    )
+    if res.status != "ok":
+        typer.echo(f"status: failed ({res.reason})")
+    typer.echo(f"class: {res.cls or '-'}")
+    if math.isfinite(res.delta):
+        typer.echo(f"delta: {res.delta:.4f} h_obs (lateral displacement y_f - y0)")
+    else:
+        typer.echo("delta: none (defined only for a fiber that passes the pillar)")
+    if res.contact:
+        typer.echo(
+            f"contact: yes, theta_c = {_f(res.theta_c, '.2f')}°, y_c/h = {_f(res.y_c, '.3f')}, "
+            f"t_contact = {_f(res.t_contact, '.3f')} s"
+        )
+    else:
+        typer.echo("contact: no")
+    passed = (
+        f"t_pass: {res.t_pass:.3f} s"
+        if math.isfinite(res.t_pass)
+        else "t_pass: never (the centre of mass did not pass the pillar)"
+    )
+    typer.echo(
+        f"{passed}; final x = {_f(res.x_f, '.1f')} µm, "
+        f"y = {_f(res.y_f, '.1f')} µm, theta = {_f(res.theta_f, '.1f')}°; "
+        f"min clearance {_f(res.min_clearance, '.3f')} µm"
+    )
+
+
+def _echo_array(res, array, fiber) -> None:
+    """What one fiber did in a pillar array, in the array's terms."""
+    st = res.start
+    typer.echo(
+        f"start: theta0 = {st.theta0:g}°, y0 = {st.y0:g} of period_y (in the gap before row "
+        f"0), L = {st.length:g} µm ({res.n_beads} beads), "
+        f"model {fiber.model} ({fiber.resolved_integrator})"
+    )
+    typer.echo(
+        f"array: periods {array.period_x:g} x {array.period_y:g} µm, shift {array.shift:g} "
+        f"(each row {array.lateral_shift:g} µm higher, tilt {array.tilt_deg:.2f}°), "
+        f"{fiber.array_rows} rows"
+    )
+    if res.status != "ok":
+        typer.echo(f"status: failed ({res.reason})")
+    typer.echo(
+        f"mode: {res.mode or '-'}; rows crossed: {res.rows if res.rows is not None else '-'}"
+    )
+    typer.echo(
+        f"shift per row: {_f(res.shift_per_row, '.2f')} µm, f = {_f(res.fraction, '.3f')} of "
+        f"the tilt's {array.lateral_shift:g} µm (1: follows the tilt, 0: the flow); migration "
+        f"angle {_f(res.migration_angle, '.2f')}° (tilt {array.tilt_deg:.2f}°)"
+    )
+    typer.echo(
+        f"contacts: {res.contacts} episodes, {res.wraps} wraps, {res.bridging} steps touching "
+        f"two pillars, {_f(res.time_on_pillars, '.2f')} s on pillars; min clearance "
+        f"{_f(res.min_clearance, '.3f')} µm; ended at t = {_f(res.t_end, '.2f')} s"
+    )
+
+
+def _plot(res, field, fiber, plot: Path) -> Path:
+    """The chronophotograph: past one pillar, or through the rows of an array."""
+    array = getattr(field, "array", None)
+    if array is None:
+        from fibersweep.plots.chrono import chronophotograph
+
+        return chronophotograph(res, field.geometry, plot)
+    from fibersweep.plots.array_chrono import run_dict, run_figure
+    from fibersweep.plots.style import paper_style, save_figure
+
+    with paper_style():
+        fig = run_figure(array, run_dict(res, fiber.bead_radius), fiber.bead_radius)
+        return save_figure(fig, plot)

@@ -1,4 +1,4 @@
-"""The ``flow`` command (issue 2): the steady flow field of a config."""
+"""The ``flow`` command: the steady flow field of a config."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from fibersweep.cli._app import (
+    SETUP,
     ConfigArg,
     Overrides,
     Verbose,
@@ -19,7 +20,7 @@ from fibersweep.cli._app import (
 )
 
 
-@app.command()
+@app.command(rich_help_panel=SETUP)
 def flow(
     config: ConfigArg,
     overrides: Overrides = None,
@@ -36,7 +37,8 @@ def flow(
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Compute (or load from the cache) the steady flow field of CONFIG.
+    """Compute (or load from the cache) the steady flow field of CONFIG: a channel's, or a
+    pillar array's unit cell.
 
     A sweep over flow settings (``sweep: {flow.dx: [4, 2]}``) has one field per
     distinct flow setting: each is computed (or found) once and reported.

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from fibersweep.cli._app import _errors, app
+from fibersweep.cli._app import SETUP, _errors, app
 from fibersweep.examples import EXAMPLES
 
 _WRITTEN = ", ".join(name for name in EXAMPLES.values() if name != "fibersweep.yaml")
@@ -17,7 +17,7 @@ INIT_HELP = (
 )
 
 
-@app.command(help=INIT_HELP)
+@app.command(help=INIT_HELP, rich_help_panel=SETUP)
 def init(
     directory: Annotated[
         Path, typer.Argument(help="Folder to write the configs into (created if missing).")

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import typer
 
-from fibersweep.cli._app import ConfigArg, Overrides, _errors, _load, app
+from fibersweep.cli._app import SETUP, ConfigArg, Overrides, _errors, _load, app
 
 
-@app.command("config")
+@app.command("config", rich_help_panel=SETUP)
 def show_config(config: ConfigArg, overrides: Overrides = None) -> None:
     """Print CONFIG with the OVERRIDES applied and every default filled in (YAML)."""
     import yaml

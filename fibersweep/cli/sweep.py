@@ -1,4 +1,4 @@
-"""The sweep commands (issue 4/5): ``run``, ``classify`` and ``plot-phase``."""
+"""The sweep commands: ``run``, ``classify``, ``plot-phase`` and ``check``."""
 
 from __future__ import annotations
 
@@ -9,6 +9,8 @@ import typer
 
 from fibersweep.analysis.classify import RULES
 from fibersweep.cli._app import (
+    FIGURES,
+    SWEEP,
     ConfigArg,
     Overrides,
     Verbose,
@@ -57,7 +59,7 @@ def _with_run_overrides(cfg, **kw):
     return parse_config(data, source="command line")
 
 
-@app.command()
+@app.command(rich_help_panel=SWEEP)
 def run(
     config: ConfigArg,
     overrides: Overrides = None,
@@ -183,12 +185,12 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
         missing = [flow for flow, is_cached in fields.values() if not is_cached]
         if per_run is None and cached:
             per_run = estimate_run_s(cfg, plan.todo)
-            how = "timed on one run of this sweep"
+            how = _timed_on(cfg, plan.todo) + " of this sweep"
         if missing:
-            flow_s, per_run_timed, note = _estimate_fields(cfg, task, missing)
+            flow_s, per_run_timed, note = _estimate_fields(cfg, plan.todo, missing)
             typer.echo(f"  {note}")
             if per_run is None:
-                per_run, how = per_run_timed, "timed on one run on a probe field"
+                per_run, how = per_run_timed, _timed_on(cfg, plan.todo) + " on a probe field"
     # same rule as SweepPlan.estimate_s: no more workers busy than runs to do
     est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(cfg.run.workers)
     if est is not None and flow_s:
@@ -201,6 +203,16 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     )
     if cfg.sweep.refine is not None:
         _dry_run_refinement(cfg, plan, extra, rnd, info)
+
+
+def _timed_on(cfg, todo) -> str:
+    """How many runs the estimate timed (in a pillar array, spread over the lengths)."""
+    from fibersweep.sweep.estimate import sample_tasks
+
+    if cfg.flow.array is None:
+        return "timed on one run"
+    n = len(sample_tasks(todo))
+    return "timed on one run" if n == 1 else f"mean of {n} runs timed across the lengths"
 
 
 def _dry_run_refinement(cfg, plan, extra, rnd: int, info) -> None:
@@ -251,14 +263,20 @@ def _refinement_line(info: dict, refine) -> str:
     return f"{line} ({why})"
 
 
-def _estimate_fields(cfg, task, missing) -> tuple[float, float, str]:
-    """Seconds for the fields not cached, seconds per run, and a line on how."""
+def _estimate_fields(cfg, todo, missing) -> tuple[float, float, str]:
+    """Seconds for the fields not cached, seconds per run, and a line on how.
+
+    The runs are timed on the probe field of the first field not cached: its middle
+    run, or in a pillar array runs spread across the lengths (their cost depends on it).
+    """
     from fibersweep.fiber.result import FiberStart
-    from fibersweep.sweep.estimate import PROBE_STEPS, estimate_uncached
+    from fibersweep.sweep.estimate import PROBE_STEPS, estimate_uncached, sample_tasks
     from fibersweep.sweep.plan import sweep_settings
 
+    task = todo[len(todo) // 2]
     sub = next((s.config for s in sweep_settings(cfg) if s.id == task.settings), cfg)
-    start = FiberStart(theta0=task.theta0, y0=task.y0, length=task.length)
+    picks = sample_tasks(todo) if cfg.flow.array is not None else [task]
+    start = [FiberStart(theta0=t.theta0, y0=t.y0, length=t.length) for t in picks]
     total = 0.0
     per_run = None
     notes = []
@@ -270,10 +288,12 @@ def _estimate_fields(cfg, task, missing) -> tuple[float, float, str]:
         compile_s = max(compile_s, e.compile_s)
         warmup_s = max(warmup_s, e.warmup_s)
         grids = " then ".join(f"{dx:g} µm ({cells / 1e6:.2g} M cells)" for dx, cells in e.grids)
+        what = "unit cell" if flow.array is not None else "flow field"
         notes.append(
-            f"flow field on {grids}: about {_fmt_s(e.flow_s)} "
-            f"({e.mlups:.0f} MLUPS timed over {PROBE_STEPS} steps; typical step counts)"
+            f"{what} on {grids}: about {_fmt_s(e.flow_s)} "
+            f"({e.mlups:.2g} MLUPS timed over {PROBE_STEPS} steps; typical step counts)"
         )
+        start = start[:1]  # the runs are timed once, on the first probe field
     note = notes[0] if len(notes) == 1 else f"{len(notes)} flow fields: {'; '.join(notes)}"
     # This dry run made every kernel the run needs ready: a first use compiled them (and
     # cached them on disk, so the run only loads them); say what that cost.
@@ -290,7 +310,7 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
     """Run the sweep with a progress bar; True if any run of the table failed."""
     from collections import Counter
 
-    from fibersweep.progressbar import progress_bar
+    from fibersweep.progressbar import WarmingBar
     from fibersweep.sweep.runner import run_sweep
 
     bar = None
@@ -299,13 +319,30 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
              "zigzag": "Z", "displacement": "D", "wrap-and-jump": "WJ", "trapped": "T",
              "mixed": "M"}  # fmt: skip
 
+    def new_bar(n: int):
+        # On a terminal: a live bar; into a log file: a line every 10 s, not thousands. The
+        # first run of each worker includes its start-up (kernels compiled on first use):
+        # the rate and the estimate start after them.
+        return WarmingBar(
+            n,
+            warm=min(cfg.run.workers, n),
+            note="workers starting (the first runs also compile the kernels)",
+            unit="run",
+            smoothing=0.1,
+        )
+
     def on_plan(plan) -> None:
         nonlocal bar
         _print_plan(plan, cfg.run.workers)
+        if cfg.sweep.refine is not None and plan.todo:
+            typer.echo(
+                f"  the bar counts these {len(plan.todo)} runs; the refinement then adds up to "
+                f"{cfg.sweep.refine.max_runs} more in up to {cfg.sweep.refine.rounds} rounds, "
+                "each with its own bar"
+            )
         if not plan.todo:
             return
-        # On a terminal: a live bar; into a log file: a line every 10 s, not thousands.
-        bar = progress_bar(total=len(plan.todo), unit="run", smoothing=0.1)
+        bar = new_bar(len(plan.todo))
 
     def progress(row) -> None:
         label = row.get("mode") or row["class"]  # a pillar array's runs: the mode
@@ -327,7 +364,7 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
             f"({len(plan.tasks)} points in the sweep so far)"
         )
         if plan.todo:
-            bar = progress_bar(total=len(plan.todo), unit="run", smoothing=0.1)
+            bar = new_bar(len(plan.todo))
 
     line, cached = _fields_line(cfg)
     typer.echo(line if cached else f"{line}; computing into {cfg.run.cache_dir} ...")
@@ -379,7 +416,7 @@ def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = No
     return summary.failed > 0
 
 
-@app.command()
+@app.command(rich_help_panel=SWEEP)
 def classify(
     results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
     head_blocked_speed: Annotated[
@@ -423,7 +460,8 @@ def classify(
     """Re-classify stored trajectories with new thresholds or rule (no simulation).
 
     The runs table gets one class column per rule (class_head_speed, class_pivot,
-    class_switch); 'class' is the chosen rule's.
+    class_switch); 'class' is the chosen rule's. A pillar array's runs get their
+    modes re-derived with the trap rule (--trap-time, --trap-speed).
     """
     _setup_logging(verbose)
     with _errors():
@@ -440,7 +478,15 @@ def classify(
             pivot_fraction=pivot_fraction,
         )
         res = reclassify(results, th)
-    typer.echo(f"re-classified {res.n_runs} runs ({res.n_changed} changed) with {th}")
+    if "mode" in res.counts.columns:  # a pillar array: modes, of which only the trap rule is here
+        typer.echo(
+            f"re-derived the modes of {res.n_runs} pillar-array runs ({res.n_changed} changed) "
+            f"with the trap rule trap_time = {th.trap_time:g} s, trap_speed = "
+            f"{th.trap_speed:g} U_center (the other mode thresholds are sort-report's "
+            "--zigzag-max and --displacement-min)"
+        )
+    else:
+        typer.echo(f"re-classified {res.n_runs} runs ({res.n_changed} changed) with {th}")
     typer.echo(res.counts.to_string(index=False))
     typer.echo(f"wrote {res.counts_path}")
     for w in res.warnings:
@@ -456,7 +502,7 @@ def _warn_mixed_rules(runs, results: Path) -> None:
         typer.secho(f"warning: {message}", err=True, fg=typer.colors.YELLOW)
 
 
-@app.command("plot-phase")
+@app.command("plot-phase", rich_help_panel=FIGURES)
 def plot_phase(
     results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
     out: Annotated[
@@ -482,7 +528,10 @@ def plot_phase(
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Phase diagram, δ map, contact map and δ distribution of a sweep.
+    """Phase diagram, δ map, contact map and δ distribution of a sweep past one pillar.
+
+    A pillar array's runs have modes, not the channel's classes: exit 2 naming
+    sort-report, plot-fractions and explore.
 
     A folder of several settings gets one panel per value of the swept keys that
     vary (--col, --row), and one file per value of any further one.
@@ -496,6 +545,15 @@ def plot_phase(
         runs = read_runs(results)
         if runs.empty:
             raise InputError(f"{results}: no runs to plot (expected {results}/runs/part-*.parquet)")
+        if "mode" in runs and runs["mode"].notna().any():
+            raise InputError(
+                f"plot-phase: {results} holds pillar-array runs; the phase diagram shows the "
+                "channel's classes (Below, Above, Pole-vaulting, Trapping) past one pillar, "
+                "which array runs do not have. For an array: fibersweep sort-report RESULTS "
+                "(f and migration against length, critical lengths, outlets), fibersweep "
+                "plot-fractions RESULTS --by length (modes against a setting), fibersweep "
+                "explore RESULTS"
+            )
         man = read_manifest(results) or {}
         sep = man.get("separatrix")
         combos = man.get("combinations") or {}
@@ -509,7 +567,7 @@ def plot_phase(
         typer.echo(f"wrote {p}")
 
 
-@app.command()
+@app.command(rich_help_panel=SWEEP)
 def check(
     results: Annotated[Path, typer.Argument(help="Output directory of a sweep.")],
     verbose: Verbose = False,

@@ -1,8 +1,11 @@
-"""Views of a results folder beyond the phase diagram (issue 29).
+"""Views of a results folder beyond the phase diagram.
 
 ``plot-fractions`` (class fractions against a setting), ``plot-delta`` (δ against
 a setting), ``plot-tracks`` (trajectories of a chosen subset), ``animate`` (one
-run) and ``explore`` (one self-contained HTML page).
+run) and ``explore`` (one self-contained HTML page). On a pillar array's results
+each answers in the array's terms (modes, displacement against rows crossed, f
+against length), except ``plot-delta``, whose δ an array run does not have: it
+exits 2 naming the commands that answer the question.
 """
 
 from __future__ import annotations
@@ -13,7 +16,7 @@ from typing import Annotated
 
 import typer
 
-from fibersweep.cli._app import Verbose, _errors, _setup_logging, app, choices
+from fibersweep.cli._app import FIGURES, Verbose, _errors, _setup_logging, app, choices
 from fibersweep.errors import InputError
 from fibersweep.plots import FORMATS
 
@@ -60,6 +63,44 @@ def _geometries(results: Path, runs) -> dict:
     return out
 
 
+def is_array(runs) -> bool:
+    """Whether ``runs`` are pillar-array runs (their outcome is a mode, not a class)."""
+    return "mode" in runs and bool(runs["mode"].notna().any())
+
+
+def _array_runs(results: Path, where: str | None):
+    """Array runs that ``where`` selects, with their trajectories, settings and config
+    (:func:`fibersweep.sweep.sort_report.load_array_results`)."""
+    from fibersweep.plots.subset import select_runs
+    from fibersweep.sweep.sort_report import load_array_results
+
+    runs, settings, cfg = load_array_results(results)
+    plain = runs[[c for c in runs.columns if not c.startswith("traj_")]]
+    ids = set(select_runs(plain, where)["id"])
+    return runs[runs["id"].isin(ids)].reset_index(drop=True), settings, cfg
+
+
+def _cell_arrays(results: Path, runs) -> dict:
+    """The pillar array of each settings id of ``runs``, from the folder's manifest."""
+    from fibersweep.flow.array_settings import ArraySettings
+    from fibersweep.sweep.manifest import read_manifest
+
+    man = read_manifest(results) or {}
+    combos = man.get("combinations") or {}
+    default = (man.get("config") or {}).get("flow") or {}
+    out = {}
+    for sid in runs["settings"].astype(str).unique():
+        flow = (combos.get(sid) or {}).get("flow") or default
+        out[sid] = ArraySettings.model_validate(flow["array"]).to_array()
+    return out
+
+
+def _arrays(settings: list[dict]) -> list:
+    from fibersweep.flow.array_settings import ArraySettings
+
+    return [ArraySettings.model_validate(s["array"]).to_array() for s in settings]
+
+
 def _safe(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.=+-]", "_", name)
 
@@ -70,7 +111,7 @@ def _save(fig, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@app.command("plot-fractions")
+@app.command("plot-fractions", rich_help_panel=FIGURES)
 def plot_fractions(
     results: Results,
     by: Annotated[
@@ -86,7 +127,8 @@ def plot_fractions(
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Fraction of runs in each class against one setting, with binomial (Wilson) intervals."""
+    """Fraction of runs in each class (a pillar array: each mode) against one setting,
+    with binomial (Wilson) intervals."""
     _setup_logging(verbose)
     with _errors():
         from fibersweep.plots.fractions import class_fractions, fractions_figure
@@ -106,7 +148,7 @@ def plot_fractions(
     typer.echo(f"wrote {path}")
 
 
-@app.command("plot-delta")
+@app.command("plot-delta", rich_help_panel=FIGURES)
 def plot_delta(
     results: Results,
     by: Annotated[str, typer.Option("--by", help="Setting of the horizontal axis.")] = "length",
@@ -117,13 +159,25 @@ def plot_delta(
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Lateral displacement δ against one setting: every run, median, quartiles, 5–95 %."""
+    """Lateral displacement δ past one pillar against one setting: every run, median,
+    quartiles, 5–95 %.
+
+    A pillar array's runs have no δ (their displacement is f: sort-report); exit 2.
+    """
     _setup_logging(verbose)
     with _errors():
         from fibersweep.plots.fractions import delta_by_figure, delta_spread
         from fibersweep.plots.style import paper_style
 
         runs = _runs(results, where)
+        if is_array(runs):
+            raise InputError(
+                f"plot-delta: {results} holds pillar-array runs, which have no δ (the lateral "
+                "displacement past the channel's one pillar); their displacement is f, a "
+                "fraction of the array's tilt: fibersweep sort-report RESULTS draws f and the "
+                "migration angle against length, fibersweep plot-tracks RESULTS the "
+                "displacement against rows crossed"
+            )
         with paper_style():
             path = _save(
                 delta_by_figure(runs, by), out or results / "figures" / f"delta-{_safe(by)}.png"
@@ -137,7 +191,7 @@ def plot_delta(
     typer.echo(f"wrote {path}")
 
 
-@app.command("plot-tracks")
+@app.command("plot-tracks", rich_help_panel=FIGURES)
 def plot_tracks(
     results: Results,
     where: Where = None,
@@ -149,7 +203,12 @@ def plot_tracks(
     ] = None,
     verbose: Verbose = False,
 ) -> None:
-    """Centre-of-mass paths of the runs --where selects (all by default), by class."""
+    """Paths of the runs --where selects (all by default): past one pillar by class, through
+    a pillar array as displacement against rows crossed by mode.
+
+    A pillar array's runs: their lateral displacement against the rows crossed, one
+    panel per setting and length, by mode, with the array's tilt.
+    """
     _setup_logging(verbose)
     with _errors():
         from fibersweep.plots.style import paper_style
@@ -157,6 +216,18 @@ def plot_tracks(
         from fibersweep.sweep.store import read_trajectories
 
         runs = _runs(results, where)
+        if is_array(runs):
+            from fibersweep.plots.array import overlay_figure as rows_figure
+
+            aruns, settings, _ = _array_runs(results, where)
+            arrays = _arrays(settings)
+            periods = {i: a.period_x for i, a in enumerate(arrays)}
+            shifts = {i: a.lateral_shift for i, a in enumerate(arrays)}
+            with paper_style():
+                fig = rows_figure(aruns, periods, shifts=shifts)
+                path = _save(fig, out or results / "figures" / "tracks.png")
+            typer.echo(f"wrote {path} ({len(aruns)} runs)")
+            return
         samples = read_trajectories(results, runs["id"].tolist())
         with paper_style():
             fig = overlay_figure(runs, samples, _geometries(results, runs), title=where or "")
@@ -164,7 +235,7 @@ def plot_tracks(
     typer.echo(f"wrote {path}")
 
 
-@app.command()
+@app.command(rich_help_panel=FIGURES)
 def animate(
     results: Results,
     run_id: Annotated[
@@ -185,10 +256,12 @@ def animate(
     fps: Annotated[int, typer.Option("--fps", min=1, help="Frames per second.")] = 20,
     verbose: Verbose = False,
 ) -> None:
-    """Animate one run of a sweep: the fiber moving past the pillar.
+    """Animate one run of a sweep: the fiber moving past the pillar, or through the rows.
 
-    The run is RUN_ID, or the first run --where selects. A .gif is written with
-    matplotlib's PillowWriter (Pillow comes with matplotlib); an .mp4 needs ffmpeg.
+    The run is RUN_ID, or the first run --where selects. A pillar array's run is
+    followed through the rows. A flexible fiber is drawn through all its beads
+    (stored with fiber.record.all_beads). A .gif is written with matplotlib's
+    PillowWriter (Pillow comes with matplotlib); an .mp4 needs ffmpeg.
     """
     _setup_logging(verbose)
     with _errors():
@@ -208,6 +281,19 @@ def animate(
             typer.echo(f"{len(runs)} runs match --where; animating the first, {runs['id'].iloc[0]}")
         hit = runs.iloc[:1]
         run = hit.iloc[0]
+        if is_array(runs):
+            from fibersweep.plots.array_chrono import animate_array_run
+
+            aruns, settings, cfg = _array_runs(results, None)
+            arun = aruns[aruns["id"] == run["id"]].iloc[0]
+            array = _arrays(settings)[int(arun["setting"])]
+            with paper_style():
+                path = animate_array_run(
+                    arun.to_dict(), array, cfg["fiber"]["bead_radius"],
+                    out or results / "figures" / f"run-{run['id']}.gif", frames=frames, fps=fps,
+                )  # fmt: skip
+            typer.echo(f"wrote {path}")
+            return
         samples = read_trajectories(results, [run["id"]])
         geometry = _geometries(results, hit)[str(run["settings"])]
         with paper_style():
@@ -218,7 +304,7 @@ def animate(
     typer.echo(f"wrote {path}")
 
 
-@app.command()
+@app.command(rich_help_panel=FIGURES)
 def explore(
     results: Results,
     out: Annotated[
@@ -233,7 +319,8 @@ def explore(
     """Write one self-contained HTML page to explore a sweep in a browser (works offline).
 
     Hover a run of the phase diagram for its settings and outcome, filter by any
-    column, click a run to see its trajectory.
+    column, click a run to see its trajectory. A pillar array's runs are shown as
+    f against length by mode, a clicked run's path through the rows over its pillars.
     """
     _setup_logging(verbose)
     with _errors():
@@ -248,9 +335,14 @@ def explore(
             samples = max(10, MAX_PAGE_POINTS // n_tracks)
             typer.echo(f"{n_tracks} trajectories: keeping {samples} points of each (--samples)")
         sep = (read_manifest(results) or {}).get("separatrix")
+        arrays = geometries = None
+        if is_array(runs):
+            arrays, geometries = _cell_arrays(results, runs), {}
+        else:
+            geometries = _geometries(results, runs)
         html = explorer_html(
-            runs, traj, _geometries(results, runs), title=str(results), separatrix=sep,
-            samples_per_run=samples,
+            runs, traj, geometries, title=str(results), separatrix=sep,
+            samples_per_run=samples, arrays=arrays,
         )  # fmt: skip
         from fibersweep.atomic import atomic_write
 

@@ -1,9 +1,10 @@
 """A fibersweep config: its YAML schema, sweep axes, and loader.
 
 Modules: :mod:`.axes` (the forms of a sweep axis, their counts and values),
-:mod:`.schema` (the four sections ``flow``, ``fiber``, ``sweep``, ``run``),
+:mod:`.schema` (the four sections ``flow``, ``fiber``, ``sweep``, ``run``, and
+what a swept setting key names: its type and its column),
 :mod:`.sweep_axes` (the sweep-axis algebra: the sweep over starts and settings,
-setting columns, combinations), :mod:`.starts` (physics checks of the start
+combinations), :mod:`.starts` (physics checks of the start
 points), :mod:`.loading` (YAML
 with line numbers, command-line overrides, error messages that name each
 field) and :mod:`.errors`. Every public name is importable from here.

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from fibersweep.errors import InputError
+from fibersweep.errors import FieldError, InputError  # FieldError re-exported for config
 
 
 class ConfigError(InputError):
@@ -21,20 +21,6 @@ class ConfigError(InputError):
         self.source = source
         head = f"{source}: {len(problems)} problem{'s' if len(problems) > 1 else ''}"
         super().__init__(head + "\n" + "\n".join(f"  - {p}" for p in problems))
-
-
-class FieldError(ValueError):
-    """A check across several fields that fails at one of them.
-
-    Raised by model validators with the field's dotted ``path`` relative to the
-    model that raised it; the config loader reports the problem at that field's
-    line instead of at the model's.
-    """
-
-    def __init__(self, path: str | tuple, message: str) -> None:
-        super().__init__(message)
-        # a tuple keeps parts that hold dots themselves (a swept setting key)
-        self.path = tuple(path) if isinstance(path, tuple) else tuple(path.split("."))
 
 
 def error_parts(err: dict) -> tuple[tuple, str, Any]:

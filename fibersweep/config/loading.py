@@ -22,8 +22,7 @@ from pydantic import (
 )
 
 from fibersweep.config.errors import ConfigError, FieldError, error_parts
-from fibersweep.config.schema import Config
-from fibersweep.config.sweep_axes import _unwrap
+from fibersweep.config.schema import Config, _unwrap
 
 
 @dataclass(frozen=True)

@@ -3,17 +3,22 @@
 A config has four sections, each optional: ``flow`` (:class:`FlowSettings`),
 ``fiber`` (:class:`FiberSettings`), ``sweep`` (:class:`SweepSettings`, in
 :mod:`.sweep_axes` with the sweep-axis algebra) and ``run``
-(:class:`RunSettings`). Unknown keys are errors. The physics checks of the
-start points live in :mod:`.starts`. The config does not import the sweep: the
-executor registry is handed in by the caller (:func:`.loading.load_config`).
+(:class:`RunSettings`). Unknown keys are errors. A swept setting key is resolved
+here, against the whole config's models (:func:`setting_annotation`), and stored
+as a typed, documented column (:func:`setting_column`). The physics checks of
+the start points live in :mod:`.starts`. The config does not import the sweep:
+the executor registry is handed in by the caller (:func:`.loading.load_config`).
 """
 
 from __future__ import annotations
 
 import difflib
+import re
+import types
+import typing
 from typing import Any
 
-from pydantic import Field, ValidationInfo, model_validator
+from pydantic import BaseModel, Field, ValidationInfo, field_validator, model_validator
 
 from fibersweep.config.axes import DEFAULT_MAX_POINTS, _Strict
 from fibersweep.config.errors import FieldError
@@ -23,8 +28,6 @@ from fibersweep.config.sweep_axes import (
     RefineSettings,
     SweepSettings,
     combinations,
-    setting_annotation,
-    setting_column,
 )
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.settings import FlowSettings
@@ -112,6 +115,20 @@ class Config(_Strict):
     sweep: SweepSettings = SweepSettings()
     run: RunSettings = RunSettings()
 
+    @field_validator("sweep")
+    @classmethod
+    def _swept_keys_are_settings(cls, sweep: SweepSettings) -> SweepSettings:
+        """Every setting axis names a setting of this config that changes results.
+
+        A field validator, so that the other sections' problems are reported with it.
+        """
+        for loc, key, _ in sweep.axis_items():
+            try:
+                setting_annotation(key)
+            except ValueError as exc:
+                raise FieldError(loc, str(exc)) from None
+        return sweep
+
     @model_validator(mode="after")
     def _size_within_limit(self) -> Config:
         """Refuse huge sweeps at once, before any point is made (counted, not listed).
@@ -177,3 +194,92 @@ class Config(_Strict):
         """
         check_starts(self)
         return self
+
+
+def _unwrap(ann: Any) -> Any:
+    """``X | None`` -> X (the other members of a union are kept)."""
+    args = [a for a in typing.get_args(ann) if a is not type(None)]
+    if typing.get_origin(ann) in (typing.Union, types.UnionType) and len(args) == 1:
+        return args[0]
+    return ann
+
+
+def setting_annotation(key: str) -> tuple[Any, Any]:
+    """Type annotation and pydantic field of a dotted setting key that may be swept.
+
+    Walks the models of :class:`Config` from the root; inside a mapping setting
+    (``fiber.effects``) the next part is a mapping key and the value type is
+    returned (field None).
+
+    Raises
+    ------
+    ValueError
+        Not a setting that changes results, or an unknown key (did-you-mean).
+    """
+    parts = key.split(".")
+    if any(not p for p in parts):
+        raise ValueError(f"{key!r}: empty part in the dotted key")
+    if parts[0] in ("run", "sweep"):
+        raise ValueError(
+            f"{parts[0]}.* settings do not change a run's result; they cannot be a sweep axis"
+        )
+    if parts[:2] == ["fiber", "classify"]:
+        raise ValueError(
+            "classification thresholds are not part of a run's id: re-label stored runs "
+            "with `fibersweep classify` instead of sweeping them"
+        )
+    model: Any = Config
+    ann: Any = Config
+    field: Any = None
+    for i, part in enumerate(parts):
+        if isinstance(model, type) and issubclass(model, BaseModel):
+            if part not in model.model_fields:
+                here = ".".join(parts[:i]) or "<top level>"
+                close = difflib.get_close_matches(part, list(model.model_fields), n=1, cutoff=0.5)
+                hint = f"; did you mean '{close[0]}'?" if close else ""
+                valid = ", ".join(k for k in model.model_fields if i or k in ("fiber", "flow"))
+                raise ValueError(
+                    f"unknown setting '{part}' in {here}{hint} Valid keys there: {valid}"
+                )
+            field = model.model_fields[part]
+            ann = _unwrap(field.annotation)
+        elif typing.get_origin(model) is dict:
+            ann, field = _unwrap(typing.get_args(model)[1]), None
+        else:
+            here = ".".join(parts[:i])
+            raise ValueError(f"{here} is a value, not a section: no '{part}' inside it")
+        model = ann
+    return ann, field
+
+
+def setting_column(key: str) -> tuple[str, str, str]:
+    """How a swept setting is stored as a runs-table column.
+
+    Returns
+    -------
+    kind : {'float', 'int', 'bool', 'string', 'json'}
+        Column type (``json``: a section or list, stored as its JSON text).
+    unit : str
+        From the ``[unit]`` in the field's description ('' if none).
+    doc : str
+        The field's description.
+    """
+    try:
+        ann, field = setting_annotation(key)
+    except ValueError:
+        return "json", "", f"swept setting {key}"
+    kind = "json"
+    if ann is bool:
+        kind = "bool"
+    elif ann is int:
+        kind = "int"
+    elif ann is float:
+        kind = "float"
+    elif ann is str or typing.get_origin(ann) is typing.Literal:
+        kind = "string"
+    desc = (field.description if field is not None else None) or ""
+    if field is None and key.startswith("fiber.effects."):
+        desc = f"strength of the effect {key.rsplit('.', 1)[1]} (0 = off)"
+    m = re.search(r"\[([^\]]+)\]", desc)
+    unit = m.group(1) if m else ""
+    return kind, unit, f"swept setting {key}: {desc}" if desc else f"swept setting {key}"

@@ -2,10 +2,10 @@
 
 :class:`SweepSettings` holds the three start axes (``theta0``, ``y0``,
 ``length``), any dotted setting key swept as an axis, and ``zip`` groups swept
-together; :class:`RefineSettings` the adaptive refinement. A setting key is
-resolved against the config models (:func:`setting_annotation`), stored as a
-typed, documented column (:func:`setting_column`), and every combination of the
-axes is validated as a whole config (:func:`combinations`).
+together; :class:`RefineSettings` the adaptive refinement. Every combination of
+the axes is validated as a whole config (:func:`combinations`). What a setting
+key names is resolved against the whole config's models, so it lives with them
+(:func:`fibersweep.config.schema.setting_annotation`).
 """
 
 from __future__ import annotations
@@ -13,15 +13,11 @@ from __future__ import annotations
 import copy
 import difflib
 import itertools
-import re
-import types
-import typing
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from pydantic import (
-    BaseModel,
     ConfigDict,
     Field,
     ValidationError,
@@ -49,8 +45,6 @@ __all__ = [
     "RefineSettings",
     "SweepSettings",
     "combinations",
-    "setting_annotation",
-    "setting_column",
 ]
 
 
@@ -236,7 +230,11 @@ class SweepSettings(_Strict):
 
     @model_validator(mode="after")
     def _setting_axes_valid(self) -> SweepSettings:
-        """Keys name settings, values are axis forms, zipped lists are equally long."""
+        """Keys are dotted, values are axis forms, zipped lists are equally long.
+
+        That a key names a setting is the whole config's to say: :class:`Config`
+        (:mod:`fibersweep.config.schema`) checks it.
+        """
         seen: dict[str, tuple] = {}
         for loc, key, raw in self.axis_items():
             if "." not in key:
@@ -253,15 +251,13 @@ class SweepSettings(_Strict):
                     "or a dotted setting key such as fiber.effects.friction",
                 )
             try:
-                setting_annotation(key)
-                values = setting_axis_values(raw)
+                setting_axis_values(raw)
             except ValueError as exc:
                 raise FieldError(loc, str(exc)) from None
             if key in seen:
                 where = ".".join(str(p) for p in ("sweep", *seen[key]))
                 raise FieldError(loc, f"{key} is swept twice (also at {where}); keep one")
             seen[key] = loc
-            del values
         for gloc, group in self._zip_groups():
             sizes = {k: len(setting_axis_values(v)) for k, v in group.items()}
             if len(set(sizes.values())) > 1:
@@ -357,96 +353,6 @@ class SweepSettings(_Strict):
 
 
 _START_AXES = ("theta0", "y0", "length")
-
-
-def _unwrap(ann: Any) -> Any:
-    """``X | None`` -> X (the other members of a union are kept)."""
-    args = [a for a in typing.get_args(ann) if a is not type(None)]
-    if typing.get_origin(ann) in (typing.Union, types.UnionType) and len(args) == 1:
-        return args[0]
-    return ann
-
-
-def setting_annotation(key: str) -> tuple[Any, Any]:
-    """Type annotation and pydantic field of a dotted setting key that may be swept.
-
-    Walks the config models; inside a mapping setting (``fiber.effects``) the
-    next part is a mapping key and the value type is returned (field None).
-
-    Raises
-    ------
-    ValueError
-        Not a setting that changes results, or an unknown key (did-you-mean).
-    """
-    parts = key.split(".")
-    if any(not p for p in parts):
-        raise ValueError(f"{key!r}: empty part in the dotted key")
-    if parts[0] in ("run", "sweep"):
-        raise ValueError(
-            f"{parts[0]}.* settings do not change a run's result; they cannot be a sweep axis"
-        )
-    if parts[:2] == ["fiber", "classify"]:
-        raise ValueError(
-            "classification thresholds are not part of a run's id: re-label stored runs "
-            "with `fibersweep classify` instead of sweeping them"
-        )
-    from fibersweep.config.schema import Config  # the root of the models (imports this module)
-
-    model: Any = Config
-    ann: Any = Config
-    field: Any = None
-    for i, part in enumerate(parts):
-        if isinstance(model, type) and issubclass(model, BaseModel):
-            if part not in model.model_fields:
-                here = ".".join(parts[:i]) or "<top level>"
-                close = difflib.get_close_matches(part, list(model.model_fields), n=1, cutoff=0.5)
-                hint = f"; did you mean '{close[0]}'?" if close else ""
-                valid = ", ".join(k for k in model.model_fields if i or k in ("fiber", "flow"))
-                raise ValueError(
-                    f"unknown setting '{part}' in {here}{hint} Valid keys there: {valid}"
-                )
-            field = model.model_fields[part]
-            ann = _unwrap(field.annotation)
-        elif typing.get_origin(model) is dict:
-            ann, field = _unwrap(typing.get_args(model)[1]), None
-        else:
-            here = ".".join(parts[:i])
-            raise ValueError(f"{here} is a value, not a section: no '{part}' inside it")
-        model = ann
-    return ann, field
-
-
-def setting_column(key: str) -> tuple[str, str, str]:
-    """How a swept setting is stored as a runs-table column.
-
-    Returns
-    -------
-    kind : {'float', 'int', 'bool', 'string', 'json'}
-        Column type (``json``: a section or list, stored as its JSON text).
-    unit : str
-        From the ``[unit]`` in the field's description ('' if none).
-    doc : str
-        The field's description.
-    """
-    try:
-        ann, field = setting_annotation(key)
-    except ValueError:
-        return "json", "", f"swept setting {key}"
-    kind = "json"
-    if ann is bool:
-        kind = "bool"
-    elif ann is int:
-        kind = "int"
-    elif ann is float:
-        kind = "float"
-    elif ann is str or typing.get_origin(ann) is typing.Literal:
-        kind = "string"
-    desc = (field.description if field is not None else None) or ""
-    if field is None and key.startswith("fiber.effects."):
-        desc = f"strength of the effect {key.rsplit('.', 1)[1]} (0 = off)"
-    m = re.search(r"\[([^\]]+)\]", desc)
-    unit = m.group(1) if m else ""
-    return kind, unit, f"swept setting {key}: {desc}" if desc else f"swept setting {key}"
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,9 @@
 * ``paper.yaml``: the source's 1323-run study at its resolution;
 * ``friction_axis.yaml``: settings as sweep axes (friction x pillar surface);
 * ``refine.yaml``: adaptive refinement of the class boundaries;
-* ``shapes.yaml``: the pillar shape as a sweep axis (triangle vs circle).
+* ``shapes.yaml``: the pillar shape as a sweep axis (triangle vs circle);
+* ``array.yaml``: rigid fibers through a tilted pillar array (``sort-report``);
+* ``array-flexible.yaml``: flexible fibers of three stiffnesses through the same array.
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ EXAMPLES = {
     "friction_axis.yaml": "friction_axis.yaml",
     "refine.yaml": "refine.yaml",
     "shapes.yaml": "shapes.yaml",
+    "array.yaml": "array.yaml",
+    "array-flexible.yaml": "array-flexible.yaml",
 }
 
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from fibersweep.errors import InputError
 from fibersweep.fiber import record as R
-from fibersweep.fiber.models import MODELS
+from fibersweep.fiber.models import integrator_of
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
 from fibersweep.fiber.setup import MIN_BEADS
 
@@ -107,8 +107,8 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
     field : fibersweep.flow.cell.CellField
         Unit-cell midplane velocity [µm/s] and its array.
     settings : FiberSettings
-        Fiber model (rigid or bead-spring), contact, step, trap rule, effects acting in
-        the kernels.
+        Fiber model (rigid or bead-spring) and integrator, contact, step, trap rule, effects
+        acting in the kernels.
     start : FiberStart
         theta0 [deg], y0 [fraction of period_y], length [µm].
     rng_seed : int, optional
@@ -132,6 +132,7 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
     from fibersweep.fiber.rows import array_pillar, check_array_effects
 
     t_wall = time.perf_counter()
+    integrator = integrator_of(settings)
     array = field.array
     a = settings.bead_radius
     for name in ("theta0", "y0", "length"):
@@ -162,13 +163,15 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
     y0 = start.y0 * array.period_y
     k = array_run_kernel(field, settings, start.length)
     try:
-        rec, beads, code = MODELS[settings.model].integrate(
-            k, x0, y0, math.radians(start.theta0), None
-        )
+        rec, beads, code = integrator.integrate(k, x0, y0, math.radians(start.theta0), None)
     except (FloatingPointError, np.linalg.LinAlgError, ZeroDivisionError) as exc:
         log.warning("run %s failed: %s", start, exc)
         return RunResult(
-            start=start, status="failed", reason=f"numerical error: {exc}", model=settings.model
+            start=start,
+            status="failed",
+            reason=f"numerical error: {exc}",
+            model=settings.model,
+            integrator=integrator.name,
         )
     code = int(code)
     npil = rec[:, R.CONTACT]  # pillars in contact at each step
@@ -183,8 +186,9 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
     common = dict(
         start=start,
         model=settings.model,
+        integrator=integrator.name,
         n_beads=n,
-        n_steps=MODELS[settings.model].steps(k, rec),
+        n_steps=integrator.steps(k, rec),
         wall_time=time.perf_counter() - t_wall,
         x_f=float(rec[-1, R.XC]),
         y_f=float(rec[-1, R.YC]),

@@ -39,7 +39,8 @@ from fibersweep.fiber.exclusion import GAP
 from fibersweep.fiber.frame import CHANNEL
 from fibersweep.fiber.hooks import BASELINE
 from fibersweep.fiber.mobility import body_mobility
-from fibersweep.fiber.settings import FiberSettings
+from fibersweep.fiber.rosw import METHODS
+from fibersweep.fiber.settings import ROSENBROCK, FiberSettings
 from fibersweep.fiber.setup import Setup
 
 __all__ = [
@@ -94,10 +95,10 @@ class Params(NamedTuple):
     ----------
     a, mu : bead radius, viscosity [pN s/µm²]
     max_disp, contact_disp : largest bead move per step far from / near the pillar
-        (rigid: step.max_displacement, contact_displacement; bead-spring-ros2: the
+        (rigid: step.max_displacement, contact_displacement; ros2, ros34pw2: the
         step.ros2_ ones)
-    dt_max : largest step (rigid)
-    dt : fixed step (bead-spring; NaN for rigid)
+    dt_max : largest step (rigid, ros2, ros34pw2)
+    dt : fixed step (bdf2; NaN otherwise unless step.dt is set)
     t_max : give up
     x_stop : mode 0 stops when the rearmost end passes this x
     t_stop : mode 1 stops at this time
@@ -106,10 +107,10 @@ class Params(NamedTuple):
     stopped_implicit : rigid: linearly implicit steps while stopped in contact
     y_lo, y_hi : bead centres must stay between these
     stretch, bend : bead-spring S [pN] and B [pN µm²]
-    tol : bead-spring-ros2: local error allowed per step [µm] (NaN otherwise)
-    rosw : bead-spring-ros2: 0 ROS2, 1 ROS34PW2 (step.rosenbrock)
-    w_reuse : bead-spring-ros2: accepted steps one W = M J may serve (step.jacobian_reuse)
-    pi_control : bead-spring-ros2: PI step-size controller (step.controller == "pi")
+    tol : ros2, ros34pw2: local error allowed per step [µm] (step.tolerance)
+    rosw : the Rosenbrock-W method, 0 ROS2, 1 ROS34PW2 (:data:`~fibersweep.fiber.rosw.METHODS`)
+    w_reuse : ros2, ros34pw2: accepted steps one W = M J may serve (step.jacobian_reuse)
+    pi_control : ros2, ros34pw2: PI step-size controller (step.controller == "pi")
     excl_gap : bead-spring self-exclusion: beads |i − j| >= excl_gap repel (0: off;
         :mod:`fibersweep.fiber.exclusion`)
     excl_cut, excl_eq, excl_fref : its cutoff χ·2a [µm], r_eq = 2a [µm] and F_ref [pN],
@@ -144,7 +145,7 @@ class Params(NamedTuple):
 
 
 class Work(NamedTuple):
-    """Scratch buffers of both integrators (n beads).
+    """Scratch buffers of every integrator (n beads).
 
     ``x, y`` bead centres [µm], ``u`` (n, 2) background velocities [µm/s],
     ``fx, fy`` forces [pN] (rigid: contact; bead-spring: total), ``st`` contact
@@ -162,7 +163,7 @@ class Work(NamedTuple):
 
 
 class BeadWork(NamedTuple):
-    """Scratch buffers of the bead-spring integrator (empty for rigid).
+    """Scratch buffers of the bead-spring integrators (empty for rigid).
 
     ``cfx, cfy`` contact forces [pN], ``gx, gy`` Jacobian scratch, ``f`` (2n)
     bead velocities [µm/s], ``mob, jac, lhs`` (2n, 2n) mobility, force Jacobian
@@ -246,10 +247,11 @@ def make_params(
         See :func:`build_kernel`.
     """
     a = float(st.bead_radius)
-    bead_spring = st.model == "bead-spring"
-    dt = st.step.dt if st.step.dt is not None else (DEFAULT_DT if bead_spring else math.nan)
-    ros2 = st.model == "bead-spring-ros2"
-    excl = st.self_exclusion and st.model in ("bead-spring", "bead-spring-ros2")
+    integrator = st.resolved_integrator
+    fixed = integrator == "bdf2"
+    dt = st.step.dt if st.step.dt is not None else (DEFAULT_DT if fixed else math.nan)
+    ros2 = integrator in ROSENBROCK
+    excl = st.self_exclusion and st.model == "bead-spring"
     return Params(
         a=a,
         mu=mu,
@@ -272,7 +274,7 @@ def make_params(
         stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²
         bend=st.young_modulus * math.pi * a**4 / 4.0,
         tol=float(st.step.tolerance),
-        rosw=int(st.step.rosenbrock == "ros34pw2"),
+        rosw=METHODS.get(integrator, 0),
         w_reuse=int(st.step.jacobian_reuse),
         pi_control=st.step.controller == "pi",
         excl_gap=GAP if excl else 0,
@@ -294,7 +296,7 @@ def assemble(
     """A Kernel of ``n`` beads: body mobility, work buffers and the effects' tuple added."""
     bm = body_mobility(n, params.a, params.mu)
     body = BodyArrays(bm.offsets.copy(), bm.P.copy(), bm.N.copy(), bm.chol.copy(), bm.tip_mobility)
-    beads = st.model in ("bead-spring", "bead-spring-ros2")
+    beads = st.model == "bead-spring"
     return Kernel(
         flow,
         pillar,

@@ -1,14 +1,16 @@
 """Fiber-pillar repulsion: the rough pillar (small beads) and the smooth pillar (Bézier outline).
 
-Rough (docs/model.md): pillar beads of radius a_obs centred on the outline,
-2 a_obs apart (a bead on each vertex of a polygon); a fiber bead at centre
-distance r < R_ref from a pillar bead is pushed away with
-F = (F_ref / (a + a_obs)) · w⁴ · r,  w = (R_ref² − r²) / (R_ref² − (a + a_obs)²).
-Smooth: the polygon's sides and its corners rounded with radius r_c, each a
-quadratic Bézier curve; the nearest point on a curve is a root of a cubic in
-the curve parameter; the force is normal, F = (F_ref / a) · w⁴ · R with
-w = (R_ref² − R²) / (R_ref² − a²) and R the bead-centre-to-curve distance. A
-circular pillar is smooth already: its nearest point and normal are exact.
+Both use the soft-core pair law of :mod:`fibersweep.fiber.pairlaw`
+(|F| = F_ref at r_eq, zero from the cutoff R_ref = χ r_eq on):
+
+- rough (docs/model.md): pillar beads of radius a_obs centred on the outline,
+  2 a_obs apart (a bead on each vertex of a polygon); a fiber bead at centre
+  distance r < R_ref from a pillar bead is pushed away from it, r_eq = a + a_obs;
+- smooth: the polygon's sides and its corners rounded with radius r_c, each a
+  quadratic Bézier curve; the nearest point on a curve is a root of a cubic in
+  the curve parameter; the force is along the outward normal, r the
+  bead-centre-to-curve distance, r_eq = a. A circular pillar is smooth
+  already: its nearest point and normal are exact.
 
 Any pillar shape of :mod:`fibersweep.geometry` (triangle, square, convex
 polygon, circle). Only beads whose centre is closer than R_ref to the exact
@@ -25,6 +27,7 @@ import numba as nb
 import numpy as np
 
 from fibersweep.fiber.bezier import bezier_nearest, smooth_curves
+from fibersweep.fiber.pairlaw import soft_core
 from fibersweep.fiber.settings import ContactSettings
 from fibersweep.geometry import Circle
 from fibersweep.units import Geometry
@@ -114,14 +117,6 @@ def shape_distance(px: float, py: float, verts: np.ndarray, circle: np.ndarray) 
     return outline_distance(px, py, verts)
 
 
-@nb.njit(cache=True, inline="always")
-def _smooth_pair(r: float, r2c: float, den: float, amp: float) -> tuple[float, float]:
-    """Force magnitude [pN] and |dF/dr| [pN/µm] of the contact potential at distance r [µm]."""
-    w = (r2c - r * r) / den
-    w3 = w * w * w
-    return amp * w3 * w * r, abs(amp * (w3 * w - 8.0 * w3 * r * r / den))
-
-
 @nb.njit(cache=True)
 def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
     """Contact forces on fiber beads (overwrites fx, fy, stiff, dist).
@@ -180,14 +175,12 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
                 r2 = rx * rx + ry * ry
                 if r2 >= r2c:
                     continue
-                w = (r2c - r2) / den
-                w3 = w * w * w
-                r = math.sqrt(r2)
+                sp, _, k_r = soft_core(r2, r2c, den, amp)
                 # r_ij points to the pillar bead: the force pushes the fiber bead away.
-                fx[i] -= amp * w3 * w * rx
-                fy[i] -= amp * w3 * w * ry
-                fm = amp * w3 * w * r
-                stiff[i] += abs(amp * (w3 * w - 8.0 * w3 * r2 / den))
+                fx[i] -= sp * rx
+                fy[i] -= sp * ry
+                fm = sp * math.sqrt(r2)
+                stiff[i] += k_r
                 any_c = True
                 if fm > fmax:
                     fmax = fm
@@ -199,7 +192,8 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
             ry = by[i] - circle[1]
             rr = math.sqrt(rx * rx + ry * ry)
             r = abs(d_out)
-            fm, k_r = _smooth_pair(r, r2c, den, amp)
+            sp, _, k_r = soft_core(r * r, r2c, den, amp)
+            fm = sp * r
             if rr > 0.0:
                 fx[i] += fm * rx / rr
                 fy[i] += fm * ry / rr
@@ -226,7 +220,8 @@ def pillar_forces(pil, bx, by, fx, fy, stiff, dist):
                     s_curve = side
                 if r >= r_cut:
                     continue
-                fm, k_r = _smooth_pair(r, r2c, den, amp)
+                sp, _, k_r = soft_core(r * r, r2c, den, amp)
+                fm = sp * r
                 # push along the outward normal even if the centre crossed the curve
                 ex = side * (bx[i] - qx)
                 ey = side * (by[i] - qy)

@@ -3,8 +3,8 @@
 The chain's springs keep neighbours 2a apart but nothing else stops a soft
 fiber from passing through itself. Two beads i, j with |i − j| >= ``gap``
 whose centres are closer than the cutoff R repel each other with the pillar's
-contact law (:mod:`fibersweep.fiber.contact`), with the bead diameter in place
-of the bead-to-pillar distance:
+contact law (:func:`~fibersweep.fiber.pairlaw.soft_core`), with the bead
+diameter in place of the bead-to-pillar distance:
 
     F_i = −F_j = (F_ref / r_eq) · w⁴ · (r_i − r_j),
     w = (R² − r²) / (R² − r_eq²),  r = |r_i − r_j| < R,
@@ -29,6 +29,8 @@ from __future__ import annotations
 
 import numba as nb
 import numpy as np
+
+from fibersweep.fiber.pairlaw import soft_core
 
 __all__ = ["GAP", "exclusion_forces", "exclusion_jacobian", "min_self_distance"]
 
@@ -85,8 +87,7 @@ def exclusion_forces(
             r2 = dx * dx + dy * dy
             if r2 >= r2c:
                 continue
-            w = (r2c - r2) / den
-            s = amp * w * w * w * w
+            s, _, _ = soft_core(r2, r2c, den, amp)
             fx[i] += s * dx
             fy[i] += s * dy
             fx[j] -= s * dx
@@ -117,7 +118,8 @@ def exclusion_jacobian(
     """Add ∂F/∂q [pN/µm] of :func:`exclusion_forces` into ``jac`` (2n, 2n), analytically.
 
     With d = r_i − r_j, F_i = amp w⁴ d, ∂w/∂r_i = −2d/den (den = R² − r_eq²):
-        K = ∂F_i/∂r_i = amp (w⁴ I − (8 w³/den) d dᵀ),
+        K = ∂F_i/∂r_i = amp (w⁴ I − (8 w³/den) d dᵀ) = s I − g d dᵀ
+    (s, g of :func:`~fibersweep.fiber.pairlaw.soft_core`),
     entering +K on the diagonal blocks (i, i), (j, j) and −K on (i, j), (j, i):
     symmetric, and translations are zero modes. Unlike the springs' Jacobian it is
     not banded: a pair can couple any two beads |i − j| >= gap apart.
@@ -144,10 +146,8 @@ def exclusion_jacobian(
             r2 = dx * dx + dy * dy
             if r2 >= r2c:
                 continue
-            w = (r2c - r2) / den
-            w3 = w * w * w
-            s0 = amp * w3 * w
-            s1 = -amp * 8.0 * w3 / den
+            s0, g, _ = soft_core(r2, r2c, den, amp)
+            s1 = -g
             kxx = s0 + s1 * dx * dx
             kxy = s1 * dx * dy
             kyy = s0 + s1 * dy * dy

@@ -1,9 +1,10 @@
-"""Small dense LU factorisation with partial pivoting, in place, for the Numba kernels.
+"""Small dense LU factorisation with partial pivoting, in place: the Rosenbrock integrators' solve.
 
-``bead-spring-ros2`` solves two systems with the same matrix I − γhW per step
-(2n ≈ 40–100 unknowns): one factorisation, two triangular solves, and no
-allocation per step (``np.linalg.solve`` copies the matrix and factorises it
-at every call). Checked against ``np.linalg.solve`` in tests/unit/test_fiber_lu.py.
+A Rosenbrock-W step (:mod:`fibersweep.fiber.rosenbrock`) solves two (ROS2) or
+four (ROS34PW2) systems with the same matrix I − γhW (2n ≈ 40–100 unknowns):
+one factorisation, a triangular solve per stage, and no allocation per step
+(``np.linalg.solve`` copies the matrix and factorises it at every call).
+Checked against ``np.linalg.solve`` in tests/unit/test_fiber_lu.py.
 """
 
 from __future__ import annotations

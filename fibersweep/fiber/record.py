@@ -1,15 +1,28 @@
-"""The per-step record the integrators write, their stop codes and their shared stop rule."""
+"""The per-step record every integrator writes: its columns, the pose of a bead chain, the stop
+codes, the stop rule they share, and the chunked loop that collects a run's rows."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numba as nb
 import numpy as np
 
 from fibersweep.analysis.trajectory import Trajectory
 
-__all__ = ["COLS", "NCOLS", "STOP_REASONS", "stop_test", "trajectory_from_record", "write_row"]
+__all__ = [
+    "CHUNK",
+    "COLS",
+    "NCOLS",
+    "STOP_REASONS",
+    "bead_pose",
+    "collect",
+    "stop_test",
+    "trajectory_from_record",
+    "write_bead_row",
+    "write_row",
+]
 
 # Columns of one record row (one per accepted step, at the start of the step).
 T, XC, YC, TH, VX, VY, OM, CONTACT, CX, CY, MIN_DIST, HEAD_SPEED, COM_SPEED, HX, HY, TX, TY = range(
@@ -35,6 +48,7 @@ COLS = (
     "tail_y",
 )
 NCOLS = len(COLS)
+CHUNK = 20_000  # record rows per kernel call
 
 # Stop codes returned by the kernels.
 CHUNK_FULL = 0
@@ -78,8 +92,73 @@ def write_row(r, t, xc, yc, th, vx, vy, om, contact, cx, cy, min_d, head_speed, 
 
 
 @nb.njit(cache=True, inline="always")
+def bead_pose(q, v, theta):
+    """Pose of a bead chain at positions ``q`` (2n) [µm] moving with velocities ``v`` (2n) [µm/s].
+
+    ``theta`` is the last unwrapped axis angle [rad]; the new one is the tail→head
+    angle (bead 0 → bead n−1) continued from it by less than π.
+
+    Returns
+    -------
+    (theta, xc, yc, vxc, vyc, com_speed, hx, hy, tx, ty, y_min, y_max, finite_q, finite_v)
+        Axis angle [rad], centre and its velocity [µm, µm/s], its speed, head and
+        tail bead [µm], lowest and highest bead centre [µm], whether q and v are
+        finite.
+    """
+    n = q.shape[0] // 2
+    hx = q[2 * n - 2]
+    hy = q[2 * n - 1]
+    tx = q[0]
+    ty = q[1]
+    ang = math.atan2(hy - ty, hx - tx)
+    theta += (ang - theta + math.pi) % (2.0 * math.pi) - math.pi
+    xc = 0.0
+    yc = 0.0
+    vxc = 0.0
+    vyc = 0.0
+    y_min = 1e300
+    y_max = -1e300
+    finite_q = True
+    finite_v = True
+    for i in range(n):
+        xc += q[2 * i] / n
+        yc += q[2 * i + 1] / n
+        vxc += v[2 * i] / n
+        vyc += v[2 * i + 1] / n
+        y_min = min(y_min, q[2 * i + 1])
+        y_max = max(y_max, q[2 * i + 1])
+        if not (math.isfinite(q[2 * i]) and math.isfinite(q[2 * i + 1])):
+            finite_q = False
+        if not (math.isfinite(v[2 * i]) and math.isfinite(v[2 * i + 1])):
+            finite_v = False
+    com_speed = math.hypot(vxc, vyc)
+    return theta, xc, yc, vxc, vyc, com_speed, hx, hy, tx, ty, y_min, y_max, finite_q, finite_v
+
+
+@nb.njit(cache=True, inline="always")
+def write_bead_row(r, br, t, q, v, pose, contact, cx, cy, min_d):
+    """Record a bead chain: row ``r`` (NCOLS,) and its bead positions ``br`` (n, 2) [µm].
+
+    ``pose`` is :func:`bead_pose` of (q, v); the angular velocity is that of the
+    tail→head vector, the head speed that of bead n−1.
+    """
+    n = q.shape[0] // 2
+    theta, xc, yc, vxc, vyc, com_speed, hx, hy, tx, ty, _, _, _, _ = pose
+    ex = hx - tx
+    ey = hy - ty
+    om = (ex * (v[2 * n - 1] - v[1]) - ey * (v[2 * n - 2] - v[0])) / (ex * ex + ey * ey)
+    write_row(
+        r, t, xc, yc, theta, vxc, vyc, om, contact, cx, cy, min_d,
+        math.hypot(v[2 * n - 2], v[2 * n - 1]), com_speed, hx, hy, tx, ty,
+    )  # fmt: skip
+    for i in range(n):
+        br[i, 0] = q[2 * i]
+        br[i, 1] = q[2 * i + 1]
+
+
+@nb.njit(cache=True, inline="always")
 def stop_test(p, t, finite, min_d, y_min, y_max, stopped, stopped_since, x_rear, t_tol):
-    """The stop rule shared by both integrators, on the state about to be recorded.
+    """The stop rule every integrator shares, on the state about to be recorded.
 
     Parameters
     ----------
@@ -148,3 +227,34 @@ def trajectory_from_record(rec: np.ndarray, beads: np.ndarray | None = None) -> 
         contact=rec[:, CONTACT] > 0.5,
         beads=beads,
     )
+
+
+def collect(
+    advance: Callable[[np.ndarray, np.ndarray | None], tuple[int, int]], n_beads: int = 0
+) -> tuple[np.ndarray, np.ndarray | None, int]:
+    """Run an integrator chunk by chunk until it stops; its rows, bead positions and stop code.
+
+    Parameters
+    ----------
+    advance : callable
+        ``advance(rec, brec) -> (rows, code)``: fills ``rec`` (CHUNK, NCOLS) and, for a
+        bead chain, ``brec`` (CHUNK, n_beads, 2) from row 0, carrying its own state
+        from call to call; ``code`` is CHUNK_FULL while it goes on.
+    n_beads : int
+        Beads recorded per row (0: none, ``brec`` is None).
+
+    Returns
+    -------
+    (rec, beads, code)
+        Rows (m, NCOLS), bead positions (m, n_beads, 2) [µm] or None, stop code.
+    """
+    recs, brecs = [], []
+    while True:
+        rec = np.empty((CHUNK, NCOLS))
+        brec = np.empty((CHUNK, n_beads, 2)) if n_beads else None
+        rows, code = advance(rec, brec)
+        recs.append(rec[:rows])
+        if brec is not None:
+            brecs.append(brec[:rows])
+        if code != CHUNK_FULL:
+            return np.concatenate(recs), np.concatenate(brecs) if n_beads else None, int(code)

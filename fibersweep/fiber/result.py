@@ -150,6 +150,9 @@ class RunResult:
     wall_time : float
         Seconds of computation.
     model : str
+        Fiber model (rigid or bead-spring).
+    integrator : str
+        Its time integrator (midpoint; bdf2, ros2 or ros34pw2).
     n_beads : int
         Beads of the fiber (0 when the run did not start).
     t_end : float
@@ -204,7 +207,11 @@ class RunResult:
     theta_f: float = column(math.nan, "float64", "deg", "final directed angle, unwrapped")
     n_steps: int = column(0, "int64", "", "integrator steps")
     wall_time: float = column(0.0, "float64", "s", "wall-clock time of the run")
-    model: str = column("", "string", "", "fiber model (rigid, bead-spring or bead-spring-ros2)")
+    model: str = column("", "string", "", "fiber model (rigid or bead-spring)")
+    integrator: str = column(
+        "", "string", "", "time integrator of the model (rigid: midpoint; bead-spring: bdf2, "
+        "ros2 or ros34pw2)"
+    )
     n_beads: int = column(0, "int64", "", "beads of the fiber (0 when the run did not start)")
     t_end: float = column(
         math.nan, "float64", "s", "time at the end of the run (stop or time limit)"

@@ -44,11 +44,10 @@ from fibersweep.fiber import frame as F
 from fibersweep.fiber import hooks as H
 from fibersweep.fiber import record as R
 from fibersweep.fiber.mobility import body_velocity
+from fibersweep.fiber.rosw import GAMMA2
 
-__all__ = ["CHUNK", "integrate_rigid", "rigid_velocity", "ros2_step", "run_rigid", "seed_numba"]
+__all__ = ["integrate_rigid", "rigid_velocity", "ros2_step", "run_rigid", "seed_numba"]
 
-CHUNK = 20_000  # record rows per kernel call
-ROS2_GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
 FD_STEP = 1e-5  # finite-difference step of the Jacobian [µm] (angle: this / half-length)
 
 
@@ -169,7 +168,7 @@ def ros2_step(frame, flow, pillar, body, w, effects, xc, yc, th, vx, vy, om, dt,
         fx, fy, fo, _, _, _, _, _ = rigid_velocity(
             frame, flow, pillar, body, w, effects, qx, qy, qt
         )
-        g = ROS2_GAMMA * dt / h
+        g = GAMMA2 * dt / h
         a[0, j] = -g * (fx - vx)
         a[1, j] = -g * (fy - vy)
         a[2, j] = -g * (fo - om)
@@ -320,10 +319,4 @@ def run_rigid(
         Record rows (record.COLS) and the stop code.
     """
     state = np.array([0.0, x0, y0, th0, math.nan])
-    chunks = []
-    while True:
-        rec = np.empty((CHUNK, R.NCOLS))
-        rows, code = integrate_rigid(state, k, rec)
-        chunks.append(rec[:rows])
-        if code != R.CHUNK_FULL:
-            return np.concatenate(chunks), None, code
+    return R.collect(lambda rec, _: integrate_rigid(state, k, rec))  # type: ignore[return-value]

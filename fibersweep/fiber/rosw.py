@@ -1,4 +1,9 @@
-"""Rosenbrock-W tableau ROS34PW2 and its stage arithmetic, for the bead-spring fiber.
+"""Rosenbrock-W methods of the bead-spring fiber: their codes, ROS2's γ, the ROS34PW2 tableau
+and its stage arithmetic.
+
+ROS2 (two stages, γ = :data:`GAMMA2` = 1 + 1/√2) is written out in
+:mod:`fibersweep.fiber.rosenbrock`; the rigid fiber's stopped steps use it too
+(:mod:`fibersweep.fiber.rigid`).
 
 ROS34PW2 (Rang & Angermann 2005, BIT 45:761) is a four-stage Rosenbrock-W
 method of order 3 with an embedded method of order 2, L-stable and stiffly
@@ -8,7 +13,7 @@ q' = f(q) and any matrix W (a W-method: its order holds for an inexact W),
     (I − γ h W) k_i = f(q + h Σ_{j<i} α_ij k_j) + h W Σ_{j<i} γ_ij k_j,
     q' = q + h Σ b_i k_i,   q̂' = q + h Σ b̂_i k_i.
 
-:mod:`fibersweep.fiber.implicit_beadspring` uses the transformed form that
+:mod:`fibersweep.fiber.rosenbrock` uses the transformed form that
 needs no product with W: with Γ = (γ_ij) (γ_ii = γ) and x = Γ k / γ,
 
     (I − γ h W) x_i = f(q + h Σ_{j<i} a_ij x_j) + Σ_{j<i} c_ij x_j,
@@ -22,6 +27,8 @@ order conditions (tests/unit/test_fiber_rosw.py).
 
 from __future__ import annotations
 
+import math
+
 import numba as nb
 import numpy as np
 
@@ -33,15 +40,27 @@ __all__ = [
     "M34",
     "B",
     "BHAT",
+    "GAMMA2",
     "GAMMA3",
     "GAMMA_MATRIX",
+    "METHODS",
+    "ROS2_CODE",
     "ROS34PW2",
+    "ROS34PW2_CODE",
     "combine",
     "stage_point",
     "stage_rhs",
     "transformed",
     "w_order_residuals",
 ]
+
+ROS2_CODE = 0
+ROS34PW2_CODE = 1
+METHODS = {"ros2": ROS2_CODE, "ros34pw2": ROS34PW2_CODE}
+"""``Params.rosw`` of each method, by its ``fiber.integrator`` name."""
+
+GAMMA2 = 1.0 + 1.0 / math.sqrt(2.0)
+"""γ of ROS2."""
 
 GAMMA3 = 4.3586652150845900e-01
 """γ of ROS34PW2 (the diagonal of Γ)."""

@@ -1,8 +1,9 @@
-"""Fibers through many rows of a pillar array: the array case of the one integrator.
+"""Fibers through many rows of a pillar array: the array case of the channel's integrators.
 
-An array run is the channel's fiber model (:mod:`fibersweep.fiber.rigid`: its
-mobility, effects' stages, step rule, stop rule and implicit stopped steps)
-in the :class:`~fibersweep.fiber.frame.Lattice` frame. This module only
+An array run is the channel's fiber model and integrator
+(:mod:`fibersweep.fiber.models`: mobility, effects' stages, step rule, stop
+rule; for the rigid model its implicit stopped steps) in the
+:class:`~fibersweep.fiber.frame.Lattice` frame. This module only
 assembles the run's :class:`~fibersweep.fiber.bundles.Kernel`, as
 :func:`fibersweep.fiber.bundles.build_kernel` does for the channel:
 
@@ -36,7 +37,7 @@ from fibersweep.fiber.bundles import FlowArrays, Kernel, assemble, make_params
 from fibersweep.fiber.contact import Pillar, contact_force_scale, make_pillar
 from fibersweep.fiber.effects import DynamicsContext, EffectSet, build_effects
 from fibersweep.fiber.effects.base import Effect
-from fibersweep.fiber.models import MODELS
+from fibersweep.fiber.models import get_integrator
 from fibersweep.fiber.settings import FiberSettings
 
 __all__ = ["PAD", "array_kernel", "array_pillar", "check_array_effects", "run_array_fiber"]
@@ -128,11 +129,12 @@ def array_kernel(
 
 
 def run_array_fiber(
-    k: Kernel, model: str, x0: float, y0: float, th0: float
+    k: Kernel, model: str, x0: float, y0: float, th0: float, integrator: str | None = None
 ) -> tuple[np.ndarray, int]:
     """Integrate one fiber from centre (x0, y0) [µm], angle th0 [rad] with ``model``.
 
+    ``integrator``: one of the model's (None: its default); ``k`` must be built for it.
     Returns the record (rows, :data:`fibersweep.fiber.record.NCOLS`) and the stop code.
     """
-    rec, _, code = MODELS[model].integrate(k, x0, y0, th0, None)
+    rec, _, code = get_integrator(model, integrator).integrate(k, x0, y0, th0, None)
     return rec, int(code)

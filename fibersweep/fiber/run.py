@@ -1,4 +1,5 @@
-"""One fiber run: validate the start, integrate (rigid or bead-spring), classify, report.
+"""One fiber run: validate the start, integrate (the settings' model and integrator), classify,
+report.
 
 :func:`simulate` is the public entry point the sweep calls thousands of times:
 a module-level function (picklable), Numba kernels compiled once per process
@@ -27,7 +28,7 @@ from fibersweep.fiber import record as R
 from fibersweep.fiber.bundles import Kernel, build_kernel
 from fibersweep.fiber.deformation import deformation
 from fibersweep.fiber.mobility import fiber_offsets
-from fibersweep.fiber.models import MODELS
+from fibersweep.fiber.models import integrator_of
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
 from fibersweep.fiber.rigid import seed_numba
 from fibersweep.fiber.settings import FiberSettings
@@ -47,8 +48,8 @@ def _integrate(
     th0: float,
     beads0: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray | None, int]:
-    """Run the selected model; returns (record rows, bead positions or None, stop code)."""
-    return MODELS[setup.settings.model].integrate(k, x0, y0, th0, beads0)
+    """Run the selected integrator; returns (record rows, bead positions or None, stop code)."""
+    return integrator_of(setup.settings).integrate(k, x0, y0, th0, beads0)
 
 
 def _seed(rng: np.random.Generator, setup: Setup) -> None:
@@ -64,9 +65,10 @@ def _result(
     traj = R.trajectory_from_record(rec, beads)
     common = dict(
         start=setup.start,
-        n_steps=MODELS[st.model].steps(k, rec),
+        n_steps=integrator_of(st).steps(k, rec),
         wall_time=wall,
         model=st.model,
+        integrator=st.resolved_integrator,
         n_beads=setup.n,
         min_clearance=float(np.min(rec[:, R.MIN_DIST]) - st.bead_radius),
         x_f=float(traj.x[-1]),
@@ -132,7 +134,7 @@ def simulate(
         (then :func:`fibersweep.fiber.array_run.simulate_array` runs it, with its
         start in the array's units).
     settings : FiberSettings
-        Model, contact, stepping, classification, recording, effects.
+        Model and integrator, contact, stepping, classification, recording, effects.
     start : FiberStart
         theta0 [deg], y0 / h_obs, L / l_obs (array: y0 / period_y, L [µm]).
     rng_seed : int, optional
@@ -149,7 +151,7 @@ def simulate(
     InputError
         Bad input, naming the parameter: non-finite values, a length the grid
         cannot resolve, a start overlapping the pillar or outside the channel,
-        an unknown effect.
+        an unknown effect, a model and integrator that are no pair.
     """
     from fibersweep.flow.cell import CellField
 
@@ -158,6 +160,7 @@ def simulate(
 
         return simulate_array(field, settings, start, rng_seed=rng_seed)
     t_wall = time.perf_counter()
+    integrator_of(settings)  # an unknown model or integrator: InputError before any work
     rng = np.random.default_rng(rng_seed)
     setup = prepare(field, settings, start, rng)
     _seed(rng, setup)
@@ -167,7 +170,11 @@ def simulate(
     except (FloatingPointError, np.linalg.LinAlgError, ZeroDivisionError) as exc:
         log.warning("run %s failed: %s", start, exc)
         return RunResult(
-            start=start, status="failed", reason=f"numerical error: {exc}", model=settings.model
+            start=start,
+            status="failed",
+            reason=f"numerical error: {exc}",
+            model=settings.model,
+            integrator=settings.resolved_integrator,
         )
     result = _result(setup, k, rec, beads, code, time.perf_counter() - t_wall)
     return setup.effects.result(result, start, field.geometry)

@@ -1,12 +1,30 @@
-"""Validated settings of one fiber run: model, contact, stepping, classification, recording."""
+"""Validated settings of one fiber run: model and integrator, contact, stepping, classification,
+recording.
+
+The model (``fiber.model``) is the fiber's physics, the integrator
+(``fiber.integrator``) how it is stepped in time; :data:`INTEGRATORS` names
+each model's integrators, and :mod:`fibersweep.fiber.models` implements exactly
+these pairs. The former model name ``bead-spring-ros2`` (the bead-spring model
+stepped by Rosenbrock-W, its method in ``fiber.step.rosenbrock``) is still read,
+with a logged deprecation, as ``model: bead-spring`` with that integrator.
+"""
 
 from __future__ import annotations
 
+import logging
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_serializer
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationInfo,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 
-from fibersweep.analysis.settings import ClassifySettings
+from fibersweep.analysis.classify import ClassifySettings
 
 __all__ = [
     "ContactSettings",
@@ -15,7 +33,27 @@ __all__ = [
     "RecordSettings",
     "FiberSettings",
     "ARRAY_ROWS",
+    "INTEGRATORS",
+    "LEGACY_MODELS",
+    "ROSENBROCK",
+    "valid_pairs",
 ]
+
+log = logging.getLogger(__name__)
+
+#: Each fiber model's integrators (``fiber.integrator``); the first is the model's default.
+#: The bead-spring model defaults to its reference, BDF2, the method ``model: bead-spring``
+#: has always named; sweeps of flexible fibers choose ``ros2``.
+INTEGRATORS: dict[str, tuple[str, ...]] = {
+    "rigid": ("midpoint",),
+    "bead-spring": ("bdf2", "ros2", "ros34pw2"),
+}
+#: The adaptive Rosenbrock-W integrators (their step settings: ``tolerance``, ``ros2_*``,
+#: ``jacobian_reuse``, ``controller``).
+ROSENBROCK = ("ros2", "ros34pw2")
+#: Former model names, still read (with a logged deprecation), and the model they name;
+#: the integrator is ``fiber.step.rosenbrock``.
+LEGACY_MODELS = {"bead-spring-ros2": "bead-spring"}
 
 #: Rows a fiber crosses in a pillar array unless ``fiber.array_rows`` says otherwise.
 ARRAY_ROWS = 20
@@ -60,32 +98,32 @@ class StepSettings(_Strict):
         "displacement (false: explicit steps bound by the contact stiffness)",
     )
     tolerance: float = Field(
-        0.01, gt=0, description="bead-spring-ros2: local error allowed per step [µm]"
+        0.01, gt=0, description="ros2, ros34pw2 integrators: local error allowed per step [µm]"
     )
     ros2_max_displacement: float = Field(
-        2.0, gt=0, description="bead-spring-ros2: largest bead move per step [µm]"
+        2.0, gt=0, description="ros2, ros34pw2 integrators: largest bead move per step [µm]"
     )
     ros2_contact_displacement: float = Field(
         0.1,
         gt=0,
-        description="bead-spring-ros2: smallest step bound approaching the pillar [µm]",
+        description="ros2, ros34pw2 integrators: smallest step bound approaching the pillar [µm]",
     )
     rosenbrock: Literal["ros2", "ros34pw2"] = Field(
         "ros2",
-        description="bead-spring-ros2: the Rosenbrock-W method, two-stage second order (ros2) "
-        "or four-stage third order with one LU per step (ros34pw2; docs/flexible.md)",
+        description="deprecated: the integrator of the former model name bead-spring-ros2 "
+        "(read as fiber.integrator; set that instead)",
     )
     jacobian_reuse: int = Field(
         1,
         ge=1,
         le=1000,
-        description="bead-spring-ros2: accepted steps one W = M J and its LU may serve "
-        "(1: a fresh W every step; more: W is refreshed after a rejected step, when the "
+        description="ros2, ros34pw2 integrators: accepted steps one W = M J and its LU may "
+        "serve (1: a fresh W every step; more: W is refreshed after a rejected step, when the "
         "beads in contact change, or after this many steps; docs/flexible.md)",
     )
     controller: Literal["i", "pi"] = Field(
         "i",
-        description="bead-spring-ros2: step-size controller, integral (i) or "
+        description="ros2, ros34pw2 integrators: step-size controller, integral (i) or "
         "proportional-integral (pi, Gustafsson's 0.7/0.4)",
     )
 
@@ -115,8 +153,16 @@ class RecordSettings(_Strict):
 class FiberSettings(_Strict):
     """One fiber run apart from its start (theta0, y0, L)."""
 
-    model: Literal["rigid", "bead-spring", "bead-spring-ros2"] = Field(
-        "rigid", description="fiber model (docs/flexible.md)"
+    model: Literal["rigid", "bead-spring"] = Field(
+        "rigid",
+        description="fiber model: rigid or bead-spring (docs/flexible.md); the former "
+        "bead-spring-ros2 is read as bead-spring with integrator fiber.step.rosenbrock",
+    )
+    integrator: Literal["midpoint", "bdf2", "ros2", "ros34pw2"] | None = Field(
+        None,
+        description="time integrator of the model; unset: its default. rigid: midpoint; "
+        "bead-spring: bdf2 (fixed step, the reference; the default), ros2 or ros34pw2 "
+        "(adaptive Rosenbrock-W, for sweeps; docs/flexible.md)",
     )
     bead_radius: float = Field(2.0, gt=0, description="bead radius a [µm]")
     young_modulus: float = Field(26e6, gt=0, description="E [Pa] (bead-spring models only)")
@@ -139,11 +185,77 @@ class FiberSettings(_Strict):
         "contact law, so a fiber cannot pass through itself (docs/flexible.md)",
     )
 
+    @model_validator(mode="before")
+    @classmethod
+    def _legacy_names(cls, data: Any) -> Any:
+        """Read the former spelling: ``model: bead-spring-ros2``, its method in ``step.rosenbrock``.
+
+        That pair becomes (bead-spring, the method), and ``step.rosenbrock`` is dropped
+        whenever a Rosenbrock integrator is set (it must then name the same one), so both
+        spellings give equal settings and run ids. With the rigid model or BDF2 it keeps
+        its old meaning: none.
+        """
+        if not isinstance(data, dict):
+            return data
+        legacy = data.get("model") in LEGACY_MODELS
+        integrator = data.get("integrator")
+        step = data.get("step")
+        if isinstance(step, BaseModel):
+            given, step = step.model_fields_set, step.model_dump()
+        else:
+            step = dict(step or {})
+            given = set(step)
+        if not legacy and (integrator not in ROSENBROCK or "rosenbrock" not in given):
+            return data
+        method = step.pop("rosenbrock", None) if "rosenbrock" in given else None
+        step.pop("rosenbrock", None)
+        if legacy:
+            integrator = integrator or method or "ros2"
+            name = data["model"]
+            if integrator not in ROSENBROCK:
+                raise ValueError(
+                    f"fiber.integrator: {integrator!r} contradicts fiber.model: {name}, the former "
+                    f"name of bead-spring with a Rosenbrock integrator: {', '.join(ROSENBROCK)}"
+                )
+            log.warning(
+                "fiber.model: %s is deprecated; read as model: %s, integrator: %s",
+                name,
+                LEGACY_MODELS[name],
+                integrator,
+            )
+            data = {**data, "model": LEGACY_MODELS[name]}
+        if method not in (None, integrator):
+            raise ValueError(
+                f"fiber.step.rosenbrock: {method!r} contradicts fiber.integrator: {integrator!r} "
+                "(step.rosenbrock is the deprecated way to name a Rosenbrock integrator; write "
+                "only fiber.integrator)"
+            )
+        return {**data, "integrator": integrator, "step": step}
+
+    @field_validator("integrator")
+    @classmethod
+    def _integrator_of_the_model(cls, value: str | None, info: ValidationInfo) -> str | None:
+        """An integrator of the model (stored as None when it is the model's default)."""
+        model = info.data.get("model")
+        if value is None or model not in INTEGRATORS:
+            return value
+        if value not in INTEGRATORS[model]:
+            raise ValueError(
+                f"{value!r} is not an integrator of the {model} model; valid pairs "
+                f"(model: integrator): {valid_pairs()}"
+            )
+        return None if value == INTEGRATORS[model][0] else value
+
+    @property
+    def resolved_integrator(self) -> str:
+        """The integrator that runs: ``integrator``, or the model's default when unset."""
+        return self.integrator or INTEGRATORS[self.model][0]
+
     @model_serializer(mode="wrap")
     def _defaults_left_out(self, handler: Any) -> dict[str, Any]:
-        """``array_rows`` and ``self_exclusion`` are written only away from their defaults,
-        so the dump, the run ids and the manifest of every config that does not set them
-        stay as before they existed."""
+        """``array_rows``, ``self_exclusion`` and an unset ``integrator`` are written only away
+        from their defaults, so the dump, the run ids and the manifest of every config that
+        does not set them stay as before they existed."""
         data = handler(self)
         if isinstance(data, dict):
             for key, default in _HIDDEN_DEFAULTS.items():
@@ -153,4 +265,13 @@ class FiberSettings(_Strict):
 
 
 #: Settings left out of a dump at these values (see ``FiberSettings._defaults_left_out``).
-_HIDDEN_DEFAULTS: dict[str, Any] = {"array_rows": ARRAY_ROWS, "self_exclusion": True}
+_HIDDEN_DEFAULTS: dict[str, Any] = {
+    "array_rows": ARRAY_ROWS,
+    "self_exclusion": True,
+    "integrator": None,
+}
+
+
+def valid_pairs() -> str:
+    """The valid (model: integrator) pairs, as one line, each model's default first."""
+    return "; ".join(f"{m}: {', '.join(i)}" for m, i in INTEGRATORS.items())

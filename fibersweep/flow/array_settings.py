@@ -2,9 +2,10 @@
 
 With ``flow.array`` set, the flow of a config is the steady flow of one unit
 cell of the array (:func:`fibersweep.flow.cell.solve_cell`), with shifted
-periodic boundaries; ``flow.dx``, ``pillar_boundary``, ``symmetry``,
-``tolerance``, ``max_steps``, ``check_every``, ``tau``, ``precision`` and
-``fluid`` apply to it, ``flow.geometry`` is not used. The checks here name the
+periodic boundaries; every flow setting applies to it as to the channel but
+``flow.geometry`` (the cell is the domain) and ``flow.patch`` (the cell is
+solved whole), which :class:`~fibersweep.flow.settings.FlowSettings` refuses
+with their reasons. The checks here name the
 field at fault (``FieldError``): pillars that overlap, a shift that is not a
 whole number of lattice cells, a pillar wall too close to the cell's edge. The
 gap against the fiber's diameter is checked with the fiber settings
@@ -17,6 +18,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from fibersweep.errors import FieldError
+from fibersweep.flow.lattice import EDGE_CELLS
 from fibersweep.geometry import PILLAR_SHAPES, check_shape_name
 from fibersweep.geometry.array import ArrayError, PillarArray
 
@@ -58,8 +61,6 @@ class ArraySettings(BaseModel):
 
     @model_validator(mode="after")
     def _valid(self) -> ArraySettings:
-        from fibersweep.config.errors import FieldError  # config imports flow: lazily
-
         try:
             self.to_array()
         except ArrayError as exc:
@@ -72,17 +73,14 @@ class ArraySettings(BaseModel):
 def check_array_flow(array: ArraySettings, dx: float, boundary: str, symmetry: bool) -> None:
     """The unit cell's lattice: whole cells, enough depth nodes, the wall clear of the edges.
 
-    The same checks :func:`fibersweep.flow.cell.solve_cell` makes, before any
-    field is computed.
+    Checked when the settings are, before any field is computed
+    (:func:`fibersweep.flow.cell.solve_cell` relies on them).
 
     Raises
     ------
     FieldError
         At ``array.<field>`` (a length or the shift not whole in cells) or ``dx``.
     """
-    from fibersweep.config.errors import FieldError
-    from fibersweep.flow.cell import EDGE_CELLS
-
     arr = array.to_array()
     try:
         arr.check_lattice(dx)

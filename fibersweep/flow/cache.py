@@ -25,8 +25,11 @@ from typing import Any
 
 import numpy as np
 
+from fibersweep.flow.cell import CELL_SOLVER_VERSION
+from fibersweep.flow.cell_cache import cell_path, get_cell_field
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.ghost import GHOST_METHOD, extend_into_wall
+from fibersweep.flow.patch import PATCH_METHOD
 from fibersweep.flow.schemes import get_wall_scheme
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.solver import SOLVER_VERSION, solve_flow
@@ -121,12 +124,8 @@ def cache_key(settings: FlowSettings) -> str:
     """
     payload = {"settings": key_settings(settings.model_dump(mode="json")), "solver": SOLVER_VERSION}
     if settings.patch is not None:  # the nesting's version (a field without a patch: no key)
-        from fibersweep.flow.patch import PATCH_METHOD
-
         payload["patch_method"] = PATCH_METHOD
     if settings.array is not None:  # the unit cell's solver (a channel: no key)
-        from fibersweep.flow.cell import CELL_SOLVER_VERSION
-
         payload["cell_solver"] = CELL_SOLVER_VERSION
     blob = json.dumps(payload, sort_keys=True, separators=(",", ":")).encode()
     return hashlib.sha256(blob).hexdigest()[:24]
@@ -280,8 +279,6 @@ def get_flow_field(
     root.mkdir(parents=True, exist_ok=True)
     key = cache_key(settings)
     if settings.array is not None:
-        from fibersweep.flow.cell_cache import cell_path, get_cell_field
-
         cell, hit = get_cell_field(settings, root, key, force=force)
         return cell, _cell_info(cell, key, cell_path(root, key), hit)
     path = root / f"flow-{key}"

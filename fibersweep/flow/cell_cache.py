@@ -3,7 +3,8 @@
 The key is the flow cache key (:func:`fibersweep.flow.cache.cache_key`, which
 adds the cell solver's version when ``flow.array`` is set). A field is solved
 once (:func:`fibersweep.flow.cell.solve_cell`), scaled (:func:`~fibersweep.flow.cell.field_of`)
-and written atomically; an unreadable entry is discarded and solved again.
+and written atomically, with its full-depth field if ``flow.keep_3d``; an
+unreadable entry is discarded and solved again.
 """
 
 from __future__ import annotations
@@ -17,7 +18,9 @@ from pathlib import Path
 import numpy as np
 
 from fibersweep.atomic import atomic_write
+from fibersweep.flow.array_settings import ArraySettings
 from fibersweep.flow.cell import CellField, field_of, solve_cell
+from fibersweep.flow.settings import FlowSettings
 
 __all__ = ["cell_path", "get_cell_field", "load_cell_field", "save_cell_field"]
 
@@ -33,7 +36,8 @@ def save_cell_field(field: CellField, path: str | Path) -> None:
     """Write a cell field as .npz, atomically (a reader sees all of it or nothing)."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     buf = io.BytesIO()
-    np.savez(buf, ux=field.ux, uy=field.uy, dx=field.dx, meta=json.dumps(field.meta))
+    arrays = {} if field.u3d is None else {"u3d": field.u3d}
+    np.savez(buf, ux=field.ux, uy=field.uy, dx=field.dx, meta=json.dumps(field.meta), **arrays)
     atomic_write(path, buf.getvalue())
 
 
@@ -45,15 +49,16 @@ def load_cell_field(path: str | Path) -> CellField:
     OSError, ValueError, KeyError
         A missing or unreadable entry.
     """
-    from fibersweep.flow.array_settings import ArraySettings
-
     with np.load(path) as z:
         meta = json.loads(str(z["meta"]))
         array = ArraySettings.model_validate(meta["settings"]["array"]).to_array()
-        return CellField(array, z["ux"], z["uy"], float(z["dx"]), meta)
+        u3d = z["u3d"] if "u3d" in z.files else None
+        return CellField(array, z["ux"], z["uy"], float(z["dx"]), meta, u3d)
 
 
-def get_cell_field(settings, cache_dir: str | Path, key: str, *, force: bool = False):
+def get_cell_field(
+    settings: FlowSettings, cache_dir: str | Path, key: str, *, force: bool = False
+) -> tuple[CellField, bool]:
     """The unit-cell field of ``settings`` (a FlowSettings with ``array``): cached or solved.
 
     Returns
@@ -70,28 +75,7 @@ def get_cell_field(settings, cache_dir: str | Path, key: str, *, force: bool = F
         except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
             log.warning("discarding unreadable cell cache entry %s: %s", path, exc)
             path.unlink(missing_ok=True)
-    array = settings.array.to_array()
-    sol = solve_cell(
-        array,
-        settings.dx,
-        boundary=settings.pillar_boundary,
-        symmetry=settings.symmetry,
-        tolerance=settings.tolerance,
-        max_steps=settings.max_steps,
-        check_every=settings.check_every,
-        tau=settings.tau,
-        precision=settings.precision,
-        mean_flow=settings.array.mean_flow,
-    )
-    meta_settings = settings.model_dump(mode="json")
-    field = field_of(
-        array,
-        sol,
-        settings.fluid.u_center,
-        settings.pillar_boundary,
-        meta_settings,
-        viscosity=settings.fluid.viscosity,
-    )
+    field = field_of(settings, solve_cell(settings))
     field.meta["cache_key"] = key
     save_cell_field(field, path)
     log.info("cell cache miss: solved and stored %s", path)

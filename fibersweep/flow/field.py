@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 import numba as nb
 import numpy as np
 
-from fibersweep.units import Fluid, Geometry
+from fibersweep.geometry import Geometry
+from fibersweep.units import Fluid
 
 __all__ = ["FlowField", "interpolate_ib", "ib_phi"]
 

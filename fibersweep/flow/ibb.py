@@ -53,7 +53,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fibersweep.flow.cuts import Cuts
-from fibersweep.flow.lattice import OPP, E, Grid, Q
+from fibersweep.flow.lattice import OPP, E, Grid, Q, table_cells
 
 __all__ = [
     "LinkTable",
@@ -210,26 +210,28 @@ def _candidates(grid: Grid, cuts: Cuts, table: np.ndarray, wrap: bool):
     for k in range(grid.nz):
         rows = k * grid.ny + cuts.j
         for q in range(1, Q):
-            slot, zs, ys, xo = (table[rows, q, c] for c in range(4))
-            ii = (cuts.i + xo - 1) % grid.nx
-            jj = ys - 1
+            loc, ii, jj = _location(table, rows, q, cuts.i, grid, wrap)
             di = (ii - cuts.i + 1) % grid.nx - 1
             dj = jj - cuts.j
             hit = (np.abs(di) <= 1) & (np.abs(dj) <= 1) & ((di != 0) | (dj != 0))
             hit[hit] = np.isfinite(cuts.q[np.flatnonzero(hit), di[hit] + 1, dj[hit] + 1])
             if not hit.any():
                 continue
-            xp = ii[hit] + 1 if wrap else cuts.i[hit] + xo[hit]
-            loc = (slot[hit], zs[hit], ys[hit], xp)
+            loc = tuple(c[hit] for c in loc)
             yield k, q, np.flatnonzero(hit), loc, di[hit], dj[hit]
 
 
 def _location(table: np.ndarray, rows, q, i, grid: Grid, wrap: bool):
-    """(slot, z, y, x_padded) of ``table`` entry q for cells i of ``rows``; interior x, y."""
+    """(slot, z, y, x_padded) of ``table`` entry q for cells i of ``rows``; interior x, y.
+
+    ``wrap``: an AA table, whose kernel wraps x itself (x_padded in the interior);
+    otherwise a pull table, read through the ghost columns (x_padded as it is).
+    """
+    if wrap:
+        return table_cells(grid, table, rows, q, i)
     slot, zs, ys, xo = (table[rows, q, c] for c in range(4))
-    ii = (i + xo - 1) % grid.nx
-    xp = ii + 1 if wrap else i + xo
-    return (slot, zs, ys, xp), ii, ys - 1
+    ii, jj, _ = grid.wrap(i + xo - 1, ys - 1)  # the node the ghost column repeats
+    return (slot, zs, ys, i + xo), ii, jj
 
 
 def _fluid(grid: Grid, ii: np.ndarray, jj: np.ndarray) -> np.ndarray:
@@ -247,8 +249,7 @@ def _chain(grid: Grid, flat: _Flat, i, j, k: int, p: int, steps: int):
     ok = np.full(i.size, ez == 0)
     cells = []
     for n in range(1, steps + 1):
-        ii = (i - n * ex) % grid.nx
-        jj = j - n * ey
+        ii, jj, _ = grid.wrap(i - n * ex, j - n * ey)
         kk = k - n * ez
         ok &= (kk >= 0) & (kk < grid.nz) & _fluid(grid, ii, jj)
         cells.append(flat(0, kk + 1, np.clip(jj, -1, grid.ny) + 1, ii + 1))
@@ -313,7 +314,7 @@ def aa_interpolated(
     grid : Grid
     cuts : Cuts
         Wall fractions of ``grid.solid``'s links.
-    gather, scatter : ndarray, shape (nz * ny, 19, 4), int64
+    gather, scatter : ndarray, shape (nz * ny, 19, 5), int64
         From :func:`fibersweep.flow.lattice.aa_tables`.
     omega_p, omega_m : float
         TRT relaxation rates (the "trt" weights depend on them).

@@ -169,6 +169,7 @@ def stream_collide(
     g: np.ndarray,
     gn: np.ndarray,
     sources: np.ndarray,
+    slots: np.ndarray,
     fx: float,
     omega_p: float,
     omega_m: float,
@@ -191,6 +192,10 @@ def stream_collide(
         Per row r = z * ny + y and population q: (q_src, z_src, y_src, x_off) in
         padded coordinates; population q of interior cell i is
         ``g[q_src, z_src, y_src, x_off + i]`` (see :func:`fibersweep.flow.lattice.pull_sources`).
+    slots : ndarray, shape (19,), int64
+        Slot of ``gn`` that the collided population q is written to: the identity,
+        or with the force along y the turned frame (:data:`fibersweep.flow.lattice.FRAMES`,
+        ``sources`` then permuted alike).
     fx : float
         Body force density along x [lattice units].
     omega_p, omega_m : float
@@ -217,7 +222,7 @@ def stream_collide(
             _collide_block(b, n, F, half_f, wp, wm, sp, sm, w0, w1, w2)
             o = np.uint64(1 + c0)
             for q in range(19):
-                dst = gn[q, z, y]
+                dst = gn[slots[q], z, y]
                 bq = b[q]
                 for i in range(n):
                     dst[o + i] = bq[i]
@@ -292,14 +297,24 @@ def apply_interpolated(
 
 
 @nb.njit(cache=True, parallel=True)
-def fill_periodic(g: np.ndarray) -> None:
-    """Copy the x ghost columns from the opposite interior columns (periodic x)."""
-    nxp = g.shape[3]
+def fill_periodic(g: np.ndarray, shift: int) -> None:
+    """Copy the x ghost columns from the interior columns they repeat.
+
+    With a row shift s (a box periodic in y, :attr:`fibersweep.flow.lattice.Grid.shift`)
+    the ghost of node (−1, j) is node (nx − 1, j + s) and that of (nx, j) is
+    (0, j − s); with s = 0 each row is periodic on its own.
+    """
+    nyp, nxp = g.shape[2], g.shape[3]
+    ny = nyp - 2
     for q in nb.prange(g.shape[0]):
         for z in range(g.shape[1]):
-            for y in range(g.shape[2]):
-                g[q, z, y, 0] = g[q, z, y, nxp - 2]
-                g[q, z, y, nxp - 1] = g[q, z, y, 1]
+            for y in range(nyp):
+                low, high = y, y
+                if shift != 0 and 0 < y < nyp - 1:
+                    low = (y - 1 + shift) % ny + 1
+                    high = (y - 1 - shift) % ny + 1
+                g[q, z, y, 0] = g[q, z, low, nxp - 2]
+                g[q, z, y, nxp - 1] = g[q, z, high, 1]
 
 
 @nb.njit(cache=True, parallel=True)

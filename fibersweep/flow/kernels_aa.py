@@ -14,7 +14,8 @@ within a step, so no second array is needed: 76 B read + 76 B written per cell
 
 Boundaries: the odd step gathers and scatters through per-row tables
 (:func:`fibersweep.flow.lattice.aa_tables`) that resolve walls and the
-symmetric top; periodic x is handled by fixing the two row-end cells; the pillar
+symmetric top; periodic x is handled by fixing the two row-end cells (in the
+row the tables name, so that a unit cell's shifted x faces cost nothing more); the pillar
 by copying bounce-back values into and out of its cells around the odd step
 (:func:`fibersweep.flow.lattice.aa_links`, applied with :func:`apply_links`).
 
@@ -34,15 +35,20 @@ __all__ = ["aa_even", "aa_odd", "apply_links"]
 
 
 @nb.njit(cache=True, parallel=True, fastmath=True)
-def aa_even(g: np.ndarray, opp: np.ndarray, fx: float, omega_p: float, omega_m: float) -> None:
+def aa_even(
+    g: np.ndarray, reads: np.ndarray, writes: np.ndarray, fx: float, omega_p: float,
+    omega_m: float,
+) -> None:  # fmt: skip
     """Even AA step: collide in place, f*_q stored in the node's slot opp(q).
 
     Parameters
     ----------
     g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32 or float64
         Shifted populations (g = f − w); ghost layers are not used.
-    opp : ndarray, shape (19,), int64
-        Opposite directions.
+    reads, writes : ndarray, shape (19,), int64
+        Slot that population q of the collision is read from, and the slot its
+        f*_q goes to: (identity, opposite directions), or with the force along y
+        the turned frame and its opposites (:data:`fibersweep.flow.lattice.FRAMES`).
     fx : float
         Body force density along x [lattice units].
     omega_p, omega_m : float
@@ -58,13 +64,13 @@ def aa_even(g: np.ndarray, opp: np.ndarray, fx: float, omega_p: float, omega_m: 
             n = np.uint64(min(CHUNK, nx - c0))  # unsigned: no wraparound test
             o = np.uint64(1 + c0)
             for q in range(19):
-                src = g[q, z, y]
+                src = g[reads[q], z, y]
                 bq = b[q]
                 for i in range(n):
                     bq[i] = src[o + i]
             _collide_block(b, n, F, half_f, wp, wm, sp, sm, w0, w1, w2)
             for q in range(19):
-                dst = g[opp[q], z, y]
+                dst = g[writes[q], z, y]
                 bq = b[q]
                 for i in range(n):
                     dst[o + i] = bq[i]
@@ -84,11 +90,13 @@ def aa_odd(
     Parameters
     ----------
     g : ndarray, shape (19, nz + 2, ny + 2, nx + 2), float32 or float64
-    gather, scatter : ndarray, shape (nz * ny, 19, 4), int64
-        Per row and population: (slot, z, y, x_off) in padded coordinates; cell i
-        of the row reads ``g[slot, z, y, x_off + i]`` and writes its f*_q to
-        ``g[slot', z', y', x_off' + i]``. x_off is 0, 1 or 2 (shift −1, 0, +1);
-        shifts that leave the row are wrapped (periodic x) here.
+    gather, scatter : ndarray, shape (nz * ny, 19, 5), int64
+        Per row and population: (slot, z, y, x_off, y_across) in padded
+        coordinates; cell i of the row reads ``g[slot, z, y, x_off + i]`` and
+        writes its f*_q to ``g[slot', z', y', x_off' + i]``. x_off is 0, 1 or 2
+        (shift −1, 0, +1); shifts that leave the row are wrapped here, to the
+        other end of row y_across (the row itself, or moved by the shifted
+        periodic x faces of a unit cell).
     fx, omega_p, omega_m : float
         As in :func:`aa_even`.
     """
@@ -108,9 +116,9 @@ def aa_odd(
                 for i in range(n):
                     bq[i] = src[off + i]
                 if c0 == 0 and xo == 0:  # cell 0 reads x = −1: the last cell
-                    bq[0] = src[last]
+                    bq[0] = g[gather[r, q, 0], gather[r, q, 1], gather[r, q, 4], last]
                 if ends_row and xo == 2:  # last cell reads x = nx: cell 0
-                    bq[n - np.uint64(1)] = src[1]
+                    bq[n - np.uint64(1)] = g[gather[r, q, 0], gather[r, q, 1], gather[r, q, 4], 1]
             _collide_block(b, n, F, half_f, wp, wm, sp, sm, w0, w1, w2)
             for q in range(19):
                 dst = g[scatter[r, q, 0], scatter[r, q, 1], scatter[r, q, 2]]
@@ -120,9 +128,11 @@ def aa_odd(
                 for i in range(n):
                     dst[off + i] = bq[i]
                 if c0 == 0 and xo == 0:  # cell 0 pushes to x = −1: the last cell
-                    dst[last] = bq[0]
+                    g[scatter[r, q, 0], scatter[r, q, 1], scatter[r, q, 4], last] = bq[0]
                 if ends_row and xo == 2:  # last cell pushes to x = nx: cell 0
-                    dst[1] = bq[n - np.uint64(1)]
+                    g[scatter[r, q, 0], scatter[r, q, 1], scatter[r, q, 4], 1] = bq[
+                        n - np.uint64(1)
+                    ]
 
 
 @nb.njit(cache=True)

@@ -1,4 +1,4 @@
-"""D3Q19 lattice constants and the padded grid of the channel with its pillar.
+"""D3Q19 lattice constants and the padded grid of a channel or a periodic box with its pillar.
 
 Storage layout
 --------------
@@ -12,6 +12,23 @@ where to read each population of a row), periodic x by ghost columns, and the
 pillar by storing in each solid cell the bounce-back value its fluid
 neighbour will pull (:func:`boundary_links`). The y and z ghost layers are
 never read; they keep the indexing simple.
+
+Box boundaries
+--------------
+The channel has no-slip walls at y = 0 and y = W and periodic ends in x. The
+unit cell of a pillar array (:mod:`fibersweep.flow.cell`) is periodic in y and
+*shifted* periodic in x: node (i + nx, j + s) is node (i, j), s the row shift
+in cells (:attr:`Grid.shift`, :meth:`Grid.wrap`). Every table below resolves
+its neighbours through :meth:`Grid.wrap`, so both boxes are stepped by the
+same kernels.
+
+Body force along y
+------------------
+The collision kernels apply the body force along x. A force along y is the
+same collision seen in a frame turned by 90° about z: the kernels read the
+populations through a permutation of the directions (:data:`FRAMES`), so that
+their x axis is the box's y axis; boundaries, slots and tables stay those of
+the box.
 """
 
 from __future__ import annotations
@@ -20,9 +37,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fibersweep.units import Geometry
+from fibersweep.geometry import Geometry
 
 __all__ = [
+    "U_LATTICE",
+    "MACH_LIMIT",
+    "EDGE_CELLS",
+    "FRAMES",
     "E",
     "W",
     "OPP",
@@ -35,10 +56,16 @@ __all__ = [
     "pull_sources",
     "aa_tables",
     "aa_links",
+    "table_cells",
 ]
 
 Q = 19
 CS2 = 1.0 / 3.0
+U_LATTICE = 1e-5  # empty duct's centre speed in lattice units: Mach ~ 2e-5, lattice Re ~ 2e-3
+MACH_LIMIT = 0.1  # |u| in lattice units above this means divergence
+# cells between a sub-grid pillar wall and the edge of a periodic box: the wall's link
+# interpolation (3 upstream nodes) and the IB ghost stencil are built for one pillar image
+EDGE_CELLS = 4
 
 # Velocity set: rest, 6 faces, 12 edges; opposite pairs are (1,2), (3,4), ... (17,18).
 E = np.array(
@@ -74,6 +101,12 @@ def _index_of(e: np.ndarray) -> int:
 
 OPP = np.array([_index_of(-E[q]) for q in range(Q)], dtype=np.int64)
 MIRROR_Z = np.array([_index_of(E[q] * np.array([1, 1, -1])) for q in range(Q)], dtype=np.int64)
+# the direction of E[q] turned by +90° about z, (x, y, z) -> (−y, x, z)
+_TURN = np.array([[0, 1, 0], [-1, 0, 0], [0, 0, 1]])  # row vectors: e @ _TURN
+_TURN_Z = np.array([_index_of(E[q] @ _TURN) for q in range(Q)], dtype=np.int64)
+#: Per force axis (0: x, 1: y), the direction of the box that the kernels' direction q
+#: stands for: the kernels collide with the force along their x, the box's axis.
+FRAMES = (np.arange(Q, dtype=np.int64), _TURN_Z)
 
 
 @dataclass(frozen=True)
@@ -92,6 +125,11 @@ class Grid:
         Node spacing [µm].
     solid : ndarray, shape (nx, ny), bool
         Pillar nodes (node centres strictly inside the pillar); full depth.
+    periodic_y : bool
+        False: no-slip walls at y = 0 and y = ny (the channel); True: periodic in y.
+    shift : int
+        Row shift of the x faces in cells: node (i + nx, j + shift) is node (i, j)
+        (0: plainly periodic in x; nonzero only with ``periodic_y``).
     """
 
     nx: int
@@ -101,6 +139,12 @@ class Grid:
     symmetry: bool
     dx: float
     solid: np.ndarray
+    periodic_y: bool = False
+    shift: int = 0
+
+    def __post_init__(self) -> None:
+        if self.shift and not self.periodic_y:
+            raise ValueError("a row shift of the x faces needs a box periodic in y")
 
     @property
     def padded_shape(self) -> tuple[int, int, int, int]:
@@ -111,6 +155,19 @@ class Grid:
     def cells(self) -> int:
         """Interior lattice cells updated per step."""
         return self.nx * self.ny * self.nz
+
+    def wrap(self, i, j):
+        """The interior node at lattice position (i, j) (ints or int arrays).
+
+        Returns (i', j', inside): x folded into [0, nx) with the row shift, y
+        folded (periodic: inside is True) or left as it is (inside is False
+        beyond a wall).
+        """
+        rows = i // self.nx
+        i, j = i - rows * self.nx, j - rows * self.shift
+        if self.periodic_y:
+            return i, j % self.ny, True
+        return i, j, (j >= 0) & (j < self.ny)
 
 
 def make_grid(
@@ -160,10 +217,8 @@ def boundary_links(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
 
     def add_links(slot: int, q: int, base_s: np.ndarray, kt: int) -> None:
         """Rows (slot, solid cell, opp(q), fluid source in layer kt) for fluid in-plane targets."""
-        ex, ey, _ = E[q]
-        it = (si + ex) % grid.nx
-        jt = sj + ey
-        ok = (jt >= 0) & (jt < grid.ny)
+        it, jt, inside = grid.wrap(si + E[q][0], sj + E[q][1])
+        ok = np.ones(si.shape, dtype=bool) & inside
         ok[ok] = ~grid.solid[it[ok], jt[ok]]
         if not ok.any():
             return
@@ -187,6 +242,12 @@ def boundary_links(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
     return links, solid_cells
 
 
+def _row(grid: Grid, j: int) -> int | None:
+    """Interior row of lattice row j, None beyond a wall."""
+    _, jj, inside = grid.wrap(0, int(j))
+    return jj if inside else None
+
+
 def pull_sources(grid: Grid) -> np.ndarray:
     """Where each row pulls each population from (walls and midplane resolved).
 
@@ -197,7 +258,9 @@ def pull_sources(grid: Grid) -> np.ndarray:
         coordinates, so that population q of interior node i after streaming is
         ``g[q_src, z_src, y_src, x_off + i]``:
 
-        - interior source: (q, k − e_z, j − e_y, −e_x), i.e. a plain pull;
+        - interior source: (q, k − e_z, j − e_y, −e_x), i.e. a plain pull (rows
+          folded in a box periodic in y; across an x face the ghost columns hold
+          the shifted row, :func:`fibersweep.flow.kernels.fill_periodic`);
         - source beyond a no-slip wall (y, bottom z, top z without symmetry):
           half-way bounce-back, (opp q, k, j, 0) of the node itself;
         - source above the symmetric top: specular reflection from the mirror
@@ -211,8 +274,8 @@ def pull_sources(grid: Grid) -> np.ndarray:
             r = k * grid.ny + j
             for q in range(Q):
                 ex, ey, ez = E[q]
-                ks, js = k - ez, j - ey
-                if js < 0 or js >= grid.ny or ks < 0 or (ks >= grid.nz and not grid.symmetry):
+                ks, js = k - ez, _row(grid, j - ey)
+                if js is None or ks < 0 or (ks >= grid.nz and not grid.symmetry):
                     out[r, q] = (OPP[q], k + 1, j + 1, 1)
                 elif ks >= grid.nz:
                     out[r, q] = (MIRROR_Z[q], k + 1, js + 1, 1 - ex)
@@ -240,10 +303,12 @@ def aa_tables(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
 
     Returns
     -------
-    gather, scatter : ndarray, shape (nz * ny, 19, 4), int64
-        (slot, z, y, x_off) in padded coordinates for cell 0 of each row.
+    gather, scatter : ndarray, shape (nz * ny, 19, 5), int64
+        (slot, z, y, x_off, y_across) in padded coordinates for cell 0 of each
+        row; y_across is the row the first (x_off 0) or last (x_off 2) cell
+        reaches across the x face (y moved by the row shift).
     """
-    gather = np.zeros((grid.nz * grid.ny, Q, 4), dtype=np.int64)
+    gather = np.zeros((grid.nz * grid.ny, Q, 5), dtype=np.int64)
     scatter = np.zeros_like(gather)
     for k in range(grid.nz):
         for j in range(grid.ny):
@@ -251,23 +316,37 @@ def aa_tables(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
             for q in range(Q):
                 ex, ey, ez = (int(v) for v in E[q])
                 for sign, table in ((-1, gather), (1, scatter)):
-                    kk, jj = k + sign * ez, j + sign * ey
-                    wall = jj < 0 or jj >= grid.ny or kk < 0
-                    wall |= kk >= grid.nz and not grid.symmetry
-                    if sign < 0:
-                        if wall:
-                            table[r, q] = (q, k + 1, j + 1, 1)
-                        elif kk >= grid.nz:
-                            table[r, q] = (OPP[MIRROR_Z[q]], k + 1, jj + 1, 1 - ex)
-                        else:
-                            table[r, q] = (OPP[q], kk + 1, jj + 1, 1 - ex)
-                    elif wall:
-                        table[r, q] = (OPP[q], k + 1, j + 1, 1)
+                    kk, jj = k + sign * ez, _row(grid, j + sign * ey)
+                    wall = jj is None or kk < 0 or (kk >= grid.nz and not grid.symmetry)
+                    if wall:
+                        slot, kk, jj, xo = (q if sign < 0 else OPP[q]), k, j, 1
                     elif kk >= grid.nz:
-                        table[r, q] = (MIRROR_Z[q], k + 1, jj + 1, 1 + ex)
+                        slot = OPP[MIRROR_Z[q]] if sign < 0 else MIRROR_Z[q]
+                        kk, xo = k, 1 + sign * ex
                     else:
-                        table[r, q] = (q, kk + 1, jj + 1, 1 + ex)
+                        slot, xo = (OPP[q] if sign < 0 else q), 1 + sign * ex
+                    across = grid.wrap({0: -1, 1: 0, 2: grid.nx}[xo], jj)[1]
+                    table[r, q] = (slot, kk + 1, jj + 1, xo, int(across) + 1)
     return gather, scatter
+
+
+def table_cells(grid: Grid, table: np.ndarray, rows: np.ndarray, q: int, i: np.ndarray):
+    """The cell an AA table's entry q reads or writes for cells ``i`` of ``rows``.
+
+    Returns
+    -------
+    (slot, z, y, x) : tuple of ndarray
+        Padded coordinates, x wrapped into the interior (across an x face the
+        row moves by the shift, as the kernels do).
+    ii, jj : ndarray
+        The cell's interior x and y.
+    """
+    slot, zs, ys, xo, across = (table[rows, q, c] for c in range(5))
+    x = i + xo - 1
+    crossed = (x < 0) | (x >= grid.nx)
+    ys = np.where(crossed, across, ys)
+    ii = x % grid.nx
+    return (slot, zs, ys, ii + 1), ii, ys - 1
 
 
 def aa_links(grid: Grid, gather: np.ndarray, scatter: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -294,14 +373,11 @@ def aa_links(grid: Grid, gather: np.ndarray, scatter: np.ndarray) -> tuple[np.nd
         x_flat = ((k + 1) * nyp + (fj + 1)) * nxp + (fi + 1)
         for q in range(Q):
             for table, out in ((gather, before), (scatter, after)):
-                slot, zs, ys, xo = (table[rows, q, c] for c in range(4))
-                ii = (fi + xo - 1) % grid.nx  # interior x of the cell read/written
-                jj = ys - 1
-                hit = (jj >= 0) & (jj < grid.ny)
-                hit[hit] = grid.solid[ii[hit], jj[hit]]
+                (slot, zs, ys, xs), ii, jj = table_cells(grid, table, rows, q, fi)
+                hit = grid.solid[ii, jj]
                 if not hit.any():
                     continue
-                s_flat = (zs[hit] * nyp + ys[hit]) * nxp + (ii[hit] + 1)
+                s_flat = (zs[hit] * nyp + ys[hit]) * nxp + xs[hit]
                 n = int(hit.sum())
                 if out is before:
                     out.append(np.column_stack([slot[hit], s_flat, np.full(n, q), x_flat[hit]]))

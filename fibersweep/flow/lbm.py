@@ -1,9 +1,12 @@
-"""The D3Q19 lattice-Boltzmann time loop: steady state of the pillar channel in lattice units.
+"""The D3Q19 lattice-Boltzmann time loop: steady state of a lattice in lattice units.
 
-The flow is driven by a uniform body force along x (periodic ends). The lattice
-speed is kept tiny (``U_LATTICE``) so the lattice Reynolds number is far below
-one and the quadratic terms of the equilibrium are negligible: the result is
-Stokes flow, linear in the force, rescaled later (:mod:`fibersweep.flow.solver`).
+The flow is driven by a uniform body force (periodic ends). The lattice speed
+is kept tiny (``U_LATTICE``) so the lattice Reynolds number is far below one
+and the quadratic terms of the equilibrium are negligible: the result is
+Stokes flow, linear in the force, rescaled later (:mod:`fibersweep.flow.solver`
+for the pillar channel, :mod:`fibersweep.flow.cell` for an array's unit cell).
+:func:`run_stepper` is the one time loop with its convergence test: the
+channel (:func:`solve_lattice`), its fine patch and the unit cell all run it.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from fibersweep.flow import progress
 from fibersweep.flow.analytic import duct_center_velocity
 from fibersweep.flow.cuts import Cuts, pillar_cuts
 from fibersweep.flow.initial import duct_guess, hele_shaw_guess, velocity_gradient
-from fibersweep.flow.lattice import Grid, make_grid
+from fibersweep.flow.lattice import MACH_LIMIT, U_LATTICE, Grid, make_grid
 from fibersweep.flow.prolong import prolong
 from fibersweep.flow.schemes import get_collision, get_wall_scheme
 from fibersweep.flow.settings import FlowSettings
@@ -29,11 +32,12 @@ from fibersweep.flow.steppers import make_stepper
 
 __all__ = [
     "SOLVER_VERSION",
-    "U_LATTICE",
-    "MACH_LIMIT",
     "SolveReport",
     "LatticeSolution",
     "choose_tau",
+    "rates",
+    "run_stepper",
+    "wall_kind",
     "solve_lattice",
     "solve_nested",
     "coarser_settings",
@@ -43,8 +47,6 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 SOLVER_VERSION = "d3q19-trt-guo-3"  # 3: sub-grid (interpolated) pillar, closed solid set
-U_LATTICE = 1e-5  # duct centre speed in lattice units: Mach ~ 2e-5, lattice Re ~ 2e-3
-MACH_LIMIT = 0.1  # |u| in lattice units above this means divergence
 SERIAL_BELOW_CELLS = 250_000  # smaller grids run on one thread (fork/join costs more)
 DEFAULT_KERNEL = "aa"
 REPROBE_EVERY = 10  # check intervals between re-timing the other thread counts
@@ -128,21 +130,27 @@ def choose_tau(grid: Grid) -> float:
     The slowest transient is the pressure (density) field: sound waves of the
     longest wavelength damped by Hele-Shaw friction γ ≈ 12ν/H². Critical damping,
     γ ≈ 2 c_s k_min, equilibrates it fastest; it also keeps the z-diffusion
-    time H²/(π²ν) short. τ is clipped to [0.6, 1.5].
+    time H²/(π²ν) short. The longest wave spans the box in x, and in y twice the
+    channel between its walls or once a periodic box. τ is clipped to [0.6, 1.5].
     """
-    k_min = 2.0 * math.pi / max(grid.nx, 2 * grid.ny)
+    k_min = 2.0 * math.pi / max(grid.nx, (1 if grid.periodic_y else 2) * grid.ny)
     nu = 2.0 * k_min / math.sqrt(3.0) * grid.nz_full**2 / 12.0
     return float(min(max(3.0 * nu + 0.5, 0.6), 1.5))
 
 
-def _rates(settings: FlowSettings, grid: Grid) -> tuple[float, float, float, float]:
-    """(τ, ω+, ω−, body force fx) of ``settings`` on ``grid``.
+def rates(settings: FlowSettings, grid: Grid) -> tuple[float, float, float, float]:
+    """(τ, ω+, ω−, body force) of ``settings`` on ``grid``.
 
-    fx gives the centre speed U_LATTICE in the empty duct (ρ = 1).
+    The force gives the centre speed U_LATTICE in the empty duct (ρ = 1), or in
+    a box periodic in y the empty slit's (plane Poiseuille across the depth).
+    The collision scheme's rates come from its registry entry.
     """
     tau = settings.tau if settings.tau is not None else choose_tau(grid)
     nu = (tau - 0.5) / 3.0
-    fx = U_LATTICE / duct_center_velocity(grid.ny, grid.nz_full, 1.0) * nu
+    if grid.periodic_y:
+        fx = 8.0 * nu * U_LATTICE / grid.nz_full**2
+    else:
+        fx = U_LATTICE / duct_center_velocity(grid.ny, grid.nz_full, 1.0) * nu
     omega_p, omega_m = get_collision(settings.collision).rates(tau, settings.magic)
     return tau, omega_p, omega_m, fx
 
@@ -189,13 +197,12 @@ def solve_lattice(
     SolverError
         If the field becomes non-finite or faster than Mach ``MACH_LIMIT``.
     """
-    geom = settings.geometry.to_geometry()
     if grid is None:
         grid = lattice_of(settings, pillar=pillar)
         if pillar:
-            cuts = pillar_cuts(grid, geom.shape, settings.pillar_boundary)
-    boundary = "none" if not grid.solid.any() else ("staircase" if cuts is None else "interpolated")
-    tau, omega_p, omega_m, fx = _rates(settings, grid)
+            shape = settings.geometry.to_geometry().shape
+            cuts = pillar_cuts(grid, shape, settings.pillar_boundary)
+    tau, omega_p, omega_m, fx = solve_rates = rates(settings, grid)
     nu = (tau - 0.5) / 3.0
     if initial is None and grid.solid.any():
         u0, hs_rho = hele_shaw_guess(grid, fx, fx / nu)
@@ -219,6 +226,43 @@ def solve_lattice(
     # the populations now hold the start: drop the float64 copies before the time
     # loop (1.2 GB at dx = 1 µm; solve_nested hands them over without keeping them)
     del u0, rho0, initial, initial_rho
+    return run_stepper(settings, grid, stepper, solve_rates, wall_kind(grid, cuts), threads)
+
+
+def wall_kind(grid: Grid, cuts: Cuts | None) -> str:
+    """How the pillar wall enters ``grid``, for the report: none, staircase or interpolated."""
+    if not grid.solid.any():
+        return "none"
+    return "staircase" if cuts is None else "interpolated"
+
+
+def run_stepper(
+    settings: FlowSettings, grid: Grid, stepper, solve_rates: tuple[float, float, float, float],
+    boundary: str, threads: int | None = None,
+) -> LatticeSolution:  # fmt: skip
+    """Step ``stepper`` on ``grid`` to steady state (the time loop and its convergence test).
+
+    Parameters
+    ----------
+    settings : FlowSettings
+        Tolerance, check interval, step limit (and dx for the progress report).
+    grid : Grid
+    stepper : PullStepper or AAStepper
+        Holding the start (:func:`fibersweep.flow.steppers.make_stepper`).
+    solve_rates : tuple
+        (τ, ω+, ω−, force) it steps with (:func:`rates`), for the report.
+    boundary : str
+        How the pillar wall is represented, for the report.
+    threads : int, optional
+        Numba threads; default 1 below ``SERIAL_BELOW_CELLS`` cells, else the
+        faster of all and one, measured while running.
+
+    Raises
+    ------
+    SolverError
+        If the field becomes non-finite or faster than Mach ``MACH_LIMIT``.
+    """
+    tau, _, omega_m, fx = solve_rates
     previous_threads = numba.get_num_threads()
     if threads:
         candidates = [threads]
@@ -233,7 +277,7 @@ def solve_lattice(
 
 
 def _run(settings, grid, stepper, fx, tau, omega_m, candidates, boundary) -> LatticeSolution:
-    """Time loop of :func:`solve_lattice` (arguments as computed there).
+    """Time loop of :func:`run_stepper` (arguments as computed there).
 
     With several thread counts in ``candidates`` each is timed over one check
     interval, the fastest is used, and the others are re-timed every
@@ -293,8 +337,11 @@ def _run(settings, grid, stepper, fx, tau, omega_m, candidates, boundary) -> Lat
                 f"LBM diverged: lattice speed {speed_max:.3g} > {MACH_LIMIT} (Mach too high) "
                 f"after {steps} steps (tau={tau:g})"
             )
+        # numpy's pairwise sums, not BLAS (np.linalg.norm): BLAS threads left spinning
+        # after the call slow the next interval's kernels down (2x on a 2-core cell solve)
         change = math.sqrt(sum(float(np.sum((uxy[c] - u_prev[c]) ** 2)) for c in range(2)))
-        residual = change / max(float(np.linalg.norm(uxy)), 1e-300)
+        size = math.sqrt(sum(float(np.sum(uxy[c] ** 2)) for c in range(2)))
+        residual = change / max(size, 1e-300)
         u_prev = uxy
         log.debug("step %d residual %.3e", steps, residual)
         progress.report(
@@ -370,7 +417,7 @@ def solve_nested(settings: FlowSettings, threads: int | None = None) -> LatticeS
         return solve_lattice(settings, threads=threads)
     coarse = solve_nested(coarse_settings, threads=threads)
     fine_grid = lattice_of(settings)
-    fx = _rates(settings, fine_grid)[3]
+    fx = rates(settings, fine_grid)[3]
     density_scale = fx / coarse.report.force * (coarse.grid.dx / fine_grid.dx)
     start = list(prolong(coarse.u, coarse.rho, coarse.grid, fine_grid, density_scale))
     # popped into the call so that solve_lattice holds the only reference and can

@@ -32,11 +32,11 @@ import logging
 import math
 import time
 
-import numba
 import numpy as np
 from scipy.ndimage import map_coordinates
 
 from fibersweep import __version__
+from fibersweep.flow.channel_field import field_from_solution
 from fibersweep.flow.cuts import pillar_cuts
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.ghost import GHOST_METHOD, extend_into_wall
@@ -44,19 +44,19 @@ from fibersweep.flow.initial import velocity_gradient
 from fibersweep.flow.kernels import stream_collide
 from fibersweep.flow.lattice import E, Grid, W, make_grid
 from fibersweep.flow.lbm import (
-    SERIAL_BELOW_CELLS,
     SOLVER_VERSION,
     LatticeSolution,
-    _rates,
-    _run,
     lattice_of,
+    rates,
+    run_stepper,
     solve_nested,
+    wall_kind,
 )
 from fibersweep.flow.midplane import midplane_average, midplane_weights
 from fibersweep.flow.schemes import get_wall_scheme
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.steppers import PullStepper
-from fibersweep.units import Geometry
+from fibersweep.geometry import Geometry
 
 __all__ = ["PatchBox", "patch_box", "PatchStepper", "solve_patched", "compose", "depth_factor"]
 
@@ -220,7 +220,9 @@ class PatchStepper(PullStepper):
     def advance(self, n: int) -> None:
         """n steps, the frame reset after each."""
         for _ in range(n):
-            stream_collide(self.g, self.gn, self.sources, self.fx, self.omega_p, self.omega_m)
+            stream_collide(
+                self.g, self.gn, self.pull, self.slots, self.fx, self.omega_p, self.omega_m
+            )
             self._fill(self.gn)
             self._pin(self.gn)
             self.g, self.gn = self.gn, self.g
@@ -239,7 +241,7 @@ def solve_patch_lattice(
     pgeom = patch_geometry(geom, box)
     fine = settings.model_copy(update={"dx": box.dx, "patch": None})
     full_fine = lattice_of(fine, pillar=False)  # τ and force as the whole fine grid's
-    tau, omega_p, omega_m, fx = _rates(fine, full_fine)
+    _, omega_p, omega_m, fx = fine_rates = rates(fine, full_fine)
     grid = make_grid(
         pgeom, box.dx, settings.symmetry, closed=get_wall_scheme(settings.pillar_boundary).sub_grid
     )
@@ -257,18 +259,7 @@ def solve_patch_lattice(
     stepper = PatchStepper(grid, u0, rho0, grad, fx, omega_p, omega_m, cuts=cuts,
                            dtype=np.dtype(settings.precision))  # fmt: skip
     del u0, rho0, grad
-    previous = numba.get_num_threads()
-    if threads:
-        candidates = [threads]
-    elif grid.cells < SERIAL_BELOW_CELLS or previous == 1:
-        candidates = [1]
-    else:
-        candidates = [previous, 1]
-    boundary = "staircase" if cuts is None else "interpolated"
-    try:
-        sol = _run(fine, grid, stepper, fx, tau, omega_m, candidates, boundary)
-    finally:
-        numba.set_num_threads(previous)
+    sol = run_stepper(fine, grid, stepper, fine_rates, wall_kind(grid, cuts), threads)
     return sol, box, pgeom
 
 
@@ -345,8 +336,6 @@ def solve_patched(
         At spacing ``patch.dx`` over the whole channel (see :func:`compose`);
         ``meta["patch"]`` records the box, the channel's solve and the method.
     """
-    from fibersweep.flow.solver import field_from_solution
-
     t0 = time.perf_counter()
     channel = settings.model_copy(update={"patch": None})
     if coarse is None:

@@ -15,9 +15,10 @@ from pydantic import (
     model_validator,
 )
 
+from fibersweep.errors import FieldError
 from fibersweep.flow.array_settings import ArraySettings, check_array_flow
-from fibersweep.geometry import PILLAR_SHAPES, ConvexPolygon, check_shape_name
-from fibersweep.units import Fluid, Geometry
+from fibersweep.geometry import PILLAR_SHAPES, ConvexPolygon, Geometry, check_shape_name
+from fibersweep.units import Fluid
 
 __all__ = [
     "ArraySettings",
@@ -30,6 +31,13 @@ __all__ = [
 ]
 
 MIN_DEPTH_NODES = 8
+#: Flow settings that cannot apply to an array's unit cell, and why.
+_NOT_FOR_ARRAYS = {
+    "geometry": "the array's unit cell is the flow domain (flow.geometry is the single "
+    "pillar's channel)",
+    "patch": "a patch nests a finer grid round one pillar in a channel's solution, and the "
+    "unit cell is solved whole: refine flow.dx instead",
+}
 # float32 populations carry rounding noise of about one float32 epsilon (6e-8) of the
 # field: the relative change per check levels off there (measured 7e-8 past the pillar,
 # docs/precision.md), so a smaller tolerance may never be met
@@ -144,8 +152,8 @@ class FlowSettings(_Strict):
         None,
         description=(
             "a tilted pillar array (docs/arrays.md): the flow is then its unit cell with "
-            "shifted periodic boundaries, and geometry is not used; None: the single "
-            "pillar in a channel"
+            "shifted periodic boundaries, and geometry and patch are not used; None: the "
+            "single pillar in a channel"
         ),
     )
     fluid: FluidSettings = FluidSettings()
@@ -237,19 +245,14 @@ class FlowSettings(_Strict):
 
     @model_validator(mode="after")
     def _array_cell(self) -> FlowSettings:
-        """With ``array``: the settings the unit cell does not use are refused away from
-        their defaults, and the lattice must fit the cell (:func:`check_array_flow`)."""
+        """With ``array``: the settings that cannot apply to a unit cell are refused away
+        from their defaults, with the reason, and the lattice must fit the cell
+        (:func:`check_array_flow`)."""
         if self.array is None:
             return self
-        from fibersweep.config.errors import FieldError  # config imports flow: lazily
-
-        for name in ("geometry", "collision", "magic", "keep_3d", "patch"):
+        for name, why in _NOT_FOR_ARRAYS.items():
             if getattr(self, name) != type(self).model_fields[name].default:
-                raise FieldError(
-                    name,
-                    f"not used with flow.array (the unit cell of the array is the geometry; "
-                    f"its solver is TRT with its own Lambda); leave flow.{name} out",
-                )
+                raise FieldError(name, f"not used with flow.array: {why}; leave flow.{name} out")
         check_array_flow(self.array, self.dx, self.pillar_boundary, self.symmetry)
         return self
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fibersweep.flow.analysis import flux_separatrix
+from fibersweep.flow.cache import CorruptCacheError, cache_key, load_entry
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.streamlines import separatrix_y
@@ -83,8 +84,6 @@ def other_level(
 
     Only loads (never solves).
     """
-    from fibersweep.flow.cache import CorruptCacheError, cache_key, load_entry
-
     for factor in (0.5, 2.0):
         try:
             dump = settings.model_dump()

@@ -7,9 +7,11 @@ inside-test, signed distance, the fraction q at which a lattice link enters
 the wall, the nearest outline point with its outward normal, the outline as a
 polygon and the bounding box. :mod:`fibersweep.geometry.pillars` builds the
 named shapes (triangle, circle, square, polygon) at a size, rotation and
-placement.
+placement; :class:`Geometry` (:mod:`fibersweep.geometry.channel`) is the channel
+with one pillar, :mod:`fibersweep.geometry.array` the tilted pillar array.
 """
 
+from fibersweep.geometry.channel import Geometry
 from fibersweep.geometry.circle import Circle
 from fibersweep.geometry.pillars import PILLAR_SHAPES, check_shape_name, pillar_shape
 from fibersweep.geometry.polygon import ENTRY_MIN, ConvexPolygon
@@ -20,6 +22,7 @@ __all__ = [
     "ENTRY_MIN",
     "Circle",
     "ConvexPolygon",
+    "Geometry",
     "PILLAR_SHAPES",
     "Shape",
     "as_shape",

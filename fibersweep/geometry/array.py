@@ -5,14 +5,14 @@ One model for both geometries
 A pillar geometry is a *set of pillars*: one outline (any registered shape,
 :mod:`fibersweep.geometry.pillars`) and the translations at which it stands.
 
-- The single pillar in a channel (:class:`fibersweep.units.Geometry`) is the set
+- The single pillar in a channel (:class:`fibersweep.geometry.channel.Geometry`) is the set
   with one member, bounded by side walls at y = 0 and y = W_ch.
 - An array is the same outline at every lattice point
   ``(r λx, r ε λy + c λy)`` for rows r and columns c (integers): each row is
   shifted across the flow by ε times the lateral period, so the array is tilted
   by atan ε to the flow.
 
-The unit cell of the array *is* a single-pillar :class:`~fibersweep.units.Geometry`
+The unit cell of the array *is* a single-pillar :class:`~fibersweep.geometry.channel.Geometry`
 (``length = λx``, ``width = λy``, pillar centred in the cell); the array adds
 its periodic images. Everything that solves or reads a cell (the flow solver,
 the contact kernel, plots) therefore uses the same shape objects, caches and
@@ -31,8 +31,8 @@ from functools import cached_property
 
 import numpy as np
 
+from fibersweep.geometry.channel import Geometry
 from fibersweep.geometry.pillars import unit_width
-from fibersweep.units import Geometry
 
 __all__ = ["PillarArray", "ArrayError"]
 

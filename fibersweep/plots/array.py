@@ -1,22 +1,22 @@
-"""Figures of a pillar-array sweep: cell flow, chronophotographs, migration, trajectories.
+"""Figures of a pillar-array sweep: the cell's flow and the fibers' paths through the rows.
 
-Every function takes data (no files) and returns a matplotlib Figure.
+Every function takes data (no files) and returns a matplotlib Figure. The
+chronophotographs are in :mod:`.array_chrono`, the designer's figures (migration
+and critical lengths, outlets, the critical length against a setting) in
+:mod:`.array_design`; both are re-exported here.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-from matplotlib.patches import Circle, Polygon
+from matplotlib.lines import Line2D
+from matplotlib.patches import Polygon
 
-from fibersweep.analysis.modes import MODES
-from fibersweep.plots.style import subplots
+from fibersweep.plots.array_chrono import chrono_figure
+from fibersweep.plots.array_design import migration_figure
+from fibersweep.plots.style import MODE_STYLE, subplots
 
 __all__ = ["cell_flow_figure", "chrono_figure", "migration_figure", "overlay_figure"]
-
-_MODE_COLOURS = dict(zip(MODES, ("#1f77b4", "#d62728", "#9467bd", "#7f7f7f", "#ff7f0e"),
-                         strict=True))  # fmt: skip
 
 
 def _pillars(ax, array, x0, x1, y0, y1) -> None:
@@ -64,79 +64,68 @@ def cell_flow_figure(field):
     return fig
 
 
-def chrono_figure(array, runs: list[dict], bead_radius: float, frames: int = 30):
-    """One panel per run (a mode each): the fiber drawn at equal time intervals over the pillars.
+def overlay_figure(runs, period_x: float | dict, lengths: list[float] | None = None,
+                   ncols: int | None = None, shifts: dict | None = None):  # fmt: skip
+    """Lateral displacement y − y0 [µm] against rows crossed, many fibers per panel.
 
-    A run with stored bead positions (``traj_beads``, shape (samples, n_beads, 2) [µm];
-    bead-spring runs with ``fiber.record.all_beads``) is drawn through its beads, so a
-    bent or wrapped fiber shows its shape; otherwise as the straight rod of its angle.
+    One panel per (setting, length) of ``runs`` (a setting's label in the title when
+    there are several), coloured by mode; the dotted line is the array's tilt (a
+    fiber in the displacement mode follows it), the grey one the mean flow.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        Array runs with ``traj_xc``, ``traj_yc``, ``mode``, ``length`` (and
+        ``setting``, ``setting_label`` when several settings are drawn).
+    period_x : float or dict
+        λx [µm], or per setting index.
+    lengths : list of float, optional
+        The lengths to draw (default: all).
+    ncols : int, optional
+        Panels per row (default: one per length, up to 7, so a row is a setting).
+    shifts : dict, optional
+        ε λy [µm] per setting index (the tilt line).
     """
-    fig, axes = subplots(len(runs), 1, figsize=(7.0, 1.9 * len(runs)), squeeze=False)
-    for ax, run in zip(axes[:, 0], runs, strict=True):
-        t = np.asarray(run["traj_t"])
-        xc, yc, th = (np.asarray(run[f"traj_{c}"]) for c in ("xc", "yc", "th"))
-        half = 0.5 * (run["n_beads"] - 1) * 2 * bead_radius
-        times = np.linspace(t[0], t[-1], frames)
-        k = np.searchsorted(t, times).clip(0, t.size - 1)
-        col = _MODE_COLOURS.get(run["mode"], "k")
-        beads = run.get("traj_beads")
-        for j in k:
-            if beads is not None:  # a flexible fiber: its beads, bent as they were
-                ax.plot(beads[j, :, 0], beads[j, :, 1], color=col, lw=1.4, alpha=0.8,
-                        solid_capstyle="round")  # fmt: skip
-                continue
-            c, s = math.cos(th[j]), math.sin(th[j])
-            if half == 0.0:  # one bead: a sphere
-                ax.add_patch(Circle((xc[j], yc[j]), bead_radius, fc=col, ec="none", alpha=0.8))
-                continue
-            ax.plot([xc[j] - half * c, xc[j] + half * c], [yc[j] - half * s, yc[j] + half * s],
-                    color=col, lw=1.4, alpha=0.8, solid_capstyle="round")  # fmt: skip
-        x0, x1 = xc.min() - half - 10, xc.max() + half + 10
-        y0, y1 = yc.min() - half - 30, yc.max() + half + 30
-        _pillars(ax, array, x0, x1, y0, y1)
-        ax.set_xlim(x0, x1)
-        ax.set_ylim(y0, y1)
-        ax.set_aspect("equal")
-        ax.set_title(f"{run['mode']}: L = {run['length']:g} µm, y0 = {run['y0']:.2f} λy, "
-                     f"θ0 = {run['theta0']:.1f}°", fontsize=8)  # fmt: skip
-        ax.set_ylabel("y [µm]")
-    axes[-1, 0].set_xlabel("x [µm]")
-    return fig
-
-
-def migration_figure(table, tilts: dict[int, float], labels: dict[int, str]):
-    """Mean migration angle ± one standard deviation against length, one line per setting."""
-    fig, ax = subplots(figsize=(5.0, 3.6))
-    for s, g in table.groupby("setting"):
-        g = g.sort_values("length")
-        line = ax.errorbar(g["length"], g["angle_mean"], yerr=g["angle_std"], marker="o",
-                           capsize=3, label=labels.get(int(s)) or "array")  # fmt: skip
-        ax.axhline(tilts[int(s)], color=line[0].get_color(), ls=":", lw=0.8)
-    ax.axhline(0.0, color="0.5", lw=0.6)
-    ax.set_xlabel("fiber length L [µm]")
-    ax.set_ylabel("migration angle [deg]")
-    ax.legend(fontsize=7, title="dotted: array tilt atan ε", title_fontsize=7)
-    return fig
-
-
-def overlay_figure(runs, period_x: float, lengths: list[float], ncols: int = 3):
-    """Lateral displacement y − y0 against rows crossed, many fibers per length."""
-    nrows = -(-len(lengths) // ncols)
-    fig, axes = subplots(nrows, ncols, figsize=(2.4 * ncols, 2.2 * nrows), sharey=True,
-                         sharex=True, squeeze=False)  # fmt: skip
+    settings = sorted(runs["setting"].unique()) if "setting" in runs else [None]
+    lengths = lengths if lengths is not None else sorted(runs["length"].unique())
+    panels = [
+        (s, L)
+        for s in settings
+        for L in lengths
+        if ((runs["length"] == L) & ((runs["setting"] == s) if s is not None else True)).any()
+    ]
+    ncols = min(ncols or min(len(lengths), 7), len(panels))
+    nrows = -(-len(panels) // ncols)
+    fig, axes = subplots(nrows, ncols, figsize=(2.3 * ncols, 2.0 * nrows + 0.4), sharey=True,
+                         sharex=True, squeeze=False, layout="constrained")  # fmt: skip
     flat = axes.ravel()
-    for ax, L in zip(flat, lengths, strict=False):
-        for _, r in runs[runs["length"] == L].iterrows():
-            x = (np.asarray(r["traj_xc"]) - r["traj_xc"][0]) / period_x
+    for ax, (s, L) in zip(flat, panels, strict=False):
+        sel = runs["length"] == L
+        if s is not None:
+            sel &= runs["setting"] == s
+        px = period_x[s] if isinstance(period_x, dict) else period_x
+        rows_max = 0.0
+        for _, r in runs[sel].iterrows():
+            x = (np.asarray(r["traj_xc"]) - r["traj_xc"][0]) / px
             y = np.asarray(r["traj_yc"]) - r["traj_yc"][0]
-            ax.plot(x, y, color=_MODE_COLOURS.get(r["mode"], "k"), lw=0.6, alpha=0.7)
-        ax.set_title(f"L = {L:g} µm", fontsize=8)
-    for ax in flat[len(lengths) :]:
+            rows_max = max(rows_max, float(x.max()))
+            ax.plot(x, y, color=MODE_STYLE.get(r["mode"], {"color": "k"})["color"], lw=0.7,
+                    alpha=0.75)  # fmt: skip
+        if shifts is not None and s in shifts:
+            ax.plot([0, rows_max], [0, shifts[s] * rows_max], ":", color="k", lw=0.8)
+        ax.axhline(0.0, color="0.6", lw=0.6)
+        lab = runs.loc[sel, "setting_label"].iloc[0] if "setting_label" in runs else ""
+        ax.set_title(f"L = {L:g} µm" + (f", {lab}" if lab and len(settings) > 1 else ""),
+                     fontsize=7)  # fmt: skip
+    for ax in flat[len(panels) :]:
         ax.set_visible(False)
     for ax in axes[-1]:
-        ax.set_xlabel("rows")
+        ax.set_xlabel("rows crossed")
     for ax in axes[:, 0]:
         ax.set_ylabel("y − y0 [µm]")
-    handles = [flat[0].plot([], [], color=c, label=m)[0] for m, c in _MODE_COLOURS.items()]
-    flat[0].legend(handles=handles, fontsize=6)
+    present = [m for m in MODE_STYLE if (runs["mode"] == m).any()]
+    handles = [Line2D([], [], color=MODE_STYLE[m]["color"], label=m) for m in present]
+    handles.append(Line2D([], [], color="k", ls=":", lw=0.8, label="array tilt"))
+    fig.legend(handles=handles, loc="outside upper center", ncol=len(handles), fontsize=7,
+               frameon=False)  # fmt: skip
     return fig

@@ -12,6 +12,7 @@ from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
 from fibersweep.fiber.result import RunResult  # noqa: E402
+from fibersweep.plots.shapes import fiber_points  # noqa: E402
 from fibersweep.plots.style import paper_style, save_figure, subplots  # noqa: E402
 from fibersweep.units import Geometry  # noqa: E402
 
@@ -53,8 +54,10 @@ def chrono_figure(
     Parameters
     ----------
     result : RunResult
-        A run with a recorded trajectory (``record.trajectories``; beads are
-        drawn when recorded, else the straight head-tail segment).
+        A run with a recorded trajectory (``record.trajectories``; every bead is
+        drawn when recorded, else the straight head-tail segment of a rigid fiber;
+        a bead-spring fiber without its beads raises
+        :class:`~fibersweep.plots.shapes.ShapeNotStored`).
     geometry : Geometry
         Channel and pillar of the run.
     snapshots : int
@@ -94,10 +97,8 @@ def chrono_figure(
     ax.add_patch(Polygon((outline - [xb, yb]) / h, closed=True, fc="0.8", ec="0.3", lw=1.0))
     segs = []
     for k in picks:
-        if tr.beads is not None:
-            pts = tr.beads[k]
-        else:
-            pts = np.vstack([tr.tail[k], tr.head[k]])
+        beads = None if tr.beads is None else tr.beads[k]
+        pts = fiber_points(result.model, result.n_beads, beads, ends=(tr.tail[k], tr.head[k]))
         segs.append((pts - [xb, yb]) / h)
     lc = LineCollection(segs, cmap=cmap, norm=norm, lw=2.0, capstyle="round")
     lc.set_array(tr.t[picks])

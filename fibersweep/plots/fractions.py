@@ -14,10 +14,11 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from scipy.stats import norm
 
+from fibersweep.analysis.modes import MODES
 from fibersweep.analysis.trajectory import CLASSES
 from fibersweep.errors import InputError
 from fibersweep.plots.phase import _fixed_title, _label, swept_keys
-from fibersweep.plots.style import CLASS_STYLE, subplots
+from fibersweep.plots.style import CLASS_STYLE, MODE_STYLE, subplots
 
 __all__ = [
     "class_fractions",
@@ -32,8 +33,18 @@ __all__ = [
 _OUTCOMES = {
     "id", "class", "status", "reason", "delta", "contact", "theta_c", "y_c", "t_contact",
     "t_pass", "x_f", "y_f", "theta_f", "n_steps", "wall_time", "cpu_time", "settings",
-    "worker", "attempts", "finished_at", "round", "t_end", "min_clearance",
+    "worker", "attempts", "finished_at", "round", "t_end", "min_clearance", "class_rule",
+    "max_curvature", "min_end_to_end", "max_tension", "max_wrap", "rows", "shift_per_row",
+    "migration_angle", "fraction", "mode", "wraps", "contacts", "bridging", "time_on_pillars",
 }  # fmt: skip
+
+
+def outcome_of(runs: pd.DataFrame) -> tuple[str, tuple[str, ...], dict]:
+    """What a run's outcome is: ('class', the channel's classes, their styles), or for
+    pillar-array runs ('mode', the transport modes, their styles)."""
+    if "mode" in runs and runs["mode"].notna().any():
+        return "mode", MODES, MODE_STYLE
+    return "class", CLASSES, CLASS_STYLE
 
 
 def fraction_keys(runs: pd.DataFrame) -> list[str]:
@@ -78,7 +89,7 @@ def wilson_interval(k: np.ndarray, n: np.ndarray, level: float = 0.95) -> np.nda
 
 
 def class_fractions(runs: pd.DataFrame, key: str, level: float = 0.95) -> pd.DataFrame:
-    """Fraction of the classified runs in each class, per value of ``key``.
+    """Fraction of the classified runs in each class (array runs: each mode), per value of ``key``.
 
     Parameters
     ----------
@@ -92,15 +103,16 @@ def class_fractions(runs: pd.DataFrame, key: str, level: float = 0.95) -> pd.Dat
     Returns
     -------
     DataFrame
-        Columns ``key``, ``class``, ``k`` (runs of the class), ``n`` (classified
-        runs at the value), ``failed`` (runs at the value without a class),
-        ``fraction``, ``lo``, ``hi``; every class that occurs anywhere gets a
-        row at every value (k may be 0).
+        Columns ``key``, ``class`` (or ``mode``: :func:`outcome_of`), ``k`` (runs of
+        the class), ``n`` (classified runs at the value), ``failed`` (runs at the
+        value without a class), ``fraction``, ``lo``, ``hi``; every class that occurs
+        anywhere gets a row at every value (k may be 0).
     """
     _check_key(runs, key)
-    ok = runs["status"].eq("ok") & runs["class"].isin(CLASSES)
-    counts = pd.crosstab(runs.loc[ok, key], runs.loc[ok, "class"])
-    classes = [c for c in CLASSES if c in counts.columns]
+    col, names, _ = outcome_of(runs)
+    ok = runs["status"].eq("ok") & runs[col].isin(names)
+    counts = pd.crosstab(runs.loc[ok, key], runs.loc[ok, col])
+    classes = [c for c in names if c in counts.columns]
     counts = counts.reindex(columns=classes, fill_value=0)
     failed = (~ok).groupby(runs[key]).sum().reindex(counts.index, fill_value=0)
     n = counts.sum(axis=1)
@@ -108,7 +120,7 @@ def class_fractions(runs: pd.DataFrame, key: str, level: float = 0.95) -> pd.Dat
     for cls in classes:
         lo, hi = wilson_interval(counts[cls].to_numpy(), n.to_numpy(), level)
         rows.append(pd.DataFrame({
-            key: counts.index, "class": cls, "k": counts[cls].to_numpy(), "n": n.to_numpy(),
+            key: counts.index, col: cls, "k": counts[cls].to_numpy(), "n": n.to_numpy(),
             "failed": failed.to_numpy(), "fraction": counts[cls].to_numpy() / n.to_numpy(),
             "lo": lo, "hi": hi,
         }))  # fmt: skip
@@ -117,8 +129,12 @@ def class_fractions(runs: pd.DataFrame, key: str, level: float = 0.95) -> pd.Dat
     return pd.concat(rows, ignore_index=True)
 
 
-def _axis_label(key: str) -> str:
-    """Axis label of ``key``: the start coordinates as the phase diagrams write them."""
+def _axis_label(key: str, array: bool = False) -> str:
+    """Axis label of ``key``: the start coordinates as the phase diagrams write them
+    (in a pillar array: L in µm, y0 a fraction of the period across the flow)."""
+    if array:
+        fixed = {"length": "L [µm]", "y0": r"$y_0/\lambda_y$", "theta0": r"$\theta_0$ [deg]"}
+        return fixed.get(key) or _label(key)
     return {"theta0": r"$\theta_0$ [deg]", "y0": r"$y_0/h_{obs}$"}.get(key) or _label(key)
 
 
@@ -137,18 +153,21 @@ def fractions_figure(runs: pd.DataFrame, key: str, level: float = 0.95) -> Figur
     intervals do not hide each other.
     """
     fr = class_fractions(runs, key, level)
+    col, _, styles = outcome_of(runs)
     fig, ax = subplots(figsize=(5.2, 3.4), layout="constrained")
-    classes = list(dict.fromkeys(fr["class"]))
+    classes = list(dict.fromkeys(fr[col]))
     x_all, labels = _positions(fr[key])
     values = np.unique(x_all)
     step = float(np.diff(values).min()) if values.size > 1 else 1.0
     for j, cls in enumerate(classes):
-        sel = (fr["class"] == cls).to_numpy()
+        sel = (fr[col] == cls).to_numpy()
         q = fr[sel]
         x = x_all[sel] + (j - (len(classes) - 1) / 2) * 0.06 * step
-        st = CLASS_STYLE[cls]
+        st = styles[cls]
+        # rounding can put an end a hair inside a fraction of 0 or 1
+        err = np.clip([q["fraction"] - q["lo"], q["hi"] - q["fraction"]], 0.0, None)
         ax.errorbar(
-            x, q["fraction"], yerr=[q["fraction"] - q["lo"], q["hi"] - q["fraction"]],
+            x, q["fraction"], yerr=err,
             marker=st["marker"], color=st["color"], mec="k", mew=0.4, ms=5, lw=1.0,
             capsize=2.5, label=cls,
         )  # fmt: skip
@@ -157,15 +176,26 @@ def fractions_figure(runs: pd.DataFrame, key: str, level: float = 0.95) -> Figur
     elif values.size <= 9:
         ax.set_xticks(values)
     ax.set_ylim(-0.03, 1.03)
-    ax.set_xlabel(_axis_label(key))
-    ax.set_ylabel("fraction of runs")
+    ax.set_xlabel(_axis_label(key, array=col == "mode"))
+    ax.set_ylabel("fraction of runs" + (" in each mode" if col == "mode" else ""))
     n = fr.drop_duplicates(key)
     counts = f"{int(n['n'].min())}" if n["n"].nunique() == 1 else (
         f"{int(n['n'].min())}–{int(n['n'].max())}")  # fmt: skip
-    title = f"{counts} classified runs per value, {int(level * 100)} % Wilson intervals"
+    what = "runs" if col == "mode" else "classified runs"
+    title = f"{counts} {what} per value, {int(level * 100)} % Wilson intervals"
     if int(n["failed"].sum()):
         title += f"; {int(n['failed'].sum())} failed left out"
     fixed = _fixed_title(runs, key, None)
+    if col == "mode":  # an array sweep: say which other settings each point pools
+        pooled = [k for k in ("length", *swept_keys(runs)) if k != key and runs[k].nunique() > 1]
+        if pooled:
+            fixed = (
+                ", ".join(
+                    [fixed] * bool(fixed)
+                    + [f"pooled over {'L' if k == 'length' else _label(k)}" for k in pooled]
+                )
+                + " (--where selects one)"
+            )
     ax.set_title(title + (f"\n{fixed}" if fixed else ""), fontsize="small")
     fig.legend(loc="outside upper center", ncol=len(classes), frameon=False)
     return fig

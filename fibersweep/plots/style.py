@@ -14,6 +14,7 @@ from fibersweep.atomic import atomic_path
 
 __all__ = [
     "CLASS_STYLE",
+    "MODE_STYLE",
     "STYLE_FILE",
     "FAILED_STYLE",
     "UNCLASSIFIED_STYLE",
@@ -29,6 +30,14 @@ CLASS_STYLE: dict[str, dict[str, object]] = {
     "Above": {"marker": "s", "color": "#E69F00"},
     "Pole-vaulting": {"marker": "^", "color": "#009E73"},
     "Trapping": {"marker": "D", "color": "#D55E00"},
+}
+# Transport modes of a pillar array (fibersweep.analysis.modes.MODES), same palette idea.
+MODE_STYLE: dict[str, dict[str, object]] = {
+    "zigzag": {"marker": "o", "color": "#0072B2"},
+    "displacement": {"marker": "s", "color": "#D55E00"},
+    "wrap-and-jump": {"marker": "^", "color": "#CC79A7"},
+    "trapped": {"marker": "D", "color": "0.35"},
+    "mixed": {"marker": "v", "color": "#E69F00"},
 }
 FAILED_STYLE: dict[str, object] = {"marker": "x", "color": "0.45"}
 UNCLASSIFIED_STYLE: dict[str, object] = {"marker": "P", "color": "0.6"}

@@ -158,6 +158,25 @@ def overlay_figure(
     return fig
 
 
+def _shapes(run: pd.Series, s: pd.DataFrame, geometry: Geometry, picks: np.ndarray) -> list:
+    """The fiber at the samples ``picks`` in h_obs from the base centre: every stored bead
+    of a flexible fiber, the two ends of a rigid one (:func:`~.shapes.fiber_points`)."""
+    from fibersweep.plots.shapes import fiber_points
+
+    xb, yb = geometry.base_center
+    h = geometry.pillar_height
+    has_beads = "beads" in s.columns
+    out = []
+    for i in picks:
+        beads = s["beads"].iloc[i] if has_beads else None
+        beads = None if beads is None or np.size(beads) == 0 else np.asarray(beads, dtype=float)
+        ends = (s[["tail_x", "tail_y"]].iloc[i].to_numpy(float),
+                s[["head_x", "head_y"]].iloc[i].to_numpy(float))  # fmt: skip
+        pts = fiber_points(run.get("model"), int(run.get("n_beads") or 0), beads, ends=ends)
+        out.append((pts - [xb, yb]) / h)
+    return out
+
+
 def animate_run(
     run: pd.Series,
     samples: pd.DataFrame,
@@ -189,7 +208,8 @@ def animate_run(
     Raises
     ------
     InputError
-        Unknown suffix, no ffmpeg for an MP4, fewer than two samples.
+        Unknown suffix, no ffmpeg for an MP4, fewer than two samples, a bead-spring
+        run stored without its bead positions (:class:`~.shapes.ShapeNotStored`).
     """
     from matplotlib import animation
 
@@ -213,6 +233,7 @@ def animate_run(
     near = np.flatnonzero((p["x"] > lo) & (p["x"] < hi))
     t0, t1 = (t[near[0]], t[near[-1]]) if near.size > 1 else (t[0], t[-1])
     picks = np.unique(np.searchsorted(t, np.linspace(t0, t1, frames)).clip(0, len(t) - 1))
+    shapes = _shapes(run, s, geometry, picks)
     fig, ax = subplots(figsize=(6.4, 3.2), layout="constrained")
     ax.add_patch(Polygon(pil, closed=True, fc="0.85", ec="0.3", lw=1.0))
     color = _style(run["class"])["color"]
@@ -221,8 +242,8 @@ def animate_run(
     fiber, = ax.plot([], [], color="k", lw=2.5, solid_capstyle="round")  # fmt: skip
     head, = ax.plot([], [], "o", color=color, ms=4, mec="k", mew=0.5)  # fmt: skip
     clock = ax.text(0.01, 0.97, "", transform=ax.transAxes, va="top", fontsize=8)
-    xs = np.concatenate([p["head_x"][picks], p["tail_x"][picks], pil[:, 0]])
-    ys = np.concatenate([p["head_y"][picks], p["tail_y"][picks], pil[:, 1]])
+    xs = np.concatenate([*(q[:, 0] for q in shapes), pil[:, 0]])
+    ys = np.concatenate([*(q[:, 1] for q in shapes), pil[:, 1]])
     ax.set_xlim(xs.min() - 0.1, xs.max() + 0.1)
     ax.set_ylim(ys.min() - 0.1, ys.max() + 0.1)
     ax.set_aspect("equal")
@@ -234,7 +255,7 @@ def animate_run(
 
     def draw(k: int) -> tuple:
         i = picks[k]
-        fiber.set_data([p["tail_x"][i], p["head_x"][i]], [p["tail_y"][i], p["head_y"][i]])
+        fiber.set_data(shapes[k][:, 0], shapes[k][:, 1])
         head.set_data([p["head_x"][i]], [p["head_y"][i]])
         trail.set_data(p["x"][: i + 1], p["y"][: i + 1])
         clock.set_text(f"t = {t[i]:.2f} s")

@@ -2,62 +2,40 @@
 
 from __future__ import annotations
 
-import json
 import logging
 import math
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
-import pyarrow.parquet as pq
 from pydantic import ValidationError
 
-from fibersweep.atomic import atomic_path
+from fibersweep.analysis.classify import RULES, classify_all
 from fibersweep.errors import InputError
-from fibersweep.fiber.result import CLASSES, Trajectory
+from fibersweep.fiber.result import CLASSES
 from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.sweep.coldocs import rule_column
 from fibersweep.sweep.lock import output_lock
-from fibersweep.sweep.manifest import read_manifest, write_manifest
-from fibersweep.sweep.store import (
-    META_KEY,
-    RUNS_DIR,
-    list_parts,
-    part_name,
-    read_runs,
-    read_trajectories,
-    runs_table,
-    write_table_atomic,
+from fibersweep.sweep.manifest import read_manifest
+from fibersweep.sweep.reclassify_modes import is_array_table, reclassify_modes
+from fibersweep.sweep.relabel import (
+    Reclassified,
+    classified_meta,
+    per_combination,
+    replace_labels,
+    trajectory_from_frame,
 )
+from fibersweep.sweep.store import RUNS_DIR, list_parts, read_runs, read_trajectories
 
 __all__ = [
-    "Reclassified",
     "class_counts",
-    "per_combination",
-    "replace_labels",
     "reclassify",
     "rule_column",
     "thresholds_for",
-    "trajectory_from_frame",
 ]
 
 log = logging.getLogger(__name__)
-
-COUNTS_FILE = "counts.csv"
-
-
-@dataclass(frozen=True)
-class Reclassified:
-    """Outcome of :func:`reclassify`."""
-
-    n_runs: int
-    n_changed: int
-    counts: pd.DataFrame
-    counts_path: Path
-    warnings: tuple[str, ...] = ()
 
 
 def _beyond_simulated(
@@ -97,72 +75,6 @@ def thresholds_for(
         raise InputError(f"classification thresholds: {exc}") from None
 
 
-def trajectory_from_frame(df: pd.DataFrame) -> Trajectory:
-    """Rebuild a :class:`Trajectory` from its stored samples (one id, sorted by sample)."""
-
-    def col(name: str) -> np.ndarray:
-        return df[name].to_numpy(dtype=np.float64)
-
-    beads = None
-    if "beads" in df and df["beads"].notna().all():
-        flat = np.stack([np.asarray(b, dtype=np.float64) for b in df["beads"]])
-        beads = flat.reshape(len(df), -1, 2)
-    return Trajectory(
-        t=col("t"),
-        x=col("x"),
-        y=col("y"),
-        theta=col("theta"),
-        head=np.column_stack([col("head_x"), col("head_y")]),
-        tail=np.column_stack([col("tail_x"), col("tail_y")]),
-        head_speed=col("head_speed"),
-        com_speed=col("com_speed"),
-        contact=df["contact"].to_numpy(dtype=bool),
-        beads=beads,
-    )
-
-
-def replace_labels(
-    out: Path, runs: pd.DataFrame, meta: dict[str, Any], man: dict[str, Any],
-    thresholds: ClassifySettings, counts_of,
-) -> tuple[pd.DataFrame, Path]:  # fmt: skip
-    """Write re-labelled ``runs`` as one part replacing the old ones, the counts file and
-    the manifest's thresholds and totals.
-
-    ``counts_of(runs, by=None)`` gives a table whose first column is the label
-    (class or mode) and whose ``runs`` column the count (:func:`class_counts`,
-    :func:`fibersweep.sweep.reclassify_modes.mode_counts`). Returns the counts per
-    swept combination and the path they were written to.
-    """
-    old_parts = list_parts(out / RUNS_DIR)
-    write_table_atomic(
-        runs_table(runs.to_dict("records"), meta), out / RUNS_DIR / part_name("-classified")
-    )
-    for p in old_parts:
-        p.unlink(missing_ok=True)
-    counts = counts_of(runs, list(man.get("swept") or []))
-    counts_path = out / COUNTS_FILE
-    with atomic_path(counts_path) as tmp:
-        counts.to_csv(tmp, index=False)
-    man["config"]["fiber"]["classify"] = thresholds.model_dump(mode="json")
-    total = counts_of(runs)
-    man["counts"] = {c: int(n) for c, n in zip(total.iloc[:, 0], total["runs"], strict=True)}
-    write_manifest(out, man)
-    return counts, counts_path
-
-
-def per_combination(runs: pd.DataFrame, by: list[str], counts) -> pd.DataFrame:
-    """``counts(group)`` for each combination of the ``by`` columns' values, stacked,
-    the key columns first (one block per combination, fractions within it)."""
-    blocks = []
-    for values, group in runs.groupby(by, sort=True, dropna=False):
-        values = values if isinstance(values, tuple) else (values,)
-        block = counts(group)
-        for k, v in reversed(list(zip(by, values, strict=True))):
-            block.insert(0, k, v)
-        blocks.append(block)
-    return pd.concat(blocks, ignore_index=True)
-
-
 def class_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFrame:
     """Runs per class (ok runs) and failures, with fractions.
 
@@ -193,40 +105,6 @@ def class_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFram
     total = max(1, int(df["runs"].sum()))
     df["fraction"] = (df["runs"] / total).round(4)
     return df
-
-
-def classified_meta(parts: list[Path], man: dict, thresholds: ClassifySettings) -> dict[str, Any]:
-    """Schema metadata of a re-classified part: the sweep's provenance kept, the rule added.
-
-    The version, revision and config of the sweep come from its newest part (the
-    manifest's provenance if no part has them); ``classify`` holds the thresholds
-    and ``rule`` the rule that labelled the rows, with the version and revision of
-    the fibersweep that re-labelled them.
-    """
-    from fibersweep import __version__
-    from fibersweep.sweep.manifest import revision
-
-    old: dict[str, Any] = {}
-    for p in reversed(parts):
-        raw = (pq.read_schema(p).metadata or {}).get(META_KEY)
-        if raw:
-            old = json.loads(raw)
-            break
-    prov = man.get("provenance", {})
-    base = {
-        "fibersweep": prov.get("fibersweep"),
-        "git": prov.get("git"),
-        "flow_key": prov.get("flow_key"),
-        "config": man.get("config"),
-    }
-    rev, source = revision()
-    return {
-        **base,
-        **old,
-        "classify": thresholds.model_dump(),
-        "rule": thresholds.rule,
-        "classified_by": {"fibersweep": __version__, "git": rev, "git_from": source},
-    }
 
 
 def reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
@@ -271,8 +149,6 @@ def _run_context(man: dict, out: Path) -> tuple[object, float]:
 
 
 def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
-    from fibersweep.analysis.classify import RULES, classify_all
-
     man = read_manifest(out)
     runs = read_runs(out)
     if man is None or runs.empty:
@@ -280,8 +156,6 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     # The thresholds the runs were simulated with (the trap rule also stops a run);
     # kept apart from the config's, which later re-classifications overwrite.
     simulated = man.setdefault("simulated_classify", man["config"]["fiber"]["classify"])
-    from fibersweep.sweep.reclassify_modes import is_array_table, reclassify_modes
-
     if is_array_table(runs):  # pillar-array runs: their transport modes
         meta = classified_meta(list_parts(out / RUNS_DIR), man, thresholds)
         return reclassify_modes(out, man, runs, thresholds, meta)

@@ -18,9 +18,13 @@ from fibersweep.analysis.modes import MODES, summarise_trajectory
 from fibersweep.errors import InputError
 from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.flow.array_settings import ArraySettings
-from fibersweep.sweep.store import (
-    read_trajectories,
+from fibersweep.sweep.relabel import (
+    Reclassified,
+    per_combination,
+    replace_labels,
+    trajectory_from_frame,
 )
+from fibersweep.sweep.store import read_trajectories
 
 __all__ = ["is_array_table", "mode_counts", "reclassify_modes"]
 
@@ -39,8 +43,6 @@ def mode_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFrame
     """Runs per mode (ok runs) and failures, with fractions; one block per swept combination."""
     by = [k for k in (by or []) if k in runs]
     if by:
-        from fibersweep.sweep.reclassify import per_combination
-
         return per_combination(runs, by, mode_counts)
     ok = runs[runs["status"] == "ok"]
     rows = [(m, int((ok["mode"] == m).sum())) for m in MODES]
@@ -57,10 +59,8 @@ def reclassify_modes(
 
     Returns
     -------
-    fibersweep.sweep.reclassify.Reclassified
+    Reclassified
     """
-    from fibersweep.sweep.reclassify import Reclassified, trajectory_from_frame
-
     combos = man.get("combinations") or {}
     base_flow = man["config"]["flow"]
 
@@ -97,7 +97,5 @@ def reclassify_modes(
         ):
             runs.at[i, col] = value
     changed = int((runs["mode"] != old_mode).sum())
-    from fibersweep.sweep.reclassify import replace_labels
-
     counts, counts_path = replace_labels(out, runs, meta, man, thresholds, mode_counts)
     return Reclassified(len(runs), changed, counts, counts_path)

@@ -17,7 +17,6 @@ budget caps the total.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -27,10 +26,11 @@ from fibersweep.analysis.boundaries import COORDS, brackets
 from fibersweep.config import RefineSettings
 from fibersweep.sweep.ids import run_ids
 from fibersweep.sweep.plan import Setting
+from fibersweep.sweep.proposal import Proposal
+from fibersweep.sweep.refine_lengths import propose_lengths
 from fibersweep.sweep.worker import SweepTask
 
 __all__ = [
-    "Proposal",
     "next_round",
     "propose",
     "refinement_points",
@@ -40,26 +40,6 @@ __all__ = [
 ]
 
 _DIGITS = 12  # midpoints rounded like axis values (stable ids)
-
-
-@dataclass(frozen=True)
-class Proposal:
-    """The next round of a refinement.
-
-    Attributes
-    ----------
-    new : DataFrame
-        Points to run: columns ``group``, ``theta0``, ``y0``, ``length`` (at most
-        the budget; the widest brackets, relative to their tolerance, first).
-    brackets : DataFrame
-        Every bracket of the known points (:data:`BRACKET_COLUMNS`) with a
-        ``state``: 'located' (within tolerance), 'open' (to bisect: its midpoint
-        is in ``new`` or was left out by the budget) or 'stuck' (its midpoint is
-        known but has no class: a failed or missing run).
-    """
-
-    new: pd.DataFrame
-    brackets: pd.DataFrame
 
 
 def _key(frame: pd.DataFrame) -> pd.Series:
@@ -227,8 +207,6 @@ def next_round(
     pts = refinement_points(tasks, stored)
     used = int((pts["round"] > 0).sum())
     if _random_starts(settings):  # a pillar array's critical length (refine_lengths)
-        from fibersweep.sweep.refine_lengths import propose_lengths
-
         prop = propose_lengths(pts, float(refine.tolerance["length"]),
                                refine.max_runs - used, _drawer(settings))  # fmt: skip
     else:

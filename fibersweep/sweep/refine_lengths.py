@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.analysis.boundaries import BRACKET_COLUMNS, COORDS
+from fibersweep.sweep.proposal import Proposal
 
 __all__ = ["LEVEL", "length_brackets", "propose_lengths"]
 
@@ -88,13 +89,11 @@ def propose_lengths(
 
     Returns
     -------
-    fibersweep.sweep.refine.Proposal
+    Proposal
         ``new``: columns group, theta0, y0, length; ``brackets`` with their state
         ('located', 'open' or 'stuck': the midpoint was run and has no mean, every
         run of it trapped or failed).
     """
-    from fibersweep.sweep.refine import Proposal
-
     b = length_brackets(points, group)
     empty = pd.DataFrame({c: pd.Series(dtype=float) for c in ("group", *COORDS)})
     if b.empty:

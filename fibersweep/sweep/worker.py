@@ -297,10 +297,10 @@ def init_worker(spec: WorkerSpec, ignore_sigint: bool = True) -> None:
     field, fiber = _setting(first)
     t1 = time.perf_counter()
     if spec.warm:
-        warmed: set[str] = set()
-        for sid, f in fibers.items():  # one warm-up per fiber model (its kernels)
-            if f.model not in warmed:
-                warmed.add(f.model)
+        warmed: set[tuple[str, str]] = set()
+        for sid, f in fibers.items():  # one warm-up per fiber model and integrator (its kernels)
+            if (f.model, f.resolved_integrator) not in warmed:
+                warmed.add((f.model, f.resolved_integrator))
                 _warm(_setting(sid)[0] if f.model != fiber.model else field, f)
     log.info(
         "worker %s ready: field %.2f s, warm-up %.2f s",
@@ -389,7 +389,13 @@ def run_fiber(
     except RUN_ERRORS as exc:  # bad input or a failed computation: a failed run
         log.warning("run %s raised: %s", name, traceback.format_exc(limit=3))
         reason = f"exception {type(exc).__name__}: {exc}"
-        return RunResult(start=start, status="failed", reason=reason, model=fiber.model)
+        return RunResult(
+            start=start,
+            status="failed",
+            reason=reason,
+            model=fiber.model,
+            integrator=fiber.resolved_integrator,
+        )
     except Exception as exc:  # anything else is a bug: stop the caller, say where
         raise RunBug(f"run {name} ({start}):\n{traceback.format_exc()}") from exc
 

@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
+from matplotlib.collections import LineCollection
 
 from fibersweep.flow.settings import FlowSettings
 from fibersweep.plots import array as pa
+from fibersweep.plots.shapes import ShapeNotStored
 from fibersweep.sweep.sort_report import _beads
 
 
@@ -29,11 +32,20 @@ def test_a_bent_fiber_is_drawn_through_its_beads_not_as_a_rod():
         "y0": 0.4, "theta0": 0.0, "traj_beads": bent,
     }  # fmt: skip
     fig = pa.chrono_figure(arr, [run], 2.0, frames=5)
-    lines = [ln for ln in fig.axes[0].get_lines() if len(ln.get_xdata()) == 6]
-    assert len(lines) == 5  # one polyline of 6 beads per frame
-    assert np.allclose(lines[0].get_ydata(), bent[0, :, 1])  # the parabola, not a rod
-    rod = pa.chrono_figure(arr, [{**run, "traj_beads": None}], 2.0, frames=5)
-    assert not [ln for ln in rod.axes[0].get_lines() if len(ln.get_xdata()) == 6]
+    segs = [s for c in fig.axes[0].collections if isinstance(c, LineCollection)
+            for s in c.get_segments()]  # fmt: skip
+    assert len(segs) == 5 and all(len(s) == 6 for s in segs)  # 6 beads at every frame
+    assert np.allclose(segs[0][:, 1], bent[0, :, 1])  # the parabola, not a rod
+    rod = pa.chrono_figure(arr, [{**run, "traj_beads": None}], 2.0, frames=5)  # rigid: 2 ends
+    segs = [s for c in rod.axes[0].collections if isinstance(c, LineCollection)
+            for s in c.get_segments()]  # fmt: skip
+    assert segs and all(len(s) == 2 for s in segs)
+    # a bead-spring run must show its beads: without them nothing is drawn, and why is said
+    with pytest.raises(ShapeNotStored, match="all_beads"):
+        pa.chrono_figure(arr, [{**run, "traj_beads": None, "model": "bead-spring-ros2"}], 2.0)
+    short = {**run, "model": "bead-spring-ros2", "traj_beads": bent[:, :5]}  # a bead missing
+    with pytest.raises(ShapeNotStored, match="5 bead positions for a fiber of 6"):
+        pa.chrono_figure(arr, [short], 2.0, frames=5)
 
 
 def test_settings_are_labelled_with_their_unit_and_ordered_by_value():

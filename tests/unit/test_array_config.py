@@ -39,10 +39,27 @@ def test_an_array_key_differs_from_the_channel_and_with_each_setting():
     assert FiberSettings(array_rows=30).model_dump()["array_rows"] == 30
 
 
+def test_an_array_takes_the_channels_collision_settings_and_keeps_3d(tmp_path):
+    """``collision``, ``magic`` and ``keep_3d`` apply to the unit cell: each enters its key,
+    and a kept 3D cell field is stored and read back with the midplane field."""
+    from fibersweep.flow.cache import get_flow_field
+
+    base = {"dx": 4.0, "tolerance": 1e-4, "array": {"mean_flow": "force"}}
+    a = FlowSettings.model_validate(base)
+    others = [FlowSettings.model_validate({**base, **u})
+              for u in ({"collision": "bgk"}, {"magic": 0.25}, {"keep_3d": True})]  # fmt: skip
+    assert len({cache_key(a), *map(cache_key, others)}) == 4
+    field, info = get_flow_field(others[2], tmp_path)
+    again, hit = get_flow_field(others[2], tmp_path)
+    assert not info.hit and hit.hit and field.u3d.shape == (3, 10, 20, 20)
+    np.testing.assert_array_equal(again.u3d, field.u3d)
+    np.testing.assert_array_equal(field.u3d[:2], field.u3d[:2, ::-1])  # ux, uy even in z
+
+
 @pytest.mark.parametrize(
     ("data", "field"),
     [
-        ({"flow": {"dx": 4.0, "array": {}, "collision": "bgk"}}, "flow.collision"),
+        ({"flow": {"dx": 4.0, "array": {}, "patch": {"dx": 2.0}}}, "flow.patch"),
         ({"flow": {"dx": 4.0, "array": {"period_x": 42.0}}}, "flow.array.period_x"),
         ({"flow": {"dx": 4.0, "array": {"depth": 20.0}}}, "flow.dx"),  # 5 depth nodes
         ({"flow": {"dx": 4.0, "array": {}}, "sweep": {"y0": 0.5, "length": 80.0}}, "sweep.y0"),

@@ -126,6 +126,18 @@ def test_bad_axes_name_the_key_and_line(tmp_path, line, expected):
     assert len(ei.value.problems) == 1
 
 
+def test_an_unknown_swept_key_is_reported_with_the_other_sections_problems(tmp_path):
+    """The whole config resolves swept keys, field by field: a problem elsewhere
+    (flow.dx) does not hide the unknown key, nor the key the other problem."""
+    p = _write(tmp_path, "flow:\n  dx: -1\nsweep:\n  fiber.contct.chi: [1.1, 1.2]\n")
+    with pytest.raises(ConfigError) as ei:
+        load_config(p)
+    problems = ei.value.problems
+    assert len(problems) == 2, problems
+    assert problems[0].startswith("flow.dx (line 2): Input should be greater than 0")
+    assert problems[1].startswith("sweep.fiber.contct.chi (line 4): unknown setting 'contct'")
+
+
 def test_bad_axis_in_an_override_is_named_as_the_override(tmp_path):
     p = _write(tmp_path, "sweep:\n  y0: 0.8\n")
     with pytest.raises(ConfigError, match=r"sweep\.fiber\.contact\.chi \(override .*\): value 0.5"):

@@ -81,3 +81,34 @@ def test_simulate_prints_units_and_says_never_for_a_missing_pass(
     assert "class: Trapping" in trapped.output
     assert "t_pass: never" in trapped.output and "- s" not in trapped.output
     assert "delta: none" in trapped.output
+
+
+def test_a_soft_fiber_wrapping_the_pillar_is_drawn_bent_never_as_a_chord(
+    tmp_path, flow_cache_dir, coarse_field, monkeypatch
+):
+    """10 kPa, draped over the apex: every snapshot is drawn through all its beads, and no
+    drawn bead is inside the pillar (a head-to-tail chord would cut through it)."""
+    import numpy as np
+    from matplotlib.collections import LineCollection
+
+    from fibersweep.plots import chrono
+
+    drawn = []
+    real = chrono.save_figure
+    monkeypatch.setattr(chrono, "save_figure", lambda f, p, **k: drawn.append(f) or real(f, p, **k))
+    cfg = _config(tmp_path, flow_cache_dir, "fiber:\n  model: bead-spring-ros2\n"
+                  "  young_modulus: 1.0e+4\n")  # fmt: skip
+    res = CliRunner().invoke(app, ["simulate", cfg, "--theta0", "0", "--y0", "0.45", "--length",
+                                   "1.2", "--plot", str(tmp_path / "f.png")])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    n = int(res.output.split(" beads)")[0].rsplit("(", 1)[1])
+    end_to_end = float(res.output.split("min end-to-end ")[1].split()[0])
+    assert end_to_end < 0.8  # it bends round the apex
+    (fig,) = drawn
+    segs = [s for c in fig.axes[0].collections if isinstance(c, LineCollection)
+            for s in c.get_segments()]  # fmt: skip
+    assert segs and all(len(s) == n for s in segs)
+    geo = coarse_field.geometry
+    xb, yb = geo.base_center
+    pts = np.concatenate(segs) * geo.pillar_height + [xb, yb]
+    assert np.min(geo.shape.signed_distance(pts[:, 0], pts[:, 1])) > 0.0

@@ -22,14 +22,16 @@ PROBES = (-1e9, -1.0, -0.6, 0.6, 1.0, 1e9)
 # A fiber that meets the pillar apex within the first 0.05 s (x0 close to the pillar).
 CONTACT_START = FiberStart(8.0, 0.351, 0.5)
 STAGE_MODELS = {
-    "background": {"rigid", "bead-spring", "bead-spring-ros2"},
+    "background": {"rigid", "bead-spring"},
     "rigid_mobility": {"rigid"},
     "rigid_contact": {"rigid"},
     "rigid_noise": {"rigid"},
-    # bead-spring-ros2 evaluates f(q) with the bead-spring model's bead_velocity
-    "bead_forces": {"bead-spring", "bead-spring-ros2"},
-    "bead_mobility": {"bead-spring", "bead-spring-ros2"},
+    # every bead-spring integrator evaluates f(q) with the model's bead_velocity
+    "bead_forces": {"bead-spring"},
+    "bead_mobility": {"bead-spring"},
 }
+# every (model, integrator) pair of the registry
+PAIRS = [(m, i) for m, model in MODELS.items() for i in model.integrators]
 
 
 @pytest.mark.parametrize("name", sorted(EFFECTS))
@@ -77,12 +79,12 @@ def test_model_registry_is_the_settings_choice():
     assert set(typing.get_args(literal)) == set(MODELS)
 
 
-@pytest.mark.parametrize("model", sorted(MODELS))
+@pytest.mark.parametrize(("model", "integrator"), PAIRS)
 @pytest.mark.parametrize("name", sorted(EFFECTS))
-def test_effect_at_zero_is_bit_identical_to_none(coarse_field, model, name):
+def test_effect_at_zero_is_bit_identical_to_none(coarse_field, model, integrator, name):
     """A fiber meeting the pillar (0.05 s from x0 = 1150 µm): the trajectory with the effect
-    at 0 equals the one without it, bit for bit."""
-    base = FiberSettings(model=model, x0=1150.0)
+    at 0 equals the one without it, bit for bit, with every integrator."""
+    base = FiberSettings(model=model, integrator=integrator, x0=1150.0)
     runs = [
         simulate_for(coarse_field, st, CONTACT_START, 0.05, rng_seed=1)
         for st in (base, base.model_copy(update={"effects": {name: 0.0}}))

@@ -150,17 +150,19 @@ def test_setting_on_by_default_off_by_name_and_hidden_at_default():
     false, meaningless (gap 0) for the rigid model; the dump (and so run ids, manifests)
     leaves it out at its default and writes it when false."""
     kw = dict(mu=0.34, u_center=600.0, x_stop=1e3, y_lo=0.0, y_hi=1e3, random=False)
-    for model in ("bead-spring", "bead-spring-ros2"):
-        p = make_params(FiberSettings(model=model), **kw)
+    for integrator in ("bdf2", "ros2", "ros34pw2"):
+        st = FiberSettings(model="bead-spring", integrator=integrator)
+        p = make_params(st, **kw)
         assert p.excl_gap == GAP
         assert p.excl_eq == 2 * A and p.excl_cut == pytest.approx(CHI * 2 * A, rel=1e-15)
         assert p.excl_fref == pytest.approx(6 * math.pi * 0.34 * A * 600.0, rel=1e-15)
-        assert make_params(FiberSettings(model=model, self_exclusion=False), **kw).excl_gap == 0
+        off = st.model_copy(update={"self_exclusion": False})
+        assert make_params(off, **kw).excl_gap == 0
     assert make_params(FiberSettings(), **kw).excl_gap == 0
-    on = FiberSettings(model="bead-spring-ros2")
+    on = FiberSettings(model="bead-spring", integrator="ros2")
     assert "self_exclusion" not in on.model_dump()
     assert "self_exclusion" not in fiber_result_settings(on)
-    off = FiberSettings(model="bead-spring-ros2", self_exclusion=False)
+    off = FiberSettings(model="bead-spring", integrator="ros2", self_exclusion=False)
     assert off.model_dump()["self_exclusion"] is False
     assert FiberSettings.model_validate(off.model_dump()) == off
     assert FiberSettings.model_validate(on.model_dump()) == on

@@ -194,7 +194,7 @@ def test_transformed_form_matches_the_hairer_wanner_form():
 
 
 def test_fiber_kernel_agrees_with_ros2_in_free_flow(coarse_field):
-    """The fiber kernel's ROS34PW2 path (``fiber.step.rosenbrock: ros34pw2``) against
+    """The fiber kernel's ROS34PW2 path (``fiber.integrator: ros34pw2``) against
     ROS2 at a tight tolerance (1e-6 µm, bead error 4e-7 µm against Δt = 2.5e-5 s BDF2
     at t = 0.3 s): E = 1 MPa, L = 0.5 l_obs, free flow to t = 0.2 s (68 ROS34PW2 steps
     against 399). Measured 1.6e-5 µm; tolerance 1e-4 µm on every bead (ROS34PW2's
@@ -208,9 +208,7 @@ def test_fiber_kernel_agrees_with_ros2_in_free_flow(coarse_field):
     out = {}
     for method, tol in (("ros2", 1e-6), ("ros34pw2", 1e-4)):
         st = FiberSettings(
-            model="bead-spring-ros2",
-            young_modulus=1e6,
-            step={"rosenbrock": method, "tolerance": tol},
+            model="bead-spring", integrator=method, young_modulus=1e6, step={"tolerance": tol}
         )
         traj, _ = simulate_for(coarse_field, st, start, 0.2)
         out[method] = traj.beads[-1]
@@ -234,13 +232,15 @@ def test_reused_w_and_pi_controller_keep_the_solution(coarse_field, method, reus
 
     start = FiberStart(0.0, 0.45, 0.5)
 
-    def beads(**step):
-        st = FiberSettings(model="bead-spring-ros2", young_modulus=1e6, step=step)
+    def beads(integrator, **step):
+        st = FiberSettings(
+            model="bead-spring", integrator=integrator, young_modulus=1e6, step=step
+        )
         traj, _ = simulate_for(coarse_field, st, start, 0.2)
         return traj.beads[-1]
 
-    ref = beads(rosenbrock="ros2", tolerance=1e-6)
-    got = beads(rosenbrock=method, tolerance=1e-4, jacobian_reuse=reuse, controller=controller)
+    ref = beads("ros2", tolerance=1e-6)
+    got = beads(method, tolerance=1e-4, jacobian_reuse=reuse, controller=controller)
     assert np.max(np.hypot(*(got - ref).T)) < 1e-4
 
 

@@ -10,12 +10,14 @@ from fibersweep.flow.lattice import (
     MIRROR_Z,
     OPP,
     E,
+    Grid,
     Q,
     W,
     aa_tables,
     boundary_links,
     make_grid,
     pull_sources,
+    table_cells,
 )
 from fibersweep.flow.lbm import solve_lattice
 from fibersweep.flow.prolong import prolong
@@ -141,22 +143,58 @@ def test_midplane_weights_are_the_ib_kernel_at_half_depth():
         assert phi(0.5) == pytest.approx(0.4268, abs=1e-4)
 
 
+def _box(kind: str, symmetry: bool) -> Grid:
+    """The channel SMALL, or a box periodic in y whose x faces are shifted by 3 cells."""
+    if kind == "channel":
+        return make_grid(SMALL, 4.0, symmetry, pillar=False)
+    solid = np.zeros((12, 10), dtype=bool)
+    return Grid(12, 10, 4 if symmetry else 8, 8, symmetry, 4.0, solid, periodic_y=True, shift=3)
+
+
+@pytest.mark.parametrize("kind", ["channel", "shifted cell"])
 @pytest.mark.parametrize("symmetry", [True, False])
-def test_aa_gather_and_scatter_are_permutations_of_all_slots(symmetry):
+def test_aa_gather_and_scatter_are_permutations_of_all_slots(symmetry, kind):
     # In-place streaming is only race-free and mass-conserving if every (cell, slot)
-    # is read exactly once by the gather and written exactly once by the scatter.
-    grid = make_grid(SMALL, 4.0, symmetry, pillar=False)
+    # is read exactly once by the gather and written exactly once by the scatter;
+    # in a unit cell also across its shifted periodic faces.
+    grid = _box(kind, symmetry)
     gather, scatter = aa_tables(grid)
     i = np.arange(grid.nx)
     for table in (gather, scatter):
         seen = []
         for r in range(grid.nz * grid.ny):
             for q in range(Q):
-                slot, z, y, xo = table[r, q]
-                x = (xo - 1 + i) % grid.nx
-                seen.append(((slot * (grid.nz + 2) + z) * (grid.ny + 2) + y) * grid.nx + x)
+                (slot, z, y, x), _, _ = table_cells(grid, table, np.full(grid.nx, r), q, i)
+                seen.append(((slot * (grid.nz + 2) + z) * (grid.ny + 2) + y) * grid.nx + x - 1)
         seen = np.concatenate(seen)
         assert seen.size == Q * grid.cells and np.unique(seen).size == seen.size
+
+
+def test_the_scatter_of_a_shifted_cell_reaches_the_node_its_gather_reads():
+    # Node x gathers population opp(q) from the slot q of x + e_q that it also pushes
+    # f*_q into: the AA pattern's race-freedom, across the shifted faces too.
+    grid = _box("shifted cell", True)
+    gather, scatter = aa_tables(grid)
+    i = np.arange(grid.nx)
+    for r in range(grid.nz * grid.ny):
+        rows = np.full(grid.nx, r)
+        for q in range(Q):
+            pushed, _, _ = table_cells(grid, scatter, rows, q, i)
+            read, _, _ = table_cells(grid, gather, rows, OPP[q], i)
+            for a, b in zip(pushed, read, strict=True):
+                np.testing.assert_array_equal(a, b)
+
+
+def test_grid_wrap_moves_rows_across_the_shifted_x_faces():
+    grid = _box("shifted cell", True)
+    i, j, inside = grid.wrap(np.array([-1, 12, 25, 3]), np.array([0, 0, 9, -1]))
+    np.testing.assert_array_equal(i, [11, 0, 1, 3])
+    np.testing.assert_array_equal(j, [3, 7, (9 - 6) % 10, 9])  # u(x + nx, y + s) = u(x, y)
+    assert inside is True
+    channel = _box("channel", True)
+    assert list(channel.wrap(np.array([-1, 3]), np.array([0, 10]))[2]) == [True, False]
+    with pytest.raises(ValueError, match="periodic in y"):
+        Grid(4, 4, 2, 4, True, 1.0, np.zeros((4, 4), bool), shift=1)
 
 
 @pytest.mark.parametrize("symmetry", [True, False])

@@ -188,3 +188,32 @@ def test_page_data_survives_awkward_values():
     row = dict(zip(data["columns"], data["rows"][0], strict=True))
     assert row["delta"] is None and row["class"] is None and row["reason"] == "</script><b>x"
     assert data["tracks"] == {} and len(data["outlines"]["s"]) == 3  # the triangle
+
+
+def test_a_flexible_fiber_is_drawn_through_its_beads_or_not_at_all():
+    """Never a head-to-tail chord for a bead-spring run: its beads, or a note saying how."""
+    import pandas as pd
+
+    from fibersweep.plots.explore import explorer_data
+    from fibersweep.units import Geometry
+
+    geo = Geometry()
+    xb, yb = geo.base_center
+    n, m = 6, 12
+    t = np.linspace(0.0, 1.0, m)
+    xs = xb - 60.0 + 10.0 * np.arange(m)
+    s = np.linspace(-10, 10, n)
+    beads = [np.column_stack([x + s, yb + 50 + 0.1 * s**2]).ravel().tolist() for x in xs]
+    samples = pd.DataFrame({"id": "r", "sample": np.arange(m), "t": t, "x": xs, "y": yb + 55.0,
+                            "head_x": xs + 10, "head_y": yb + 60.0, "tail_x": xs - 10,
+                            "tail_y": yb + 60.0, "beads": beads})  # fmt: skip
+    runs = pd.DataFrame({"id": ["r"], "theta0": [0.0], "y0": [0.5], "length": [1.0],
+                         "class": ["Above"], "status": ["ok"], "settings": ["s"],
+                         "model": ["bead-spring-ros2"], "n_beads": [n]})  # fmt: skip
+    tr = explorer_data(runs, samples, {"s": geo})["tracks"]["r"]
+    assert tr["fibers"] and all(len(xs_) == n for xs_, _ in tr["fibers"])
+    bare = explorer_data(runs, samples.drop(columns="beads"), {"s": geo})["tracks"]["r"]
+    assert bare["fibers"] is None and "all_beads" in bare["note"]
+    rigid = runs.assign(model="rigid")
+    chords = explorer_data(rigid, samples.drop(columns="beads"), {"s": geo})["tracks"]["r"]
+    assert all(len(xs_) == 2 for xs_, _ in chords["fibers"])

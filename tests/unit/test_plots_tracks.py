@@ -98,3 +98,30 @@ def test_mp4_needs_ffmpeg(folder, tmp_path):
         assert r.exit_code == 0 and out.stat().st_size > 0, r.output
     else:
         assert r.exit_code == 2 and "needs the ffmpeg program" in r.output
+
+
+def test_animation_of_a_flexible_fiber_draws_every_bead_or_refuses(tmp_path):
+    """A bead-spring run animates through its stored beads; without them it is refused with
+    the way to keep them, never drawn as the chord between its ends."""
+    import numpy as np
+
+    from fibersweep.plots.shapes import ShapeNotStored
+    from fibersweep.plots.tracks import _shapes, animate_run
+    from fibersweep.units import Geometry
+
+    geo = Geometry()
+    xb, yb = geo.base_center
+    n, m = 6, 10
+    xs = xb - 60.0 + 12.0 * np.arange(m)
+    s = np.linspace(-10, 10, n)
+    beads = [np.column_stack([x + s, yb + 50 + 0.1 * s**2]).ravel().tolist() for x in xs]
+    samples = pd.DataFrame({"id": "r", "sample": np.arange(m), "t": np.linspace(0, 1, m),
+                            "x": xs, "y": yb + 55.0, "head_x": xs + 10, "head_y": yb + 60.0,
+                            "tail_x": xs - 10, "tail_y": yb + 60.0, "beads": beads})  # fmt: skip
+    run = pd.Series({"id": "r", "theta0": 0.0, "y0": 0.5, "length": 1.0, "class": "Above",
+                     "status": "ok", "model": "bead-spring-ros2", "n_beads": n})  # fmt: skip
+    shapes = _shapes(run, samples, geo, np.arange(m))
+    assert all(len(p) == n for p in shapes)
+    assert animate_run(run, samples, geo, tmp_path / "f.gif", frames=4).stat().st_size > 0
+    with pytest.raises(ShapeNotStored, match="all_beads"):
+        animate_run(run, samples.drop(columns="beads"), geo, tmp_path / "g.gif", frames=4)

@@ -109,3 +109,31 @@ def test_a_jupyter_kernel_gets_tqdm_auto(monkeypatch):
         assert isinstance(bar, auto_tqdm) and not isinstance(bar, LineTqdm)
     finally:
         bar.close()
+
+
+def test_rate_and_estimate_start_after_the_workers_start_up():
+    """A first run slowed by compiling the kernels (60 s) does not make the estimate."""
+    from fibersweep.progressbar import WARMING_FORMAT, WarmingBar
+
+    out = io.StringIO()
+    clock = _Clock()
+    bar = WarmingBar(100, warm=2, note="workers starting", unit="run", file=out, smoothing=0.1)
+    inner = bar._bar
+    inner._time = clock
+    inner.start_t = inner.last_print_t = inner._last_line_t = clock()
+    assert inner.bar_format == WARMING_FORMAT and "workers starting" in out.getvalue()
+    clock.t += 60.0  # both workers compile, then finish their first run
+    bar.update(1)
+    clock.t += 0.5
+    bar.update(1)
+    assert "<" not in out.getvalue() and "run/s" not in out.getvalue()  # no estimate yet
+    for _ in range(40):  # then one run every 0.5 s
+        clock.t += 0.5
+        bar.update(1)
+    bar.refresh()
+    line = out.getvalue().splitlines()[-1]
+    assert inner.bar_format is None
+    rate = float(line.split("run/s")[0].split()[-1].rstrip(","))
+    assert rate == pytest.approx(2.0, rel=0.05), line  # the rate of the runs, not 42/80 s
+    left = line.split("<")[1].split(",")[0]  # 58 runs at 2/s: 29 s
+    assert left == "00:29", line

@@ -10,12 +10,8 @@ from fibersweep.config import parse_config
 from fibersweep.errors import InputError
 from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.sweep.manifest import write_manifest
-from fibersweep.sweep.reclassify import (
-    class_counts,
-    reclassify,
-    thresholds_for,
-    trajectory_from_frame,
-)
+from fibersweep.sweep.reclassify import class_counts, reclassify, thresholds_for
+from fibersweep.sweep.relabel import trajectory_from_frame
 from fibersweep.sweep.store import PartWriter
 
 

@@ -30,9 +30,8 @@ def prepare_run(fiber: FiberSettings, field, length: float, x_end: float | None 
 @pytest.fixture(scope="module")
 def small():
     """Triangles 40 µm high, 80 µm periods, ε = 0.1, dx = 4 µm."""
-    arr = FlowSettings.model_validate({"dx": 4.0, "array": {}}).array.to_array()
-    field = field_of(arr, solve_cell(arr, 4.0), 600.0, "interpolated")
-    return FiberSettings(), field
+    flow = FlowSettings.model_validate({"dx": 4.0, "array": {}})
+    return FiberSettings(), field_of(flow, solve_cell(flow))
 
 
 def test_velocity_is_the_same_at_every_periodic_image(small):
@@ -92,11 +91,12 @@ def test_one_pillar_of_a_sparse_array_as_the_channel_integrator():
     identical to the last bit while no implicit stopped step is taken.
     Tolerance: 1e-6 µm in y, 1e-6° in angle at the end.
     """
-    arr = FlowSettings.model_validate({
+    flow = FlowSettings.model_validate({
         "array": {"pillar_size": 75.0, "period_x": 240.0, "period_y": 240.0, "shift": 0.0},
         "dx": 4.0,
-    }).array.to_array()  # fmt: skip
-    cf = field_of(arr, solve_cell(arr, 4.0), 600.0, "interpolated")
+    })  # fmt: skip
+    arr = flow.array.to_array()
+    cf = field_of(flow, solve_cell(flow))
     geo = arr.cell_geometry
     X, Y = np.meshgrid(*(np.arange(n) * 4.0 + 2.0 for n in cf.ux.shape), indexing="ij")
     ff = FlowField(cf.ux, cf.uy, 4.0, geo, Fluid(), geo.inside_pillar(X, Y))
@@ -130,12 +130,13 @@ def test_one_bead_fiber_is_a_steric_sphere():
     1/ε = 10 lanes before it reaches the pillar's first streamline). (The
     empirical DLD law 1.4 G ε^0.48 = 18.5 µm is not met: docs/arrays.md.)
     """
-    arr = FlowSettings.model_validate(
+    flow = FlowSettings.model_validate(
         {"array": {"pillar_shape": "circle", "shift": 0.1}, "dx": 2.0}
-    ).array.to_array()
-    sol = solve_cell(arr, 2.0)
+    )
+    arr = flow.array.to_array()
+    sol = solve_cell(flow)
     beta, _ = first_streamline_width(arr, sol.u, 2.0)
-    field = field_of(arr, sol, 600.0, "interpolated")
+    field = field_of(flow, sol)
     d_c = 2.0 * (beta / 1.1 - 0.6)
     for scale, zigzag in ((0.8, True), (1.2, False)):
         a = 0.5 * scale * d_c
@@ -200,7 +201,7 @@ def test_stiff_bead_spring_fiber_follows_the_rigid_one_through_the_array(small, 
     cfg, field = small
     start = FiberStart(0.0, y0, 60.0)
     rigid = simulate(field, cfg.model_copy(update={"array_rows": 5}), start)
-    stiff = cfg.model_copy(update={"model": "bead-spring-ros2", "array_rows": 5})
+    stiff = cfg.model_copy(update={"model": "bead-spring", "integrator": "ros2", "array_rows": 5})
     flex = simulate(field, stiff, start)
     assert rigid.status == flex.status == "ok", (rigid, flex)
     assert flex.mode == rigid.mode and flex.rows == rigid.rows == 5
@@ -216,7 +217,8 @@ def test_softer_fibers_bend_more_around_the_array_pillars(small):
     out = []
     for e in (26e6, 1e6, 1e5):
         fiber = cfg.model_copy(
-            update={"model": "bead-spring-ros2", "young_modulus": e, "array_rows": 5}
+            update={"model": "bead-spring", "integrator": "ros2", "young_modulus": e,
+                    "array_rows": 5}  # fmt: skip
         )
         r = simulate(field, fiber, FiberStart(0.0, 0.6, 60.0))
         assert r.status == "ok" and r.contacts > 0, r

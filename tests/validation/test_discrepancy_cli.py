@@ -98,15 +98,17 @@ def test_effect_options_one_convention(tmp_path, config):
     # discrepancy fits the values: a value given to --effect is a named input error
     r = runner.invoke(app, ["discrepancy", str(measured), str(config), "--effect", "friction=0.3"])
     assert r.exit_code == 2 and "give the name only" in r.output
-    # the old comma list still works, with a deprecation message
+    # the removed comma list is an unknown option; the repeatable --effect runs
+    r = runner.invoke(app, ["discrepancy", str(measured), str(config), "--effects", "friction"])
+    assert r.exit_code == 2 and "--effects" in r.output
     out = tmp_path / "r"
     r = runner.invoke(
         app,
         ["discrepancy", str(measured), str(config), "-o", str(out), "--copies", "2",
-         "--no-power", "--no-next", "--pairs", "0", "--effects", "friction,inlet_speed"],
+         "--no-power", "--no-next", "--pairs", "0", "--effect", "friction",
+         "--effect", "inlet_speed"],
     )  # fmt: skip
     assert r.exit_code == 0, r.output
-    assert "deprecated" in r.output and "--effect a --effect b" in r.output
 
 
 def test_power_command_writes_limits(tmp_path, config):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from fibersweep.fiber.beadspring import DEFAULT_DT
+from fibersweep.fiber.bundles import DEFAULT_DT
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
 from fibersweep.fiber.settings import FiberSettings

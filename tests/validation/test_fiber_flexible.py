@@ -1,8 +1,8 @@
 """Validation of the adaptive bead-spring integrators ROS2 and ROS34PW2 (docs/flexible.md).
 
-Every test runs with both Rosenbrock-W methods (``fiber.step.rosenbrock``), same
-tolerances. The fiber is integrated by :func:`integrate_implicit` in a quiescent fluid (the run's
-flow replaced by zeros, the fiber far from the pillar) or in a uniform shear,
+Every test runs with both Rosenbrock-W methods (``fiber.integrator``), same
+tolerances. The fiber is integrated by :func:`integrate_rosenbrock` in a quiescent
+fluid (the run's flow replaced by zeros, the fiber far from the pillar) or in a uniform shear,
 and compared with analytic results: Euler-Bernoulli beam deflection, the
 relaxation rate of the slowest bending mode, the elasto-viscous buckling
 threshold in shear; and with the rigid model and the fixed-step bead-spring
@@ -20,21 +20,21 @@ from fibersweep.fiber import record as R
 from fibersweep.fiber.beadspring import bead_velocity, force_jacobian
 from fibersweep.fiber.bundles import FlowArrays, build_kernel
 from fibersweep.fiber.effects import registry
-from fibersweep.fiber.implicit_beadspring import integrate_implicit
 from fibersweep.fiber.mobility import fiber_offsets
 from fibersweep.fiber.result import FiberStart
+from fibersweep.fiber.rosenbrock import integrate_rosenbrock
 from fibersweep.fiber.run import simulate
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.fiber.setup import prepare
 
 A = 2.0  # bead radius [µm]
-METHODS = ("ros2", "ros34pw2")  # fiber.step.rosenbrock
+METHODS = ("ros2", "ros34pw2")  # fiber.integrator
 
 
 def _kernel(field, E, length, t_stop, flow=None, tol=1e-4, method="ros2"):
     """Kernel of a run far from the pillar in mode 1 (stop at t_stop), flow replaced."""
-    step = {"tolerance": tol, "rosenbrock": method}
-    st = FiberSettings(model="bead-spring-ros2", young_modulus=E, step=step)
+    step = {"tolerance": tol}
+    st = FiberSettings(model="bead-spring", integrator=method, young_modulus=E, step=step)
     setup = prepare(field, st, FiberStart(0.0, 2.0, length), np.random.default_rng(0))
     k = build_kernel(setup, mode=1, t_stop=t_stop)
     if flow is None:
@@ -55,7 +55,7 @@ def _integrate(k, q0, fext=None, h0=1e-6):
     while True:
         rec = np.empty((20_000, R.NCOLS))
         brec = np.empty((20_000, n, 2))
-        rows, code = integrate_implicit(q, state, k, rec, brec, *scratch, fext)
+        rows, code = integrate_rosenbrock(q, state, k, rec, brec, *scratch, fext)
         recs.append(rec[:rows])
         brecs.append(brec[:rows])
         if code != R.CHUNK_FULL:
@@ -166,7 +166,7 @@ def test_stiff_limit_agrees_with_rigid(coarse_field, start, method):
     model's class, and δ within 0.01 (the rigid/bead-spring agreement the project
     requires of the fixed-step model, docs/validation.md)."""
     r = simulate(coarse_field, FiberSettings(x0=1100.0), start)
-    st = FiberSettings(model="bead-spring-ros2", x0=1100.0, step={"rosenbrock": method})
+    st = FiberSettings(model="bead-spring", integrator=method, x0=1100.0)
     b = simulate(coarse_field, st, start)
     assert b.status == "ok" and r.status == "ok"
     assert b.cls == r.cls
@@ -184,9 +184,7 @@ def test_ros2_matches_fixed_step_bead_spring(coarse_field, E, method):
     start = FiberStart(8.0, 0.351, 0.75)
     fixed = FiberSettings(model="bead-spring", young_modulus=E, x0=1100.0)
     a = simulate(coarse_field, fixed, start)
-    st = FiberSettings(
-        model="bead-spring-ros2", young_modulus=E, x0=1100.0, step={"rosenbrock": method}
-    )
+    st = FiberSettings(model="bead-spring", integrator=method, young_modulus=E, x0=1100.0)
     b = simulate(coarse_field, st, start)
     assert a.cls == b.cls
     assert abs(a.delta - b.delta) < 2e-3
@@ -211,14 +209,13 @@ def test_every_effect_runs_or_is_refused(coarse_field, name, cls, method):
 
     value = 0.2  # inside every effect's valid range
     start = FiberStart(8.0, 0.351, 0.75)
-    step = {"rosenbrock": method}
-    st = FiberSettings(model="bead-spring-ros2", x0=1100.0, effects={name: value}, step=step)
-    if "bead-spring-ros2" not in cls.models:
+    st = FiberSettings(model="bead-spring", integrator=method, x0=1100.0, effects={name: value})
+    if "bead-spring" not in cls.models:
         with pytest.raises(InputError, match=name):
             simulate(coarse_field, st, start, rng_seed=1)
         return
     b = simulate(coarse_field, st, start, rng_seed=1)
-    a = simulate(coarse_field, st.model_copy(update={"model": "bead-spring"}), start, rng_seed=1)
+    a = simulate(coarse_field, st.model_copy(update={"integrator": "bdf2"}), start, rng_seed=1)
     assert b.status == "ok" and a.status == "ok"
     assert a.cls == b.cls
     assert abs(a.delta - b.delta) < 5e-3

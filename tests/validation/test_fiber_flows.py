@@ -21,6 +21,8 @@ Y_MID = 200.0
 Y0 = (Y_MID - 20.0) / 20.0  # y0/h_obs of the channel centreline
 L_OVER = 40.0 / GEO.pillar_base_length  # a 40 µm fiber: 10 beads
 SHEAR = 100.0  # 1/s
+# every (model, integrator) pair of the registry
+PAIRS = [(m, i) for m, model in MODELS.items() for i in model.integrators]
 
 
 @pytest.fixture(scope="module")
@@ -28,10 +30,10 @@ def shear_field():
     return FlowField.from_function(lambda X, Y: (SHEAR * (Y - Y_MID), 0.0 * X), GEO, 2.0)
 
 
-@pytest.mark.parametrize("model", sorted(MODELS))
-def test_uniform_flow_translates_without_rotation(model):
+@pytest.mark.parametrize(("model", "integrator"), PAIRS)
+def test_uniform_flow_translates_without_rotation(model, integrator):
     field = FlowField.from_function(lambda X, Y: (600.0 + 0 * X, 250.0 + 0 * X), GEO, 4.0)
-    st = FiberSettings(model=model, x0=100.0)
+    st = FiberSettings(model=model, integrator=integrator, x0=100.0)
     tr, reason = simulate_for(field, st, FiberStart(20.0, Y0 - 3.0, L_OVER), 0.2)
     assert reason == ""
     t = tr.t - tr.t[0]
@@ -57,16 +59,18 @@ def test_bead_chain_is_an_infinitely_thin_jeffery_rod():
         assert om == pytest.approx(-0.5 * SHEAR * (1 - math.cos(2 * th)), abs=1e-9 * SHEAR)
 
 
-@pytest.mark.parametrize("model", sorted(MODELS))
-def test_tumbling_in_shear_follows_jeffery(shear_field, model):
+@pytest.mark.parametrize(("model", "integrator"), PAIRS)
+def test_tumbling_in_shear_follows_jeffery(shear_field, model, integrator):
     """Flip from θ = 170° to 10°: Jeffery with B = 1 gives cot θ = cot θ0 + γ̇ t, so the flip
     takes (cot 10° − cot 170°)/γ̇ = 0.1134 s. Tolerance 1 % (the cosine kernel's first moment
     is not exactly zero: linear fields are interpolated with a ~0.02 Δx position error).
 
-    Each model is asked for an accurate integration: the explicit models by a 0.1 µm step
-    bound, the adaptive ROS2 model by a 1e-3 µm local error (its default 1e-2 µm, chosen for
-    sweeps, flips 5 % late; docs/flexible.md, "Accuracy in free shear")."""
-    st = FiberSettings(model=model, x0=200.0, step={"max_displacement": 0.1, "tolerance": 1e-3})
+    Each integrator is asked for an accurate integration: the rigid midpoint by a 0.1 µm
+    step bound, BDF2 by its fixed step, the adaptive Rosenbrock-W ones by a 1e-3 µm local
+    error (ROS2 at its default 1e-2 µm, chosen for sweeps, flips 5 % late; docs/flexible.md,
+    "Accuracy in free shear")."""
+    step = {"max_displacement": 0.1, "tolerance": 1e-3}
+    st = FiberSettings(model=model, integrator=integrator, x0=200.0, step=step)
     tr, reason = simulate_for(shear_field, st, FiberStart(170.0, Y0, L_OVER), 0.14)
     assert reason == ""
     # theta is the directed tail→head angle; the head leads, so it starts at 170° + 180°

@@ -214,14 +214,44 @@ def test_rigid_and_bead_spring_agree_over_the_sweep_range(coarse_field):
 
 
 def _classes_around_the_separatrix(field) -> None:
-    """SPEC section 5 near the separatrix y_s (measured on the field by streamline tracing):
+    r"""SPEC section 5 near the separatrix y_s (measured on the field by streamline tracing):
     trapping in a narrow band slightly below y_s for positive θ0 (θ0 = 8°, L = 0.75 l_obs,
     y0 = y_s − 0.02), pole-vaulting just above it for negative θ0 (θ0 = −3.7°, L = 0.82,
-    y0 = y_s + 0.005), Below / Above outside the bands. The band edges were measured by
-    scanning y0 in steps of 0.005 h at dx = 2 and 4 µm (issue notes); the points sit
-    inside them with ≥ 0.008 h to spare. The source's classes, so its rule (``head-speed``):
-    under the default ``switch`` the θ0 = 8° start below the band is a vault below the base
-    (docs/fidelity.md, "The source's facts, re-checked with switch")."""
+    y0 = y_s + 0.015), Below / Above outside the bands. The source's classes, so its rule
+    (``head-speed``): under the default ``switch`` the θ0 = 8° start below the band is a
+    vault below the base (docs/fidelity.md, "The source's facts, re-checked with switch").
+
+    Band edges in y0 − y_s (default sub-grid pillar, head-speed rule; y0 scanned in steps
+    of 0.0005 h at θ0 = −3.7°, 0.001 h at 8°):
+
+    ===========================  =======================  =======================
+    start                        dx = 2 µm, y_s = 0.3277  dx = 4 µm, y_s = 0.3219
+    ===========================  =======================  =======================
+    8°, L 0.75: Trapping         −0.034 … −0.003          −0.032 … −0.001
+    −3.7°, L 0.82: Pole-vaulting +0.0055 … +0.024         +0.0025 … +0.025
+    ===========================  =======================  =======================
+
+    Below the trapping band the 8° fiber passes Below, above the bands both pass Above
+    (checked up to +0.06). Between the pole-vaulting band and the trapping band of the
+    −3.7° fiber (from y_s − 0.009) the head-speed class alternates between Pole-vaulting
+    and Above every ≈ 0.005 h: every such fiber swaps head and tail (δ ≈ 0.21), but its
+    head either settles in the pocket between two beads of the rough pillar (1.2 µm
+    apart along the face) at ≈ 2e-4 U_center, or creeps over a bead at 0.010–0.016
+    U_center, just above the rule's 0.01 U_center, depending on where in the bead pitch
+    it lands (the smooth pillar shows no such windows). So every start here lies at
+    least 0.0095 h from the nearest start of another class at either resolution, three
+    times the band edges' shift between dx = 4 and 2 µm; from y_s + 0.010 to + 0.020
+    the head stays below 0.001 U_center. The θ0 = −3.7° scan at dx = 2 µm (y_s is
+    printed by ``fibersweep flow configs/quick.yaml flow.dx=2``; θ0 = 8° likewise with
+    ``'sweep.theta0=[8]' 'sweep.length=[0.75]'``)::
+
+        fibersweep run configs/quick.yaml flow.dx=2 fiber.classify.rule=head-speed \
+            'sweep.theta0=[-3.7]' 'sweep.length=[0.82]' \
+            'sweep.y0={start: 0.3157, stop: 0.3577, step: 0.0005}' run.output=results/band
+        python3 -c "from fibersweep.results import load_results as l; \
+            r = l('results/band', False).runs.sort_values('y0'); \
+            print(r[['y0', 'class']].to_string(index=False))"
+    """
     from fibersweep.flow.streamlines import separatrix_y
 
     ys = separatrix_y(field)
@@ -229,7 +259,7 @@ def _classes_around_the_separatrix(field) -> None:
     assert simulate(field, base, FiberStart(8.0, ys - 0.02, 0.75)).cls == "Trapping"
     assert simulate(field, base, FiberStart(8.0, ys - 0.06, 0.75)).cls == "Below"
     assert simulate(field, base, FiberStart(8.0, ys + 0.03, 0.75)).cls == "Above"
-    assert simulate(field, base, FiberStart(-3.7, ys + 0.005, 0.82)).cls == "Pole-vaulting"
+    assert simulate(field, base, FiberStart(-3.7, ys + 0.015, 0.82)).cls == "Pole-vaulting"
     assert simulate(field, base, FiberStart(-3.7, ys + 0.04, 0.82)).cls == "Above"
 
 

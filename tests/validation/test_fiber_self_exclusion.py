@@ -7,24 +7,22 @@ beads never meet, runs bit for bit the same with the setting on and off.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
 from fibersweep.fiber import record as R
 from fibersweep.fiber.bundles import FlowArrays, build_kernel
 from fibersweep.fiber.exclusion import min_self_distance
-from fibersweep.fiber.models import MODELS
+from fibersweep.fiber.models import get_integrator
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.fiber.setup import prepare
 
 A = 2.0  # bead radius [µm]
-PATHS = {  # (model, step settings): the fixed-step BDF2 and both Rosenbrock-W methods
-    "bdf2": ("bead-spring", {}),
-    "ros2": ("bead-spring-ros2", {"tolerance": 1e-3}),
-    "ros34pw2": ("bead-spring-ros2", {"rosenbrock": "ros34pw2", "tolerance": 1e-5}),
+PATHS = {  # integrator: its step settings; the fixed-step BDF2 and both Rosenbrock-W methods
+    "bdf2": {},
+    "ros2": {"tolerance": 1e-3},
+    "ros34pw2": {"tolerance": 1e-5},
 }
 
 
@@ -53,8 +51,10 @@ def _squeeze(field, yc, speed):
 
 def _squeezed_run(field, path, excl, t_stop=0.15):
     """Bead positions (rows, n, 2) of a 10 kPa U squeezed for t_stop [s] at 3 U_center."""
-    model, step = PATHS[path]
-    st = FiberSettings(model=model, young_modulus=1e4, self_exclusion=excl, step=step)
+    st = FiberSettings(
+        model="bead-spring", integrator=path, young_modulus=1e4, self_exclusion=excl,
+        step=PATHS[path],
+    )  # fmt: skip
     length = 20 * 2 * A / field.geometry.pillar_base_length  # 20 beads, as the U has
     setup = prepare(field, st, FiberStart(0.0, 0.45, length), np.random.default_rng(0))
     k = build_kernel(setup, mode=1, t_stop=t_stop)
@@ -63,9 +63,8 @@ def _squeezed_run(field, path, excl, t_stop=0.15):
     return k, beads0
 
 
-def _run(k, beads0):
-    model = "bead-spring" if math.isfinite(k.params.dt) else "bead-spring-ros2"
-    rec, beads, code = MODELS[model].integrate(k, 0.0, 0.0, 0.0, beads0)
+def _run(k, beads0, path):
+    rec, beads, code = get_integrator("bead-spring", path).integrate(k, 0.0, 0.0, 0.0, beads0)
     assert code == R.TIME_REACHED, R.STOP_REASONS.get(int(code))
     return rec, beads
 
@@ -82,10 +81,10 @@ def test_fiber_driven_into_itself_does_not_pass_through(coarse_field, path):
     (closer than the cutoff)."""
     k, beads0 = _squeezed_run(coarse_field, path, True)
     assert k.body.s.shape[0] == beads0.shape[0]
-    _, beads = _run(k, beads0)
+    _, beads = _run(k, beads0, path)
     d_on = min_self_distance(beads)
     k_off, _ = _squeezed_run(coarse_field, path, False)
-    _, beads_off = _run(k_off, beads0)
+    _, beads_off = _run(k_off, beads0, path)
     d_off = min_self_distance(beads_off)
     assert d_off < A, f"{path}: without self-exclusion the arms stay {d_off:.2f} µm apart"
     assert d_on > 2 * A * (1 - 0.1), f"{path}: smallest non-neighbour distance {d_on:.3f} µm"
@@ -97,13 +96,15 @@ def test_stiff_fiber_is_bit_identical_with_and_without(coarse_field, path):
     """A 26 MPa fiber (L = 0.6 l_obs, apex contact) past the pillar: its distant beads never
     come within the cutoff, so every recorded row and bead position is the same bit for bit
     with ``self_exclusion`` on and off (tolerance: none)."""
-    model, step = PATHS[path]
     out = []
     for excl in (True, False):
-        st = FiberSettings(model=model, self_exclusion=excl, step=step)
+        st = FiberSettings(
+            model="bead-spring", integrator=path, self_exclusion=excl, step=PATHS[path]
+        )
         setup = prepare(coarse_field, st, FiberStart(0.0, 0.45, 0.6), np.random.default_rng(0))
         k = build_kernel(setup)
-        out.append(MODELS[model].integrate(k, setup.x0, setup.y0_abs, setup.th0, None))
+        integrator = get_integrator("bead-spring", path)
+        out.append(integrator.integrate(k, setup.x0, setup.y0_abs, setup.th0, None))
     (r1, b1, c1), (r0, b0, c0) = out
     assert c1 == c0 == R.PASSED
     assert np.any(r1[:, R.CONTACT] > 0)  # it did touch the pillar
@@ -112,9 +113,9 @@ def test_stiff_fiber_is_bit_identical_with_and_without(coarse_field, path):
     assert min_self_distance(b1) > 1.5 * 2 * A
 
 
-@pytest.mark.parametrize("model", ["bead-spring", "bead-spring-ros2"])
-def test_kernel_jacobians_hold_the_pairs(coarse_field, model):
-    """Both models' Jacobians (analytic ``force_jacobian`` of the Rosenbrock-W path, and
+@pytest.mark.parametrize("path", ["bdf2", "ros2"])
+def test_kernel_jacobians_hold_the_pairs(coarse_field, path):
+    """Both Jacobians of the model (analytic ``force_jacobian`` of the Rosenbrock-W path, and
     ``force_jacobian_fd`` of the fixed step) of a U whose arms are pressed together
     (0.95 · 2a apart, far from the pillar) against central differences (step 1e-6 µm) of
     the chain's whole force, springs and pairs: within 1e-6 of max |J| (truncation and
@@ -122,7 +123,7 @@ def test_kernel_jacobians_hold_the_pairs(coarse_field, model):
     J left its band, so its W = M J is taken dense."""
     from fibersweep.fiber.beadspring import bead_velocity, force_jacobian, force_jacobian_fd
 
-    st = FiberSettings(model=model, young_modulus=1e4)
+    st = FiberSettings(model="bead-spring", integrator=path, young_modulus=1e4)
     length = 20 * 2 * A / coarse_field.geometry.pillar_base_length
     setup = prepare(coarse_field, st, FiberStart(0.0, 0.45, length), np.random.default_rng(0))
     k = build_kernel(setup)
@@ -147,7 +148,7 @@ def test_kernel_jacobians_hold_the_pairs(coarse_field, model):
         ref[:, c] = (force(qp) - force(qm)) / (2 * h)
     force(q0)
     assert np.max(w.dist) > pillar.r_cut  # no pillar contact: F is springs and pairs
-    if model == "bead-spring":
+    if path == "bdf2":
         dense = force_jacobian_fd(frame, pillar, p, w, bw)
         assert dense
     else:

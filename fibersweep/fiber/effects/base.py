@@ -74,7 +74,7 @@ class Effect:
     name: ClassVar[str] = ""
     unit: ClassVar[str] = ""
     #: Fiber models the effect works in (its kernel stages exist for them).
-    models: ClassVar[tuple[str, ...]] = ("rigid", "bead-spring", "bead-spring-ros2")
+    models: ClassVar[tuple[str, ...]] = ("rigid", "bead-spring")
     #: True when its kernel stages draw from Numba's random generator (seeded per run).
     random: ClassVar[bool] = False
 

@@ -1,38 +1,39 @@
 """Adaptive linearly implicit (Rosenbrock-W) stepping of the bead-spring fiber (docs/flexible.md).
 
-Same model as :mod:`fibersweep.fiber.beadspring` (stretching + bending springs,
-RPY mobility, pillar contact, the effects' stages), other time stepping. With
-f(q) = u(q) + M(q) F(q) the bead velocities (2n) and W = M J, J = ∂F/∂q the
-banded Jacobian of the elastic and contact forces (the mobility and the flow
-are lagged: their derivatives are left out of W), one step of length h is the
-two-stage Rosenbrock-W method ROS2 (Verwer et al. 1999), γ = 1 + 1/√2:
+The model is :mod:`fibersweep.fiber.beadspring`: f(q) = u(q) + M(q) F(q) the
+bead velocities (2n), and W = M J with J = ∂F/∂q the Jacobian of the elastic,
+self-exclusion and contact forces (the mobility and the flow are lagged: their
+derivatives are left out of W). ``fiber.integrator`` picks the method
+(``Params.rosw``); both are W-methods, whose order holds for any W, so lagging
+the mobility costs no order, and L-stable, so the spring times (~1e-7 s) do not
+bound the step h:
 
-    (I − γ h W) k1 = f(q),
-    (I − γ h W) k2 = f(q + h k1) − 2 k1,
-    q' = q + (3/2) h k1 + (1/2) h k2.
+- ``ros2`` (Verwer et al. 1999), two stages, order 2, γ = 1 + 1/√2:
 
-ROS2 is second order for any W (a W-method), so lagging the mobility costs no
-order, and it is L-stable, so the spring times (~1e-7 s) do not bound h. The
-difference to the embedded first-order solution q + h k1, e = h |k1 + k2| / 2
-(largest over the beads [µm]), controls h: a step is accepted when
-e <= ``Params.tol`` and the next h is h · min(2, max(0.2, 0.9 √(tol / e))).
-The displacement of a bead per step is also kept below ``Params.max_disp``
-and, approaching the pillar, below half the gap to the contact cutoff (so that
-the step does not jump into contact), but not below ``Params.contact_disp``.
+      (I − γ h W) k1 = f(q),
+      (I − γ h W) k2 = f(q + h k1) − 2 k1,
+      q' = q + (3/2) h k1 + (1/2) h k2,
 
-Cost of a step (scripts/profile_flexible.py): two evaluations of f (each
-rebuilds the RPY mobility), the analytic banded Jacobian
+  error estimate e = h |k1 + k2| / 2 (against the first-order q + h k1);
+- ``ros34pw2``, four stages, order 3 (embedded order 2), in the transformed
+  form of :mod:`fibersweep.fiber.rosw`.
+
+Everything else is shared by :func:`integrate_rosenbrock`: the record row and
+stop test, W = M J and one LU factorisation of I − γhW per try
+(:func:`system`, :mod:`fibersweep.fiber.lu`) whose factors serve every stage,
+and the step control. The error e is the largest over the beads [µm]; a step is
+accepted when e <= ``Params.tol`` and the next h is
+h · min(2, max(0.2, 0.9 (tol / e)^(1/p))), p = 2 (ros2) or 3 (ros34pw2). The
+displacement of a bead per step is also kept below ``Params.max_disp`` and,
+approaching the pillar, below half the gap to the contact cutoff (so that the
+step does not jump into contact), but not below ``Params.contact_disp``.
+
+Cost of a ROS2 step (scripts/profile_flexible.py): two evaluations of f (each
+rebuilds the RPY mobility), the analytic Jacobian
 (:func:`~fibersweep.fiber.beadspring.force_jacobian`), W = M J by one BLAS
-product, and one in-place LU factorisation of I − γhW whose factors serve both
-stages (:mod:`fibersweep.fiber.lu`); a rejected step redoes the LU and the
-stage-2 f only. The mobility is lagged in W only: f itself always uses M at its
-own argument.
-
-With ``fiber.step.rosenbrock: ros34pw2`` (``Params.rosw`` = 1) the same loop
-(:func:`integrate_implicit`) takes the four stages of the third-order W-method
-ROS34PW2 instead (:mod:`fibersweep.fiber.rosw`: four f, one LU, four solves) and
-sets the next step with the exponent 1/3. Only the stages differ
-(:func:`_try_ros2`, :func:`_try_ros34pw2`); the ROS2 path is unchanged bit for bit.
+product, and the one LU; a rejected step redoes the LU and the stage
+evaluations only. The mobility is lagged in W only: f itself always uses M at
+its own argument.
 """
 
 from __future__ import annotations
@@ -43,52 +44,46 @@ import numba as nb
 import numpy as np
 
 from fibersweep.fiber import record as R
-from fibersweep.fiber.beadspring import bead_velocity, force_jacobian
+from fibersweep.fiber.beadspring import chain, force_jacobian, velocity_at
 from fibersweep.fiber.bundles import Kernel
 from fibersweep.fiber.lu import lu_factor, lu_solve
-from fibersweep.fiber.mobility import fiber_offsets
-from fibersweep.fiber.rosw import A34, C34, E34, GAMMA3, M34, combine, stage_point, stage_rhs
+from fibersweep.fiber.rosw import (
+    A34,
+    C34,
+    E34,
+    GAMMA2,
+    GAMMA3,
+    M34,
+    ROS34PW2_CODE,
+    combine,
+    stage_point,
+    stage_rhs,
+)
 
 __all__ = [
-    "GAMMA",
-    "ROSW_ROS2",
-    "ROSW_ROS34PW2",
-    "integrate_implicit",
-    "integrate_ros2",
-    "run_bead_spring_ros2",
+    "integrate_rosenbrock",
+    "run_rosenbrock",
     "system",
     "w_matrix",
 ]
 
-GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
-CHUNK = 20_000
 KEEP_H = 1.2
 """With a reused W, a proposed step up to this factor above the factored one keeps it."""
-ROSW_ROS2 = 0
-"""``Params.rosw`` of ROS2 (``fiber.step.rosenbrock: ros2``)."""
-ROSW_ROS34PW2 = 1
-"""``Params.rosw`` of ROS34PW2 (``fiber.step.rosenbrock: ros34pw2``)."""
 
 
 @nb.njit(cache=True)
 def _velocity(frame, flow, pillar, body, p, w, bw, effects, q, fext, has_ext, out):
     """f(q) (+ M fext if ``has_ext``) into ``out`` (2n); returns (any_contact, cx, cy, min_d)."""
-    n = q.shape[0] // 2
-    for i in range(n):
-        w.x[i] = q[2 * i]
-        w.y[i] = q[2 * i + 1]
-    any_c, cx, cy = bead_velocity(frame, flow, pillar, body, p, w, bw, effects)
-    for r in range(2 * n):
+    any_c, cx, cy, min_d = velocity_at(frame, flow, pillar, body, p, w, bw, effects, q)
+    n2 = q.shape[0]
+    for r in range(n2):
         out[r] = bw.f[r]
     if has_ext:
-        for r in range(2 * n):
+        for r in range(n2):
             acc = 0.0
-            for c in range(2 * n):
+            for c in range(n2):
                 acc += bw.mob[r, c] * fext[c]
             out[r] += acc
-    min_d = 1e300
-    for i in range(n):
-        min_d = min(min_d, w.dist[i])
     return any_c, cx, cy, min_d
 
 
@@ -107,8 +102,8 @@ def w_matrix(bw):
 def system(bw, h, piv, gamma):
     """``bw.lhs`` = LU factors of I − γ h W (W in ``bw.jac``, see :func:`w_matrix`).
 
-    ``gamma``: the method's γ (:data:`GAMMA` for ROS2, :data:`~fibersweep.fiber.rosw.GAMMA3`
-    for ROS34PW2). Returns False when the matrix is singular.
+    ``gamma``: the method's γ (:data:`~fibersweep.fiber.rosw.GAMMA2` for ROS2,
+    :data:`~fibersweep.fiber.rosw.GAMMA3` for ROS34PW2). Returns False when the matrix is singular.
     """
     w = bw.jac
     lhs = bw.lhs
@@ -189,15 +184,12 @@ def _try_ros34pw2(k, q, f0, fext, has_ext, h, piv, ok, xs, qn, qnew):
 
 
 @nb.njit(cache=True)
-def integrate_implicit(q, state, k, rec, brec, f0, k1, k2, qn, fext):
+def integrate_rosenbrock(q, state, k, rec, brec, f0, k1, k2, qn, fext):
     """Advance a bead-spring fiber with adaptive Rosenbrock-W steps until a stop or ``rec`` is full.
 
-    The method is ``k.params.rosw``: 0 ROS2 (module docstring), 1 ROS34PW2
-    (:mod:`fibersweep.fiber.rosw`). Both share everything but the stages: the
-    recorded row and stop test, the step bounds, W = M J and its one LU per try,
-    and the step control (accept when e <= tol; next h = h · min(2, max(0.2,
-    0.9 (tol/e)^(1/p))), p = 2 for ROS2 and 3 for ROS34PW2, the embedded
-    order + 1).
+    The method is ``k.params.rosw`` (:data:`fibersweep.fiber.rosw.METHODS`): ROS2 or
+    ROS34PW2 (module docstring); only their stages differ (:func:`_try_ros2`,
+    :func:`_try_ros34pw2`).
 
     Parameters
     ----------
@@ -230,8 +222,8 @@ def integrate_implicit(q, state, k, rec, brec, f0, k1, k2, qn, fext):
     h = state[3]
     rejected = state[4]
     piv = np.empty(n2, dtype=np.int64)
-    third = p.rosw == ROSW_ROS34PW2
-    gamma = GAMMA3 if third else GAMMA
+    third = p.rosw == ROS34PW2_CODE
+    gamma = GAMMA3 if third else GAMMA2
     xs = np.empty((4 if third else 0, n2))
     qnew = np.empty(n2)
     r_cut = pillar.r_cut
@@ -253,51 +245,21 @@ def integrate_implicit(q, state, k, rec, brec, f0, k1, k2, qn, fext):
         any_c, cx, cy, min_d = _velocity(
             frame, flow, pillar, body, p, w, bw, effects, q, fext, has_ext, f0
         )
-        hx = q[2 * n - 2]
-        hy = q[2 * n - 1]
-        tx = q[0]
-        ty = q[1]
-        ang = math.atan2(hy - ty, hx - tx)
-        theta += (ang - theta + math.pi) % (2.0 * math.pi) - math.pi
-        xc = 0.0
-        yc = 0.0
-        vxc = 0.0
-        vyc = 0.0
-        y_min = 1e300
-        y_max = -1e300
-        finite = True
-        vmax = 0.0
-        for i in range(n):
-            xc += q[2 * i] / n
-            yc += q[2 * i + 1] / n
-            vxc += f0[2 * i] / n
-            vyc += f0[2 * i + 1] / n
-            y_min = min(y_min, q[2 * i + 1])
-            y_max = max(y_max, q[2 * i + 1])
-            vmax = max(vmax, math.hypot(f0[2 * i], f0[2 * i + 1]))
-            if not (math.isfinite(q[2 * i]) and math.isfinite(q[2 * i + 1])):
-                finite = False
-            if not (math.isfinite(f0[2 * i]) and math.isfinite(f0[2 * i + 1])):
-                finite = False
-        com_speed = math.hypot(vxc, vyc)
-        ex = hx - tx
-        ey = hy - ty
-        om = (ex * (f0[2 * n - 1] - f0[1]) - ey * (f0[2 * n - 2] - f0[0])) / (ex * ex + ey * ey)
-        R.write_row(
-            rec[rows], t, xc, yc, theta, vxc, vyc, om, 1.0 if any_c else 0.0, cx, cy, min_d,
-            math.hypot(f0[2 * n - 2], f0[2 * n - 1]), com_speed, hx, hy, tx, ty,
-        )  # fmt: skip
-        for i in range(n):
-            brec[rows, i, 0] = q[2 * i]
-            brec[rows, i, 1] = q[2 * i + 1]
+        pose = R.bead_pose(q, f0, theta)
+        theta, _, _, _, _, com_speed, hx, _, tx, _, y_min, y_max, fin_q, fin_v = pose
+        R.write_bead_row(rec[rows], brec[rows], t, q, f0, pose, 1.0 if any_c else 0.0, cx, cy,
+                         min_d)  # fmt: skip
         rows += 1
         code, stopped_since = R.stop_test(
-            p, t, finite, min_d, y_min, y_max, any_c and com_speed < p.trap_speed,
+            p, t, fin_q and fin_v, min_d, y_min, y_max, any_c and com_speed < p.trap_speed,
             stopped_since, min(hx, tx), 0.0,
         )  # fmt: skip
         if code != R.CHUNK_FULL:
             break
         # Step bounds: displacement far from / approaching the pillar, largest step.
+        vmax = 0.0
+        for i in range(n):
+            vmax = max(vmax, math.hypot(f0[2 * i], f0[2 * i + 1]))
         free = min_d - r_cut
         disp = min(p.max_disp, max(p.contact_disp, 0.5 * free))
         h_cap = min(disp / (vmax + 1e-12), p.dt_max)
@@ -372,16 +334,12 @@ def integrate_implicit(q, state, k, rec, brec, f0, k1, k2, qn, fext):
     return rows, code
 
 
-integrate_ros2 = integrate_implicit
-"""Former name of :func:`integrate_implicit` (ROS2 when ``k.params.rosw`` is 0)."""
-
-
-def run_bead_spring_ros2(
+def run_rosenbrock(
     k: Kernel, x0: float, y0: float, th0: float, beads0: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """Integrate a bead-spring run with adaptive Rosenbrock-W steps (:func:`integrate_implicit`).
+    """Integrate a bead-spring run with adaptive Rosenbrock-W steps (:func:`integrate_rosenbrock`).
 
-    ROS2 or ROS34PW2 as ``k.params.rosw`` says (``fiber.step.rosenbrock``).
+    ROS2 or ROS34PW2 as ``k.params.rosw`` says (``fiber.integrator``).
 
     Returns
     -------
@@ -389,19 +347,10 @@ def run_bead_spring_ros2(
         Record rows (record.COLS), bead positions (rows, n, 2) [µm], stop code.
     """
     n = k.body.s.shape[0]
-    if beads0 is None:
-        s = fiber_offsets(n, k.params.a)
-        beads0 = np.column_stack([x0 + s * math.cos(th0), y0 + s * math.sin(th0)])
-    q = np.ascontiguousarray(beads0, dtype=np.float64).reshape(-1).copy()
+    q = chain(n, k.params.a, x0, y0, th0, beads0)
     h0 = min(1e-5, k.params.dt_max)
     state = np.array([0.0, math.nan, th0, h0, 0.0])
     scratch = [np.zeros(2 * n) for _ in range(5)]
-    recs, brecs = [], []
-    while True:
-        rec = np.empty((CHUNK, R.NCOLS))
-        brec = np.empty((CHUNK, n, 2))
-        rows, code = integrate_implicit(q, state, k, rec, brec, *scratch)
-        recs.append(rec[:rows])
-        brecs.append(brec[:rows])
-        if code != R.CHUNK_FULL:
-            return np.concatenate(recs), np.concatenate(brecs), code
+    return R.collect(  # type: ignore[return-value]
+        lambda rec, brec: integrate_rosenbrock(q, state, k, rec, brec, *scratch), n
+    )
