@@ -42,6 +42,27 @@ different systems, and their agreement is a check of the solution
 (tests/validation/test_wall_mobility.py). Goldman, Cox & Brenner's
 coefficients are F*_t^t = −f_tt, T*_t^t = (3/4) f_tr (torque over 8πμa²U),
 F*_r^r = f_tr, T*_r^r = −(3/4) f_rr.
+
+The flow's push normal to the wall (Goren & O'Neill 1971, Chem. Eng. Sci. 26,
+325): a sphere held fixed at h in the axisymmetric flow towards the wall
+u_z = −α z², u_r = α r z (the leading normal flow next to a no-slip wall, whose
+normal velocity grows as the square of the distance), feels the force
+6πμa u_z(h) c_n. In bispherical coordinates the total stream function is the
+ambient ψ∞ = −(α/2) r² z² plus Brenner's general form, which vanishes with its
+normal derivative on the plane; on the sphere it cancels ψ∞ and ∂ψ∞/∂ξ. With
+(cosh ξ − μ)^(−1/2) = √2 Σ e^(−(n+½)ξ) P_n(μ) differentiated twice, ψ∞
+expands as (cosh ξ − μ)^(−3/2) Σ G_n(ξ) C_{n+1}^(−1/2)(μ) with
+
+    G_n = (√2/3) α c⁴ n(n+1) [(n − ½ + coth ξ) e^(−(n−½)ξ) − (n + 3/2 + coth ξ) e^(−(n+3/2)ξ)]
+
+(c = a sinh α_s the focal distance), so the conditions decouple per order n
+into 2×2 systems whose determinant is Brenner's (4/(2n+3)) [sinh²((n+½)α) −
+(n+½)² sinh² α]. The force follows from the coefficients by Stimson &
+Jeffery's sum. The same solver with Brenner's boundary data (a translating
+sphere) returns his λ⊥ (tests/validation/test_wall_mobility.py). Far away
+c_n = (1 + x²/3) λ⊥ + O(x³) = 1 + (9/8) x + (81/64 + 1/3) x² + O(x³) (Faxén's
+a²∇²u/6 and the wall's reflection of the sphere's force); at contact it tends
+to 3.23.
 """
 
 from __future__ import annotations
@@ -51,7 +72,13 @@ import math
 import numpy as np
 from scipy.linalg import solve_banded
 
-__all__ = ["brenner_normal", "parallel_resistances", "terms_needed"]
+__all__ = [
+    "brenner_normal",
+    "normal_push",
+    "parallel_resistances",
+    "terms_needed",
+    "translation_force",
+]
 
 _SQRT2 = math.sqrt(2.0)
 
@@ -195,3 +222,89 @@ def parallel_resistances(h_over_a: float, n_terms: int | None = None) -> tuple[f
     f_tr_r = -_SQRT2 / 6.0 * sa**2 * f_sum
     f_rr = 4.0 / 9.0 * (1.0 - t_sum * sa**3 / (4.0 * _SQRT2))
     return f_tt, f_tr_t, f_tr_r, f_rr
+
+
+def _axisymmetric_force(al: float, g: np.ndarray, dg: np.ndarray) -> float:
+    """Force along the normal [over μ c U-scale] of the axisymmetric problem with sphere data G_n.
+
+    ``g``, ``dg``: G_n(α) e^((n+½)α) and G_n'(α) e^((n+½)α), n = 1 .. N (scaled so
+    that nothing overflows). The disturbance (cosh ξ − μ)^(−3/2) Σ U_n C_{n+1}^(−1/2),
+    U_n = a_n (cosh((n−½)ξ) − cosh((n+3/2)ξ)) + b_n (sinh((n−½)ξ) − κ_n sinh((n+3/2)ξ)),
+    κ_n = (2n−1)/(2n+3), vanishes with its normal derivative on the plane ξ = 0 and
+    takes the values −G_n, −G_n' on the sphere ξ = α; the force is Stimson &
+    Jeffery's (2√2π/c) Σ (a_n + b_n + c_n + d_n) = (2√2π/c) Σ 4 b_n/(2n+3), returned
+    here without the factor 2√2π/c.
+    """
+    n = np.arange(1, g.shape[0] + 1, dtype=float)
+    p = n - 0.5
+    q = n + 1.5
+    m = n + 0.5
+    sa = math.sinh(al)
+    # rows of the 2x2 system times e^(−(n+½)α): A11, A21 (A22 = p A11, A12 unused by b_n)
+    e2 = np.exp(-2.0 * m * al)
+    one_q = -np.expm1(-2.0 * m * al)
+    a11 = -one_q * sa
+    a21 = 0.5 * (p * (math.exp(-al) - e2 * math.exp(al)) - q * (math.exp(al) - e2 * math.exp(-al)))
+    # determinant times e^(−(2n+1)α): (1/q) [(1 − e2)² − (2n+1)² sinh²α e2]
+    det = (one_q**2 - (2.0 * m * sa) ** 2 * e2) / q
+    b = (a21 * g - a11 * dg) / det * e2  # the rows carried e^(−(n+½)α), the data e^((n+½)α)
+    terms = 4.0 * b / (2.0 * n + 3.0)
+    return float(np.sum(terms[::-1]))
+
+
+def _series_length(al: float) -> int:
+    return max(4, int(60.0 / al) + 40)
+
+
+def translation_force(h_over_a: float, n_terms: int | None = None) -> float:
+    """λ⊥ from the axisymmetric solver of :func:`normal_push` with Brenner's boundary data.
+
+    The sphere (radius 1) moves towards the plane with unit speed: ψ = −r²/2 on it,
+    the data −G_n of that, G_n = −(c²/√2) n(n+1) [e^(−(n−½)α)/(2n−1) −
+    e^(−(n+3/2)α)/(2n+3)]; the drag pushes it away from the plane. An
+    independent route to :func:`brenner_normal` (which sums Brenner's closed form),
+    used to check the solver.
+    """
+    al = _alpha(h_over_a)
+    n_max = _series_length(al) if n_terms is None else int(n_terms)
+    n = np.arange(1, n_max + 1, dtype=float)
+    c = math.sinh(al)
+    k = -(c * c / _SQRT2) * n * (n + 1)
+    # G e^((n+½)α) and G' e^((n+½)α)
+    g = k * (math.exp(al) / (2 * n - 1) - math.exp(-al) / (2 * n + 3))
+    dg = k * (-(n - 0.5) * math.exp(al) / (2 * n - 1) + (n + 1.5) * math.exp(-al) / (2 * n + 3))
+    return 2.0 * _SQRT2 * math.pi / c * _axisymmetric_force(al, g, dg) / (6.0 * math.pi)
+
+
+def normal_push(h_over_a: float, n_terms: int | None = None) -> float:
+    """Goren & O'Neill's c_n: force on a fixed sphere in the flow u_z = −α z² over 6πμa u_z(h).
+
+    Parameters
+    ----------
+    h_over_a : float
+        Centre-to-wall distance over the radius, > 1.
+    n_terms : int, optional
+        Terms of the series (default ~ 60/α + 40).
+
+    Returns
+    -------
+    float
+        c_n [-] (→ 1 far away, 3.23 at contact); a force-free sphere there moves
+        across the wall with c_n u_z(h) / λ⊥.
+    """
+    al = _alpha(h_over_a)
+    n_max = _series_length(al) if n_terms is None else int(n_terms)
+    n = np.arange(1, n_max + 1, dtype=float)
+    c = math.sinh(al)
+    coth = 1.0 / math.tanh(al)
+    k = _SQRT2 / 3.0 * c**4 * n * (n + 1)  # α = 1, a = 1
+    p = n - 0.5
+    q = n + 1.5
+    ep = math.exp(al)
+    em = math.exp(-al)
+    g = k * ((p + coth) * ep - (q + coth) * em)
+    inv_s2 = 1.0 / (c * c)
+    dg = k * (-(inv_s2 + p * p + p * coth) * ep + (inv_s2 + q * q + q * coth) * em)
+    force = 2.0 * _SQRT2 * math.pi / c * _axisymmetric_force(al, g, dg)
+    h = float(h_over_a)
+    return force / (6.0 * math.pi * (-h * h))

@@ -53,6 +53,16 @@ the same expression is (0.7431 ln ε − 0.5299)/(−0.2 ln² ε + 0.6376 ln ε 
 0.7431/(0.6376 − 0.2 ln ε) is its leading term in 1/ln ε, 8 % low at ε = 3e-3
 and still 4 % low at ε = 1e-6.
 
+Flow towards the wall, u_z = −α z² (Goren & O'Neill 1971): a sphere held
+fixed at h feels 6πμa u_z(h) c_n, and a force-free one crosses the wall's
+planes with c_n u_z(h)/λ⊥ (exact values: :func:`~fibersweep.fiber.wallexact.normal_push`).
+c_n = 1 + (9/8) x + (81/64 + 1/3) x² + x³ [P + (1 − x) L Q], fitted as the
+resistances are (largest relative error 1.3e-6 over 1e-6 ≤ ε ≤ 1e3), → 3.2293
+at contact.
+
+For a bead near a wall, :func:`bead_coefficients` returns the four numbers the
+near-wall effect needs (:mod:`fibersweep.fiber.nearwall`) from one logarithm.
+
 The kernels are Numba functions of floats (ε > 0; a caller clamps the gap of an
 overlapping bead); :func:`sphere_wall` and :func:`wall_mobility` are the
 checked Python entry points.
@@ -73,8 +83,10 @@ __all__ = [
     "SHEAR_FORCE_X3",
     "SHEAR_TORQUE_CONTACT",
     "SphereWall",
+    "bead_coefficients",
     "coupling_resistance",
     "mobility_2d",
+    "normal_push",
     "normal_resistance",
     "parallel_resistance",
     "rotation_resistance",
@@ -143,6 +155,19 @@ _RR = (
     -6.65210718279662,
     2.3062279096554685,
 )
+_PUSH = (
+    -0.5686574597404721,
+    -1.9383713625209842,
+    4.759750354838983,
+    -3.5561377414710176,
+    0.6945704389242235,
+    0.1142213201099662,
+    1.1491464204880388,
+    -2.1312796228627455,
+    0.9837200746819827,
+)
+#: x² coefficient of c_n far away: the wall's reflection (9/8)² and Faxén's 1/3.
+PUSH_X2 = 81.0 / 64.0 + 1.0 / 3.0
 # Shear factors: (c₀, c₁, c₂, d) from the same script.
 _FS = (
     -0.0036800496116118353,
@@ -215,6 +240,13 @@ def torque_free_resistance(gap: float) -> float:
 
 
 @nb.njit(cache=True)
+def normal_push(gap: float) -> float:
+    """c_n: force on a fixed sphere in the flow u_z = −α z² over 6πμa u_z(h) [-] (→ 1, 3.2293)."""
+    x, lg = _gap_vars(gap)
+    return 1.0 + x * (1.125 + x * PUSH_X2) + _remainder(_PUSH, x, lg, 3)
+
+
+@nb.njit(cache=True)
 def shear_force(gap: float) -> float:
     """F^s: force on a fixed sphere in the wall shear γ̇z over 6πμa γ̇h [-]."""
     x, lg = _gap_vars(gap)
@@ -242,6 +274,43 @@ def shear_velocity(gap: float) -> float:
 
 
 @nb.njit(cache=True)
+def bead_coefficients(gap: float, free_rotation: bool) -> tuple[float, float, float, float]:
+    """Drag and flow push of a sphere at gap ε = δ/a from a wall, from one logarithm.
+
+    Parameters
+    ----------
+    gap : float
+        ε = δ/a > 0.
+    free_rotation : bool
+        True: a torque-free sphere (it rolls: λ∥ and the torque-free push); False: a
+        sphere that does not rotate (a bead of a fiber, turning with the fiber).
+
+    Returns
+    -------
+    (lam_t, lam_n, c_t, c_n) : floats [-]
+        Drag along the wall (λ∥ or f_tt) and across it (λ⊥), over 6πμa; the force on
+        the sphere held in the wall shear (F^s, or F^s + (2/3) x (f_tr/f_rr) T^s
+        with rotation free) over 6πμa u_t(h); c_n over 6πμa u_n(h). A force-free
+        sphere moves with (c_t/lam_t) u_t along the wall and (c_n/lam_n) u_n across.
+    """
+    x, lg = _gap_vars(gap)
+    lam_n = 1.0 / gap + 0.2 * (lg - x) + 1.0 + 0.125 * x + _remainder(_PERP, x, lg, 2)
+    lam_t = 8.0 / 15.0 * (lg - x) + 1.0 + 0.5625 * x + _remainder(_TT, x, lg, 2)
+    c = _FS
+    far = 1.0 + x * (0.5625 + x * (81.0 / 256.0 + x * SHEAR_FORCE_X3))
+    c_t = far + x**4 * (c[0] + c[1] * x + c[2] * x * x + c[3] * (1.0 - x) * lg)
+    c_n = 1.0 + x * (1.125 + x * PUSH_X2) + _remainder(_PUSH, x, lg, 3)
+    if free_rotation:
+        f_tr = 2.0 / 15.0 * (lg - x - 0.5 * x * x - x * x * x / 3.0) + _remainder(_TR, x, lg, 4)
+        f_rr = 4.0 / 3.0 * (0.4 * (lg - x - 0.5 * x * x) + 1.0 + _remainder(_RR, x, lg, 3))
+        d = _TS
+        t_s = 1.0 + x * x * x * (d[0] + d[1] * x + d[2] * x * x + d[3] * (1.0 - x) * lg)
+        lam_t -= f_tr * f_tr / f_rr
+        c_t += 2.0 / 3.0 * x * f_tr / f_rr * t_s
+    return lam_t, lam_n, c_t, c_n
+
+
+@nb.njit(cache=True)
 def mobility_2d(nx: float, ny: float, gap: float) -> tuple[float, float, float]:
     """In-plane mobility of a torque-free sphere near a wall with unit normal (nx, ny).
 
@@ -260,7 +329,7 @@ class SphereWall:
     Attributes are floats, or arrays of the shape of the gaps asked for: ``gap``
     ε; ``normal`` λ⊥; ``translation`` f_tt; ``coupling`` f_tr; ``rotation``
     f_rr; ``torque_free`` λ∥; ``shear_force`` F^s; ``shear_torque`` T^s;
-    ``shear_velocity`` U/(γ̇h) (module docstring for each).
+    ``shear_velocity`` U/(γ̇h); ``normal_push`` c_n (module docstring for each).
     """
 
     gap: float | np.ndarray
@@ -272,6 +341,7 @@ class SphereWall:
     shear_force: float | np.ndarray
     shear_torque: float | np.ndarray
     shear_velocity: float | np.ndarray
+    normal_push: float | np.ndarray
 
 
 def _checked_gap(gap) -> np.ndarray:
@@ -299,6 +369,7 @@ def sphere_wall(gap) -> SphereWall:
         shear_force,
         shear_torque,
         shear_velocity,
+        normal_push,
     )
     flat = g.ravel()
     vals = [np.array([k(float(e)) for e in flat]).reshape(g.shape) for k in kernels]
