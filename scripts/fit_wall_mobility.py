@@ -5,6 +5,8 @@ remainder x^m [P(x) + (1 − x) ln(h/δ) Q(x)], x = a/h, fitted by least squares
 in relative error to the exact bispherical values (fibersweep.fiber.wallexact)
 on gaps ε = δ/a from 1e-6 to 1e3. The shear force and torque factors are fitted
 to Goldman, Cox & Brenner's (1967b) table with their contact values imposed.
+Goren & O'Neill's normal push c_n is 1 + (9/8) x + (81/64 + 1/3) x² plus the
+same remainder at m = 3, fitted to the exact series (wallexact.normal_push).
 The script prints the coefficient tuples to paste into wallmobility.py and the
 largest error of each fit on the fit points and on a denser check grid.
 
@@ -16,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from fibersweep.fiber import wallmobility as wm
-from fibersweep.fiber.wallexact import brenner_normal, parallel_resistances
+from fibersweep.fiber.wallexact import brenner_normal, normal_push, parallel_resistances
 
 # powers m of the remainders; P of degree 5 and Q of degree 2 for all four. The
 # first coefficient P₀ is imposed so that the far field is exact to O(x²)
@@ -66,6 +68,8 @@ def main() -> None:
         "TR": fit(x, ftr, 2 / 15 * (lg - x - x**2 / 2 - x**3 / 3), M_TR, 1 / 8 - 1 / 30, scale=ftt),
         "RR": fit(x, 0.75 * frr, 0.4 * (lg - x - x**2 / 2) + 1, M_RR, fixed0=5 / 16 - 2 / 15),
     }
+    push = np.array([normal_push(1.0 + e) for e in eps])
+    fits["PUSH"] = fit(x, push, 1 + 9 / 8 * x + wm.PUSH_X2 * x**2, 3)
     for name, c in fits.items():
         show(name, c)
 
@@ -102,6 +106,7 @@ def main() -> None:
         ("parallel", wm.parallel_resistance, ftt),
         ("coupling", wm.coupling_resistance, ftr),
         ("rotation", wm.rotation_resistance, frr),
+        ("normal push", wm.normal_push, np.array([normal_push(1.0 + e) for e in chk])),
     ):
         got = np.array([fn(e) for e in chk])
         scale = ftt if name == "coupling" else ref
