@@ -55,12 +55,17 @@ import numba as nb
 import numpy as np
 
 from fibersweep.fiber.bezier import bezier_nearest
-from fibersweep.fiber.contact import SMOOTH, Pillar
+from fibersweep.fiber.contact import ROUGH, SMOOTH, Pillar
 from fibersweep.fiber.wallhydro import _inv3
 from fibersweep.fiber.wallmobility import MIN_GAP, bead_coefficients
 
 __all__ = [
+    "NROWS",
     "REACH",
+    "convex_point",
+    "new_scratch",
+    "polygon_sides",
+    "sides_of",
     "bead_wall_mobility",
     "rigid_wall_body",
     "surface_point",
@@ -70,6 +75,12 @@ __all__ = [
 
 #: Gaps beyond REACH screening lengths are skipped: the screening is below 1.2e-4 there.
 REACH = 3.0
+
+#: Rows of the per-bead scratch array ``b`` (NROWS, n) the kernels share: where the
+#: terms were computed (LX, LY [µm], NaN: never), ΔR (RXX, RXY, RYY [pN s/µm]), the push
+#: map P with E = P u (PXX, PXY, PYY [pN s/µm]) and E (EX, EY [pN]).
+LX, LY, RXX, RXY, RYY, PXX, PXY, PYY, EX, EY = range(10)
+NROWS = 10
 
 
 @nb.njit(cache=True, inline="always")
@@ -170,31 +181,119 @@ def surface_point(kind, verts, circle, curves, roots, px, py):
     return side * (px - qx) / best, side * (py - qy) / best, side * best
 
 
+def polygon_sides(verts: np.ndarray) -> np.ndarray:
+    """Per side k of a CCW convex polygon: (a_x, a_y, n_x, n_y, e_x/|e|², e_y/|e|²), (m, 6).
+
+    a the side's first vertex, n its outward unit normal, e = a_{k+1} − a_k: what
+    :func:`convex_point` reads, computed once per run.
+    """
+    v = np.ascontiguousarray(verts, dtype=np.float64).reshape(-1, 2)
+    e = np.roll(v, -1, axis=0) - v
+    ln2 = np.einsum("ij,ij->i", e, e)
+    ln = np.sqrt(ln2)
+    return np.ascontiguousarray(
+        np.column_stack([v, e[:, 1] / ln, -e[:, 0] / ln, e[:, 0] / ln2, e[:, 1] / ln2])
+    )
+
+
 @nb.njit(cache=True, inline="always")
-def _add_wall(nx, ny, d, ux, uy, a, z0, ell, free, i, rxx, rxy, ryy, ex, ey):
-    """Add one wall's ΔR and E to bead i (module docstring)."""
+def convex_point(sides, px, py):
+    """:func:`surface_point` of a convex polygon (the rough pillar) from its precomputed
+    sides (:func:`polygon_sides`), without a division or a root on a face.
+
+    Outside, the nearest point lies on the one side whose outward half-plane holds
+    p and onto whose segment p projects, or else at the vertex v_j where p projects
+    beyond the end of side j − 1 and before the start of side j (of those two, a
+    side whose half-plane holds p finds it); inside, on the side of largest signed
+    distance (a convex polygon's inside point projects onto it).
+    """
+    m = sides.shape[0]
+    best = -1e300
+    kb = 0
+    for k in range(m):
+        rx = px - sides[k, 0]
+        ry = py - sides[k, 1]
+        d = rx * sides[k, 2] + ry * sides[k, 3]
+        if d > 0.0:
+            t = rx * sides[k, 4] + ry * sides[k, 5]
+            if 0.0 <= t <= 1.0:
+                return sides[k, 2], sides[k, 3], d
+            # beyond its end (start): the vertex there, if p projects before the next
+            # side's start (beyond the previous side's end)
+            j = (k + 1) % m if t > 1.0 else k
+            i = j - 1 if j > 0 else m - 1
+            tj = (px - sides[j, 0]) * sides[j, 4] + (py - sides[j, 1]) * sides[j, 5]
+            ti = (px - sides[i, 0]) * sides[i, 4] + (py - sides[i, 1]) * sides[i, 5]
+            if tj < 0.0 and ti > 1.0:
+                vx = px - sides[j, 0]
+                vy = py - sides[j, 1]
+                r = math.sqrt(vx * vx + vy * vy)
+                return vx / r, vy / r, r
+        if d > best:
+            best = d
+            kb = k
+    return sides[kb, 2], sides[kb, 3], best
+
+
+@nb.njit(cache=True, inline="always")
+def _point(kind, verts, circle, curves, roots, sides, px, py):
+    """:func:`surface_point`, with the circle and the rough polygon inline (no call)."""
+    if circle[2] > 0.0:
+        rx = px - circle[0]
+        ry = py - circle[1]
+        rr = math.sqrt(rx * rx + ry * ry)
+        if rr > 0.0:
+            return rx / rr, ry / rr, rr - circle[2]
+    if sides.shape[0] > 0:
+        return convex_point(sides, px, py)
+    return surface_point(kind, verts, circle, curves, roots, px, py)
+
+
+@nb.njit(cache=True, inline="always")
+def _add_wall(nx, ny, d, a, z0, ell, free, i, b):
+    """Add one wall's ΔR and push map P (E = P u) to bead i of ``b`` (module docstring)."""
     delta = max(d - a, 0.0)
     w = z0 * math.exp(-((delta / ell) ** 2))
     gap = max((d - a) / a, MIN_GAP)
     lam_t, lam_n, c_t, c_n = bead_coefficients(gap, free)
     dt = w * (lam_t - 1.0)
     dd = w * (lam_n - 1.0) - dt
-    rxx[i] += dt + dd * nx * nx
-    rxy[i] += dd * nx * ny
-    ryy[i] += dt + dd * ny * ny
-    un = ux * nx + uy * ny
+    b[RXX, i] += dt + dd * nx * nx
+    b[RXY, i] += dd * nx * ny
+    b[RYY, i] += dt + dd * ny * ny
     pt = w * (c_t - 1.0)
-    pn = w * (c_n - 1.0) * un - pt * un
-    ex[i] += pt * ux + pn * nx
-    ey[i] += pt * uy + pn * ny
+    pd = w * (c_n - 1.0) - pt
+    b[PXX, i] += pt + pd * nx * nx
+    b[PXY, i] += pd * nx * ny
+    b[PYY, i] += pt + pd * ny * ny
 
 
-@nb.njit(cache=True)
+def sides_of(pillar) -> np.ndarray:
+    """:func:`polygon_sides` of a rough polygon pillar (``PillarArrays``); (0, 6) otherwise."""
+    if pillar.kind == ROUGH and pillar.circle[2] == 0.0 and pillar.verts.shape[0] >= 3:
+        return polygon_sides(pillar.verts)
+    return np.zeros((0, 6))
+
+
+def new_scratch(n: int) -> np.ndarray:
+    """The per-bead scratch array (NROWS, n) of :func:`wall_terms`, nothing computed yet."""
+    b = np.zeros((NROWS, n))
+    b[LX] = np.nan
+    b[LY] = np.nan
+    return b
+
+
+@nb.njit(cache=True, inline="always")
 def wall_terms(
-    x, y, u, dist, a, z0, ell, free, kind, verts, circle, curves, roots,
-    lattice, px, py, sy, bounds, rxx, rxy, ryy, ex, ey,
+    x, y, u, dist, a, z0, ell, free, kind, verts, circle, curves, roots, sides,
+    lattice, px, py, sy, bounds, tol, b,
 ):  # fmt: skip
     """Extra resistance ΔR_i and force E_i of every bead near a pillar (lab frame).
+
+    E_i = P_i u_i is linear in the bead's background velocity: ΔR_i and P_i
+    depend on its position only. They are kept per bead in ``b`` with the
+    position they were computed at and recomputed only for a bead that has moved
+    more than ``tol`` in x or y since; E_i is formed from the current u_i always.
 
     Parameters
     ----------
@@ -215,60 +314,68 @@ def wall_terms(
         Torque-free beads (a lone sphere) or beads turning with the body.
     kind, verts, circle, curves, roots
         The pillar (:func:`surface_point`).
+    sides : ndarray, shape (m, 6)
+        The rough pillar's :func:`polygon_sides` (read instead of ``verts`` by
+        :func:`convex_point`); shape (0, 6) for a smooth pillar or a circle.
     lattice : bool
         Pillars at every (r px, r sy + c py) (an array) or one (the channel).
     px, py, sy : float
         Periods and row shift of the array [µm].
     bounds : ndarray, shape (4,)
         (x0, y0, x1, y1) of the pillar at the origin of the array [µm].
-    rxx, rxy, ryy, ex, ey : ndarray, shape (n,)
-        Written: ΔR_i [pN s/µm] and E_i [pN].
+    tol : float
+        Reuse distance [µm] (0: only at the very same position, which is exact).
+    b : ndarray, shape (NROWS, n)
+        Per-bead scratch (:data:`NROWS`; :func:`new_scratch`): positions, ΔR_i and
+        P_i kept between calls and updated; E_i written.
 
     Returns
     -------
     int
-        Beads within reach of a pillar.
+        Beads with a non-zero term.
     """
     reach = REACH * ell
     count = 0
     for i in range(x.shape[0]):
-        rxx[i] = 0.0
-        rxy[i] = 0.0
-        ryy[i] = 0.0
-        ex[i] = 0.0
-        ey[i] = 0.0
-        if dist[i] - a >= reach:
-            continue
         bx = x[i]
         by = y[i]
+        if not (abs(bx - b[LX, i]) <= tol and abs(by - b[LY, i]) <= tol):
+            b[LX, i] = bx
+            b[LY, i] = by
+            for k in range(RXX, EX):
+                b[k, i] = 0.0
+            if dist[i] - a < reach:
+                if not lattice:
+                    nx, ny, d = _point(kind, verts, circle, curves, roots, sides, bx, by)
+                    if d - a < reach:
+                        _add_wall(nx, ny, d, a, z0, ell, free, i, b)
+                else:
+                    r_far = reach + a
+                    r0 = math.floor((bx - r_far - bounds[2]) / px)
+                    r1 = math.floor((bx + r_far - bounds[0]) / px)
+                    for r in range(r0, r1 + 1):
+                        oxr = r * px
+                        dy = r * sy
+                        c0 = math.floor((by - r_far - bounds[3] - dy) / py)
+                        c1 = math.floor((by + r_far - bounds[1] - dy) / py)
+                        for c in range(c0, c1 + 1):
+                            oy = dy + c * py
+                            nx, ny, d = _point(
+                                kind, verts, circle, curves, roots, sides, bx - oxr, by - oy
+                            )
+                            if d - a < reach:
+                                _add_wall(nx, ny, d, a, z0, ell, free, i, b)
         ux = u[i, 0]
         uy = u[i, 1]
-        near = False
-        if not lattice:
-            nx, ny, d = surface_point(kind, verts, circle, curves, roots, bx, by)
-            if d - a < reach:
-                _add_wall(nx, ny, d, ux, uy, a, z0, ell, free, i, rxx, rxy, ryy, ex, ey)
-                near = True
-        else:
-            r_far = reach + a
-            for r in range(math.floor((bx - r_far - bounds[2]) / px),
-                           math.floor((bx + r_far - bounds[0]) / px) + 1):  # fmt: skip
-                oxr = r * px
-                dy = r * sy
-                for c in range(math.floor((by - r_far - bounds[3] - dy) / py),
-                               math.floor((by + r_far - bounds[1] - dy) / py) + 1):  # fmt: skip
-                    oy = dy + c * py
-                    nx, ny, d = surface_point(kind, verts, circle, curves, roots, bx - oxr, by - oy)
-                    if d - a < reach:
-                        _add_wall(nx, ny, d, ux, uy, a, z0, ell, free, i, rxx, rxy, ryy, ex, ey)
-                        near = True
-        if near:
+        b[EX, i] = b[PXX, i] * ux + b[PXY, i] * uy
+        b[EY, i] = b[PXY, i] * ux + b[PYY, i] * uy
+        if b[RXX, i] != 0.0 or b[RYY, i] != 0.0 or b[PXX, i] != 0.0 or b[PYY, i] != 0.0:
             count += 1
     return count
 
 
-@nb.njit(cache=True)
-def rigid_wall_body(s, nm, c, sn, rxx, rxy, ryy, ex, ey, vbx, vby, om, nm_out):
+@nb.njit(cache=True, inline="always")
+def rigid_wall_body(s, nm, c, sn, b, vbx, vby, om, nm_out, m3):
     """Body velocity of a rigid fiber with the wall terms (module docstring).
 
     Parameters
@@ -279,19 +386,26 @@ def rigid_wall_body(s, nm, c, sn, rxx, rxy, ryy, ex, ey, vbx, vby, om, nm_out):
         Body mobility N (body frame).
     c, sn : float
         cos and sin of the fiber angle.
-    rxx, rxy, ryy, ex, ey : ndarray, shape (n,)
+    b : ndarray, shape (NROWS, n)
         ΔR_i and E_i, lab frame (:func:`wall_terms`).
     vbx, vby, om : float
         Body velocity without them (body frame) [µm/s, rad/s].
     nm_out : ndarray, shape (3, 3)
         Written: N' = (I + N ΔR_b)⁻¹ N.
+    m3 : ndarray, shape (3, 3, 3)
+        Scratch (no allocation per call).
 
     Returns
     -------
     (vbx, vby, om)
         (I + N ΔR_b)⁻¹ (V₀ + N E_b), body frame.
     """
-    r = np.zeros((3, 3))
+    r = m3[0]
+    am = m3[1]
+    ainv = m3[2]
+    for i in range(3):
+        for j in range(3):
+            r[i, j] = 0.0
     eb0 = 0.0
     eb1 = 0.0
     eb2 = 0.0
@@ -299,11 +413,16 @@ def rigid_wall_body(s, nm, c, sn, rxx, rxy, ryy, ex, ey, vbx, vby, om, nm_out):
     ss = sn * sn
     cs = c * sn
     for i in range(s.shape[0]):
-        if rxx[i] == 0.0 and ryy[i] == 0.0 and ex[i] == 0.0 and ey[i] == 0.0:
+        rxx = b[RXX, i]
+        rxy = b[RXY, i]
+        ryy = b[RYY, i]
+        ex = b[EX, i]
+        ey = b[EY, i]
+        if rxx == 0.0 and ryy == 0.0 and ex == 0.0 and ey == 0.0:
             continue
-        bxx = cc * rxx[i] + 2.0 * cs * rxy[i] + ss * ryy[i]
-        bxy = cs * (ryy[i] - rxx[i]) + (cc - ss) * rxy[i]
-        byy = ss * rxx[i] - 2.0 * cs * rxy[i] + cc * ryy[i]
+        bxx = cc * rxx + 2.0 * cs * rxy + ss * ryy
+        bxy = cs * (ryy - rxx) + (cc - ss) * rxy
+        byy = ss * rxx - 2.0 * cs * rxy + cc * ryy
         si = s[i]
         r[0, 0] += bxx
         r[0, 1] += bxy
@@ -311,20 +430,18 @@ def rigid_wall_body(s, nm, c, sn, rxx, rxy, ryy, ex, ey, vbx, vby, om, nm_out):
         r[1, 1] += byy
         r[1, 2] += byy * si
         r[2, 2] += byy * si * si
-        ebx = c * ex[i] + sn * ey[i]
-        eby = -sn * ex[i] + c * ey[i]
+        ebx = c * ex + sn * ey
+        eby = -sn * ex + c * ey
         eb0 += ebx
         eb1 += eby
         eb2 += eby * si
     r[1, 0] = r[0, 1]
     r[2, 0] = r[0, 2]
     r[2, 1] = r[1, 2]
-    am = np.empty((3, 3))
     for i in range(3):
         for j in range(3):
             am[i, j] = nm[i, 0] * r[0, j] + nm[i, 1] * r[1, j] + nm[i, 2] * r[2, j]
         am[i, i] += 1.0
-    ainv = np.empty((3, 3))
     _inv3(am, ainv)
     for i in range(3):
         for j in range(3):
@@ -340,7 +457,7 @@ def rigid_wall_body(s, nm, c, sn, rxx, rxy, ryy, ex, ey, vbx, vby, om, nm_out):
 
 
 @nb.njit(cache=True)
-def bead_wall_mobility(mob, vel, rxx, rxy, ryy, ex, ey):
+def bead_wall_mobility(mob, vel, b):
     """Free beads with the wall terms, in place: M -> M', u -> M'(M⁻¹ u + E).
 
     With A the beads near a wall, Z_A their 2×2 blocks ΔR_i and
@@ -353,9 +470,14 @@ def bead_wall_mobility(mob, vel, rxx, rxy, ryy, ex, ey):
         Bead mobility M [µm/(pN s)] (symmetric); overwritten with M'.
     vel : ndarray, shape (2n,)
         Background velocities u [µm/s]; overwritten.
-    rxx, rxy, ryy, ex, ey : ndarray, shape (n,)
+    b : ndarray, shape (NROWS, n)
         ΔR_i and E_i (:func:`wall_terms`).
     """
+    rxx = b[RXX]
+    rxy = b[RXY]
+    ryy = b[RYY]
+    ex = b[EX]
+    ey = b[EY]
     n = rxx.shape[0]
     k = 0
     for i in range(n):
@@ -440,14 +562,13 @@ def wall_terms_at(
         raise ValueError(f"positions and velocities must be (n, 2), got {p.shape}, {u.shape}")
     n = p.shape[0]
     arr = pillar.arrays()
-    out = [np.zeros(n) for _ in range(5)]
+    b = new_scratch(n)
     a = float(bead_radius)
     wall_terms(
         np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), u, np.zeros(n), a,
         float(strength) * 6.0 * math.pi * float(viscosity) * a, 0.5 * float(depth),
         bool(free_rotation), arr.kind, arr.verts, arr.circle, arr.curves, np.zeros(3),
-        False, 1.0, 1.0, 0.0, np.zeros(4), *out,
+        sides_of(arr), False, 1.0, 1.0, 0.0, np.zeros(4), 0.0, b,
     )  # fmt: skip
-    rxx, rxy, ryy, ex, ey = out
-    r = np.stack([np.stack([rxx, rxy], -1), np.stack([rxy, ryy], -1)], -2)
-    return r, np.column_stack([ex, ey])
+    r = np.stack([np.stack([b[RXX], b[RXY]], -1), np.stack([b[RXY], b[RYY]], -1)], -2)
+    return r, np.column_stack([b[EX], b[EY]])

@@ -25,6 +25,7 @@ import math
 import numpy as np
 import pytest
 
+from fibersweep.fiber import nearwall as nw
 from fibersweep.fiber import wallmobility as wm
 from fibersweep.fiber.beadspring import bead_velocity
 from fibersweep.fiber.bundles import FlowArrays, assemble, make_params
@@ -152,6 +153,14 @@ def test_a_sphere_in_a_stagnation_flow_crosses_with_goren_oneill_push(gap):
     assert 0.5 - 2 * h * 0.0211 / DX <= shift <= 0.5429 + 2 * h * 0.0211 / DX
 
 
+def _scratch(r, e):
+    """The kernels' per-bead array (nearwall.NROWS, n) holding ΔR (n, 2, 2) and E (n, 2)."""
+    b = nw.new_scratch(len(r))
+    b[nw.RXX], b[nw.RXY], b[nw.RYY] = r[:, 0, 0], r[:, 0, 1], r[:, 1, 1]
+    b[nw.EX], b[nw.EY] = e[:, 0], e[:, 1]
+    return b
+
+
 def _straight_fiber(n, theta, gap):
     """Positions (n, 2) of a straight fiber whose lowest bead is at gap ε above the wall."""
     s = (np.arange(n) - 0.5 * (n - 1)) * 2 * A
@@ -178,8 +187,7 @@ def test_rigid_and_bead_forms_equal_the_dense_algebra():
     m_new = np.linalg.inv(np.linalg.inv(m) + z)
     f_new = m_new @ (np.linalg.solve(m, u.ravel()) + e.ravel())
     mob, vel = m.copy(), u.ravel().copy()
-    bead_wall_mobility(mob, vel, r[:, 0, 0].copy(), r[:, 0, 1].copy(), r[:, 1, 1].copy(),
-                       e[:, 0].copy(), e[:, 1].copy())  # fmt: skip
+    bead_wall_mobility(mob, vel, _scratch(r, e))
     assert np.allclose(mob, m_new, rtol=0, atol=1e-10 * np.abs(m_new).max())
     assert np.allclose(vel, f_new, rtol=0, atol=1e-10 * np.abs(f_new).max())
 
@@ -189,8 +197,9 @@ def test_rigid_and_bead_forms_equal_the_dense_algebra():
     bm = body_mobility(n, A, MU)
     vb0 = body_velocity(c, sn, bm.offsets, bm.P, bm.N, u.ravel(), np.zeros(n), np.zeros(n), False)
     nm_out = np.zeros((3, 3))
-    rr = [r[:, 0, 0].copy(), r[:, 0, 1].copy(), r[:, 1, 1].copy(), e[:, 0].copy(), e[:, 1].copy()]
-    got = rigid_wall_body(bm.offsets, np.array(bm.N), c, sn, *rr, *vb0, nm_out)
+    got = rigid_wall_body(
+        bm.offsets, np.array(bm.N), c, sn, _scratch(r, e), *vb0, nm_out, np.zeros((3, 3, 3))
+    )
     kmap = rigid_map(s)
     mb = rpy_matrix(np.column_stack([s, 0 * s]), A, MU)
     zb = np.zeros_like(z)
@@ -224,6 +233,13 @@ def test_the_plane_is_the_contact_surface():
             assert (nx, ny) == pytest.approx((gx, gy), abs=1e-6)
     nx, ny, d = surface_point(ROUGH, rough.verts, rough.circle, rough.curves, roots, 43.3, 80.0)
     assert (nx, ny, d) == pytest.approx((0.0, 1.0, 5.0), abs=1e-12)
+    # the rough pillar's fast path (precomputed sides) is the same plane, for a triangle
+    # and a turned square, outside and inside, faces and corners (1e-12)
+    for poly in (tri, _square(0.3, (40.0, 30.0), 35.0)):
+        sides = nw.polygon_sides(poly)
+        for px, py in pts:
+            want = surface_point(ROUGH, poly, rough.circle, rough.curves, roots, px, py)
+            assert nw.convex_point(sides, px, py) == pytest.approx(want, abs=1e-12)
 
     from fibersweep.fiber.bezier import smooth_curves
 
@@ -257,11 +273,11 @@ def test_every_image_of_an_array_pillar_acts_and_two_add():
         p = np.asarray(points, dtype=float)
         n = len(p)
         u = np.column_stack([np.full(n, 5.0), np.full(n, -1.0)])
-        out = [np.zeros(n) for _ in range(5)]
+        b = nw.new_scratch(n)
         wall_terms(p[:, 0].copy(), p[:, 1].copy(), u, np.zeros(n), A, 1.0, 0.5 * depth, False,
-                   arr.kind, arr.verts, circ, arr.curves, np.zeros(3), lattice, px, py, sy,
-                   bounds, *out)  # fmt: skip
-        return np.array(out)
+                   arr.kind, arr.verts, circ, arr.curves, np.zeros(3), np.zeros((0, 6)),
+                   lattice, px, py, sy, bounds, 0.0, b)  # fmt: skip
+        return b[nw.RXX :]
 
     here = (40.0 + 22.5, 40.0 + 1.0)
     ox, oy = 2 * px, 2 * sy + 1 * py  # row 2, column 1
@@ -274,7 +290,7 @@ def test_every_image_of_an_array_pillar_acts_and_two_add():
     both = terms([mid], True, depth=30.0)
     one = terms([mid], False, depth=30.0)
     other = terms([(mid[0], mid[1] - py)], False, depth=30.0)
-    assert np.all(one[[0, 2]] > 0)
+    assert np.all(one[[0, 2, 3, 5]] > 0)  # ΔR and P along the normal and across it
     assert np.allclose(both, one + other, rtol=1e-12, atol=1e-15)
 
 
@@ -359,9 +375,8 @@ def test_one_bead_has_the_sphere_wall_mobility(gap, wall_angle):
         c, sn = math.cos(th), math.sin(th)
         rot = np.array([[c, -sn], [sn, c]])
         nm_out = np.zeros((3, 3))
-        rigid_wall_body(bm.offsets, np.array(bm.N), c, sn, r[:, 0, 0].copy(), r[:, 0, 1].copy(),
-                        r[:, 1, 1].copy(), e[:, 0].copy(), e[:, 1].copy(), 0.0, 0.0, 0.0,
-                        nm_out)  # fmt: skip
+        rigid_wall_body(bm.offsets, np.array(bm.N), c, sn, _scratch(r, e), 0.0, 0.0, 0.0,
+                        nm_out, np.zeros((3, 3, 3)))  # fmt: skip
         lab = rot @ nm_out[:2, :2] @ rot.T
         assert np.allclose(lab, want, rtol=0, atol=1e-12)  # 6πμa = 1
         assert nm_out[2, 2] == pytest.approx(bm.N[2, 2], rel=1e-12)
