@@ -450,3 +450,40 @@ def test_bead_spring_model_moves_its_beads_with_the_wall_terms():
     want = m_new @ (np.linalg.solve(m, u.ravel()) + e.ravel() + force.ravel())
     assert np.allclose(f, want, rtol=0, atol=1e-10 * np.abs(want).max())
     assert out["zero"][0].tobytes() == out["none"][0].tobytes()
+
+
+def test_rigid_model_keeps_a_beads_terms_within_the_reuse_distance():
+    """The rigid model keeps a bead's ΔR and push map while the bead stays within
+    RIGID_REUSE (2 finite-difference steps) of where they were computed; its force E = P u
+    follows the current u always; a bead that moved further gets fresh terms (equal to a
+    computation from scratch there, 1e-15). Over that distance the terms change by at most
+    1.5 RIGID_REUSE/δ of the largest at a contact gap δ = 0.1 a (λ⊥ ~ a/δ: 1/δ, times
+    λ⊥/(λ⊥ − 1) ≈ 1.1)."""
+    from fibersweep.fiber.effects.near_wall import RIGID_REUSE
+
+    tol = RIGID_REUSE
+    arr = _pillar().arrays()
+    sides = nw.sides_of(arr)
+    assert sides.shape == (4, 6)
+
+    def call(b, x, y, u):
+        wall_terms(np.array([x]), np.array([y]), np.array([u], dtype=float), np.zeros(1), A,
+                   1.0, 20.0, False, arr.kind, arr.verts, arr.circle, arr.curves, np.zeros(3),
+                   sides, False, 1.0, 1.0, 0.0, np.zeros(4), tol, b)  # fmt: skip
+        return b[:, 0].copy()
+
+    y0 = Y_WALL + 1.1 * A
+    b = nw.new_scratch(1)
+    first = call(b, 10.0, y0, (1.0, -0.5))
+    kept = call(b, 10.0 + 0.9 * tol, y0 - 0.9 * tol, (2.0, 0.3))
+    assert np.array_equal(kept[nw.LX : nw.EX], first[nw.LX : nw.EX])
+    p = kept[[nw.PXX, nw.PXY, nw.PXY, nw.PYY]].reshape(2, 2)
+    assert np.allclose(kept[[nw.EX, nw.EY]], p @ [2.0, 0.3], rtol=1e-15, atol=0)
+    moved = call(b, 10.0, y0 - 1.1 * tol, (2.0, 0.3))
+    fresh = call(nw.new_scratch(1), 10.0, y0 - 1.1 * tol, (2.0, 0.3))
+    assert np.allclose(moved, fresh, rtol=1e-15, atol=0)
+    delta = 0.1 * A
+    near = call(nw.new_scratch(1), 10.0, Y_WALL + A + delta, (1.0, -0.5))
+    off = call(nw.new_scratch(1), 10.0, Y_WALL + A + delta + tol, (1.0, -0.5))
+    rel = np.abs(off[nw.RXX : nw.EX] - near[nw.RXX : nw.EX]) / np.abs(near[nw.RXX : nw.EX]).max()
+    assert rel.max() <= 1.5 * tol / delta
