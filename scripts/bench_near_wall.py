@@ -30,9 +30,7 @@ def _cases(cache: str):
     """(label, field, settings without the effect, start) of each case."""
     channel, _ = get_flow_field(FlowSettings(dx=4.0), cache)
     cell, _ = get_flow_field(
-        FlowSettings.model_validate(
-            {"dx": 2.0, "array": {"pillar_shape": "circle", "shift": 0.1}}
-        ),
+        FlowSettings.model_validate({"dx": 2.0, "array": {"pillar_shape": "circle", "shift": 0.1}}),
         cache,
     )
     rigid = FiberSettings()
