@@ -59,6 +59,8 @@ LIBRARY: dict[str, Candidate] = {
         # (the source's "about 10 % slower") 60 fibers show only a t_pass shift, which a
         # 2.5 % slower inlet explains as well (docs/discrepancy.md, the study)
         Candidate("pillar_hydro", 0.0, 3.0, (1.0,), 1.0, "multiplier on the Faxén pillar drag"),
+        # k = 1: the sphere-wall theory's drag and flow push of the pillar on each bead
+        Candidate("near_wall", 0.0, 2.0, (1.0,), 1.0, "multiplier on the sphere-wall theory"),
         Candidate("off_midplane", 0.0, 0.35, (0.25,), 0.15, "offset from the midplane / depth"),
         # 1e3 x kT: rotational diffusion of ~25° over a ~1 s pass, already extreme
         Candidate("brownian", 0.0, 3.0e3, (1.0e3,), 1.0, "multiplier on kT at 295 K", True),
