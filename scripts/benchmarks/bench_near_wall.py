@@ -1,10 +1,10 @@
 """Cost of the ``near_wall`` effect: rigid runs with it on against off, in one process.
 
-    python3 scripts/bench_near_wall.py [--cache .fibersweep-cache] [--rounds 5] [--repeat 5]
+    python3 scripts/benchmarks/bench_near_wall.py [--cache DIR] [--rounds 5] [--repeat 5]
 
 Cases: the channel's rigid fiber (dx = 4 µm, L = l_obs, 22 beads) passing without
 contact and with contact at the pillar's apex; a sphere (one bead, a = 6 µm)
-through 20 rows of the circle array of ``scripts/array_dc.py`` at ε = 0.1
+through 20 rows of the circle array of ``array_dc.py`` at ε = 0.1
 (every pillar image within reach is visited). Numba is compiled before timing.
 On and off alternate ``--rounds`` times (off, on, off, on, ...) so a loaded
 machine slows both alike; each round takes the minimum of ``--repeat`` runs.

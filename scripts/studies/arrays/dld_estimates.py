@@ -1,6 +1,6 @@
 """Estimates of what a one-way sphere model of DLD leaves out, beside its critical diameter.
 
-For the circle array of ``scripts/array_dc.py`` (G = 40 µm, H = 40 µm, dx = 2 µm)
+For the circle array of ``array_dc.py`` (G = 40 µm, H = 40 µm, dx = 2 µm)
 at each ``--shifts`` ε it prints:
 
 * the steric bound 2β of the simulated gap profile ū(s) (depth-integrated,
@@ -17,7 +17,7 @@ at each ``--shifts`` ε it prints:
   resistance of a sphere beside a cylinder of radius R is the plane's times
   R/(a + R) (gap paraboloid radii aR/(a + R) and a, against a and a).
 
-    python3 scripts/dld_estimates.py [--shifts 0.1 0.2] [--diameters 15 20 25]
+    python3 scripts/studies/arrays/dld_estimates.py [--shifts 0.1 0.2] [--diameters 15 20 25]
 """
 
 from __future__ import annotations
