@@ -8,6 +8,8 @@ through 20 rows of the circle array of ``array_dc.py`` at ε = 0.1
 (every pillar image within reach is visited). Numba is compiled before timing.
 On and off alternate ``--rounds`` times (off, on, off, on, ...) so a loaded
 machine slows both alike; each round takes the minimum of ``--repeat`` runs.
+Times are the process's CPU time (the runs are single-threaded): on a machine
+shared by many processes the wall time mostly measures the others.
 Printed per case: the median over rounds of each, the ratio on/off of the run
 time and of the time per step (the effect changes the path, hence the number
 of steps), and the steps of each.
@@ -43,13 +45,13 @@ def _cases(cache: str):
 
 
 def _best(field, settings, start, repeat):
-    """Minimum wall time [s] of ``repeat`` runs and the run's steps."""
+    """Minimum CPU time [s] of ``repeat`` runs and the run's steps."""
     best = float("inf")
     steps = 0
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         res = simulate(field, settings, start)
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, time.process_time() - t0)
         steps = res.n_steps
     return best, steps
 
