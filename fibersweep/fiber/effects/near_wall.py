@@ -58,9 +58,7 @@ class NearWallKernel(NamedTuple):
     origin); scratch: ``roots`` (3,), ``b`` (NROWS, n) where each bead's terms
     were computed, its extra resistance, push map and force
     (:func:`~fibersweep.fiber.nearwall.wall_terms`), ``nm`` (3, 3) the changed
-    body mobility, ``m3`` (3, 3, 3) the rigid form's scratch. One scratch array
-    for the beads rather than one per quantity: every array a kernel record
-    carries costs a reference count at each stage call.
+    body mobility, ``m3`` (3, 3, 3) the rigid form's scratch.
     """
 
     z0: float
