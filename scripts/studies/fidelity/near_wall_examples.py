@@ -7,8 +7,8 @@ sphere-wall theory) and ``pillar_hydro`` = ``--hydro`` (the first-reflection dra
 at the source's "about 10 % slower"), then the quoted starts' class, δ and contact.
 
 The field: the channel at ``--dx`` (default 4 µm, sub-grid pillar) or, with
-``--patch``, a dx = 2 µm patch in it (the field of offset_band.py's
-"model" row).
+``--patch``, a dx = 2 µm patch round the pillar in it (the finer field the
+fidelity study uses).
 
 Usage:
     python3 scripts/studies/fidelity/near_wall_examples.py [--dx 4] [--patch] [--cache DIR]
