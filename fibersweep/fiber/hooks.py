@@ -20,8 +20,9 @@ BeadWork (bead-spring buffers)):
 ``background(e, u)``
     Both models, after interpolation: change the beads' background velocities
     ``u`` (n, 2) [µm/s] in place.
-``rigid_mobility(e, body, w, vbx, vby, om, nm_eff)`` -> ``(vbx, vby, om, nm_eff)``
-    Rigid model: change the body velocity (body frame) by a change of mobility;
+``rigid_mobility(e, body, w, c, sn, vbx, vby, om, nm_eff)`` -> ``(vbx, vby, om, nm_eff)``
+    Rigid model: change the body velocity (body frame) by a change of mobility
+    (c, sn: cos and sin of the fiber angle, from the lab frame to the body's);
     return the mobility ``nm_eff`` (3, 3) the later stages must use.
 ``rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff)`` -> ``(vbx, vby, om)``
     Rigid model: change the body velocity by extra contact forces (``w.fx, fy``
@@ -140,7 +141,7 @@ def background(e, u):
     raise NotImplementedError("kernel stage: call from a Numba kernel")
 
 
-def rigid_mobility(e, body, w, vbx, vby, om, nm_eff):
+def rigid_mobility(e, body, w, c, sn, vbx, vby, om, nm_eff):
     """Rigid model: ``(vbx, vby, om, nm_eff)`` after a change of mobility."""
     raise NotImplementedError("kernel stage: call from a Numba kernel")
 
@@ -165,7 +166,7 @@ def bead_mobility(e, w, bw):
     raise NotImplementedError("kernel stage: call from a Numba kernel")
 
 
-def _keep_mobility(e, body, w, vbx, vby, om, nm_eff):
+def _keep_mobility(e, body, w, c, sn, vbx, vby, om, nm_eff):
     return vbx, vby, om, nm_eff
 
 
@@ -195,7 +196,7 @@ def _ov_background(e, u):
 
 
 @overload(rigid_mobility)
-def _ov_rigid_mobility(e, body, w, vbx, vby, om, nm_eff):
+def _ov_rigid_mobility(e, body, w, c, sn, vbx, vby, om, nm_eff):
     return _impl("rigid_mobility", e, _keep_mobility)
 
 

@@ -110,7 +110,7 @@ def rigid_velocity(frame, flow, pillar, body, w, effects, xc, yc, th):
     vbx, vby, om = body_velocity(c, sn, s, body.pm, body.nm, ub, fx, fy, any_c)
     nm_eff = body.nm
     for e in literal_unroll(effects):
-        vbx, vby, om, nm_eff = H.rigid_mobility(e, body, w, vbx, vby, om, nm_eff)
+        vbx, vby, om, nm_eff = H.rigid_mobility(e, body, w, c, sn, vbx, vby, om, nm_eff)
     for e in literal_unroll(effects):
         vbx, vby, om = H.rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff)
     vx = c * vbx - sn * vby

@@ -108,12 +108,16 @@ def array_kernel(
     """
     array = field.array
     effects = check_array_effects(settings)
+    pillar = array_pillar(array, settings, mu, u_center).arrays()
+    frame = F.lattice(array, PAD, float(field.dx), n_beads)
     ctx = DynamicsContext(
         bead_radius=settings.bead_radius,
         dx=float(field.dx),
         depth=float(array.depth),
         viscosity=mu,
         n_beads=n_beads,
+        pillar=pillar,
+        frame=frame,
     )
     params = make_params(
         settings,
@@ -126,8 +130,6 @@ def array_kernel(
     )
     ux, uy = field.extended(PAD)
     flow = FlowArrays(ux, uy, float(field.dx))
-    pillar = array_pillar(array, settings, mu, u_center).arrays()
-    frame = F.lattice(array, PAD, float(field.dx), n_beads)
     return assemble(settings, n_beads, flow, pillar, params, effects.kernel(ctx), frame)
 
 

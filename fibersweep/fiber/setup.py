@@ -178,6 +178,7 @@ def prepare(
         depth=geo.depth,
         viscosity=field.fluid.viscosity,
         n_beads=place.n,
+        pillar=pillar.arrays(),
     )
     kernel_effects = effects.kernel(ctx)
     return Setup(

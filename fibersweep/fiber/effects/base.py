@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, NamedTuple
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
 import numpy as np
 
@@ -34,6 +34,12 @@ class DynamicsContext:
         Fluid viscosity μ [pN·s/µm²].
     n_beads : int
         Beads of the fiber (for scratch arrays a kernel record carries).
+    pillar : PillarArrays or None
+        The run's pillar as the contact kernels read it (an array: the unit cell's
+        pillar); None where no pillar is known (an effect then acts on none).
+    frame : NamedTuple or None
+        The run's frame (:mod:`fibersweep.fiber.frame`): a ``Lattice`` in an array;
+        None or ``Channel`` for the single pillar.
     """
 
     bead_radius: float
@@ -41,6 +47,8 @@ class DynamicsContext:
     depth: float
     viscosity: float = 1.0
     n_beads: int = 1
+    pillar: Any = None
+    frame: Any = None
 
 
 @dataclass(frozen=True)

@@ -61,7 +61,7 @@ class PillarHydro(Effect):
 
 
 @implements("rigid_mobility", PillarHydroKernel)
-def rigid_mobility(e, body, w, vbx, vby, om, nm_eff):
+def rigid_mobility(e, body, w, c, sn, vbx, vby, om, nm_eff):
     """Rigid model: V = A⁻¹ V₀ and N' = A⁻¹ N (see :mod:`fibersweep.fiber.wallhydro`)."""
     if wall_drag(w.dist, e.a, e.strength, e.length, e.mu, e.zeta) > 0:
         vbx, vby, om = rigid_wall_velocity(body.s, nm_eff, e.zeta, vbx, vby, om, e.nm_eff)

@@ -9,6 +9,15 @@ D_c = 2 β of a point particle that follows the streamlines until it touches
 (β the first-streamline width of the simulated gap profile).
 
     python3 scripts/studies/arrays/array_dc.py [--shifts 0.1 0.2] [--starts 8] [--rows 20]
+        [--effect near_wall=1] [--radii 5 6 7 8 9 10] [--steric]
+
+``--effect NAME=VALUE`` (repeatable) adds a fiber effect to every run, e.g. the
+near-wall hydrodynamics of the pillar (``near_wall=1``: the sphere-wall theory).
+``--radii`` restricts the sphere radii a [µm] (default 1 to 13 µm in steps of 1).
+``--steric`` also solves each cell once more for its 3D velocity and prints the
+steric bound 2β of the simulated gap profile (the first streamline's width,
+:func:`fibersweep.flow.cell.first_streamline_width`) and of a parabolic profile,
+(β/G)²(3 − 2β/G) = ε.
 """
 
 from __future__ import annotations
@@ -17,8 +26,10 @@ import argparse
 import tempfile
 
 import numpy as np
+from scipy.optimize import brentq
 
 from fibersweep.config import parse_config
+from fibersweep.flow.cell import first_streamline_width, solve_cell
 from fibersweep.sweep.runner import run_sweep
 from fibersweep.sweep.store import read_runs
 
@@ -29,20 +40,29 @@ def main() -> None:
     ap.add_argument("--starts", type=int, default=8)
     ap.add_argument("--rows", type=int, default=20)
     ap.add_argument("--shape", default="circle")
+    ap.add_argument("--effect", action="append", default=[], metavar="NAME=VALUE")
+    ap.add_argument("--radii", type=float, nargs="+", default=[float(r) for r in range(1, 14)])
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--steric", action="store_true", help="print the steric bound 2β too")
     args = ap.parse_args()
-    radii = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0]
-    print(f"{args.shape} pillars 40 µm, periods 80 µm (G = 40 µm), depth 40 µm, dx = 2 µm")
+    effects = {}
+    for item in args.effect:
+        name, _, value = item.partition("=")
+        effects[name] = float(value)
+    radii = sorted(args.radii)
+    print(f"{args.shape} pillars 40 µm, periods 80 µm (G = 40 µm), depth 40 µm, dx = 2 µm; "
+          f"effects {effects or 'none'}")  # fmt: skip
     for eps in args.shifts:
         fr = []
         with tempfile.TemporaryDirectory() as tmp:
             for a in radii:
                 cfg = parse_config({
                     "flow": {"dx": 2.0, "array": {"pillar_shape": args.shape, "shift": eps}},
-                    "fiber": {"bead_radius": a, "array_rows": args.rows},
+                    "fiber": {"bead_radius": a, "array_rows": args.rows, "effects": effects},
                     "sweep": {"length": [2 * a], "theta0": [-10.0, 10.0], "y0": [0.0, 1.0],
                               "random": {"count": args.starts, "seed": 0}},
                     "run": {"output": f"{tmp}/a{a:g}", "cache_dir": ".fibersweep-cache",
-                            "workers": 2},
+                            "workers": args.workers},
                 })  # fmt: skip
                 run_sweep(cfg)
                 df = read_runs(cfg.run.output)
@@ -61,6 +81,12 @@ def main() -> None:
             f"  D_c (model) = {dc:.1f} µm; Davis 1.4 G eps^0.48 = {davis:.1f} µm; "
             f"ratio {dc / davis:.2f}"
         )
+        if args.steric:
+            beta, gap = first_streamline_width(cfg.flow.array.to_array(), solve_cell(cfg.flow).u,
+                                               cfg.flow.dx)  # fmt: skip
+            parab = brentq(lambda b, e=eps: b * b * (3 - 2 * b) - e, 0.0, 1.0) * gap
+            print(f"  steric 2β: simulated gap profile {2 * beta:.1f} µm, "
+                  f"parabolic {2 * parab:.1f} µm (G = {gap:g} µm)")  # fmt: skip
 
 
 if __name__ == "__main__":
