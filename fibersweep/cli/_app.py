@@ -12,11 +12,13 @@ import logging
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import click
 import typer
 from typer.core import TyperGroup
+
+if TYPE_CHECKING:  # annotations only: recent typer ships its own click
+    import click
 
 from fibersweep.errors import FibersweepError, InputError, Terminated
 
@@ -99,8 +101,8 @@ Overrides = Annotated[
 RunOverrides = Annotated[
     list[str] | None,
     typer.Argument(
-        help="KEY=VALUE settings that replace the config's, e.g. fiber.model=bead-spring-ros2 "
-        "fiber.young_modulus=1e4 flow.dx=2 (values are YAML).",
+        help="KEY=VALUE settings that replace the config's, e.g. fiber.model=bead-spring "
+        "fiber.integrator=ros2 fiber.young_modulus=1e4 flow.dx=2 (values are YAML).",
         show_default=False,
     ),
 ]

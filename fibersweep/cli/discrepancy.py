@@ -140,8 +140,8 @@ CandidateOpt = Annotated[
         "--candidate",
         help="A setting as a candidate explanation, repeatable: KEY=LO..HI (fitted, log "
         "scale over decades), KEY=VALUE (an alternative), or a switch with its parameter "
-        "(fiber.model=bead-spring,fiber.young_modulus=1e4..3e7); added to the config's "
-        "discrepancy.candidates.",
+        "(fiber.model=bead-spring,fiber.young_modulus=1e4..3e7). The config's "
+        "discrepancy.candidates are declared as well.",
     ),
 ]
 
@@ -370,7 +370,8 @@ def power_cmd(
     for r in rows:
         if "setting" in r:
             need = r["fibers_for_realistic"]
-            more = f" (at its probe: {need} fibers)" if need else ""
+            probe = by_name[r["effect"]].show(r["realistic"])
+            more = f" ({probe}: detected with {need} fibers)" if need else ""
             typer.echo(f"  {r['effect']}: {r['setting']}{more}")
             continue
         lim = f"{r['limit']:.3g}" if r["limit"] is not None else "not within its range"

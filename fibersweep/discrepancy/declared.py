@@ -228,6 +228,11 @@ def parse_candidate(
     switch = tuple(fixed)
     model = dict(switch).get("fiber.model", fiber.model)
     if key in STIFFNESS_KEYS and fiber.model == "rigid":
+        if lo <= 0.0:
+            raise InputError(
+                f"{label}: {key} needs a positive range (a rigid fiber is its limit, at "
+                f"infinite stiffness), got {lo:g}..{hi:g}"
+            )
         if model == "rigid":
             switch = (
                 ("fiber.model", FLEXIBLE_MODEL),

@@ -84,6 +84,8 @@ def test_an_alternative_is_compared_never_scanned():
         ("run.workers=3", "do not change a run's result"),
         ("fiber.contact.chi=3..1", "finite LO < HI"),
         ("fiber.contact.pillar=a..b", "two numbers"),
+        ("fiber.young_modulus=0..1e5", "needs a positive range"),
+        ("fiber.young_modulus=-1e4..1e5", "needs a positive range"),
         ("fiber.model=bead-spring", None),  # an alternative model: allowed
     ],
 )
