@@ -27,6 +27,9 @@ from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.settings import FlowSettings
 
+# One round of one run per case, on the tests' cached fields (scripts/benchmarks/run.py --smoke).
+SMOKE = ["--rounds", "1", "--repeat", "1", "--cache", "{cache}"]
+
 
 def _cases(cache: str):
     """(label, field, settings without the effect, start) of each case."""
