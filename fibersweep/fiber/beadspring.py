@@ -26,7 +26,6 @@ import math
 
 import numba as nb
 import numpy as np
-from numba import literal_unroll
 
 from fibersweep.fiber import frame as F
 from fibersweep.fiber import hooks as H
@@ -72,16 +71,13 @@ def bead_velocity(frame, flow, pillar, body, p, w, bw, effects):
     for i in range(n):
         fx[i] += cfx[i]
         fy[i] += cfy[i]
-    for e in literal_unroll(effects):
-        H.background(e, u)
+    H.each_background(effects, u)
     for i in range(n):
         f[2 * i] = u[i, 0]
         f[2 * i + 1] = u[i, 1]
-    for e in literal_unroll(effects):
-        H.bead_forces(e, body, w, bw, any_c)
+    H.each_bead_forces(effects, body, w, bw, any_c)
     rpy_fill(x, y, p.a, p.mu, mob)
-    for e in literal_unroll(effects):
-        H.bead_mobility(e, w, bw)
+    H.each_bead_mobility(effects, w, bw)
     for r in range(2 * n):
         acc = 0.0
         for j in range(n):

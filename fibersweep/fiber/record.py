@@ -190,7 +190,7 @@ def stop_test(p, t, finite, min_d, y_min, y_max, stopped, stopped_since, x_rear,
             stopped_since = t
     else:
         stopped_since = math.nan
-    # np.int64: plain (non-literal) integers, as Numba's literal_unroll callers need
+    # np.int64: plain (non-literal) integers, one type on every branch
     code = np.int64(CHUNK_FULL)
     if not finite:
         code = np.int64(NAN)

@@ -38,7 +38,6 @@ import math
 
 import numba as nb
 import numpy as np
-from numba import literal_unroll
 
 from fibersweep.fiber import frame as F
 from fibersweep.fiber import hooks as H
@@ -98,8 +97,7 @@ def rigid_velocity(frame, flow, pillar, body, w, effects, xc, yc, th):
     F.velocity(frame, flow, x, y, u)
     n_c, cx, cy = F.contact(frame, pillar, x, y, fx, fy, st, dist)
     any_c = n_c > 0
-    for e in literal_unroll(effects):
-        H.background(e, u)
+    H.each_background(effects, u)
     min_d = 1e300
     stiff = 0.0
     for i in range(n):
@@ -109,10 +107,8 @@ def rigid_velocity(frame, flow, pillar, body, w, effects, xc, yc, th):
     ub = u.reshape(2 * n)
     vbx, vby, om = body_velocity(c, sn, s, body.pm, body.nm, ub, fx, fy, any_c)
     nm_eff = body.nm
-    for e in literal_unroll(effects):
-        vbx, vby, om, nm_eff = H.rigid_mobility(e, body, w, c, sn, vbx, vby, om, nm_eff)
-    for e in literal_unroll(effects):
-        vbx, vby, om = H.rigid_contact(e, body, w, c, sn, any_c, vbx, vby, om, nm_eff)
+    vbx, vby, om, nm_eff = H.each_rigid_mobility(effects, body, w, c, sn, vbx, vby, om, nm_eff)
+    vbx, vby, om = H.each_rigid_contact(effects, body, w, c, sn, any_c, vbx, vby, om, nm_eff)
     vx = c * vbx - sn * vby
     vy = sn * vbx + c * vby
     return vx, vy, om, n_c, cx, cy, min_d, stiff
@@ -297,8 +293,7 @@ def integrate_rigid(state, k, rec):
         xc += dt * vx2
         yc += dt * vy2
         th += dt * om2
-        for e in literal_unroll(effects):
-            xc, yc, th = H.rigid_noise(e, body, dt, c, sn, xc, yc, th)
+        xc, yc, th = H.each_rigid_noise(effects, body, dt, c, sn, xc, yc, th)
         t += dt
     state[0] = t
     state[1] = xc
