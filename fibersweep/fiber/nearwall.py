@@ -236,36 +236,29 @@ def convex_point(sides, px, py):
 
 
 @nb.njit(cache=True, inline="always")
-def _point(kind, verts, circle, curves, roots, sides, px, py):
-    """:func:`surface_point`, with the circle and the rough polygon inline (no call)."""
-    if circle[2] > 0.0:
-        rx = px - circle[0]
-        ry = py - circle[1]
-        rr = math.sqrt(rx * rx + ry * ry)
-        if rr > 0.0:
-            return rx / rr, ry / rr, rr - circle[2]
-    if sides.shape[0] > 0:
-        return convex_point(sides, px, py)
-    return surface_point(kind, verts, circle, curves, roots, px, py)
+def _circle_point(cx, cy, r, px, py):
+    """:func:`surface_point` of a circle of centre (cx, cy) and radius r [µm]."""
+    rx = px - cx
+    ry = py - cy
+    rr = math.sqrt(rx * rx + ry * ry)
+    if rr > 0.0:
+        return rx / rr, ry / rr, rr - r
+    return 1.0, 0.0, -r  # at the centre: any direction
 
 
 @nb.njit(cache=True, inline="always")
-def _add_wall(nx, ny, d, a, z0, ell, free, i, b):
-    """Add one wall's ΔR and push map P (E = P u) to bead i of ``b`` (module docstring)."""
+def _wall(nx, ny, d, a, z0, ell, free):
+    """One wall's ΔR and push map P (E = P u) on a bead: (Rxx, Rxy, Ryy, Pxx, Pxy, Pyy)."""
     delta = max(d - a, 0.0)
     w = z0 * math.exp(-((delta / ell) ** 2))
     gap = max((d - a) / a, MIN_GAP)
     lam_t, lam_n, c_t, c_n = bead_coefficients(gap, free)
     dt = w * (lam_t - 1.0)
     dd = w * (lam_n - 1.0) - dt
-    b[RXX, i] += dt + dd * nx * nx
-    b[RXY, i] += dd * nx * ny
-    b[RYY, i] += dt + dd * ny * ny
     pt = w * (c_t - 1.0)
     pd = w * (c_n - 1.0) - pt
-    b[PXX, i] += pt + pd * nx * nx
-    b[PXY, i] += pd * nx * ny
-    b[PYY, i] += pt + pd * ny * ny
+    return (dt + dd * nx * nx, dd * nx * ny, dt + dd * ny * ny,
+            pt + pd * nx * nx, pd * nx * ny, pt + pd * ny * ny)  # fmt: skip
 
 
 def sides_of(pillar) -> np.ndarray:
@@ -335,6 +328,13 @@ def wall_terms(
         Beads with a non-zero term.
     """
     reach = REACH * ell
+    # Which surface, decided once: the per-bead branch then binds one array at most (each
+    # array an inlined call binds costs two reference counts, per bead).
+    cx = circle[0]
+    cy = circle[1]
+    cr = circle[2]
+    is_circle = cr > 0.0
+    is_convex = sides.shape[0] > 0
     count = 0
     for i in range(x.shape[0]):
         bx = x[i]
@@ -342,13 +342,24 @@ def wall_terms(
         if not (abs(bx - b[LX, i]) <= tol and abs(by - b[LY, i]) <= tol):
             b[LX, i] = bx
             b[LY, i] = by
-            for k in range(RXX, EX):
-                b[k, i] = 0.0
+            # summed over the walls within reach in locals, stored once
+            rxx = rxy = ryy = pxx = pxy = pyy = 0.0
             if dist[i] - a < reach:
                 if not lattice:
-                    nx, ny, d = _point(kind, verts, circle, curves, roots, sides, bx, by)
+                    if is_circle:
+                        nx, ny, d = _circle_point(cx, cy, cr, bx, by)
+                    elif is_convex:
+                        nx, ny, d = convex_point(sides, bx, by)
+                    else:
+                        nx, ny, d = surface_point(kind, verts, circle, curves, roots, bx, by)
                     if d - a < reach:
-                        _add_wall(nx, ny, d, a, z0, ell, free, i, b)
+                        t = _wall(nx, ny, d, a, z0, ell, free)
+                        rxx += t[0]
+                        rxy += t[1]
+                        ryy += t[2]
+                        pxx += t[3]
+                        pxy += t[4]
+                        pyy += t[5]
                 else:
                     r_far = reach + a
                     r0 = math.floor((bx - r_far - bounds[2]) / px)
@@ -360,11 +371,30 @@ def wall_terms(
                         c1 = math.floor((by + r_far - bounds[1] - dy) / py)
                         for c in range(c0, c1 + 1):
                             oy = dy + c * py
-                            nx, ny, d = _point(
-                                kind, verts, circle, curves, roots, sides, bx - oxr, by - oy
-                            )
+                            qx = bx - oxr
+                            qy = by - oy
+                            if is_circle:
+                                nx, ny, d = _circle_point(cx, cy, cr, qx, qy)
+                            elif is_convex:
+                                nx, ny, d = convex_point(sides, qx, qy)
+                            else:
+                                nx, ny, d = surface_point(
+                                    kind, verts, circle, curves, roots, qx, qy
+                                )
                             if d - a < reach:
-                                _add_wall(nx, ny, d, a, z0, ell, free, i, b)
+                                t = _wall(nx, ny, d, a, z0, ell, free)
+                                rxx += t[0]
+                                rxy += t[1]
+                                ryy += t[2]
+                                pxx += t[3]
+                                pxy += t[4]
+                                pyy += t[5]
+            b[RXX, i] = rxx
+            b[RXY, i] = rxy
+            b[RYY, i] = ryy
+            b[PXX, i] = pxx
+            b[PXY, i] = pxy
+            b[PYY, i] = pyy
         ux = u[i, 0]
         uy = u[i, 1]
         b[EX, i] = b[PXX, i] * ux + b[PXY, i] * uy
