@@ -11,8 +11,10 @@ fraction f of the full displacement over the runs not trapped, the mode counts,
 the failed runs and why, the median and largest ``max_curvature`` [1/µm] and
 ``max_wrap`` [deg], the median ``min_end_to_end``, the median ``max_tension`` [nN],
 and, where bead positions were kept (``fiber.record.all_beads``), the smallest
-distance between beads |i − j| >= 2 over the stored samples [µm] (the kernel's
-own steps are denser, so this is an upper bound of the true smallest distance).
+distance between beads far enough apart along the chain to repel (|i − j| at least
+the chain's exclusion gap: 2 at spacing 2a, 4 at a, 8 at a/2) over the stored
+samples [µm] (the kernel's own steps are denser, so this is an upper bound of the
+true smallest distance).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import pandas as pd
 
 from fibersweep.analysis.modes import ModeSettings
 from fibersweep.fiber.exclusion import min_self_distance
+from fibersweep.fiber.spacing import exclusion_gap
 from fibersweep.sweep import sort_report as sr
 
 log = logging.getLogger(__name__)
@@ -44,6 +47,7 @@ def summary(results: str) -> pd.DataFrame:
     runs, settings, cfg = sr.load_array_results(results)
     runs = sr.relabel(runs, settings, ModeSettings(), cfg["fiber"]["classify"]["trap_speed"])
     has_beads = "traj_beads" in runs
+    fiber_spacing = cfg["fiber"].get("bead_spacing", 1.0)
     rows = []
     for (s, length), g in runs.groupby(["setting", "length"], sort=True):
         moving = g[g["mode"] != "trapped"]
@@ -64,7 +68,9 @@ def summary(results: str) -> pd.DataFrame:
             "tension_med_nN": float(g["max_tension"].median()) / 1e3,
         }
         if has_beads:
-            d = [min_self_distance(b) for b in g["traj_beads"] if b is not None]
+            spacing = settings[s]["values"].get("fiber.bead_spacing", fiber_spacing)
+            gap = exclusion_gap(float(spacing))
+            d = [min_self_distance(b, gap) for b in g["traj_beads"] if b is not None]
             row["self_min"] = float(np.min(d)) if d else np.nan
         rows.append(row)
     return pd.DataFrame(rows)
