@@ -694,22 +694,26 @@ def limit_in_unit(cand: Candidate, e: EffectPower) -> dict[str, Any]:
         ``limit_setting`` and ``limit_ci_setting``: the limit and its 95 % interval
         in the unit, low end first (None where not within the range);
         ``unseen``: what may be present unseen, from the interval's end farther
-        from the baseline ("flexibility of fiber.young_modulus >= 1.4e+06 Pa").
-        A stiffness of the ``rigid`` scale runs backwards: a larger value is a
-        softer fiber, so its limit is the stiffest fiber detected.
+        from the baseline ("flexibility of fiber.young_modulus >= 1.4e+06 Pa");
+        ``probe_setting``: the value the power was probed at, in the unit (a
+        categorical candidate: its alternative). A stiffness of the ``rigid``
+        scale runs backwards: a larger value is a softer fiber, so its limit is
+        the stiffest fiber detected.
     """
     if cand.is_effect:
         return {}
+    probe = {"probe_setting": cand.setting(e.probe)}
     if cand.categorical:
         seen = e.limit is not None
         text = (f"detected with {cand.key} = {cand.choice}" if seen
                 else f"{cand.key} = {cand.choice} not detected with these fibers")  # fmt: skip
         unseen = None if seen else f"{cand.key} = {cand.choice}"
-        return {"setting": text, "unit": cand.unit, "limit_setting": None, "unseen": unseen}
+        return {"setting": text, "unit": cand.unit, "limit_setting": None, "unseen": unseen,
+                **probe}  # fmt: skip
     if e.limit is None:
         return {
             "setting": "not detected within its range", "unit": cand.unit,
-            "limit_setting": None, "unseen": f"{cand.key} anywhere in its range",
+            "limit_setting": None, "unseen": f"{cand.key} anywhere in its range", **probe,
         }  # fmt: skip
     value = cand.setting(e.limit)
     ci = None
@@ -734,5 +738,5 @@ def limit_in_unit(cand: Candidate, e: EffectPower) -> dict[str, Any]:
         text += "]"
     return {
         "setting": text, "unit": cand.unit, "limit_setting": value,
-        "limit_ci_setting": ci, "unseen": unseen,
+        "limit_ci_setting": ci, "unseen": unseen, **probe,
     }  # fmt: skip

@@ -103,6 +103,8 @@ def test_a_stiffness_limit_and_what_may_hide_are_in_pa():
         f"flexibility detected for fiber.young_modulus <= {STIFF.setting(0.935):.3g} Pa"
     )
     assert out["unseen"] == f"flexibility of fiber.young_modulus >= {STIFF.setting(1.36):.3g} Pa"
+    # power.json carries the probe in Pa too, not only the fit's log-scale value
+    assert out["probe_setting"] == pytest.approx(STIFF.setting(STIFF.probes[0]))
     assert limit_in_unit(parse_candidate("fiber.contact.chi=1.05..3", FiberSettings(),
                                          FlowSettings(dx=4.0)), e)["unseen"].startswith(
         "fiber.contact.chi up to")  # fmt: skip
