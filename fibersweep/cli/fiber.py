@@ -148,12 +148,18 @@ def _ready(field, fiber) -> float:
     return time.perf_counter() - t0
 
 
+def _effects(fiber) -> str:
+    """The active effects as ``; effects near_wall = 1, friction = 0.2`` (empty when none)."""
+    on = {k: v for k, v in fiber.effects.items() if v != 0}
+    return "; effects " + ", ".join(f"{k} = {v:g}" for k, v in on.items()) if on else ""
+
+
 def _echo_channel(res, fiber, reversible: bool, back: float) -> None:
     st = res.start
     typer.echo(
         f"start: theta0 = {st.theta0:g}°, y0/h = {st.y0:g}, L/l_obs = {st.length:g} "
         f"({res.n_beads} beads), model {fiber.model} ({fiber.resolved_integrator}), "
-        f"pillar {fiber.contact.pillar}"
+        f"pillar {fiber.contact.pillar}{_effects(fiber)}"
     )
     if res.status != "ok":
         typer.echo(f"status: failed ({res.reason})")
@@ -187,7 +193,7 @@ def _echo_array(res, array, fiber) -> None:
     typer.echo(
         f"start: theta0 = {st.theta0:g}°, y0 = {st.y0:g} of period_y (in the gap before row "
         f"0), L = {st.length:g} µm ({res.n_beads} beads), "
-        f"model {fiber.model} ({fiber.resolved_integrator})"
+        f"model {fiber.model} ({fiber.resolved_integrator}){_effects(fiber)}"
     )
     typer.echo(
         f"array: periods {array.period_x:g} x {array.period_y:g} µm, shift {array.shift:g} "

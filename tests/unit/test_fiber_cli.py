@@ -24,6 +24,8 @@ def test_simulate_prints_class_and_plots(tmp_path, flow_cache_dir, coarse_field)
     assert res.exit_code == 0, res.output
     assert "class: Pole-vaulting" in res.output
     assert "contact: yes" in res.output and "delta: 0.1" in res.output
+    start = next(line for line in res.output.splitlines() if line.startswith("start:"))
+    assert start.endswith("; effects friction = 0.3")  # what the run had on
     assert png.exists() and png.stat().st_size > 10_000
 
 
