@@ -71,6 +71,12 @@ def test_a_smooth_pillar_is_named(coarse_field):
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="a dx = 5 µm field is 1.3 % slower on average than the dx = 4 µm model's; at "
+    "N = 100 and 200 the grid and a slower flow (inlet_speed, off_midplane) explain the "
+    "data equally: ambiguous, not named (docs/validation/discrepancy.md)",
+)
 def test_a_coarser_flow_grid_is_named(coarse_field, flow_cache_dir):
     from fibersweep.flow.cache import get_flow_field
 
