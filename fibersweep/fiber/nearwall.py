@@ -56,7 +56,7 @@ import numpy as np
 
 from fibersweep.fiber.bezier import bezier_nearest
 from fibersweep.fiber.contact import ROUGH, SMOOTH, Pillar
-from fibersweep.fiber.wallhydro import _inv3
+from fibersweep.fiber.wallhydro import solve_body
 from fibersweep.fiber.wallmobility import MIN_GAP, bead_coefficients
 
 __all__ = [
@@ -342,7 +342,9 @@ def wall_terms(
         if not (abs(bx - b[LX, i]) <= tol and abs(by - b[LY, i]) <= tol):
             b[LX, i] = bx
             b[LY, i] = by
-            # summed over the walls within reach in locals, stored once
+            # summed over the walls within reach in locals, stored once; the channel's
+            # branch is the lattice loop's body for one image, kept apart because the
+            # shared loop measured 4 % slower over the quick sweep
             rxx = rxy = ryy = pxx = pxy = pyy = 0.0
             if dist[i] - a < reach:
                 if not lattice:
@@ -472,18 +474,10 @@ def rigid_wall_body(s, nm, c, sn, b, vbx, vby, om, nm_out, m3):
         for j in range(3):
             am[i, j] = nm[i, 0] * r[0, j] + nm[i, 1] * r[1, j] + nm[i, 2] * r[2, j]
         am[i, i] += 1.0
-    _inv3(am, ainv)
-    for i in range(3):
-        for j in range(3):
-            nm_out[i, j] = ainv[i, 0] * nm[0, j] + ainv[i, 1] * nm[1, j] + ainv[i, 2] * nm[2, j]
     b0 = vbx + nm[0, 0] * eb0 + nm[0, 1] * eb1 + nm[0, 2] * eb2
     b1 = vby + nm[1, 0] * eb0 + nm[1, 1] * eb1 + nm[1, 2] * eb2
     b2 = om + nm[2, 0] * eb0 + nm[2, 1] * eb1 + nm[2, 2] * eb2
-    return (
-        ainv[0, 0] * b0 + ainv[0, 1] * b1 + ainv[0, 2] * b2,
-        ainv[1, 0] * b0 + ainv[1, 1] * b1 + ainv[1, 2] * b2,
-        ainv[2, 0] * b0 + ainv[2, 1] * b1 + ainv[2, 2] * b2,
-    )
+    return solve_body(am, ainv, nm, nm_out, b0, b1, b2)
 
 
 @nb.njit(cache=True)

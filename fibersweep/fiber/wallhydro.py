@@ -37,7 +37,13 @@ import math
 import numba as nb
 import numpy as np
 
-__all__ = ["wall_drag", "rigid_wall_velocity", "mobility_with_wall_drag", "NEGLIGIBLE"]
+__all__ = [
+    "NEGLIGIBLE",
+    "mobility_with_wall_drag",
+    "rigid_wall_velocity",
+    "solve_body",
+    "wall_drag",
+]
 
 #: ζ_i below this fraction of the Stokes drag 6πμa is dropped.
 NEGLIGIBLE = 1e-6
@@ -99,6 +105,25 @@ def _inv3(m, out):
     out[2, 2] = (m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]) / det
 
 
+@nb.njit(cache=True, inline="always")
+def solve_body(a, ainv, nm, nm_out, b0, b1, b2):
+    """With ``a`` = I + N ΔR_b (3, 3): N' = a⁻¹ N into ``nm_out``, and a⁻¹ (b0, b1, b2).
+
+    ``ainv`` (3, 3) is scratch for a⁻¹; ``nm`` is the body mobility N (body frame).
+    The rigid body's velocity with an added resistance, shared by ``pillar_hydro``
+    and ``near_wall``.
+    """
+    _inv3(a, ainv)
+    for i in range(3):
+        for j in range(3):
+            nm_out[i, j] = ainv[i, 0] * nm[0, j] + ainv[i, 1] * nm[1, j] + ainv[i, 2] * nm[2, j]
+    return (
+        ainv[0, 0] * b0 + ainv[0, 1] * b1 + ainv[0, 2] * b2,
+        ainv[1, 0] * b0 + ainv[1, 1] * b1 + ainv[1, 2] * b2,
+        ainv[2, 0] * b0 + ainv[2, 1] * b1 + ainv[2, 2] * b2,
+    )
+
+
 @nb.njit(cache=True)
 def rigid_wall_velocity(s, nm, zeta, vbx, vby, om, nm_out):
     """Body velocity of a rigid fiber with the extra wall drag ζ (see the module docstring).
@@ -136,16 +161,7 @@ def rigid_wall_velocity(s, nm, zeta, vbx, vby, om, nm_out):
         a[i, 1] = nm[i, 1] * r00 + nm[i, 2] * r12
         a[i, 2] = nm[i, 1] * r12 + nm[i, 2] * r22
         a[i, i] += 1.0
-    ainv = np.empty((3, 3))
-    _inv3(a, ainv)
-    for i in range(3):
-        for j in range(3):
-            nm_out[i, j] = ainv[i, 0] * nm[0, j] + ainv[i, 1] * nm[1, j] + ainv[i, 2] * nm[2, j]
-    return (
-        ainv[0, 0] * vbx + ainv[0, 1] * vby + ainv[0, 2] * om,
-        ainv[1, 0] * vbx + ainv[1, 1] * vby + ainv[1, 2] * om,
-        ainv[2, 0] * vbx + ainv[2, 1] * vby + ainv[2, 2] * om,
-    )
+    return solve_body(a, np.empty((3, 3)), nm, nm_out, vbx, vby, om)
 
 
 @nb.njit(cache=True)
