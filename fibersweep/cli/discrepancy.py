@@ -56,7 +56,9 @@ def synth(
     overrides: Overrides = None,
     effect: Annotated[
         list[str] | None,
-        typer.Option("--effect", help="Hidden effect NAME=VALUE (repeatable)."),
+        typer.Option(
+            "--effect", metavar="NAME=VALUE", help="Hidden effect NAME=VALUE (repeatable)."
+        ),
     ] = None,
     n: Annotated[int, typer.Option("--n", help="Number of fibers.")] = 100,
     seed: Annotated[int, typer.Option(help="Random seed.")] = 0,
@@ -138,6 +140,7 @@ CandidateOpt = Annotated[
     list[str] | None,
     typer.Option(
         "--candidate",
+        metavar="KEY=LO..HI|KEY=VALUE",
         help="A setting as a candidate explanation, repeatable: KEY=LO..HI (fitted, log "
         "scale over decades), KEY=VALUE (an alternative), or a switch with its parameter "
         "(fiber.model=bead-spring,fiber.young_modulus=1e4..3e7). The config's "
@@ -190,7 +193,11 @@ def discrepancy(
     copies: Annotated[int, typer.Option(help="Jittered baseline copies per fiber.")] = 8,
     effect: Annotated[
         list[str] | None,
-        typer.Option("--effect", help="Library effect to consider, repeatable (default: all)."),
+        typer.Option(
+            "--effect",
+            metavar="NAME",
+            help="Library effect to consider, repeatable (default: all).",
+        ),
     ] = None,
     candidate: CandidateOpt = None,
     alpha: Annotated[float, typer.Option(help="Family-wise error rate.")] = 0.05,
@@ -272,6 +279,7 @@ def power_cmd(
         list[str] | None,
         typer.Option(
             "--effect",
+            metavar="NAME",
             help="Library effect to analyse, repeatable (default: all of them, or none "
             "when --candidate is given).",
         ),
@@ -336,11 +344,11 @@ def power_cmd(
             starts = np.column_stack([rng.uniform(*box[c], k) for c in ("theta0", "y0", "length")])
             obs = scored()
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
+        # the bar's length comes from the analysis (discrepancy.power.planned_runs)
         with Simulator(
             field, cfg.fiber, workers=workers or cfg.run.workers, executor=cfg.run.executor,
-            scheduler=cfg.run.scheduler, planned=3 * min(simulate, len(starts)) * (
-                1 + 3 * sum(len(c.probes) for c in cands)), tracks=False,
-            candidates=cands, flow=cfg.flow, cache_dir=cfg.run.cache_dir,
+            scheduler=cfg.run.scheduler, tracks=False, candidates=cands, flow=cfg.flow,
+            cache_dir=cfg.run.cache_dir,
         ) as sim:  # fmt: skip
             maker = CopyMaker(starts, NoiseModel(), seed, sim)
             pw = analyse_power(maker, cands, n, obs, rng, n_sim=simulate, alpha=alpha,

@@ -541,6 +541,10 @@ def analyse_power(
     n_sim = min(maker.n, n_sim or 60)
     rows = np.arange(n_sim)
     used0 = maker.sim.used
+    certain, later = planned_runs(candidates, n_sim, copies, refine)
+    expect = getattr(maker.sim, "expect", None)  # a progress bar's length, where there is one
+    if expect is not None:
+        expect(certain, later=later)
     base = maker.copies(range(copies), None, rows, desc="power baseline")
     ens = ensemble_factor(copies, workflow_copies)
     g0 = assess_gap(value_matrices(base[0], base[1:], observables), rng, n_perm=99, n_boot=10)
@@ -614,6 +618,34 @@ def analyse_power(
     )
 
 
+def planned_runs(
+    candidates: Sequence[Candidate], n_sim: int, copies: int = 3, refine: int = 4
+) -> tuple[int, int]:
+    """Runs :func:`analyse_power` makes: those it always makes, and at most how many more.
+
+    Parameters
+    ----------
+    candidates : sequence of Candidate
+    n_sim : int
+        Fibers simulated.
+    copies : int
+        Copies per magnitude.
+    refine : int
+        Most re-reads of each limit at the limit (one magnitude each).
+
+    Returns
+    -------
+    (int, int)
+        The baseline, each probe and (a numeric candidate's) half of it; and the
+        re-reads, which run only where a limit lies far from its magnitudes.
+    """
+    per = copies * n_sim
+    probes = [(c, m) for c in candidates for m in c.probes]
+    certain = per * (1 + sum(1 if c.categorical else 2 for c, _ in probes))
+    later = per * refine * sum(not c.categorical for c, _ in probes)
+    return certain, later
+
+
 def _refine(
     e: EffectPower,
     lim: float | None,
@@ -648,6 +680,9 @@ def _refine(
             or (lo <= abs(lim) <= hi and hi <= BRACKET_RATIO * lo)
         ):
             break  # read close to the limit, or interpolated over a short bracket
+        grow = getattr(maker.sim, "expect_more", None)
+        if grow is not None:
+            grow(len(base) * n_sim)  # a refinement the bar counted as "later" now runs
         z_r, eff_r = _z_vector(maker, base, {cand.name: lim}, rows, observables, rng)
         z_r = z_r * ens
         near = min(sims, key=lambda m: abs(math.log(abs(m) / abs(lim))))

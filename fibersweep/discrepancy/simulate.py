@@ -261,6 +261,14 @@ class Simulator:
             self._bar.total = max(self._planned, self._bar.n)
             self._bar.set_postfix_str(self._later_text(), refresh=True)
 
+    def expect_more(self, runs: int) -> None:
+        """Move ``runs`` of the later stages' runs into the bar's length (they now run)."""
+        self._planned += int(runs)
+        self._later = max(0, self._later - int(runs))
+        if self._bar is not None:
+            self._bar.total = max(self._planned, self._bar.n)
+            self._bar.set_postfix_str(self._later_text(), refresh=True)
+
     def _later_text(self) -> str:
         return f"later stages: up to {self._later} more if needed" if self._later else ""
 

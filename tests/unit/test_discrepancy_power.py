@@ -198,3 +198,35 @@ def test_a_limit_far_below_the_probes_is_read_again_where_it_lies(seed):
     assert (sims - sims0) % 180 == 0 and sims > sims0
     lo, hi = refined.limit_ci
     assert lo <= refined.limit <= hi, (lo, refined.limit, hi)
+
+
+class _BarSim:
+    """Counts runs like the simulator and keeps the bar's length as it would."""
+
+    def __init__(self):
+        self.used, self.planned, self.later = 0, None, 0
+
+    def expect(self, runs, later=0):
+        self.planned, self.later = self.used + runs, later
+
+    def expect_more(self, runs):
+        self.planned += runs
+        self.later = max(0, self.later - runs)
+
+
+@pytest.mark.parametrize("probe", [0.012, 0.15])
+def test_the_power_bar_ends_at_the_runs_that_ran(probe):
+    # The bar's length is the plan's certain runs (baseline, probe, half probe), and each
+    # re-read at the limit adds its own runs when it runs: at the end the length equals
+    # the runs made, exactly, whether the limit is re-read (probe 0.15) or not (0.012).
+    from fibersweep.discrepancy.candidates import Candidate
+    from fibersweep.discrepancy.power import analyse_power, planned_runs
+
+    cand = Candidate("inlet_speed", -0.3, 0.3, (probe,), 0.05, "")
+    maker = _StandInMaker(60, 1, _saturating)
+    maker.sim = _BarSim()
+    certain, later = planned_runs([cand], 60)
+    assert (certain, later) == (3 * 60 * 3, 3 * 60 * 4)
+    pw = analyse_power(maker, [cand], 100, ["delta"], np.random.default_rng(1), n_sim=60)
+    assert maker.sim.planned == maker.sim.used == pw.simulations
+    assert (pw.simulations > certain) == (pw.effects[0].read_at is not None)
