@@ -339,3 +339,23 @@ def test_guide_pages_stay_short_and_undated() -> None:
                 assert not re.search(r"\b20\d\d-\d\d-\d\d\b|[Vv]ersion\b", line), (
                     f"{path.relative_to(REPO)}: dated or version heading {line!r}"
                 )
+
+
+def test_the_module_map_names_every_module() -> None:
+    """docs/architecture.md's module map lists every module of each package in its row
+    (the effects' row says "one module per effect"; the version file is generated)."""
+    rows: dict[str, set[str]] = {}
+    for line in (REPO / "docs" / "architecture.md").read_text(encoding="utf-8").splitlines():
+        m = re.match(r"\| `([a-z_/]+)` \| (.*?) \|", line)
+        if m:
+            rows[m.group(1).rstrip("/")] = set(re.findall(r"`([a-z_0-9]+)`", m.group(2)))
+    package = REPO / "fibersweep"
+    missing = []
+    for path in sorted(package.rglob("*.py")):
+        rel = path.relative_to(package)
+        where = "fibersweep" if rel.parent == Path(".") else rel.parent.as_posix()
+        if path.stem in ("__init__", "__main__", "_version") or where == "fiber/effects":
+            continue
+        if path.stem not in rows.get(where, set()):
+            missing.append(f"{where}/{path.stem}")
+    assert not missing, f"docs/architecture.md's module map leaves out {missing}"
