@@ -37,6 +37,12 @@ SMALL_SETTINGS = FlowSettings(
 
 
 @pytest.fixture(scope="session")
+def coarse_settings() -> FlowSettings:
+    """The flow settings of :func:`coarse_field` (the SPEC channel at dx = 4 µm)."""
+    return COARSE_SETTINGS
+
+
+@pytest.fixture(scope="session")
 def coarse_field(flow_cache_dir):
     """FlowField of the SPEC geometry at dx = 4 µm (TRT, symmetric half depth), µm/s."""
     from fibersweep.flow.cache import get_flow_field

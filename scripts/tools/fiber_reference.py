@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -26,8 +26,9 @@ import numpy as np
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate, simulate_for, simulate_reversible
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+from common import DEFAULT_CACHE, study_field  # noqa: E402  (scripts/studies/common.py)
 
 REC = {"trajectories": True, "samples": 100_000, "all_beads": True}
 VAULT = FiberStart(-3.7, 0.373, 0.82)
@@ -173,11 +174,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("action", choices=("record", "compare"))
     ap.add_argument("path", type=Path)
-    default = os.environ.get("FIBERSWEEP_TEST_CACHE", ".fibersweep-cache/tests")
-    ap.add_argument("--cache", default=default)
+    ap.add_argument("--cache", default=DEFAULT_CACHE)
     ap.add_argument("--only", nargs="*", help="case names (default: all)")
     args = ap.parse_args()
-    field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
+    field = study_field(args.cache)
     names = args.only or list(CASES)
     if args.action == "record":
         data = {}

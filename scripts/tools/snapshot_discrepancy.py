@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -32,8 +33,9 @@ from fibersweep.discrepancy.synth import STUDY_BOX as BOX
 from fibersweep.discrepancy.synth import synthesize_with_tracks
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
 from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+from common import study_field  # noqa: E402  (scripts/studies/common.py)
 
 HIDDEN = {"pillar_scale": 0.1, "friction": 0.5}
 PLAN = dict(
@@ -52,7 +54,7 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, default=Path(".fibersweep-cache"))
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    field, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
+    field = study_field(args.cache)
     fiber = FiberSettings()
     t0 = time.perf_counter()
     table, tracks, _ = synthesize_with_tracks(

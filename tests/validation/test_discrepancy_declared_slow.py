@@ -18,35 +18,34 @@ import pytest
 
 from fibersweep.discrepancy.declared import parse_candidate
 from fibersweep.discrepancy.schema import validate_measured
+from fibersweep.discrepancy.synth import STUDY_BOX as BOX
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.settings import FlowSettings
 
-BOX = {"theta0": (-10.0, 10.0), "y0": (0.15, 0.65), "length": (0.5, 1.4)}
-FLOW = FlowSettings(dx=4.0)
 FIBER = FiberSettings()
 STIFFNESS = "fiber.young_modulus=1e4..3e7"
 
 
-def _analyse(field, truth_fiber, n, seed, declared, cache=None, truth_field=None):
+def _analyse(field, flow, truth_fiber, n, seed, declared, cache=None, truth_field=None):
     table, _ = synthesize(truth_field or field, truth_fiber, BOX, n, seed=seed, workers=2,
                           progress=False)  # fmt: skip
-    cands = tuple(parse_candidate(t, FIBER, FLOW) for t in declared)
+    cands = tuple(parse_candidate(t, FIBER, flow) for t in declared)
     s = DiscrepancySettings(seed=seed, workers=2, declared=cands, power_fibers=0, next_copies=0)
     res = run_discrepancy(validate_measured(table), field, FIBER, s, progress=False,
-                          flow=FLOW, cache_dir=cache)  # fmt: skip
+                          flow=flow, cache_dir=cache)  # fmt: skip
     return res, {c.name: c for c in cands}
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(("E", "seed"), [(3e5, 9501), (1e5, 9502)], ids=["E3e5", "E1e5"])
 def test_flexible_fibers_are_named_with_an_interval_holding_their_stiffness(
-    coarse_field, E, seed
+    coarse_field, coarse_settings, E, seed
 ):
     """E = 3e5 Pa (the issue's data) and 1e5 Pa: named, interval in Pa holds E."""
     truth = FiberSettings(model="bead-spring", integrator="ros2", young_modulus=E)
-    res, cands = _analyse(coarse_field, truth, 100, seed, [STIFFNESS])
+    res, cands = _analyse(coarse_field, coarse_settings, truth, 100, seed, [STIFFNESS])
     assert res.verdict.kind == "named", res.verdict.text
     assert list(res.verdict.effects) == ["fiber.young_modulus"], res.verdict.text
     lo, hi = res.extra["intervals"]["fiber.young_modulus"][:2]
@@ -55,17 +54,18 @@ def test_flexible_fibers_are_named_with_an_interval_holding_their_stiffness(
 
 
 @pytest.mark.slow
-def test_without_the_candidate_flexible_data_name_no_library_effect(coarse_field):
+def test_without_the_candidate_flexible_data_name_no_library_effect(coarse_field, coarse_settings):
     truth = FiberSettings(model="bead-spring", integrator="ros2", young_modulus=3e5)
-    res, _ = _analyse(coarse_field, truth, 100, 9501, [])
+    res, _ = _analyse(coarse_field, coarse_settings, truth, 100, 9501, [])
     # a library effect named (alone or as an alternative) would be a wrong name
     assert res.verdict.kind not in ("named", "ambiguous"), res.verdict.text
 
 
 @pytest.mark.slow
-def test_a_smooth_pillar_is_named(coarse_field):
+def test_a_smooth_pillar_is_named(coarse_field, coarse_settings):
     truth = FiberSettings(contact={"pillar": "smooth"})
-    res, _ = _analyse(coarse_field, truth, 200, 9511, ["fiber.contact.pillar=smooth"])
+    declared = ["fiber.contact.pillar=smooth"]
+    res, _ = _analyse(coarse_field, coarse_settings, truth, 200, 9511, declared)
     assert res.verdict.kind == "named", res.verdict.text
     assert list(res.verdict.effects) == ["fiber.contact.pillar=smooth"]
 
@@ -77,21 +77,21 @@ def test_a_smooth_pillar_is_named(coarse_field):
     "N = 100 and 200 the grid and a slower flow (inlet_speed, off_midplane) explain the "
     "data equally: ambiguous, not named (docs/validation/discrepancy.md)",
 )
-def test_a_coarser_flow_grid_is_named(coarse_field, flow_cache_dir):
+def test_a_coarser_flow_grid_is_named(coarse_field, coarse_settings, flow_cache_dir):
     from fibersweep.flow.cache import get_flow_field
 
     coarse5, _ = get_flow_field(FlowSettings(dx=5.0), flow_cache_dir)
-    res, _ = _analyse(coarse_field, FIBER, 100, 9521, ["flow.dx=5"], cache=flow_cache_dir,
-                      truth_field=coarse5)  # fmt: skip
+    res, _ = _analyse(coarse_field, coarse_settings, FIBER, 100, 9521, ["flow.dx=5"],
+                      cache=flow_cache_dir, truth_field=coarse5)  # fmt: skip
     assert res.verdict.kind == "named", res.verdict.text
     assert list(res.verdict.effects) == ["flow.dx=5"]
 
 
 @pytest.mark.slow
-def test_false_alarms_stay_at_alpha_with_candidates_declared(coarse_field):
+def test_false_alarms_stay_at_alpha_with_candidates_declared(coarse_field, coarse_settings):
     named = 0
     for k in range(20):
-        res, _ = _analyse(coarse_field, FIBER, 60, 9600 + k,
+        res, _ = _analyse(coarse_field, coarse_settings, FIBER, 60, 9600 + k,
                           [STIFFNESS, "fiber.contact.pillar=smooth"])  # fmt: skip
         named += res.verdict.kind in ("named", "ambiguous")
     assert named <= 3, named

@@ -14,9 +14,6 @@ import pytest
 from _duct_case import solve_duct
 
 from fibersweep.flow.analysis import flux_separatrix, peak_speeds
-from fibersweep.flow.settings import FlowSettings
-
-COARSE_SETTINGS = FlowSettings(dx=4.0)  # the tests' coarse field (conftest.coarse_field)
 
 
 def _duct(precision: str) -> tuple[float, np.ndarray, float]:
@@ -44,13 +41,13 @@ def test_float32_duct_as_accurate_as_float64():
 
 
 @pytest.fixture(scope="module")
-def pillar_pair(flow_cache_dir):
+def pillar_pair(flow_cache_dir, coarse_settings):
     """The dx = 4 µm channel field (default settings) in float32 and float64."""
     from fibersweep.flow.cache import get_flow_field
 
-    f32, _ = get_flow_field(COARSE_SETTINGS, flow_cache_dir)
+    f32, _ = get_flow_field(coarse_settings, flow_cache_dir)
     f64, _ = get_flow_field(
-        COARSE_SETTINGS.model_copy(update={"precision": "float64"}), flow_cache_dir
+        coarse_settings.model_copy(update={"precision": "float64"}), flow_cache_dir
     )
     return f32, f64
 
