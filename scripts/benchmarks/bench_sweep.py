@@ -20,8 +20,9 @@ each after one untimed warm-up (Numba caches), in one run so the machine's load
 hits both alike, and prints the ratios of the medians (this / other):
   * a whole sweep, ``fibersweep run CONFIG`` from an empty folder, the command's wall
     time (interpreter and pool start-up included; the flow field is cached);
-  * the discrepancy check of scripts/tools/snapshot_discrepancy.py (``--disc-n`` fibers),
-    timed by its own report (the workflow alone, synthesis excluded).
+  * the discrepancy check of each tree's own scripts/tools/snapshot_discrepancy.py
+    (``scripts/snapshot_discrepancy.py`` in a tree of the former layout; ``--disc-n``
+    fibers), timed by its own report (the workflow alone, synthesis excluded).
 
 Usage:  python scripts/benchmarks/bench_sweep.py [--config configs/quick.yaml] [--paper-sample 60]
                                       [--chunk-size 1 --chunk-size auto]
@@ -213,7 +214,12 @@ def compare_trees(args: argparse.Namespace) -> None:
     here = Path(__file__).resolve().parents[2]  # the repository
     trees = {"this": here, "other": args.against.resolve()}
     cache = str(Path(args.cache).resolve())
-    snap = str(here / "scripts" / "tools" / "snapshot_discrepancy.py")
+
+    def snap(tree: Path) -> str:
+        """The tree's own snapshot script (its API follows the tree's package)."""
+        script = tree / "scripts" / "tools" / "snapshot_discrepancy.py"
+        return str(script if script.exists() else tree / "scripts" / "snapshot_discrepancy.py")
+
     times: dict[tuple[str, str], list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
 
@@ -224,8 +230,8 @@ def compare_trees(args: argparse.Namespace) -> None:
             return _timed(tree, argv, None)
 
         def disc(tree: Path, k: str) -> float:
-            argv = [sys.executable, snap, str(Path(tmp) / f"disc-{k}"), "--n", str(args.disc_n),
-                    "--cache", cache]  # fmt: skip
+            argv = [sys.executable, snap(tree), str(Path(tmp) / f"disc-{k}"),
+                    "--n", str(args.disc_n), "--cache", cache]  # fmt: skip
             return _timed(tree, argv, r"discrepancy ([\d.]+) s")
 
         for rnd in range(args.rounds + 1):  # round 0: warm-up (Numba caches), not counted
