@@ -304,13 +304,17 @@ def _design(crit, table, settings, key: str, target, bead: float, separate):
 
     curve = sd.critical_curve(crit, table, settings, key)
     name = key.rsplit(".", 1)[-1]
-    typer.echo(f"\ncritical length against {name} (first length where f rises through 1/2):")
+    typer.echo(
+        f"\ncritical length against {name} (first length where f rises through 1/2; "
+        "where it never rises, where it falls):"
+    )
     for grp, g in curve.groupby("group", sort=False):
         if grp:
             typer.echo(f"  {grp}:")
         for r in g.itertuples():
             if math.isfinite(r.critical):
                 txt = f"{_pm(r.critical, r.se, 1)} µm (between {r.lo:g} and {r.hi:g})"
+                txt += "" if r.rising else ", f falls through 1/2"
             elif math.isfinite(r.lo):
                 txt = f"above {r.lo:g} µm (f < 1/2 at every length)"
             else:

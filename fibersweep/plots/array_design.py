@@ -33,8 +33,8 @@ def migration_figure(
     """Mean f (± standard error) and migration angle (± sd) against length, per setting.
 
     The critical lengths (mean f crossing ``level``) are marked on both panels, with
-    their statistical error as a shaded band; the trapped share of a length is written
-    under its f point (trapped runs are not in the means).
+    their statistical error as a shaded band; the trapped share of each length (runs
+    not in the means) has its own panel below.
 
     Parameters
     ----------
@@ -48,7 +48,10 @@ def migration_figure(
         :func:`fibersweep.sweep.sort_report.critical_table`.
     """
     settings = sorted(table["setting"].unique())
-    fig, (ax_f, ax_a) = subplots(2, 1, figsize=(5.6, 5.4), sharex=True, layout="constrained")
+    fig, (ax_f, ax_a, ax_t) = subplots(
+        3, 1, figsize=(5.6, 6.4), sharex=True, layout="constrained",
+        gridspec_kw={"height_ratios": [3, 3, 1.4]},
+    )  # fmt: skip
     for s, col in zip(settings, _colours(len(settings)), strict=True):
         g = table[table["setting"] == s].sort_values("length")
         lab = labels.get(int(s)) or "array"
@@ -72,17 +75,7 @@ def migration_figure(
             color=col,
             label=lab,
         )
-        for L, f, tr in zip(g["length"], g["fraction_mean"], g["trapped"], strict=True):
-            if tr > 0 and math.isfinite(f):
-                ax_f.annotate(
-                    f"T {tr:.0%}",
-                    (L, f),
-                    xytext=(0, -11),
-                    textcoords="offset points",
-                    ha="center",
-                    fontsize=6,
-                    color=col,
-                )
+        ax_t.plot(g["length"], g["trapped"], marker="o", ms=3, color=col)
         ax_a.errorbar(
             g["length"],
             g["angle_mean"],
@@ -95,7 +88,7 @@ def migration_figure(
         ax_a.axhline(tilts[int(s)], color=col, ls=":", lw=0.8)
         if mine is not None:
             for r in mine.itertuples():
-                for ax in (ax_f, ax_a):
+                for ax in (ax_f, ax_a, ax_t):
                     ax.axvline(r.critical, color=col, ls="--", lw=0.9)
                     if math.isfinite(r.se) and r.se > 0:
                         ax.axvspan(
@@ -106,12 +99,13 @@ def migration_figure(
     ax_f.axhline(1.0, color="0.8", lw=0.6)
     ax_f.set_ylabel("mean f of moving runs")
     ax_f.set_title(
-        f"f = displacement per row / ε λy; dashed: critical lengths (f = {level:g}) ± error; "
-        "T: share trapped (not in the means)",
+        f"f = displacement per row / ε λy; dashed: critical lengths (f = {level:g}) ± error",
         fontsize=7,
     )
     ax_a.axhline(0.0, color="0.5", lw=0.6)
-    ax_a.set_xlabel("fiber length L [µm]")
+    ax_t.set_ylim(-0.05, 1.05)
+    ax_t.set_ylabel("share trapped")
+    ax_t.set_xlabel("fiber length L [µm]")
     ax_a.set_ylabel("migration angle [deg]")
     ax_a.set_title("mean ± sd; dotted: the array's tilt atan ε", fontsize=7)
     fig.legend(loc="outside upper center", fontsize=7, frameon=False,
@@ -219,25 +213,33 @@ def critical_figure(
         x = g["value"].to_numpy(float) if numeric else np.arange(len(g), dtype=float)
         ok = np.isfinite(g["critical"].to_numpy(float))
         ax.vlines(x[ok], g["lo"][ok], g["hi"][ok], color="0.75", lw=6, zorder=1)
-        ax.errorbar(
-            x[ok],
-            g["critical"][ok],
-            yerr=g["se"][ok].fillna(0.0),
-            marker="o",
-            capsize=3,
-            color=col,
-            zorder=3,
-            label=grp or None,
-        )
+        falls = ok & (g["rising"].to_numpy() == False)  # noqa: E712  (None: no crossing)
+        for sel, marker, face in ((ok & ~falls, "o", col), (falls, "v", "none")):
+            if sel.any():
+                ax.errorbar(
+                    x[sel],
+                    g["critical"][sel],
+                    yerr=g["se"][sel].fillna(0.0),
+                    marker=marker,
+                    mfc=face,
+                    capsize=3,
+                    color=col,
+                    zorder=3,
+                    label=(grp or None) if marker == "o" or not (ok & ~falls).any() else None,
+                )
         for xi, r in zip(x[~ok], g[~ok].itertuples(), strict=True):  # no crossing: a bound
-            if math.isfinite(r.lo):
-                ax.annotate("", (xi, r.lo * 1.12), (xi, r.lo), arrowprops={"arrowstyle": "->"})
-                ax.plot([xi], [r.lo], "_", color=col, ms=10)
-            elif math.isfinite(r.hi):
-                ax.annotate("", (xi, r.hi * 0.88), (xi, r.hi), arrowprops={"arrowstyle": "->"})
-                ax.plot([xi], [r.hi], "_", color=col, ms=10)
+            for bound, tip in ((r.lo, r.lo * 1.12), (r.hi, r.hi * 0.88)):
+                if math.isfinite(bound):
+                    ax.annotate("", (xi, tip), (xi, bound), arrowprops={"arrowstyle": "->"})
+                    ax.plot([xi], [bound], "_", color=col, ms=10)
+                    ax.update_datalim([(xi, tip)])  # the arrow inside the axes
+                    break
         if not numeric:
             ax.set_xticks(x, g["value"].astype(str))
+    values = curve["value"].to_numpy(float) if numeric else np.array([])
+    if values.size and values.min() > 0 and values.max() >= 10 * values.min():
+        ax.set_xscale("log")  # a setting over decades (a stiffness)
+    ax.autoscale_view()
     if target is not None:
         ax.axhline(target, color="#D55E00", ls="--", lw=0.9, label=f"target {target:g} µm")
     if answer is not None and isinstance(answer.value, float):
@@ -255,8 +257,9 @@ def critical_figure(
     ax.set_xlabel(f"{name}" + (f" [{unit}]" if unit else ""))
     ax.set_ylabel("critical length [µm]")
     ax.set_title(
-        "critical length: mean f = 1/2; bars: statistical error; grey: between the\n"
-        "simulated lengths; arrows: none (f above or below 1/2 at every length)",
+        "critical length: mean f = 1/2 (open triangles: f falls through it); bars:\n"
+        "statistical error; grey: between the simulated lengths; arrows: none (f above\n"
+        "or below 1/2 at every length)",
         fontsize=7,
     )
     if len(groups) > 1 or target is not None:

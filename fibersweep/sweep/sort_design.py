@@ -88,7 +88,11 @@ def design_key(settings: list[dict], key: str | None = None) -> str | None:
 def critical_curve(
     crit: pd.DataFrame, table: pd.DataFrame, settings: list[dict], key: str
 ) -> pd.DataFrame:
-    """The first rising critical length of each setting combination against ``key``.
+    """The critical length of each setting combination against ``key``.
+
+    The first length where f rises through 1/2 (the lower edge of a high-pass or
+    band-pass sorter); where f never rises through 1/2, the first where it falls
+    through it (a low-pass sorter, or a band's upper edge alone in the swept lengths).
 
     Parameters
     ----------
@@ -107,22 +111,27 @@ def critical_curve(
     DataFrame
         One row per combination: ``setting``, ``value`` (of ``key``), ``group`` (the
         other swept values, '' when only ``key`` varies), ``critical``, ``se``, ``lo``,
-        ``hi`` [µm] (NaN ``critical`` without a rising crossing: then ``lo`` is the
-        longest length when f < 1/2 at every length, ``hi`` the shortest when f > 1/2).
+        ``hi`` [µm], ``rising`` (f rises through 1/2 there; None without a crossing).
+        Without a crossing ``critical`` is NaN, and ``lo`` is the longest length when
+        f < 1/2 at every length, ``hi`` the shortest when f > 1/2 at every length.
     """
     others = [k for k in swept_keys(settings) if k != key]
     rows = []
     for i, s in enumerate(settings):
         vals = s.get("values") or {}
-        c = crit[(crit["setting"] == i) & crit["rising"]]
+        mine = crit[crit["setting"] == i]
+        c = mine[mine["rising"].astype(bool)]
+        c = c if len(c) else mine  # no rising crossing: the first falling one
         row = {
             "setting": i,
             "value": vals.get(key),
             "group": ", ".join(f"{k.rsplit('.', 1)[-1]} = {vals.get(k)}" for k in others),
+            "rising": None,
         }
         if len(c):
             r = c.iloc[0]
-            row.update(critical=r["critical"], se=r["se"], lo=r["lo"], hi=r["hi"])
+            row.update(critical=r["critical"], se=r["se"], lo=r["lo"], hi=r["hi"],
+                       rising=bool(r["rising"]))  # fmt: skip
         else:
             g = table[table["setting"] == i].sort_values("length")
             f = g["fraction_mean"].to_numpy(float)
@@ -134,7 +143,8 @@ def critical_curve(
                 hi=math.nan if below else float(g["length"].min()),
             )
         rows.append(row)
-    return pd.DataFrame(rows, columns=["setting", "value", "group", "critical", "se", "lo", "hi"])
+    columns = ["setting", "value", "group", "critical", "se", "lo", "hi", "rising"]
+    return pd.DataFrame(rows, columns=columns)
 
 
 def lattice_neighbours(key: str, value: float, flow: dict) -> tuple[float, float]:
@@ -270,9 +280,12 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
     se = np.nan_to_num(c["se"].to_numpy(float))
     lo, hi = c["lo"].to_numpy(float), c["hi"].to_numpy(float)
     add: list[str] = []
+    rising = c["rising"].to_numpy()
     for k in range(len(v) - 1):
         if (lc[k] - target) * (lc[k + 1] - target) > 0 or lc[k] == lc[k + 1]:
             continue
+        if rising[k] != rising[k + 1]:
+            continue  # a lower edge and an upper edge are not one curve
         w = (target - lc[k]) / (lc[k + 1] - lc[k])
         val = v[k] + w * (v[k + 1] - v[k])
         sig = (

@@ -33,6 +33,9 @@ cp "$work/friction/phase.png" "$out/phase_friction.png"
 fs run configs/refine.yaml
 fs plot-phase results/refine -o "$work/refine"
 cp "$work/refine/phase.png" "$out/phase_refine.png"
+fs run configs/array.yaml
+fs sort-report results/array
+cp results/array/figures/migration.png "$out/array-migration.png"
 fs explore results/quick
 # a screenshot of the explorer after a click (needs chromium, chromium-driver and selenium)
 PYTHONPATH="$repo" python3 "$repo/scripts/tools/explore_screenshot.py" results/quick/explore.html \

@@ -31,9 +31,34 @@ def test_critical_length_interpolates_and_propagates_the_standard_errors():
     assert band["critical"].tolist() == [15.0, 25.0] and band["rising"].tolist() == [True, False]
 
 
-def _curve(values, crit, se, lo, hi):
+def _curve(values, crit, se, lo, hi, rising=True):
     return pd.DataFrame({"setting": range(len(values)), "value": values, "group": "",
-                         "critical": crit, "se": se, "lo": lo, "hi": hi})  # fmt: skip
+                         "critical": crit, "se": se, "lo": lo, "hi": hi,
+                         "rising": rising})  # fmt: skip
+
+
+def test_the_curve_takes_a_falling_crossing_where_f_never_rises_through_one_half():
+    # three stiffnesses: a high-pass (f rises through 1/2 at 15 µm), a low-pass (f falls
+    # from 0.8 to 0.0: its critical length is where it falls, 54 µm, not "f > 1/2 at
+    # every length"), and one above 1/2 everywhere (a bound, no critical length)
+    t = pd.concat([_table([10.0, 20.0, 40.0, 80.0], [0.2, 0.8, 0.9, 0.9], [0.05] * 4, 0),
+                   _table([10.0, 20.0, 40.0, 80.0], [0.8, 0.8, 0.7, 0.0], [0.05] * 4, 1),
+                   _table([10.0, 20.0, 40.0, 80.0], [0.8, 0.9, 0.7, 0.6], [0.05] * 4, 2)])
+    settings = [{"values": {"fiber.young_modulus": e}} for e in (1e5, 1e4, 3e4)]
+    cur = sd.critical_curve(critical_table(t), t, settings, "fiber.young_modulus")
+    assert cur["critical"].iloc[0] == pytest.approx(15.0) and cur["rising"].iloc[0]
+    assert cur["critical"].iloc[1] == pytest.approx(40.0 + 0.2 / 0.7 * 40.0)
+    assert cur["rising"].iloc[1] is False or not cur["rising"].iloc[1]
+    assert (cur["lo"].iloc[1], cur["hi"].iloc[1]) == (40.0, 80.0)
+    assert math.isnan(cur["critical"].iloc[2]) and cur["hi"].iloc[2] == 10.0
+    assert math.isnan(cur["lo"].iloc[2]) and cur["rising"].iloc[2] is None
+    # a lower edge and an upper edge are not interpolated into one answer
+    a = sd.answer(cur.iloc[:2], "fiber.young_modulus", 30.0, FLOW, bead=4.0)
+    assert a.value is None
+    # two upper edges are
+    two = _curve([1e4, 2e4], [54.0, 30.0], [1.0, 1.0], [40.0, 20.0], [80.0, 40.0], False)
+    b = sd.answer(two, "fiber.young_modulus", 42.0, FLOW, bead=4.0)
+    assert b.value == pytest.approx(1.5e4)
 
 
 def test_the_setting_for_a_target_critical_length_is_interpolated_and_snapped_to_the_lattice():
