@@ -182,17 +182,31 @@ class WarmingBar:
     warm : int
         Units that include start-up (e.g. one run per worker).
     note : str
-        Postfix shown until the first unit is done.
+        Postfix shown until the first ``warm`` units are done.
+    make : callable, optional
+        What makes the bar (default :func:`progress_bar`).
     **kwargs
         Further :func:`progress_bar` options.
     """
 
-    def __init__(self, total: int, warm: int, note: str = "", **kwargs: Any) -> None:
-        self._bar = progress_bar(total=total, bar_format=WARMING_FORMAT, postfix=note or None,
-                                 **kwargs)  # fmt: skip
+    def __init__(
+        self, total: int, warm: int, note: str = "", make: Any = None, **kwargs: Any
+    ) -> None:
+        make = make or progress_bar
+        self._bar = make(total=total, bar_format=WARMING_FORMAT, postfix=note or None,
+                         **kwargs)  # fmt: skip
         self._warm = max(1, int(warm))
         self._done = 0
         self._clock = False
+        self._note = note
+
+    @property
+    def total(self) -> float | None:
+        return self._bar.total
+
+    @total.setter
+    def total(self, value: float | None) -> None:
+        self._bar.total = value
 
     def update(self, n: int = 1) -> None:
         bar = self._bar
@@ -201,6 +215,8 @@ class WarmingBar:
         if not self._clock and self._done >= self._warm:
             start_clock(bar)
             self._clock = True
+            if self._note and str(bar.postfix or "") == self._note:
+                bar.set_postfix_str("", refresh=False)  # started: the note no longer holds
         elif self._clock and bar.bar_format is not None and bar._ema_dt():
             bar.bar_format = None  # a rate measured after start-up: show it, and the estimate
             bar.refresh()

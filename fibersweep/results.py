@@ -121,8 +121,8 @@ class Results:
                 f"{self.path}: fraction_summary is for pillar-array results (flow.array); "
                 "these are a channel's, summarised by class"
             )
-        runs, _ = with_settings(self.runs[self.runs["mode"].notna()].copy(), self.manifest)
-        return migration_table(runs)
+        runs, settings = with_settings(self.runs[self.runs["mode"].notna()].copy(), self.manifest)
+        return migration_table(runs, settings)
 
     def trajectory(self, run_id: str) -> pd.DataFrame:
         """Samples of one run, in time order (empty if it has none)."""

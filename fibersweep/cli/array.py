@@ -104,7 +104,7 @@ def sort_report(
         runs = sr.relabel(runs, settings, modes, cfg["fiber"]["classify"]["trap_speed"])
         key = _design_key(settings, setting, target)
         n_rows = rows or cfg["fiber"].get("array_rows", ARRAY_ROWS)
-        table = sr.migration_table(runs)
+        table = sr.migration_table(runs, settings)
         crit = sr.critical_table(table)
         bead = 2.0 * cfg["fiber"]["bead_radius"]
         _echo_migration(runs, table, crit, settings, bead)
@@ -241,12 +241,9 @@ def _warn_short(settings: list[dict], rows: int) -> None:
 
 
 def _name(meta: dict) -> str:
-    """A setting combination's label, or the array itself when nothing is swept."""
-    if meta["label"]:
-        return meta["label"]
-    a = meta["array"]
-    return (f"the array: {a['pillar_shape']} {a['pillar_size']:g} µm, periods "
-            f"{a['period_x']:g} x {a['period_y']:g} µm, shift {a['shift']:g}")  # fmt: skip
+    from fibersweep.sweep.sort_report import setting_name
+
+    return setting_name(meta)
 
 
 def _bisects(L: float, crit, bead: float) -> bool:
@@ -427,7 +424,9 @@ def _figures(
         written.append(save_figure(pd_.outlets_figure(out, labels), fig_dir / "outlets.png"))
         written.append(
             save_figure(
-                pa.overlay_figure(runs, periods, shifts=shifts), fig_dir / "tracks.png", dpi=130
+                pa.overlay_figure(runs, periods, shifts=shifts),
+                fig_dir / "sort-tracks.png",
+                dpi=130,
             )
         )
         shown = list(range(len(settings)))

@@ -382,7 +382,7 @@ def power_cmd(
             more = f" ({probe}: detected with {need} fibers)" if need else ""
             typer.echo(f"  {r['effect']}: {r['setting']}{more}")
             continue
-        lim = f"{r['limit']:.3g}" if r["limit"] is not None else "not within its range"
+        lim = f"from {r['limit']:.3g}" if r["limit"] is not None else "not within its range"
         if r["limit_ci"] is not None:
             lo, hi = (f"{x:.3g}" if x is not None else "out of range" for x in r["limit_ci"])
             lim += f" [{lo}, {hi}]"
@@ -392,7 +392,7 @@ def power_cmd(
             lim += f"; read at {r['read_at']:.3g}"
         need = r["fibers_for_realistic"]
         typer.echo(
-            f"  {r['effect']:>13} {'+' if r['probe'] > 0 else '-'}  from {lim:>36}"
+            f"  {r['effect']:>13} {'+' if r['probe'] > 0 else '-'}  {lim:>41}"
             f"   (realistic {r['realistic']:g}: {need if need else '> 100000'} fibers)"
         )
     for a, b, c in pw.lookalikes:

@@ -47,7 +47,7 @@ from fibersweep.errors import FibersweepError, InputError
 from fibersweep.fiber.result import CLASSES
 from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
-from fibersweep.progressbar import finish, progress_bar
+from fibersweep.progressbar import WarmingBar, finish, progress_bar
 from fibersweep.sweep.executors import EXECUTORS, make_executor
 from fibersweep.sweep.worker import (
     RunBatch,
@@ -382,7 +382,10 @@ class Simulator:
             for k, c in enumerate(chunks)
         }
         if self._bar is None and self.progress:
-            self._bar = progress_bar(total=self._planned, unit="run")
+            # the rate and estimate start once each worker has a run done (compiled)
+            note = "" if self._later else "workers starting (the first runs also compile)"
+            self._bar = WarmingBar(self._planned, self.workers, note, make=progress_bar,
+                                   unit="run")  # fmt: skip
             if self._later:
                 self._bar.set_postfix_str(self._later_text(), refresh=False)
         bar = self._bar

@@ -220,7 +220,7 @@ def synthesize_with_tracks(
     # the frames of the tracks come with fps; the track observables are not written
     with Simulator(
         field, fiber, workers=workers, progress=progress, executor=executor,
-        scheduler=scheduler, tracks=False,
+        scheduler=scheduler, tracks=False, planned=n,
     ) as sim:  # fmt: skip
         raw = sim.run(true, effects, seeds, desc="synth", fps=fps)
     obs = noise.observe(raw, z)

@@ -175,7 +175,7 @@ def relabel(
 #: Meaning of the columns of :func:`migration_table` (its CSV and ``Results.fraction_summary``).
 MIGRATION_DOCS = {
     "setting": "index of the setting combination (sort order of its swept values)",
-    "setting_label": "the swept values of the setting combination",
+    "setting_label": "the swept values of the setting combination (the array when none is swept)",
     "length": "fiber length L [µm]",
     "runs": "runs at this setting and length",
     "moving": "runs that were not trapped: the runs f and the angle are averaged over",
@@ -189,8 +189,21 @@ MIGRATION_DOCS = {
 }
 
 
-def migration_table(runs: pd.DataFrame) -> pd.DataFrame:
+def setting_name(setting: dict) -> str:
+    """A setting combination's label (its swept values), or the array itself when
+    nothing is swept (a setting of :func:`with_settings`)."""
+    if setting["label"]:
+        return setting["label"]
+    a = setting["array"]
+    return (f"the array: {a['pillar_shape']} {a['pillar_size']:g} µm, periods "
+            f"{a['period_x']:g} x {a['period_y']:g} µm, shift {a['shift']:g}")  # fmt: skip
+
+
+def migration_table(runs: pd.DataFrame, settings: list[dict] | None = None) -> pd.DataFrame:
     """Per (setting, length): the f summary (see the module docstring).
+
+    ``settings`` (of :func:`with_settings`) names each combination in
+    ``setting_label`` (:func:`setting_name`); without it the runs' own label.
 
     Returns
     -------
@@ -204,9 +217,10 @@ def migration_table(runs: pd.DataFrame) -> pd.DataFrame:
         moving = g[g["mode"] != "trapped"]
         n = len(moving)
         f_std = float(moving["fraction"].std(ddof=1)) if n > 1 else math.nan
+        label = setting_name(settings[int(s)]) if settings else g["setting_label"].iloc[0]
         r = {
             "setting": s,
-            "setting_label": g["setting_label"].iloc[0],
+            "setting_label": label,
             "length": L,
             "runs": len(g),
             "moving": n,

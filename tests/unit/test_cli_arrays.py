@@ -131,7 +131,7 @@ def test_sort_report_is_a_designer_page(rigid):
     crit = pd.read_csv(rigid / "critical.csv")
     assert sorted(crit["value"]) == [0.1, 0.2]
     fig = rigid / "figures"
-    for name in ("migration.png", "outlets.png", "tracks.png", "critical-shift.png",
+    for name in ("migration.png", "outlets.png", "sort-tracks.png", "critical-shift.png",
                  "cell-flow-shift=0.1.png", "cell-flow-shift=0.2.png"):  # fmt: skip
         assert (fig / name).stat().st_size > 5000, name
     assert list(fig.glob("chrono-*.png"))

@@ -137,3 +137,20 @@ def test_rate_and_estimate_start_after_the_workers_start_up():
     assert rate == pytest.approx(2.0, rel=0.05), line  # the rate of the runs, not 42/80 s
     left = line.split("<")[1].split(",")[0]  # 58 runs at 2/s: 29 s
     assert left == "00:29", line
+
+
+def test_a_warming_bar_drops_its_note_once_warm_and_forwards_its_length():
+    """The start-up note holds until ``warm`` units are done; a length set on the
+    wrapper is the bar's (the discrepancy simulator grows and ends it so)."""
+    from fibersweep.progressbar import WarmingBar
+
+    out = io.StringIO()
+    bar = WarmingBar(4, warm=2, note="workers starting", file=out)
+    bar.update(1)
+    assert bar.postfix == "workers starting"
+    bar.update(1)
+    assert not bar.postfix
+    bar.total = 6
+    assert bar._bar.total == 6
+    finish(bar)
+    assert bar._bar.total == 2  # ended at its real count
