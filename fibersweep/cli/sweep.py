@@ -159,10 +159,11 @@ def _fields_line(cfg) -> tuple[str, bool]:
 def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
     from dataclasses import replace
 
-    from fibersweep.sweep.estimate import estimate_run_s
+    from fibersweep.sweep.estimate import busy_cores, estimate_run_s, free_workers
     from fibersweep.sweep.fields import flow_keys_for
     from fibersweep.sweep.plan import plan_sweep
 
+    load, cpus = busy_cores()  # before the probes below add to it
     plan = plan_sweep(cfg, None, resume=resume, retry_failed=retry_failed)
     extra, rnd, info = [], 0, None
     if cfg.sweep.refine is not None and not plan.fresh:
@@ -191,13 +192,19 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
             typer.echo(f"  {note}")
             if per_run is None:
                 per_run, how = per_run_timed, _timed_on(cfg, plan.todo) + " on a probe field"
-    # same rule as SweepPlan.estimate_s: no more workers busy than runs to do
-    est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(cfg.run.workers)
+    # same rule as SweepPlan.estimate_s: no more workers busy than runs to do; on a busy
+    # machine only as many as the free cores hold
+    free = free_workers(cfg.run.workers, load, cpus)
+    est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(free)
     if est is not None and flow_s:
         est += flow_s
         how += f"; flow fields {_fmt_s(flow_s)} included"
+    if free < cfg.run.workers and est is not None:
+        how += (f"; load average {load:.1f} on {cpus} cores: the workers share them, "
+                f"counted as {free}")  # fmt: skip
     typer.echo(
-        f"  {line}; estimate {_fmt_s(est)} on {cfg.run.workers} workers"
+        f"  {line}; estimate {_fmt_s(est)} on {cfg.run.workers} "
+        + ("worker" if cfg.run.workers == 1 else "workers")
         + (f" ({per_run:.2f} s per run, {how})" if per_run is not None else "")
         + (" for the runs known so far" if cfg.sweep.refine is not None else "")
     )

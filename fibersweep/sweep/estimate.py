@@ -36,8 +36,10 @@ __all__ = [
     "PROBE_STEPS",
     "TYPICAL_STEPS",
     "UncachedEstimate",
+    "busy_cores",
     "estimate_run_s",
     "estimate_uncached",
+    "free_workers",
     "sample_tasks",
     "time_run",
 ]
@@ -251,6 +253,27 @@ def _read_only(field: Any) -> Any:
 
     arrays = {n: frozen(getattr(field, n)) for n in ("ux", "uy", "u3d") if hasattr(field, n)}
     return dataclasses.replace(field, **arrays)
+
+
+def busy_cores() -> tuple[float, int]:
+    """The machine's 1-minute load average and its CPU count (load 0 where unknown)."""
+    import os
+
+    try:
+        load = float(os.getloadavg()[0])
+    except (AttributeError, OSError):  # no load average on this platform
+        load = 0.0
+    return load, os.cpu_count() or 1
+
+
+def free_workers(workers: int, load: float, cpus: int) -> int:
+    """Workers that will run at once on ``cpus`` cores already ``load`` busy (>= 1).
+
+    A sweep's workers share the cores with what the machine runs already, so on a
+    busy machine its wall time is that of fewer workers: those the free cores
+    hold (rounded), at least one.
+    """
+    return max(1, min(int(workers), round(cpus - load)))
 
 
 def _time_run_and_warmup(
