@@ -59,8 +59,9 @@ def cell_flow_figure(field):
     ax.set_xlabel("x [µm]")
     ax.set_ylabel("y [µm]")
     d = arr.describe()
+    angle = round(field.meta["mean_flow_angle_deg"], 2) or 0.0  # no "-0.00"
     ax.set_title(f"unit cell ×9: ε = {arr.shift:g}, G = {d['gap']:.0f} µm, "
-                 f"mean flow {field.meta['mean_flow_angle_deg']:.2f}°", fontsize=8)  # fmt: skip
+                 f"mean flow {angle:.2f}°", fontsize=8)  # fmt: skip
     return fig
 
 
@@ -82,7 +83,8 @@ def overlay_figure(runs, period_x: float | dict, lengths: list[float] | None = N
     lengths : list of float, optional
         The lengths to draw (default: all).
     ncols : int, optional
-        Panels per row (default: one per length, up to 7, so a row is a setting).
+        Panels per row (default: with several settings one per length, up to 7, so
+        a row is a setting; with one, up to 3).
     shifts : dict, optional
         ε λy [µm] per setting index (the tilt line).
     """
@@ -94,7 +96,8 @@ def overlay_figure(runs, period_x: float | dict, lengths: list[float] | None = N
         for L in lengths
         if ((runs["length"] == L) & ((runs["setting"] == s) if s is not None else True)).any()
     ]
-    ncols = min(ncols or min(len(lengths), 7), len(panels))
+    # one setting: rows of 3 panels; several: a row per setting (up to 7 lengths)
+    ncols = min(ncols or min(len(lengths), 3 if len(settings) == 1 else 7), len(panels))
     nrows = -(-len(panels) // ncols)
     fig, axes = subplots(nrows, ncols, figsize=(2.3 * ncols, 2.0 * nrows + 0.4), sharey=True,
                          sharex=True, squeeze=False, layout="constrained")  # fmt: skip

@@ -78,7 +78,8 @@ def load_array_results(results: str | Path) -> tuple[pd.DataFrame, list[dict], d
     runs = read_runs(results)
     if "mode" not in runs or not runs["mode"].notna().any():
         raise InputError(
-            f"RESULTS: {results} holds no pillar-array runs (run a config with flow.array)"
+            f"RESULTS: {results} holds no pillar-array runs (sort-report reads a sweep of a "
+            "config with flow.array; a channel's results: plot-phase, plot-delta, classify)"
         )
     runs, settings = with_settings(runs[runs["mode"].notna()].copy(), man)
     traj = read_trajectories(results, list(runs["id"]))
