@@ -472,9 +472,22 @@ def classify(
     """
     _setup_logging(verbose)
     with _errors():
+        from fibersweep.sweep.manifest import read_manifest
         from fibersweep.sweep.reclassify import reclassify, thresholds_for
 
         base = _load(config).fiber.classify if config is not None else None
+        man = read_manifest(results) or {}
+        run_cfg = man.get("config") or {}
+        array = (run_cfg.get("flow") or {}).get("array") is not None
+        channel_only = {"--rule": rule, "--pivot-fraction": pivot_fraction,
+                        "--head-blocked-speed": head_blocked_speed}  # fmt: skip
+        given = [k for k, v in channel_only.items() if v is not None]
+        if array and given:
+            raise InputError(
+                f"{', '.join(given)}: pillar-array runs have modes, not a channel's classes; "
+                "classify re-derives their trap rule (--trap-time, --trap-speed), and "
+                "sort-report's --zigzag-max and --displacement-min set the other modes"
+            )
         th = thresholds_for(
             results,
             base,
@@ -492,6 +505,15 @@ def classify(
             f"{th.trap_speed:g} U_center (the other mode thresholds are sort-report's "
             "--zigzag-max and --displacement-min)"
         )
+        # the thresholds the runs were simulated with (a re-labelling rewrites the config's)
+        simulated = man.get("simulated_classify") or (run_cfg.get("fiber") or {}).get("classify")
+        ran = (simulated or {}).get("trap_time")
+        if ran is not None and th.trap_time > float(ran):
+            typer.echo(
+                f"note: the runs stopped by their own trap rule (trap_time = {float(ran):g} s) "
+                "end there, so a longer --trap-time cannot tell whether they would have "
+                "moved on; run them again with fiber.classify.trap_time to know"
+            )
     else:
         typer.echo(f"re-classified {res.n_runs} runs ({res.n_changed} changed) with {th}")
     typer.echo(res.counts.to_string(index=False))

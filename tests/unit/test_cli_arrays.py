@@ -112,6 +112,14 @@ def test_classify_and_check_work_on_array_results(results):
     assert res.exit_code == 0, res.output
     assert "modes" in res.output and "(0 changed)" in res.output
     assert _run(["check", str(results)]).exit_code == 0
+    # a channel's class rule means nothing for modes: refused, naming what applies
+    res = _run(["classify", str(results), "--rule", "pivot"])
+    assert res.exit_code == 2 and "--trap-time" in res.output and "sort-report" in res.output
+    # a trap time longer than the run's own cannot un-trap a run that stopped there: said
+    res = _run(["classify", str(results), "--trap-time", "5"])
+    assert res.exit_code == 0 and "cannot tell whether they would have moved on" in res.output
+    res = _run(["classify", str(results), "--trap-time", "2"])  # back to the run's rule
+    assert res.exit_code == 0 and "cannot tell" not in res.output
 
 
 def test_sort_report_is_a_designer_page(rigid):
