@@ -228,3 +228,44 @@ def test_simulate_in_an_array_speaks_the_array_and_draws_the_rows(tmp_path, flow
     assert "y0/h" not in res.output and "L/l_obs" not in res.output and "class:" not in res.output
     assert png.stat().st_size > 5000 and len(drawn) == 1
     assert drawn[0].axes[0].get_xlabel() == "rows crossed"
+
+
+def test_simulate_a_flexible_fiber_in_an_array_draws_every_bead(tmp_path, flow_cache_dir,
+                                                                 monkeypatch):  # fmt: skip
+    """A 10 kPa, 40 µm bead-spring fiber through the array's rows: the array's terms,
+    and every drawn snapshot has all the fiber's beads (never a chord)."""
+    from matplotlib.collections import LineCollection
+
+    from fibersweep.plots import style
+
+    drawn = []
+    real = style.save_figure
+    monkeypatch.setattr(style, "save_figure", lambda fig, p, **kw: drawn.append(fig) or real(
+        fig, p, **kw))  # fmt: skip
+    png = tmp_path / "flex.png"
+    res = _run(["simulate", "configs/array-flexible.yaml", "--theta0", "0", "--y0", "0.5",
+                "--length", "40", "fiber.young_modulus=1e4", *SMALL,
+                f"run.cache_dir={flow_cache_dir}", "--plot", str(png)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    for word in ("mode:", "rows crossed:", "f ="):
+        assert word in res.output
+    assert png.stat().st_size > 5000 and len(drawn) == 1
+    n_beads = 10  # 40 µm of 2 µm beads (b = 2a)
+    segs = [s for ax in drawn[0].axes for c in ax.collections if isinstance(c, LineCollection)
+            for s in c.get_segments() if len(s) > 2]  # fmt: skip
+    assert segs and all(len(s) == n_beads for s in segs), {len(s) for s in segs}
+
+
+@pytest.mark.parametrize("command", ["synth", "power"])
+def test_measurement_commands_refuse_an_array_config_naming_what_to_use(command, tmp_path):
+    res = _run([command, "configs/array.yaml", "-o", str(tmp_path / "x")])
+    assert res.exit_code == 2, res.output
+    assert "sort-report" in res.output, res.output
+
+
+def test_discrepancy_refuses_an_array_config(tmp_path):
+    measured = tmp_path / "m.csv"
+    measured.write_text("theta0,y0,length,delta\n0,0.3,1.0,0.1\n")
+    res = _run(["discrepancy", str(measured), "configs/array.yaml", "-o", str(tmp_path / "r")])
+    assert res.exit_code == 2, res.output
+    assert "flow.array" in res.output and "sort-report" in res.output, res.output
