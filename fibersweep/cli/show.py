@@ -14,4 +14,9 @@ def show_config(config: ConfigArg, overrides: Overrides = None) -> None:
 
     with _errors():
         cfg = _load(config, overrides)
-    typer.echo(yaml.safe_dump(cfg.model_dump(mode="json"), sort_keys=False).rstrip())
+    data = cfg.model_dump(mode="json")
+    if data["flow"].get("array") is not None:  # the unit cell is the domain: no channel
+        data["flow"].pop("geometry", None)
+    typer.echo(yaml.safe_dump(data, sort_keys=False).rstrip())
+    if cfg.flow.array is not None:
+        typer.echo("# flow.geometry (the single channel) is unused with flow.array")

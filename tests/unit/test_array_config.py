@@ -132,3 +132,16 @@ def test_random_needs_ranges_and_refines_only_an_arrays_length(sweep, field):
     with pytest.raises((ConfigError, FieldError, ValueError)) as exc:
         parse_config({"sweep": sweep})
     assert field in str(exc.value)
+
+
+def test_config_of_an_array_leaves_out_the_unused_channel():
+    import yaml
+    from typer.testing import CliRunner
+
+    from fibersweep.cli import app
+
+    r = CliRunner().invoke(app, ["config", "configs/array.yaml"])
+    assert r.exit_code == 0, r.output
+    shown = yaml.safe_load(r.output)
+    assert "geometry" not in shown["flow"] and shown["flow"]["array"]["shift"] == 0.1
+    assert "flow.geometry (the single channel) is unused" in r.output
