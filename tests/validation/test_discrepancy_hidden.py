@@ -116,7 +116,7 @@ def test_library_effect_is_named_and_recovered(coarse_field, name):
     # the out-of-sample gap over the observables that had one shrinks by at least half
     before, after = _gap_shrink(res, name)
     # pillar_scale at seed 21 once shrank only to 0.60 of its gap (one fold
-    # under-corrected its half); on main fcf0c8e it halves: 0.349 before, -0.044 after
+    # under-corrected its half); on 479c9f0 it halves: 0.349 before, -0.044 after
     assert after <= 0.5 * before, (before, after)
 
 
