@@ -194,7 +194,8 @@ def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
                 per_run, how = per_run_timed, _timed_on(cfg, plan.todo) + " on a probe field"
     # same rule as SweepPlan.estimate_s: no more workers busy than runs to do; on a busy
     # machine only as many as the free cores hold
-    free = free_workers(cfg.run.workers, load, cpus)
+    remote = cfg.run.scheduler is not None  # a cluster's workers: this machine's load is not theirs
+    free = cfg.run.workers if remote else free_workers(cfg.run.workers, load, cpus)
     est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(free)
     if est is not None and flow_s:
         est += flow_s
