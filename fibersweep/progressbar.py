@@ -212,6 +212,8 @@ class WarmingBar:
         bar = self._bar
         bar.update(n)
         self._done += n
+        if getattr(bar, "disable", False):
+            return  # a disabled bar (TQDM_DISABLE) has no format or postfix to change
         if not self._clock and self._done >= self._warm:
             start_clock(bar)
             self._clock = True

@@ -509,11 +509,13 @@ def classify(
         # the thresholds the runs were simulated with (a re-labelling rewrites the config's)
         simulated = man.get("simulated_classify") or (run_cfg.get("fiber") or {}).get("classify")
         ran = (simulated or {}).get("trap_time")
-        if ran is not None and th.trap_time > float(ran):
+        counts = res.counts
+        trapped = int(counts.loc[counts["mode"] == "trapped", "runs"].sum())
+        if ran is not None and th.trap_time > float(ran) and trapped:
             typer.echo(
-                f"note: the runs stopped by their own trap rule (trap_time = {float(ran):g} s) "
-                "end there, so a longer --trap-time cannot tell whether they would have "
-                "moved on; run them again with fiber.classify.trap_time to know"
+                f"note: runs stopped by their own trap rule (trap_time = {float(ran):g} s) "
+                f"end there, so a trap_time longer than that cannot tell whether they would "
+                "have moved on; run them again with fiber.classify.trap_time to know"
             )
     else:
         typer.echo(f"re-classified {res.n_runs} runs ({res.n_changed} changed) with {th}")

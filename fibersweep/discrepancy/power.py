@@ -602,6 +602,8 @@ def analyse_power(
     look = sorted(
         ((a, b, c) for (a, b), c in cos.items() if c >= LOOKALIKE_COSINE), key=lambda t: -t[2]
     )
+    if expect is not None:
+        expect(0)  # the re-reads that did not run are no longer "later"
     if n_boot:
         effects = limit_intervals(effects, kept, base, candidates, n, observables, z_crit,
                                   power, rng, n_boot=n_boot, ens=ens)  # fmt: skip
@@ -621,7 +623,10 @@ def analyse_power(
 def planned_runs(
     candidates: Sequence[Candidate], n_sim: int, copies: int = 3, refine: int = 4
 ) -> tuple[int, int]:
-    """Runs :func:`analyse_power` makes: those it always makes, and at most how many more.
+    """Runs :func:`analyse_power` asks for: those it always asks for, and at most how many more.
+
+    Copies the maker already holds (the workflow's baseline) are counted too, so a bar
+    sized by this may end shorter (:func:`fibersweep.progressbar.finish`).
 
     Parameters
     ----------

@@ -213,7 +213,7 @@ def critical_figure(
         x = g["value"].to_numpy(float) if numeric else np.arange(len(g), dtype=float)
         ok = np.isfinite(g["critical"].to_numpy(float))
         ax.vlines(x[ok], g["lo"][ok], g["hi"][ok], color="0.75", lw=6, zorder=1)
-        falls = ok & (g["rising"].to_numpy() == False)  # noqa: E712  (None: no crossing)
+        falls = ok & g["rising"].eq(False).fillna(False).to_numpy(bool)  # None: no crossing
         for sel, marker, face in ((ok & ~falls, "o", col), (falls, "v", "none")):
             if sel.any():
                 ax.errorbar(

@@ -120,7 +120,7 @@ def critical_curve(
     for i, s in enumerate(settings):
         vals = s.get("values") or {}
         mine = crit[crit["setting"] == i]
-        c = mine[mine["rising"].astype(bool)]
+        c = mine[mine["rising"].eq(True).fillna(False).to_numpy(bool)]
         c = c if len(c) else mine  # no rising crossing: the first falling one
         row = {
             "setting": i,
@@ -280,11 +280,18 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
     se = np.nan_to_num(c["se"].to_numpy(float))
     lo, hi = c["lo"].to_numpy(float), c["hi"].to_numpy(float)
     add: list[str] = []
-    rising = c["rising"].to_numpy()
+    # a curve without the column (made by hand, or read from an older critical.csv): rising
+    rising = (
+        ~c["rising"].eq(False).fillna(False).to_numpy(bool)
+        if "rising" in c
+        else np.ones(len(c), bool)
+    )
+    mixed = False
     for k in range(len(v) - 1):
         if (lc[k] - target) * (lc[k + 1] - target) > 0 or lc[k] == lc[k + 1]:
             continue
         if rising[k] != rising[k + 1]:
+            mixed = True
             continue  # a lower edge and an upper edge are not one curve
         w = (target - lc[k]) / (lc[k + 1] - lc[k])
         val = v[k] + w * (v[k + 1] - v[k])
@@ -362,6 +369,14 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
     if c.empty:
         text = f"no value of {name} has a critical length in the swept lengths: widen sweep.length"
         return DesignAnswer(key, target, None, text=text)
+    if mixed:
+        text = (
+            f"the critical lengths on either side of {target:g} µm are a lower edge (f rises "
+            f"through 1/2) and an upper edge (f falls): not one curve, nothing to interpolate"
+        )
+        add = [f"values of {name} between those two, to find where the edge of one kind "
+               f"reaches {target:g} µm"]  # fmt: skip
+        return DesignAnswer(key, target, None, text=text, add=add)
     k_near = int(np.argmin(np.abs(lc - target)))
     rng = f"{lc.min():.1f} to {lc.max():.1f} µm over {name} = {v.min():g} to {v.max():g}"
     side = "above" if target > lc.max() else "below" if target < lc.min() else "inside"

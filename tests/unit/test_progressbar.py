@@ -154,3 +154,14 @@ def test_a_warming_bar_drops_its_note_once_warm_and_forwards_its_length():
     assert bar._bar.total == 6
     finish(bar)
     assert bar._bar.total == 2  # ended at its real count
+
+
+def test_a_disabled_warming_bar_counts_without_drawing(monkeypatch):
+    """TQDM_DISABLE=1 (or disable=True): updates past the warm-up never touch a format."""
+    from fibersweep.progressbar import WarmingBar
+
+    bar = WarmingBar(4, warm=1, note="workers starting", disable=True)
+    for _ in range(4):
+        bar.update(1)
+    bar.total = 5
+    finish(bar)

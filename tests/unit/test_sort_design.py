@@ -54,7 +54,7 @@ def test_the_curve_takes_a_falling_crossing_where_f_never_rises_through_one_half
     assert math.isnan(cur["lo"].iloc[2]) and cur["rising"].iloc[2] is None
     # a lower edge and an upper edge are not interpolated into one answer
     a = sd.answer(cur.iloc[:2], "fiber.young_modulus", 30.0, FLOW, bead=4.0)
-    assert a.value is None
+    assert a.value is None and "not one curve" in a.text
     # two upper edges are
     two = _curve([1e4, 2e4], [54.0, 30.0], [1.0, 1.0], [40.0, 20.0], [80.0, 40.0], False)
     b = sd.answer(two, "fiber.young_modulus", 42.0, FLOW, bead=4.0)
@@ -107,3 +107,10 @@ def test_outlet_edges_out_of_range_are_refused(edges):
     with pytest.raises(InputError, match="--outlets"):
         check_edges(edges)
     assert check_edges([0.7, 0.3]) == [0.3, 0.7]
+
+
+def test_a_curve_without_the_rising_column_reads_as_rising():
+    # a critical.csv written before the column existed, read back
+    cur = _curve([0.1, 0.15], [15.0, 28.4], [0.3, 0.1], [12.0, 24.0], [16.0, 32.0])
+    a = sd.answer(cur.drop(columns="rising"), "flow.array.shift", 22.0, FLOW, bead=4.0)
+    assert a.value == pytest.approx(0.1 + 7.0 / 13.4 * 0.05)
