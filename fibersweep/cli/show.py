@@ -15,8 +15,9 @@ def show_config(config: ConfigArg, overrides: Overrides = None) -> None:
     with _errors():
         cfg = _load(config, overrides)
     data = cfg.model_dump(mode="json")
-    if data["flow"].get("array") is not None:  # the unit cell is the domain: no channel
+    array = cfg.flow.array is not None
+    if array:  # the unit cell is the domain: no channel
         data["flow"].pop("geometry", None)
     typer.echo(yaml.safe_dump(data, sort_keys=False).rstrip())
-    if cfg.flow.array is not None:
+    if array:
         typer.echo("# flow.geometry (the single channel) is unused with flow.array")

@@ -263,11 +263,8 @@ class Simulator:
 
     def expect_more(self, runs: int) -> None:
         """Move ``runs`` of the later stages' runs into the bar's length (they now run)."""
-        self._planned += int(runs)
-        self._later = max(0, self._later - int(runs))
-        if self._bar is not None:
-            self._bar.total = max(self._planned, self._bar.n)
-            self._bar.set_postfix_str(self._later_text(), refresh=True)
+        ahead = (self._planned or self.used) - self.used  # what :meth:`expect` last said
+        self.expect(ahead + int(runs), later=max(0, self._later - int(runs)))
 
     def _later_text(self) -> str:
         return f"later stages: up to {self._later} more if needed" if self._later else ""

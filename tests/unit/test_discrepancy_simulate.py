@@ -151,3 +151,13 @@ def test_the_bar_counts_what_will_run_and_says_what_later_stages_may_add(
         assert bar.total == 5 and not bar.postfix
         sim.run(starts, {}, np.arange(3))  # a batch beyond what was said grows the bar
         assert bar.total == 6 and bar.n == 6
+
+
+def test_runs_moved_from_later_into_the_bar_keep_what_was_said(uniform_field):
+    """expect(10, later=20), then 5 of the later runs start: 15 ahead, 15 still later."""
+    with Simulator(uniform_field, FiberSettings(), workers=1) as sim:
+        sim.expect(10, later=20)
+        sim.expect_more(5)
+        assert sim._planned == sim.used + 15 and sim._later == 15
+        sim.expect_more(30)
+        assert sim._planned == sim.used + 45 and sim._later == 0
