@@ -21,6 +21,14 @@ from fibersweep.flow.settings import FlowSettings, GeometrySettings
 REPO = Path(__file__).resolve().parents[1]
 
 
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--studies",
+        action="store_true",
+        help="run the docs' study commands (hours; with -m study)",
+    )
+
+
 @pytest.fixture(scope="session")
 def flow_cache_dir() -> Path:
     """Directory of the shared test flow-field cache."""

@@ -10,13 +10,17 @@ repository first on PYTHONPATH), whatever is installed.
 
 Markers, written as a trailing comment on the command's line:
 
-* ``# doc-test: slow``: takes more than about 30 s; run only in the slow suite
-  (``pytest -m slow``), where every line of the file runs;
+* ``# doc-test: slow``: takes more than about 30 s (at most ``SLOW_LINE_TIMEOUT_S``);
+  run only in the slow suite (``pytest -m slow``), where every line of the file runs
+  but the study lines;
+* ``# doc-test: study <time>``: a study that takes longer than a slow line may (a full
+  sweep at the source's resolution, a band-pass map), with its time; run only by
+  ``pytest --studies -m study tests/docs``, where every line runs, without a limit;
 * ``# doc-test: skip <why>``: never run here (an install, a cluster command);
 * ``# doc-test: exit N``: the command must exit with code N (the point of the example).
 
 One test per file, so a failure names the file and the line. Lines without a
-marker must not depend on a slow line before them.
+marker must not depend on a slow line before them, nor slow lines on a study line.
 """
 
 from __future__ import annotations
@@ -38,7 +42,7 @@ REPO = Path(__file__).resolve().parents[2]
 #: cores, and longer on a shared machine).
 LINE_TIMEOUT_S = 600
 SLOW_LINE_TIMEOUT_S = 2400
-_MARK = re.compile(r"#\s*doc-test:\s*(slow|skip|exit)\b\s*(.*)$")
+_MARK = re.compile(r"#\s*doc-test:\s*(slow|study|skip|exit)\b\s*(.*)$")
 _FENCE = re.compile(r"^\s*```(\w*)")
 
 
@@ -55,7 +59,7 @@ class Command:
     text : str
         The shell command (comments kept: bash ignores them).
     mode : str
-        ``run``, ``slow`` or ``skip``.
+        ``run``, ``slow``, ``study`` or ``skip``.
     exit_code : int
         Expected exit status.
     """
@@ -126,8 +130,9 @@ def _command(rel: str, line: int, text: str) -> Command:
         if not re.fullmatch(r"\d+", arg.split(" ")[0] if arg else ""):
             raise ValueError(f"{rel}:{line}: '# doc-test: exit' needs a number")
         return Command(rel, line, text, exit_code=int(arg.split(" ")[0]))
-    if kind == "skip" and not arg:
-        raise ValueError(f"{rel}:{line}: '# doc-test: skip' needs a reason")
+    if kind in ("skip", "study") and not arg:
+        why = "a reason" if kind == "skip" else "its time"
+        raise ValueError(f"{rel}:{line}: '# doc-test: {kind}' needs {why}")
     return Command(rel, line, text, mode=kind)
 
 
@@ -156,16 +161,20 @@ def _scratch(tmp: Path, flow_cache: Path) -> tuple[Path, dict[str, str]]:
     return work, env
 
 
-def _run_file(rel: str, commands: list[Command], tmp: Path, flow_cache: Path, slow: bool):
+#: The lines each tier runs: the default suite, ``-m slow``, ``--studies -m study``.
+TIERS = {"run": ("run",), "slow": ("run", "slow"), "study": ("run", "slow", "study")}
+
+
+def _run_file(rel: str, commands: list[Command], tmp: Path, flow_cache: Path, tier: str):
     work, env = _scratch(tmp, flow_cache)
     ran = 0
     for cmd in commands:
-        if cmd.mode == "skip" or (cmd.mode == "slow" and not slow):
+        if cmd.mode not in TIERS[tier]:
             continue
         # the scripts of the repository are reachable as in a checkout
         if "scripts/" in cmd.text and not (work / "scripts").exists():
             (work / "scripts").symlink_to(REPO / "scripts", target_is_directory=True)
-        limit = SLOW_LINE_TIMEOUT_S if cmd.mode == "slow" else LINE_TIMEOUT_S
+        limit = {"run": LINE_TIMEOUT_S, "slow": SLOW_LINE_TIMEOUT_S}.get(cmd.mode)
         try:
             proc = subprocess.run(
                 ["bash", "-o", "pipefail", "-c", cmd.text],
@@ -194,17 +203,31 @@ def test_doc_commands(path: Path, tmp_path: Path, flow_cache_dir: Path) -> None:
     cmds = extract(path)
     if not any(c.mode == "run" for c in cmds):
         pytest.skip("no command to run outside the slow suite")
-    _run_file(str(path), cmds, tmp_path, flow_cache_dir, slow=False)
+    _run_file(str(path), cmds, tmp_path, flow_cache_dir, tier="run")
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("path", _FILES, ids=_IDS)
 def test_doc_commands_slow(path: Path, tmp_path: Path, flow_cache_dir: Path) -> None:
-    """Every command of the file, slow ones included, in order."""
+    """Every command of the file, slow ones included, in order (not the studies)."""
     cmds = extract(path)
     if not any(c.mode == "slow" for c in cmds):
         pytest.skip("no slow command")
-    _run_file(str(path), cmds, tmp_path, flow_cache_dir, slow=True)
+    _run_file(str(path), cmds, tmp_path, flow_cache_dir, tier="slow")
+
+
+@pytest.mark.study
+@pytest.mark.parametrize("path", _FILES, ids=_IDS)
+def test_doc_commands_study(
+    path: Path, tmp_path: Path, flow_cache_dir: Path, request: pytest.FixtureRequest
+) -> None:
+    """Every command of the file, studies included, in order (hours: ``--studies``)."""
+    if not request.config.getoption("--studies"):
+        pytest.skip("a study: run with --studies")
+    cmds = extract(path)
+    if not any(c.mode == "study" for c in cmds):
+        pytest.skip("no study command")
+    _run_file(str(path), cmds, tmp_path, flow_cache_dir, tier="study")
 
 
 def test_readme_set_up_commands_are_what_ci_runs() -> None:
@@ -228,17 +251,20 @@ def test_extract_markers(tmp_path: Path) -> None:
         "text\n```bash\n# a comment\nfibersweep --version\n"
         "fibersweep run a.yaml \\\n  --dry-run   # doc-test: slow\n"
         "fibersweep run bad.yaml  # doc-test: exit 2\n"
-        "sbatch x.sh  # doc-test: skip cluster only\n```\n"
+        "sbatch x.sh  # doc-test: skip cluster only\n"
+        "fibersweep run paper.yaml  # doc-test: study 3 hours\n```\n"
         "```text\nnot a command\n```\n```yaml\nflow: {}\n```\n"
     )
     doc.write_text(text, encoding="utf-8")
     cmds = extract(doc)
     assert [(c.line, c.mode, c.exit_code) for c in cmds] == [
-        (4, "run", 0), (5, "slow", 0), (7, "run", 2), (8, "skip", 0),
+        (4, "run", 0), (5, "slow", 0), (7, "run", 2), (8, "skip", 0), (9, "study", 0),
     ]  # fmt: skip
     assert " ".join(cmds[1].text.split()).startswith("fibersweep run a.yaml --dry-run #")
     with pytest.raises(ValueError, match="needs a reason"):
         _command("x.md", 1, "sbatch x.sh  # doc-test: skip")
+    with pytest.raises(ValueError, match="needs its time"):
+        _command("x.md", 1, "fibersweep run paper.yaml  # doc-test: study")
     with pytest.raises(ValueError, match="unknown doc-test marker"):
         _command("x.md", 1, "ls  # doc-test: sloww")
 

@@ -1,7 +1,8 @@
 """The discrepancy workflow on data with a hidden effect (synth -> discrepancy), coarse grid.
 
 The fast tests (CI) use 24 fibers and a reduced plan; the slow ones use the
-default plan (8 copies) on 60 fibers and every library effect at a realistic magnitude.
+default plan (8 copies) on 60 fibers (100 for friction, see ``FIBERS``) and every
+library effect at a realistic magnitude.
 The label is never given to the workflow: it only sees the synthesised table.
 """
 
@@ -105,11 +106,20 @@ def _gap_shrink(res, name: str) -> tuple[float, float]:
     return before, after
 
 
+#: Fibers per case: 60, or more where the realistic magnitude sits too close to the
+#: naming power at 60. Friction 0.5 at N = 60 is 2.2 times its detection limit (the
+#: median N = 100 limit 0.18, times sqrt(100 / 60)) and was detected but not named
+#: (seed 21: halves 0.595 and 0.259; the report's own power reading: about 362 fibers
+#: to name 0.43). At N = 100 it is 2.8 times the limit, where the validation report's
+#: study named 15 of 15 single effects above twice theirs (docs/validation/discrepancy.md).
+FIBERS = {"friction": 100}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", NAMED)
 def test_library_effect_is_named_and_recovered(coarse_field, name):
     value = LIBRARY[name].realistic
-    res = _run(coarse_field, {name: value}, 60, seed=21)
+    res = _run(coarse_field, {name: value}, FIBERS.get(name, 60), seed=21)
     assert res.verdict.kind == "named", res.verdict.text
     assert list(res.verdict.effects) == [name]
     assert res.verdict.effects[name] == pytest.approx(value, rel=TOLERANCE[name])
