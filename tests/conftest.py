@@ -29,6 +29,16 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     )
 
 
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Without --studies, the study tests are deselected (not listed as skipped)."""
+    if config.getoption("--studies"):
+        return
+    study = [it for it in items if it.get_closest_marker("study")]
+    if study:
+        config.hook.pytest_deselected(items=study)
+        items[:] = [it for it in items if not it.get_closest_marker("study")]
+
+
 @pytest.fixture(scope="session")
 def flow_cache_dir() -> Path:
     """Directory of the shared test flow-field cache."""

@@ -218,12 +218,9 @@ def test_doc_commands_slow(path: Path, tmp_path: Path, flow_cache_dir: Path) -> 
 
 @pytest.mark.study
 @pytest.mark.parametrize("path", _FILES, ids=_IDS)
-def test_doc_commands_study(
-    path: Path, tmp_path: Path, flow_cache_dir: Path, request: pytest.FixtureRequest
-) -> None:
-    """Every command of the file, studies included, in order (hours: ``--studies``)."""
-    if not request.config.getoption("--studies"):
-        pytest.skip("a study: run with --studies")
+def test_doc_commands_study(path: Path, tmp_path: Path, flow_cache_dir: Path) -> None:
+    """Every command of the file, studies included, in order (hours; collected only with
+    ``--studies``, tests/conftest.py)."""
     cmds = extract(path)
     if not any(c.mode == "study" for c in cmds):
         pytest.skip("no study command")

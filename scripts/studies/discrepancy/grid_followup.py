@@ -1,0 +1,137 @@
+"""A flow grid as a declared candidate, then the measurement the report asks for.
+
+Fibers are synthesised on a field of another grid (``--truth-dx``) and analysed with
+the study model (dx = 4 µm) and ``flow.dx=<truth>`` declared. When the verdict is
+ambiguous (or unexplained), the report's what-to-measure-next names the starts where
+its two hypotheses differ most and how many fibers there would settle it. This script
+then "measures" those fibers (synthesised on the truth field at the suggested starts,
+shared out over the best starts, with the workflow's own start and outcome noise) and
+analyses all fibers again, as an experimenter would.
+
+Usage::
+
+    python scripts/studies/discrepancy/grid_followup.py --truth-dx 5 --n 100 --seed 9521 \
+        --out results/grid_followup
+
+Writes ``summary.json`` in ``--out``: both verdicts, the suggestion, runs and times.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from common import BOX, DEFAULT_CACHE, STUDY_FLOW, study_field  # noqa: E402
+
+from fibersweep.discrepancy.declared import parse_candidate  # noqa: E402
+from fibersweep.discrepancy.schema import validate_measured  # noqa: E402
+from fibersweep.discrepancy.synth import synthesize  # noqa: E402
+from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy  # noqa: E402
+from fibersweep.fiber.settings import FiberSettings  # noqa: E402
+from fibersweep.flow.cache import get_flow_field  # noqa: E402
+from fibersweep.flow.settings import FlowSettings  # noqa: E402
+
+FIBER = FiberSettings()
+
+
+def analyse(table: pd.DataFrame, field, declared, seed: int, workers: int, cache: str):
+    """The workflow on ``table`` with ``declared`` (power off, what-to-measure-next on)."""
+    s = DiscrepancySettings(seed=seed, workers=workers, declared=declared, power_fibers=0)
+    t0 = time.perf_counter()
+    res = run_discrepancy(validate_measured(table), field, FIBER, s, progress=False,
+                          flow=STUDY_FLOW, cache_dir=cache)  # fmt: skip
+    return res, time.perf_counter() - t0
+
+
+def verdict_json(res, seconds: float) -> dict:
+    v = res.verdict
+    return {
+        "kind": v.kind,
+        "text": v.text,
+        "effects": {k: float(x) for k, x in v.effects.items()},
+        "simulations": int(res.simulations),
+        "seconds": round(seconds, 1),
+    }
+
+
+def measure_more(truth_field, best, fibers: int, seed: int, workers: int) -> pd.DataFrame:
+    """``fibers`` synthesised fibers shared out over the suggested starts ``best``."""
+    share = np.full(len(best), fibers // len(best))
+    share[: fibers % len(best)] += 1
+    parts = []
+    for j, (b, k) in enumerate(zip(best, share, strict=True)):
+        if k == 0:
+            continue
+        box = {"theta0": (b.theta0, b.theta0), "y0": (b.y0, b.y0), "length": (b.length,) * 2}
+        t, _ = synthesize(truth_field, FIBER, box, int(k), seed=seed + 1 + j, workers=workers,
+                          progress=False)  # fmt: skip
+        t["fiber_id"] = [f"m{j:02d}-{i:03d}" for i in range(len(t))]
+        parts.append(t)
+    return pd.concat(parts, ignore_index=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--truth-dx", type=float, default=5.0, help="grid of the truth [µm]")
+    ap.add_argument("--n", type=int, default=100, help="fibers of the first data set")
+    ap.add_argument("--seed", type=int, default=9521)
+    ap.add_argument("--max-more", type=int, default=300, help="most fibers to add")
+    ap.add_argument("--starts", type=int, default=5, help="best starts to share them over")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--cache", default=DEFAULT_CACHE)
+    ap.add_argument("--out", type=Path, default=Path("results/grid_followup"))
+    a = ap.parse_args(argv)
+    a.out.mkdir(parents=True, exist_ok=True)
+
+    field = study_field(a.cache)
+    truth_field, _ = get_flow_field(FlowSettings(dx=a.truth_dx), a.cache)
+    declared = (parse_candidate(f"flow.dx={a.truth_dx:g}", FIBER, STUDY_FLOW),)
+    table, _ = synthesize(truth_field, FIBER, BOX, a.n, seed=a.seed, workers=a.workers,
+                          progress=False)  # fmt: skip
+    res, sec = analyse(table, field, declared, a.seed, a.workers, a.cache)
+    out = {"truth_dx": a.truth_dx, "n": a.n, "seed": a.seed, "first": verdict_json(res, sec)}
+    print(f"first ({len(table)} fibers): {res.verdict.text} [{res.simulations} runs, {sec:.0f} s]")
+    nxt = res.extra.get("next")
+    if res.verdict.kind != "named" and nxt is not None and nxt.fibers_needed:
+        best = nxt.best[: a.starts]
+        more = min(int(nxt.fibers_needed), a.max_more)
+        out["next"] = {
+            "labels": list(nxt.labels),
+            "reason": res.extra.get("next_reason"),
+            "fibers_needed": int(nxt.fibers_needed),
+            "fibers_added": more,
+            "starts": [
+                {
+                    "theta0": b.theta0,
+                    "y0": b.y0,
+                    "length": b.length,
+                    "d": b.d,
+                    "observable": b.observable,
+                }
+                for b in best
+            ],  # fmt: skip
+        }
+        print(f"what to measure next: {nxt.labels[0]} against {nxt.labels[1]}; "
+              f"{nxt.fibers_needed} fibers at the best starts; adding {more}")  # fmt: skip
+        extra = measure_more(truth_field, best, more, a.seed + 1000, a.workers)
+        both = pd.concat([table, extra], ignore_index=True)
+        res2, sec2 = analyse(both, field, declared, a.seed, a.workers, a.cache)
+        out["second"] = verdict_json(res2, sec2) | {"fibers": len(both)}
+        print(f"second ({len(both)} fibers): {res2.verdict.text} "
+              f"[{res2.simulations} runs, {sec2:.0f} s]")  # fmt: skip
+    else:
+        print("no follow-up:", res.extra.get("next_skipped", "nothing to separate"))
+    (a.out / "summary.json").write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
+    print(f"wrote {a.out / 'summary.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
