@@ -33,10 +33,12 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     """Without --studies, the study tests are deselected (not listed as skipped)."""
     if config.getoption("--studies"):
         return
-    study = [it for it in items if it.get_closest_marker("study")]
+    keep, study = [], []
+    for it in items:
+        (study if it.get_closest_marker("study") else keep).append(it)
     if study:
         config.hook.pytest_deselected(items=study)
-        items[:] = [it for it in items if not it.get_closest_marker("study")]
+        items[:] = keep
 
 
 @pytest.fixture(scope="session")

@@ -163,6 +163,8 @@ def _scratch(tmp: Path, flow_cache: Path) -> tuple[Path, dict[str, str]]:
 
 #: The lines each tier runs: the default suite, ``-m slow``, ``--studies -m study``.
 TIERS = {"run": ("run",), "slow": ("run", "slow"), "study": ("run", "slow", "study")}
+#: Seconds a line of each mode may take (a study line has no limit).
+LIMITS = {"run": LINE_TIMEOUT_S, "slow": SLOW_LINE_TIMEOUT_S}
 
 
 def _run_file(rel: str, commands: list[Command], tmp: Path, flow_cache: Path, tier: str):
@@ -174,7 +176,7 @@ def _run_file(rel: str, commands: list[Command], tmp: Path, flow_cache: Path, ti
         # the scripts of the repository are reachable as in a checkout
         if "scripts/" in cmd.text and not (work / "scripts").exists():
             (work / "scripts").symlink_to(REPO / "scripts", target_is_directory=True)
-        limit = {"run": LINE_TIMEOUT_S, "slow": SLOW_LINE_TIMEOUT_S}.get(cmd.mode)
+        limit = LIMITS.get(cmd.mode)
         try:
             proc = subprocess.run(
                 ["bash", "-o", "pipefail", "-c", cmd.text],

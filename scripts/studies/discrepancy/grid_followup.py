@@ -13,7 +13,8 @@ Usage::
     python scripts/studies/discrepancy/grid_followup.py --truth-dx 5 --n 100 --seed 9521 \
         --out results/grid_followup
 
-Writes ``summary.json`` in ``--out``: both verdicts, the suggestion, runs and times.
+Writes ``summary.json`` in ``--out``: for each analysis the report's verdict and
+what-to-measure-next (:func:`fibersweep.discrepancy.report.summary`), runs and time.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import BOX, DEFAULT_CACHE, STUDY_FLOW, study_field  # noqa: E402
 
 from fibersweep.discrepancy.declared import parse_candidate  # noqa: E402
+from fibersweep.discrepancy.report import summary  # noqa: E402
 from fibersweep.discrepancy.schema import validate_measured  # noqa: E402
 from fibersweep.discrepancy.synth import synthesize  # noqa: E402
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy  # noqa: E402
@@ -50,15 +52,11 @@ def analyse(table: pd.DataFrame, field, declared, seed: int, workers: int, cache
     return res, time.perf_counter() - t0
 
 
-def verdict_json(res, seconds: float) -> dict:
-    v = res.verdict
-    return {
-        "kind": v.kind,
-        "text": v.text,
-        "effects": {k: float(x) for k, x in v.effects.items()},
-        "simulations": int(res.simulations),
-        "seconds": round(seconds, 1),
-    }
+def reported(res, seconds: float) -> dict:
+    """What the report's summary.json says of the verdict and what to measure next."""
+    s = summary(res)
+    keep = ("verdict", "next", "n_fibers", "simulations")
+    return {k: s[k] for k in keep} | {"seconds": round(seconds, 1)}
 
 
 def measure_more(truth_field, best, fibers: int, seed: int, workers: int) -> pd.DataFrame:
@@ -96,34 +94,19 @@ def main(argv: list[str] | None = None) -> int:
     table, _ = synthesize(truth_field, FIBER, BOX, a.n, seed=a.seed, workers=a.workers,
                           progress=False)  # fmt: skip
     res, sec = analyse(table, field, declared, a.seed, a.workers, a.cache)
-    out = {"truth_dx": a.truth_dx, "n": a.n, "seed": a.seed, "first": verdict_json(res, sec)}
+    out = {"truth_dx": a.truth_dx, "n": a.n, "seed": a.seed, "first": reported(res, sec)}
     print(f"first ({len(table)} fibers): {res.verdict.text} [{res.simulations} runs, {sec:.0f} s]")
     nxt = res.extra.get("next")
     if res.verdict.kind != "named" and nxt is not None and nxt.fibers_needed:
         best = nxt.best[: a.starts]
         more = min(int(nxt.fibers_needed), a.max_more)
-        out["next"] = {
-            "labels": list(nxt.labels),
-            "reason": res.extra.get("next_reason"),
-            "fibers_needed": int(nxt.fibers_needed),
-            "fibers_added": more,
-            "starts": [
-                {
-                    "theta0": b.theta0,
-                    "y0": b.y0,
-                    "length": b.length,
-                    "d": b.d,
-                    "observable": b.observable,
-                }
-                for b in best
-            ],  # fmt: skip
-        }
+        out["fibers_added"] = {"fibers": more, "starts": len(best)}
         print(f"what to measure next: {nxt.labels[0]} against {nxt.labels[1]}; "
               f"{nxt.fibers_needed} fibers at the best starts; adding {more}")  # fmt: skip
         extra = measure_more(truth_field, best, more, a.seed + 1000, a.workers)
         both = pd.concat([table, extra], ignore_index=True)
         res2, sec2 = analyse(both, field, declared, a.seed, a.workers, a.cache)
-        out["second"] = verdict_json(res2, sec2) | {"fibers": len(both)}
+        out["second"] = reported(res2, sec2)
         print(f"second ({len(both)} fibers): {res2.verdict.text} "
               f"[{res2.simulations} runs, {sec2:.0f} s]")  # fmt: skip
     else:
