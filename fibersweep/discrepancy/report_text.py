@@ -429,12 +429,42 @@ def _next(s: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _settle(s: dict[str, Any]) -> list[str]:
+    st = s.get("settle")
+    if st is None:
+        skipped = s.get("settle_skipped")
+        return ["", "## Follow-up fibers", "", f"Not tested: {skipped}."] if skipped else []
+    a, b = st["hypotheses"]
+    pa, pb = st["p_values"]
+    first = st.get("verdict_first") or {}
+    lines = [
+        "",
+        "## Follow-up fibers",
+        "",
+        f"Why: {st['reason']}. {st['fibers']} fibers measured after the first analysis test "
+        f"**{a}** (A) against **{b}** (B) on {', '.join(st['observables'])}: the sum of their "
+        "log-likelihood ratios of A over B, against its distribution under each hypothesis "
+        "from simulated copies (one-sided tests).",
+        "",
+        "| | A | B |",
+        "|---|---|---|",
+        f"| expected sum (sd) | {st['expected'][0]:.3g} ({st['sd'][0]:.2g}) "
+        f"| {st['expected'][1]:.3g} ({st['sd'][1]:.2g}) |",
+        f"| p of this hypothesis | {_f(pa, '.2g')} | {_f(pb, '.2g')} |",
+        "",
+        f"Measured sum: {st['statistic']:.3g}. Outcome: {st['text']}.",
+    ]
+    if first:
+        lines += ["", f"Verdict on the first fibers alone: {first['kind']}: {first['text']}"]
+    return lines
+
+
 def markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
     """The report for people (see the module docstring)."""
     lines = _header(s) + _gap_table(s) + _fits(s) + _before_after(s)
     if s["advice"]:
         lines += ["", "## Advice", ""] + [f"- {a}" for a in s["advice"]]
-    lines += _power(s) + _next(s)
+    lines += _power(s) + _next(s) + _settle(s)
     if figures:
         lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
     if configs:

@@ -9,11 +9,13 @@ without any effect, N = 60, candidates declared; at most 3 named (P(X >= 4) = 1.
 for a binomial(20, 0.05): an alarm rate at alpha fails this test in 1.6 % of runs).
 
 Each test makes its own data and runs on its own; select one with -k: E3e5, E1e5,
-without_the_candidate, smooth_pillar, coarser_flow_grid, false_alarms.
+without_the_candidate, smooth_pillar, coarser_flow_grid_is_named (the 100 fibers
+alone), asks_for (the same, then the follow-up fibers), false_alarms.
 """
 
 from __future__ import annotations
 
+import pandas as pd
 import pytest
 
 from fibersweep.discrepancy.declared import parse_candidate
@@ -85,6 +87,49 @@ def test_a_coarser_flow_grid_is_named(coarse_field, coarse_settings, flow_cache_
                       cache=flow_cache_dir, truth_field=coarse5)  # fmt: skip
     assert res.verdict.kind == "named", res.verdict.text
     assert list(res.verdict.effects) == ["flow.dx=5"]
+
+
+@pytest.mark.slow
+def test_a_coarser_flow_grid_is_named_by_the_fibers_the_report_asks_for(
+    coarse_field, coarse_settings, flow_cache_dir
+):
+    """The same 100 fibers (ambiguous, above), then what the report asks for.
+
+    What-to-measure-next gives the starts where its two hypotheses differ most and
+    how many fibers settle them; that many fibers, shared over its five best starts,
+    are synthesised on the dx = 5 µm field (seeds 10522 + j) and put to the two
+    hypotheses (:mod:`fibersweep.discrepancy.settle`, one-sided tests at alpha =
+    0.05 each: a wrong pick has probability at most 0.05). The grid must be named.
+    """
+    from fibersweep.discrepancy.workflow import settle_result
+    from fibersweep.flow.cache import get_flow_field
+
+    coarse5, _ = get_flow_field(FlowSettings(dx=5.0), flow_cache_dir)
+    table, _ = synthesize(coarse5, FIBER, BOX, 100, seed=9521, workers=2, progress=False)
+    cands = (parse_candidate("flow.dx=5", FIBER, coarse_settings),)
+    s = DiscrepancySettings(seed=9521, workers=2, declared=cands, power_fibers=0)
+    res = run_discrepancy(validate_measured(table), coarse_field, FIBER, s, progress=False,
+                          flow=coarse_settings, cache_dir=flow_cache_dir)  # fmt: skip
+    assert res.verdict.kind == "ambiguous", res.verdict.text
+    assert {"flow.dx=5"} in [set(a) for a in res.verdict.alternatives], res.verdict.text
+    nx = res.extra["next"]
+    assert nx.fibers_needed is not None and nx.fibers_needed <= 50, nx.fibers_needed
+    best = nx.best[:5]
+    share = [nx.fibers_needed // len(best) + (j < nx.fibers_needed % len(best))
+             for j in range(len(best))]  # fmt: skip
+    parts = []
+    for j, (b, k) in enumerate(zip(best, share, strict=True)):
+        if k:
+            box = {"theta0": (b.theta0,) * 2, "y0": (b.y0,) * 2, "length": (b.length,) * 2}
+            t, _ = synthesize(coarse5, FIBER, box, k, seed=10522 + j, workers=2,
+                              progress=False)  # fmt: skip
+            t["fiber_id"] = [f"m{j}-{i}" for i in range(len(t))]
+            parts.append(t)
+    more = validate_measured(pd.concat(parts, ignore_index=True))
+    res2 = settle_result(res, more, coarse_field, FIBER, progress=False, flow=coarse_settings,
+                         cache_dir=flow_cache_dir)  # fmt: skip
+    assert res2.verdict.kind == "named", (res2.verdict.text, res2.extra["settle"].test)
+    assert list(res2.verdict.effects) == ["flow.dx=5"], res2.verdict.text
 
 
 @pytest.mark.slow

@@ -1,0 +1,403 @@
+"""Settling the verdict's two-way question on fibers measured for it.
+
+When the verdict leaves two hypotheses (ambiguous between A and B, or the other
+cases of :func:`.followup.next_hypotheses`), what-to-measure-next proposes the
+starts where they differ most. Fibers measured afterwards (``--followup``), used
+by no fit, test the two hypotheses against each other directly; the analysis of
+the first fibers is left as it was.
+
+The test
+--------
+Per follow-up fiber i and scored component c (:func:`.power.standardised_values`),
+the discriminant
+
+    λ_i = Σ_c [(x_ic - μB_ic)² - (x_ic - μA_ic)²] / (2 s_c²)
+
+is the Gaussian log-likelihood ratio of A over B (μ: the mean of the *reference*
+copies of each hypothesis at the fiber's start; s_c: their spread around those
+means; a component undefined in x or μ adds nothing). It is only a statistic:
+its distribution under each hypothesis is that of *null* copies of the
+hypothesis (independent of the reference copies, measurement noise included)
+scored the same way, so the test needs no Gaussian assumption. For the sum
+Λ = Σ_i λ_i the null distribution is drawn by taking one null copy per fiber at
+random, ``n_draws`` times (the per-fiber terms are independent). Then
+
+    p_A = P(Λ* <= Λ | A)   (few fibers closer to A than A's own copies are),
+    p_B = P(Λ* >= Λ | B),
+
+each one-sided at ``alpha``. At most one hypothesis is true, so the chance of
+rejecting the true one is at most alpha, and so is the chance of settling on
+the wrong one. Outcome: B rejected and A not: "A"; the reverse: "B"; both:
+"neither" (the fibers lie between the two, e.g. the truth is a value between
+two fitted values); none: "undecided" (too few or too weakly discriminating
+fibers: the report says how many the expected separation needs). The test looks
+along the difference of the two predictions only: whether the winner fits the
+first fibers was the verdict's adequacy check; fibers beyond A, away from B,
+count for A.
+
+Why not paired comparisons on the first fibers: there each hypothesis was
+fitted to the same fibers, and common random numbers favour whichever copies
+happen to look like them (:mod:`.decide`); here the hypotheses are fixed
+before the follow-up fibers are seen.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.stats import norm
+
+from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
+from fibersweep.discrepancy.decide import HeldOut, Verdict
+from fibersweep.discrepancy.followup import next_hypotheses
+from fibersweep.discrepancy.power import standardised_values
+from fibersweep.discrepancy.schema import MeasuredData
+from fibersweep.discrepancy.settings import DiscrepancySettings
+from fibersweep.discrepancy.simulate import Simulator
+
+__all__ = [
+    "Settlement",
+    "SettleTest",
+    "discriminant",
+    "settle",
+    "settle_followup",
+    "settle_test",
+    "settled_verdict",
+]
+
+#: Null draws of the sum Λ per hypothesis (resolution of the p-values: 1/(n_draws + 1)).
+N_DRAWS = 19999
+
+
+def discriminant(x: np.ndarray, mu_a: np.ndarray, mu_b: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Per-fiber log-likelihood ratio of A over B under a Gaussian model.
+
+    Parameters
+    ----------
+    x : ndarray, shape (..., n, c)
+        Component values (scoring scale) of n fibers.
+    mu_a, mu_b : ndarray, shape (n, c)
+        The hypotheses' mean predictions at the same starts.
+    s : ndarray, shape (c,)
+        Noise of one fiber per component (> 0).
+
+    Returns
+    -------
+    ndarray, shape (..., n)
+        Σ_c [(x - μB)² - (x - μA)²] / (2 s²); a component undefined (NaN) in x,
+        μA or μB adds 0, by the same rule for measured fibers and copies.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    if x.shape[-2:] != np.shape(mu_a) or np.shape(mu_a) != np.shape(mu_b):
+        raise ValueError(
+            f"shapes differ: x {x.shape}, mu_a {np.shape(mu_a)}, mu_b {np.shape(mu_b)}"
+        )
+    if np.shape(s) != x.shape[-1:]:
+        raise ValueError(f"s must have shape {x.shape[-1:]}, got {np.shape(s)}")
+    with np.errstate(invalid="ignore"):
+        term = ((x - mu_b) ** 2 - (x - mu_a) ** 2) / (2.0 * np.asarray(s) ** 2)
+    return np.where(np.isfinite(term), term, 0.0).sum(axis=-1)
+
+
+def _spread(ref_a: np.ndarray, ref_b: np.ndarray) -> np.ndarray:
+    """Noise of one fiber per component: the reference copies around their means.
+
+    As :func:`.followup.discriminate`: pooled over both hypotheses and all fibers,
+    with a floor of 5 % of the components' spread so none counts as noiseless.
+    """
+    k = ref_a.shape[0]
+    with warnings.catch_warnings():  # a component undefined at a start: NaN, as meant
+        warnings.simplefilter("ignore", RuntimeWarning)
+        resid = np.concatenate([ref_a - np.nanmean(ref_a, 0), ref_b - np.nanmean(ref_b, 0)])
+        s = np.sqrt(np.nanmean(resid**2, axis=(0, 1)) * k / max(k - 1, 1))
+        floor = np.nanstd(np.concatenate([ref_a, ref_b]), axis=(0, 1)) * 0.05
+    s = np.where(np.isfinite(s), s, 0.0)
+    floor = np.where(np.isfinite(floor) & (floor > 0), floor, 1.0)
+    return np.maximum(s, floor)
+
+
+@dataclass(frozen=True)
+class SettleTest:
+    """The two one-sided tests on the follow-up fibers (:func:`settle_test`).
+
+    Attributes
+    ----------
+    per_fiber : ndarray, shape (n,)
+        λ_i of each measured follow-up fiber (> 0: closer to A).
+    statistic : float
+        Λ = Σ λ_i.
+    expected : (float, float)
+        Mean of Λ under A and under B (from the null copies).
+    spread : (float, float)
+        Its standard deviation under A and under B.
+    p_values : (float, float)
+        p of "A is true" (Λ as low or lower under A) and of "B is true".
+    outcome : {'A', 'B', 'neither', 'undecided'}
+    fibers_needed : int or None
+        Fibers of the same discrimination that separate A from B at ``alpha``
+        with power 0.8 (None when the copies do not separate them at all).
+    """
+
+    per_fiber: np.ndarray
+    statistic: float
+    expected: tuple[float, float]
+    spread: tuple[float, float]
+    p_values: tuple[float, float]
+    outcome: str
+    fibers_needed: int | None
+
+
+def settle_test(
+    x: np.ndarray,
+    ref_a: np.ndarray,
+    ref_b: np.ndarray,
+    null_a: np.ndarray,
+    null_b: np.ndarray,
+    rng: np.random.Generator,
+    alpha: float = 0.05,
+    n_draws: int = N_DRAWS,
+) -> SettleTest:
+    """Test A against B on measured fibers, with copies of each.
+
+    Parameters
+    ----------
+    x : ndarray, shape (n, c)
+        The measured fibers' components (scoring scale; NaN where undefined).
+    ref_a, ref_b : ndarray, shape (k_ref, n, c)
+        Reference copies of each hypothesis at the fibers' starts (their means
+        and spread define λ).
+    null_a, null_b : ndarray, shape (k_null, n, c)
+        Independent copies of each hypothesis: the null distributions.
+    rng : Generator
+        For the null draws of Λ.
+    alpha : float
+        Level of each one-sided test.
+    n_draws : int
+        Null draws of Λ per hypothesis.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    n, c = x.shape
+    for name, arr in (("ref_a", ref_a), ("ref_b", ref_b), ("null_a", null_a), ("null_b", null_b)):
+        if np.ndim(arr) != 3 or np.shape(arr)[1:] != (n, c):
+            raise ValueError(f"{name} must have shape (k, {n}, {c}), got {np.shape(arr)}")
+    if len(ref_a) < 2 or len(ref_b) < 2 or len(null_a) < 2 or len(null_b) < 2:
+        raise ValueError("every copy set needs at least 2 copies")
+    with warnings.catch_warnings():  # all copies undefined at a start: NaN mean, adds 0
+        warnings.simplefilter("ignore", RuntimeWarning)
+        mu_a, mu_b = np.nanmean(ref_a, axis=0), np.nanmean(ref_b, axis=0)
+    s = _spread(np.asarray(ref_a, float), np.asarray(ref_b, float))
+    lam = discriminant(x, mu_a, mu_b, s)
+    lam_a = discriminant(null_a, mu_a, mu_b, s)  # (k_null, n)
+    lam_b = discriminant(null_b, mu_a, mu_b, s)
+    stat = float(lam.sum())
+    cols = np.arange(n)
+    draws_a = lam_a[rng.integers(0, len(lam_a), size=(n_draws, n)), cols].sum(axis=1)
+    draws_b = lam_b[rng.integers(0, len(lam_b), size=(n_draws, n)), cols].sum(axis=1)
+    p_a = (1.0 + np.count_nonzero(draws_a <= stat)) / (n_draws + 1.0)
+    p_b = (1.0 + np.count_nonzero(draws_b >= stat)) / (n_draws + 1.0)
+    rej_a, rej_b = p_a <= alpha, p_b <= alpha
+    outcome = {(False, True): "A", (True, False): "B", (True, True): "neither"}.get(
+        (bool(rej_a), bool(rej_b)), "undecided"
+    )
+    m = (float(lam_a.mean(0).sum()), float(lam_b.mean(0).sum()))
+    sd = (float(np.sqrt(lam_a.var(0, ddof=1).sum())), float(np.sqrt(lam_b.var(0, ddof=1).sum())))
+    return SettleTest(lam, stat, m, sd, (float(p_a), float(p_b)), outcome,
+                      _needed(m, sd, n, alpha))  # fmt: skip
+
+
+def _needed(m: tuple[float, float], sd: tuple[float, float], n: int, alpha: float) -> int | None:
+    """Fibers like these that separate A from B: both one-sided tests at alpha, power 0.8.
+
+    Λ's mean and variance grow with the number of fibers; the two null
+    distributions are told apart when (m_A - m_B) >= (z_{1-alpha} + z_0.8) (sd_A + sd_B)
+    / 2, all scaled from the n fibers measured to N.
+    """
+    gap = (m[0] - m[1]) / n
+    if not np.isfinite(gap) or gap <= 0.0:
+        return None
+    z = norm.ppf(1 - alpha) + norm.ppf(0.8)
+    sd1 = (sd[0] + sd[1]) / 2.0 / math.sqrt(n)
+    return max(1, int(math.ceil((z * sd1 / gap) ** 2)))
+
+
+@dataclass(frozen=True)
+class Settlement:
+    """The follow-up fibers' answer to the verdict's two-way question.
+
+    Attributes
+    ----------
+    labels : (str, str)
+        The hypotheses, e.g. ('flow.dx = 5 µm', 'off_midplane = 0.068').
+    hypotheses : (dict, dict)
+        Their effects (name -> value in the fit's scale).
+    reason : str
+        Why these two (as what-to-measure-next says).
+    n : int
+        Follow-up fibers.
+    observables : tuple of str
+        Observables scored (those the follow-up table has).
+    test : SettleTest
+    simulations : int
+    """
+
+    labels: tuple[str, str]
+    hypotheses: tuple[dict[str, float], dict[str, float]]
+    reason: str
+    n: int
+    observables: tuple[str, ...]
+    test: SettleTest
+    simulations: int
+
+    @property
+    def outcome(self) -> str:
+        return self.test.outcome
+
+    def text(self) -> str:
+        """One sentence: what the follow-up fibers say."""
+        a, b = self.labels
+        pa, pb = self.test.p_values
+        tail = f"(p {pa:.2g} for {a}, p {pb:.2g} for {b})"
+        if self.outcome in ("A", "B"):
+            win, lose = (a, b) if self.outcome == "A" else (b, a)
+            return f"the {self.n} follow-up fibers reject {lose} and fit {win} {tail}"
+        if self.outcome == "neither":
+            return f"the {self.n} follow-up fibers lie between {a} and {b}, rejecting both {tail}"
+        need = self.test.fibers_needed
+        more = f"; about {need} such fibers would separate them" if need else ""
+        return f"the {self.n} follow-up fibers do not separate {a} from {b} {tail}{more}"
+
+
+def settle(
+    sim: Simulator,
+    noise: NoiseModel,
+    hypotheses: tuple[Mapping[str, float], Mapping[str, float]],
+    labels: tuple[str, str],
+    reason: str,
+    table,
+    starts: np.ndarray,
+    observables: Sequence[str],
+    rng: np.random.Generator,
+    seed: int = 0,
+    copies: int = 24,
+    alpha: float = 0.05,
+) -> Settlement:
+    """Simulate both hypotheses at the follow-up fibers' starts and test them.
+
+    Parameters
+    ----------
+    sim : Simulator
+    noise : NoiseModel
+        Measurement model of the copies (start and outcome noise).
+    hypotheses : (mapping, mapping)
+        The two sets of effects (fixed: fitted on the first fibers).
+    labels, reason : as :class:`Settlement`
+    table : DataFrame
+        The follow-up fibers (observed columns by observable name).
+    starts : ndarray, shape (n, 3)
+        Their starts: theta0 [deg], y0 [/h_obs], length [/l_obs].
+    observables : sequence of str
+        Observables to score (present in ``table``).
+    copies : int
+        Copies per hypothesis and fiber: a third for the reference means, the
+        rest for the null distributions (>= 6).
+    """
+    if copies < 6:
+        raise ValueError(f"copies must be >= 6, got {copies}")
+    k_ref = copies // 3
+    used0 = sim.used
+    # common random numbers between A and B; reference and null copies are independent
+    maker = CopyMaker(starts, noise, seed + 15485863, sim)
+    va, vb = (
+        np.stack(
+            standardised_values(
+                maker.copies(range(copies), dict(h), desc=f"follow-up: {tag}"), observables
+            )
+        )
+        for h, tag in zip(hypotheses, "AB", strict=True)
+    )
+    x = standardised_values([table], observables)[0]
+    test = settle_test(x, va[:k_ref], vb[:k_ref], va[k_ref:], vb[k_ref:], rng, alpha)
+    return Settlement(
+        labels=labels,
+        hypotheses=(dict(hypotheses[0]), dict(hypotheses[1])),
+        reason=reason,
+        n=len(starts),
+        observables=tuple(observables),
+        test=test,
+        simulations=sim.used - used0,
+    )
+
+
+def settled_verdict(verdict: Verdict, st: Settlement) -> Verdict:
+    """The verdict after the follow-up fibers.
+
+    An ambiguous verdict between exactly these two alternatives becomes "named"
+    when the follow-up fibers reject one and fit the other; any other verdict
+    (and any other outcome) stands, and the report gives the settlement beside it.
+    """
+    alts = [dict(a) for a in verdict.alternatives]
+    if verdict.kind != "ambiguous" or st.outcome not in ("A", "B") or alts != list(st.hypotheses):
+        return verdict
+    win = st.hypotheses[0 if st.outcome == "A" else 1]
+    label = st.labels[0 if st.outcome == "A" else 1]
+    text = f"{label}: {st.text()}. On the first fibers alone: {verdict.text}"
+    return Verdict("named", dict(win), verdict.observable, verdict.region, text, (dict(win),))
+
+
+def settle_followup(
+    verdict: Verdict,
+    heldout: Sequence[HeldOut],
+    fold_values: Mapping[str, list[float]],
+    followup: MeasuredData,
+    sim: Simulator,
+    s: DiscrepancySettings,
+    observables: Sequence[str],
+    show: Callable[[Mapping[str, float]], str] | None = None,
+) -> tuple[Verdict, dict[str, Any]]:
+    """The verdict's two-way question (:func:`.followup.next_hypotheses`) put to follow-up fibers.
+
+    Parameters
+    ----------
+    verdict, heldout, fold_values
+        The analysis of the first fibers.
+    followup : MeasuredData
+        Fibers measured after it (typically at the starts what-to-measure-next gave).
+    s : DiscrepancySettings
+        ``settle_copies``, ``noise``, ``seed``, ``alpha``.
+    observables : sequence of str
+        The first fibers' observables; those the follow-up table also has are scored.
+    show : callable, optional
+        ``{name: value} -> text`` for the labels (each value in its candidate's unit).
+
+    Returns
+    -------
+    verdict : Verdict
+        :func:`settled_verdict`.
+    extra : dict
+        ``settle`` (Settlement), or ``settle_skipped`` with the reason.
+    """
+    label = show or (lambda v: " + ".join(f"{k} = {x:.3g}" for k, x in v.items()))
+    hyp = next_hypotheses(verdict, list(heldout), dict(fold_values), show)
+    if hyp is None:
+        why = f"the verdict ({verdict.kind}) leaves no two hypotheses to separate"
+        return verdict, {"settle_skipped": why}
+    obs = tuple(o for o in observables if o in followup.observed)
+    if not obs:
+        why = f"the follow-up fibers measure none of {', '.join(observables)}"
+        return verdict, {"settle_skipped": why}
+    cost = 2 * s.settle_copies * len(followup)
+    if cost > sim.remaining:
+        why = f"the budget leaves {sim.remaining} runs, it needs {cost}"
+        return verdict, {"settle_skipped": why}
+    a, b, why = hyp
+    st = settle(
+        sim, s.noise, (a, b), (label(a) or "baseline", label(b) or "baseline"), why,
+        followup.table.reset_index(drop=True), followup.starts, obs,
+        np.random.default_rng([s.seed, 23]), seed=s.seed, copies=s.settle_copies, alpha=s.alpha,
+    )  # fmt: skip
+    return settled_verdict(verdict, st), {"settle": st}

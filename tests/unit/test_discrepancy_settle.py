@@ -1,0 +1,137 @@
+"""The follow-up test of two hypotheses (fibersweep.discrepancy.settle), on Gaussian data.
+
+With Gaussian components of known means and unit noise, the discriminant λ of one
+fiber is N(+D²/2, D²) under A and N(-D²/2, D²) under B (D: the separation in noise
+units), so the power of each one-sided test is known in closed form.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.stats import norm
+
+from fibersweep.discrepancy.decide import Verdict
+from fibersweep.discrepancy.settle import (
+    Settlement,
+    discriminant,
+    settle_test,
+    settled_verdict,
+)
+
+
+def test_discriminant_is_the_gaussian_log_likelihood_ratio():
+    x = np.array([[1.0, 2.0], [0.0, np.nan]])
+    mu_a = np.array([[1.0, 2.0], [0.0, 0.0]])
+    mu_b = np.array([[0.0, 0.0], [1.0, 5.0]])
+    s = np.array([1.0, 2.0])
+    lam = discriminant(x, mu_a, mu_b, s)
+    # fiber 0: (1 - 0)²/2 + (2 - 0)²/(2·4) = 0.5 + 0.5; fiber 1: (0 - 1)²/2, the NaN adds 0
+    np.testing.assert_allclose(lam, [1.0, 0.5], rtol=0, atol=1e-15)
+    # copies broadcast over a leading axis
+    assert discriminant(np.stack([x, x, x]), mu_a, mu_b, s).shape == (3, 2)
+    with pytest.raises(ValueError, match="shapes differ"):
+        discriminant(x, mu_a[:1], mu_b, s)
+    with pytest.raises(ValueError, match="s must have shape"):
+        discriminant(x, mu_a, mu_b, s[:1])
+
+
+def _gaussian(rng, mu, k, sd=1.0):
+    """k copies (k, n, c) around means mu (n, c)."""
+    return mu + sd * rng.standard_normal((k,) + mu.shape)
+
+
+def _trial(rng, mu_a, mu_b, truth, k_ref=200, k_null=400, n_draws=1999):
+    x = _gaussian(rng, truth, 1)[0]
+    return settle_test(
+        x,
+        _gaussian(rng, mu_a, k_ref),
+        _gaussian(rng, mu_b, k_ref),
+        _gaussian(rng, mu_a, k_null),
+        _gaussian(rng, mu_b, k_null),
+        rng,
+        alpha=0.05,
+        n_draws=n_draws,
+    )
+
+
+def test_size_and_power_match_the_closed_form():
+    """Under A: A rejected at about alpha; B rejected with power Φ(√n D − z_{1−α}).
+
+    n = 9 fibers of separation D = 1 (one component): power Φ(3 − 1.645) = 0.912.
+    300 trials: binomial sd 0.013 (size) and 0.016 (power); tolerance 0.05 on both
+    (three binomial sd, and the reference copies' finite means, k_ref = 200).
+    """
+    rng = np.random.default_rng(7)
+    n, d, alpha, trials = 9, 1.0, 0.05, 300
+    mu_a = np.zeros((n, 1))
+    mu_b = np.full((n, 1), d)
+    res = [_trial(rng, mu_a, mu_b, mu_a) for _ in range(trials)]
+    size = np.mean([r.p_values[0] <= alpha for r in res])
+    power = np.mean([r.p_values[1] <= alpha for r in res])
+    expected = norm.cdf(np.sqrt(n) * d - norm.ppf(1 - alpha))
+    assert abs(size - alpha) < 0.05, size
+    assert abs(power - expected) < 0.05, (power, expected)
+    # Λ's moments under A: n D²/2 and √n D
+    m_a = np.mean([r.expected[0] for r in res])
+    sd_a = np.mean([r.spread[0] for r in res])
+    assert abs(m_a - n * d**2 / 2) < 0.2 and abs(sd_a - np.sqrt(n) * d) < 0.2, (m_a, sd_a)
+    # the fibers the closed form needs for power 0.8 with both tests at alpha:
+    # ((z_0.95 + z_0.8) / D)² = 6.2 -> 7; the estimate from copies is within one fiber
+    need = [r.fibers_needed for r in res[:20]]
+    assert all(6 <= k <= 8 for k in need), need
+
+
+def test_outcomes():
+    rng = np.random.default_rng(3)
+    n = 8
+    mu_a = np.zeros((n, 2))
+    mu_b = np.full((n, 2), 2.0)
+    assert _trial(rng, mu_a, mu_b, mu_a).outcome == "A"
+    assert _trial(rng, mu_a, mu_b, mu_b).outcome == "B"
+    # fibers half way between two well separated hypotheses: both rejected
+    assert _trial(rng, mu_a, mu_b, np.full((n, 2), 1.0)).outcome == "neither"
+    # the test looks along A - B only: fibers beyond A (away from B) are A's
+    assert _trial(rng, mu_a, mu_b, np.full((n, 2), -1.0)).outcome == "A"
+    # identical hypotheses: nothing separates them, and no number of fibers would
+    same = _trial(rng, mu_a, mu_a, mu_a)
+    assert same.outcome == "undecided"
+    assert same.fibers_needed is None or same.fibers_needed > 1000
+
+
+def test_shapes_are_checked():
+    rng = np.random.default_rng(0)
+    x = np.zeros((3, 2))
+    ok = np.zeros((4, 3, 2))
+    with pytest.raises(ValueError, match="null_b must have shape"):
+        settle_test(x, ok, ok, ok, np.zeros((4, 2, 2)), rng)
+    with pytest.raises(ValueError, match="at least 2 copies"):
+        settle_test(x, ok[:1], ok, ok, ok, rng)
+
+
+def _settlement(outcome: str, hyps=({"a": 1.0}, {"b": 2.0})) -> Settlement:
+    from fibersweep.discrepancy.settle import SettleTest
+
+    p = {"A": (0.5, 0.001), "B": (0.001, 0.5), "neither": (0.001, 0.001)}.get(outcome, (0.5, 0.5))
+    t = SettleTest(np.zeros(5), 0.0, (1.0, -1.0), (1.0, 1.0), p, outcome, 7)
+    return Settlement(("a = 1", "b = 2"), hyps, "the verdict is ambiguous", 5, ("class",), t, 240)
+
+
+def test_an_ambiguous_verdict_is_named_only_when_the_follow_up_settles_it():
+    amb = Verdict("ambiguous", {"a": 1.0, "b": 2.0}, "delta", "everywhere", "Ambiguous …",
+                  ({"a": 1.0}, {"b": 2.0}))  # fmt: skip
+    named = settled_verdict(amb, _settlement("B"))
+    assert named.kind == "named" and named.effects == {"b": 2.0}
+    assert named.alternatives == ({"b": 2.0},)
+    assert "reject a = 1" in named.text and "On the first fibers alone" in named.text
+    assert settled_verdict(amb, _settlement("A")).effects == {"a": 1.0}
+    for outcome in ("neither", "undecided"):
+        assert settled_verdict(amb, _settlement(outcome)) is amb
+    # a settlement of other hypotheses, or an ambiguity among three, leaves it
+    assert settled_verdict(amb, _settlement("A", ({"a": 1.0}, {"c": 0.1}))) is amb
+    three = Verdict("ambiguous", {}, "", "", "", ({"a": 1.0}, {"b": 2.0}, {"c": 3.0}))
+    assert settled_verdict(three, _settlement("A")) is three
+    un = Verdict("unexplained", {}, "delta", "", "Unexplained")
+    assert settled_verdict(un, _settlement("A")) is un
+    assert "do not separate" in _settlement("undecided").text()
+    assert "rejecting both" in _settlement("neither").text()
