@@ -273,8 +273,8 @@ def discrepancy(
             typer.echo(line)
         if more is not None:
             typer.echo(
-                f"  then {2 * settings.settle_copies * len(more)} for the {len(more)} follow-up "
-                "fibers, if the verdict leaves two hypotheses"
+                f"  then {2 * settings.settle_copies * len(more)} more (beyond any --budget) for "
+                f"the {len(more)} follow-up fibers, if the verdict leaves two hypotheses"
             )
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
         res = run_discrepancy(data, field, cfg.fiber, settings, flow=cfg.flow,

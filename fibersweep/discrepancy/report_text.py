@@ -444,7 +444,8 @@ def _settle(s: dict[str, Any]) -> list[str]:
         f"Why: {st['reason']}. {st['fibers']} fibers measured after the first analysis test "
         f"**{a}** (A) against **{b}** (B) on {', '.join(st['observables'])}: the sum of their "
         "log-likelihood ratios of A over B, against its distribution under each hypothesis "
-        "from simulated copies (one-sided tests).",
+        "from simulated copies (one-sided tests); the winner is then checked for a gap left "
+        "on these fibers.",
         "",
         "| | A | B |",
         "|---|---|---|",
@@ -454,6 +455,8 @@ def _settle(s: dict[str, Any]) -> list[str]:
         "",
         f"Measured sum: {st['statistic']:.3g}. Outcome: {st['text']}.",
     ]
+    if st.get("failed_copies"):
+        lines += ["", f"{st['failed_copies']} copies failed and were left out of the test."]
     if first:
         lines += ["", f"Verdict on the first fibers alone: {first['kind']}: {first['text']}"]
     return lines

@@ -19,21 +19,29 @@ means; a component undefined in x or μ adds nothing). It is only a statistic:
 its distribution under each hypothesis is that of *null* copies of the
 hypothesis (independent of the reference copies, measurement noise included)
 scored the same way, so the test needs no Gaussian assumption. For the sum
-Λ = Σ_i λ_i the null distribution is drawn by taking one null copy per fiber at
-random, ``n_draws`` times (the per-fiber terms are independent). Then
+Λ = Σ_i λ_i the null distribution is drawn by taking, per fiber, one value of
+its pool (its null copies' λ and its own measured λ_i, as a permutation test
+keeps the observed designation among its draws), ``n_draws`` times; a failed
+copy is left out of its fiber's pool. Then
 
-    p_A = P(Λ* <= Λ | A)   (few fibers closer to A than A's own copies are),
+    p_A = P(Λ* <= Λ | A)   (fibers further from A than A's own copies are),
     p_B = P(Λ* >= Λ | B),
 
-each one-sided at ``alpha``. At most one hypothesis is true, so the chance of
-rejecting the true one is at most alpha, and so is the chance of settling on
-the wrong one. Outcome: B rejected and A not: "A"; the reverse: "B"; both:
-"neither" (the fibers lie between the two, e.g. the truth is a value between
-two fitted values); none: "undecided" (too few or too weakly discriminating
-fibers: the report says how many the expected separation needs). The test looks
-along the difference of the two predictions only: whether the winner fits the
-first fibers was the verdict's adequacy check; fibers beyond A, away from B,
-count for A.
+each one-sided at ``alpha``. When one of the two is true at its fitted value,
+and the follow-up fibers' starts are spread as the copies assume (the measured
+start within the start noise of the true one, not aimed at a point exactly),
+the chance of rejecting it is at most alpha, and so is the chance of a wrong
+pick. A hypothesis whose fitted value is off (a continuous effect fitted within
+its interval) is rejected more often the more follow-up fibers there are.
+
+Outcome: B rejected and A not: "A"; the reverse: "B"; both: "neither" (the
+fibers lie between the two, e.g. the truth is a value between two fitted
+values); none: "undecided" (too few or too weakly discriminating fibers: the
+report says how many such fibers would do). The test looks along the
+difference of the two predictions only, so the winner is then checked on the
+follow-up fibers as every fitted effect is on the first ones
+(:func:`.gap.assess_gap` against its copies): a significant gap left, and it
+is not named.
 
 Why not paired comparisons on the first fibers: there each hypothesis was
 fitted to the same fibers, and common random numbers favour whichever copies
@@ -55,6 +63,7 @@ from scipy.stats import norm
 from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.decide import HeldOut, Verdict
 from fibersweep.discrepancy.followup import next_hypotheses
+from fibersweep.discrepancy.gap import GapResult, assess_gap, value_matrices
 from fibersweep.discrepancy.power import standardised_values
 from fibersweep.discrepancy.schema import MeasuredData
 from fibersweep.discrepancy.settings import DiscrepancySettings
@@ -139,8 +148,10 @@ class SettleTest:
         p of "A is true" (Λ as low or lower under A) and of "B is true".
     outcome : {'A', 'B', 'neither', 'undecided'}
     fibers_needed : int or None
-        Fibers of the same discrimination that separate A from B at ``alpha``
-        with power 0.8 (None when the copies do not separate them at all).
+        Fibers of the same discrimination for which each test rejects the false
+        hypothesis with power 0.8 (None when the copies do not separate them).
+    failed : int
+        Null copies left out because their run failed.
     """
 
     per_fiber: np.ndarray
@@ -150,6 +161,7 @@ class SettleTest:
     p_values: tuple[float, float]
     outcome: str
     fibers_needed: int | None
+    failed: int = 0
 
 
 def settle_test(
@@ -192,37 +204,60 @@ def settle_test(
         mu_a, mu_b = np.nanmean(ref_a, axis=0), np.nanmean(ref_b, axis=0)
     s = _spread(np.asarray(ref_a, float), np.asarray(ref_b, float))
     lam = discriminant(x, mu_a, mu_b, s)
-    lam_a = discriminant(null_a, mu_a, mu_b, s)  # (k_null, n)
-    lam_b = discriminant(null_b, mu_a, mu_b, s)
     stat = float(lam.sum())
-    cols = np.arange(n)
-    draws_a = lam_a[rng.integers(0, len(lam_a), size=(n_draws, n)), cols].sum(axis=1)
-    draws_b = lam_b[rng.integers(0, len(lam_b), size=(n_draws, n)), cols].sum(axis=1)
-    p_a = (1.0 + np.count_nonzero(draws_a <= stat)) / (n_draws + 1.0)
-    p_b = (1.0 + np.count_nonzero(draws_b >= stat)) / (n_draws + 1.0)
+    pools, failed = [], 0
+    for null in (np.asarray(null_a, float), np.asarray(null_b, float)):
+        # a failed run (every component undefined) is no outcome: left out of its fiber's
+        # pool, where it would count as lambda = 0
+        ok = np.isfinite(null).any(axis=2)  # (k_null, n)
+        failed += int((~ok).sum())
+        lam_k = discriminant(null, mu_a, mu_b, s)
+        pools.append([lam_k[ok[:, i], i] for i in range(n)])
+    draws = [_sum_draws(lam, p, rng, n_draws) for p in pools]
+    p_a = float(np.mean(draws[0] <= stat))
+    p_b = float(np.mean(draws[1] >= stat))
     rej_a, rej_b = p_a <= alpha, p_b <= alpha
     outcome = {(False, True): "A", (True, False): "B", (True, True): "neither"}.get(
         (bool(rej_a), bool(rej_b)), "undecided"
     )
-    m = (float(lam_a.mean(0).sum()), float(lam_b.mean(0).sum()))
-    sd = (float(np.sqrt(lam_a.var(0, ddof=1).sum())), float(np.sqrt(lam_b.var(0, ddof=1).sum())))
-    return SettleTest(lam, stat, m, sd, (float(p_a), float(p_b)), outcome,
-                      _needed(m, sd, n, alpha))  # fmt: skip
+    ma, mb = (float(sum(q.mean() for q in p if len(q))) for p in pools)
+    sa, sb = (float(np.sqrt(sum(q.var(ddof=1) for q in p if len(q) > 1))) for p in pools)
+    need = _needed((ma, mb), (sa, sb), n, alpha)
+    return SettleTest(lam, stat, (ma, mb), (sa, sb), (p_a, p_b), outcome, need, failed)
+
+
+def _sum_draws(
+    lam: np.ndarray, pools: list[np.ndarray], rng: np.random.Generator, n_draws: int
+) -> np.ndarray:
+    """Null draws of Λ: per fiber one value of its pool, the measured λ_i among them.
+
+    With the measured value in each pool (as a permutation test keeps the observed
+    designation among its draws) the test is exact under exchangeability, however
+    few the copies; without it, k copies make the null too narrow by k/(k+1).
+    Returns shape (n_draws + 1,): the draws and Λ itself.
+    """
+    total = np.zeros(n_draws)
+    for i, q in enumerate(pools):
+        pool = np.concatenate([[lam[i]], q])
+        total += pool[rng.integers(0, len(pool), size=n_draws)]
+    return np.concatenate([total, [lam.sum()]])
 
 
 def _needed(m: tuple[float, float], sd: tuple[float, float], n: int, alpha: float) -> int | None:
-    """Fibers like these that separate A from B: both one-sided tests at alpha, power 0.8.
+    """Fibers like these for which each one-sided test rejects the false hypothesis with
+    power 0.8 (at alpha).
 
-    Λ's mean and variance grow with the number of fibers; the two null
-    distributions are told apart when (m_A - m_B) >= (z_{1-alpha} + z_0.8) (sd_A + sd_B)
-    / 2, all scaled from the n fibers measured to N.
+    Per fiber Λ has mean g_H and sd σ_H under hypothesis H (from the n fibers
+    measured); rejecting B when A is true needs N (g_A - g_B) >= √N (z_{1-alpha} σ_B +
+    z_0.8 σ_A), and the reverse with A and B swapped; the larger N of the two.
     """
     gap = (m[0] - m[1]) / n
     if not np.isfinite(gap) or gap <= 0.0:
         return None
-    z = norm.ppf(1 - alpha) + norm.ppf(0.8)
-    sd1 = (sd[0] + sd[1]) / 2.0 / math.sqrt(n)
-    return max(1, int(math.ceil((z * sd1 / gap) ** 2)))
+    za, zp = norm.ppf(1 - alpha), norm.ppf(0.8)
+    sa, sb = sd[0] / math.sqrt(n), sd[1] / math.sqrt(n)
+    worst = max(za * sb + zp * sa, za * sa + zp * sb)
+    return max(1, int(math.ceil((worst / gap) ** 2)))
 
 
 @dataclass(frozen=True)
@@ -243,6 +278,9 @@ class Settlement:
         Observables scored (those the follow-up table has).
     test : SettleTest
     simulations : int
+    adequacy : GapResult or None
+        The winner (outcome A or B) checked on the follow-up fibers against
+        all its copies (:func:`.gap.assess_gap`); None otherwise.
     """
 
     labels: tuple[str, str]
@@ -252,10 +290,16 @@ class Settlement:
     observables: tuple[str, ...]
     test: SettleTest
     simulations: int
+    adequacy: GapResult | None = None
 
     @property
     def outcome(self) -> str:
         return self.test.outcome
+
+    @property
+    def settled(self) -> bool:
+        """One hypothesis rejected, the other not, and no significant gap left by it."""
+        return self.outcome in ("A", "B") and self.adequacy is not None and not self.adequacy.any
 
     def text(self) -> str:
         """One sentence: what the follow-up fibers say."""
@@ -264,7 +308,16 @@ class Settlement:
         tail = f"(p {pa:.2g} for {a}, p {pb:.2g} for {b})"
         if self.outcome in ("A", "B"):
             win, lose = (a, b) if self.outcome == "A" else (b, a)
-            return f"the {self.n} follow-up fibers reject {lose} and fit {win} {tail}"
+            if self.settled:
+                return (
+                    f"the {self.n} follow-up fibers reject {lose} and are consistent with "
+                    f"{win} {tail}"
+                )
+            left = ", ".join(self.adequacy.flagged) if self.adequacy is not None else "?"
+            return (
+                f"the {self.n} follow-up fibers reject {lose}; {win} is closer to them but "
+                f"leaves a significant gap in {left} {tail}"
+            )
         if self.outcome == "neither":
             return f"the {self.n} follow-up fibers lie between {a} and {b}, rejecting both {tail}"
         need = self.test.fibers_needed
@@ -285,6 +338,7 @@ def settle(
     seed: int = 0,
     copies: int = 24,
     alpha: float = 0.05,
+    n_perm: int = 4999,
 ) -> Settlement:
     """Simulate both hypotheses at the follow-up fibers' starts and test them.
 
@@ -305,6 +359,8 @@ def settle(
     copies : int
         Copies per hypothesis and fiber: a third for the reference means, the
         rest for the null distributions (>= 6).
+    n_perm : int
+        Permutations of the winner's gap test.
     """
     if copies < 6:
         raise ValueError(f"copies must be >= 6, got {copies}")
@@ -312,16 +368,18 @@ def settle(
     used0 = sim.used
     # common random numbers between A and B; reference and null copies are independent
     maker = CopyMaker(starts, noise, seed + 15485863, sim)
-    va, vb = (
-        np.stack(
-            standardised_values(
-                maker.copies(range(copies), dict(h), desc=f"follow-up: {tag}"), observables
-            )
-        )
+    cps = [
+        maker.copies(range(copies), dict(h), desc=f"follow-up: {tag}")
         for h, tag in zip(hypotheses, "AB", strict=True)
-    )
+    ]
+    va, vb = (np.stack(standardised_values(c, observables)) for c in cps)
     x = standardised_values([table], observables)[0]
     test = settle_test(x, va[:k_ref], vb[:k_ref], va[k_ref:], vb[k_ref:], rng, alpha)
+    adequacy = None
+    if test.outcome in ("A", "B"):
+        win = cps[0 if test.outcome == "A" else 1]
+        adequacy = assess_gap(value_matrices(table, win, observables), rng, alpha=alpha,
+                              n_perm=n_perm)  # fmt: skip
     return Settlement(
         labels=labels,
         hypotheses=(dict(hypotheses[0]), dict(hypotheses[1])),
@@ -330,6 +388,7 @@ def settle(
         observables=tuple(observables),
         test=test,
         simulations=sim.used - used0,
+        adequacy=adequacy,
     )
 
 
@@ -337,11 +396,12 @@ def settled_verdict(verdict: Verdict, st: Settlement) -> Verdict:
     """The verdict after the follow-up fibers.
 
     An ambiguous verdict between exactly these two alternatives becomes "named"
-    when the follow-up fibers reject one and fit the other; any other verdict
+    when the follow-up fibers reject one and the other leaves no significant gap
+    on them (:attr:`Settlement.settled`); any other verdict
     (and any other outcome) stands, and the report gives the settlement beside it.
     """
     alts = [dict(a) for a in verdict.alternatives]
-    if verdict.kind != "ambiguous" or st.outcome not in ("A", "B") or alts != list(st.hypotheses):
+    if verdict.kind != "ambiguous" or not st.settled or alts != list(st.hypotheses):
         return verdict
     win = st.hypotheses[0 if st.outcome == "A" else 1]
     label = st.labels[0 if st.outcome == "A" else 1]
@@ -399,5 +459,6 @@ def settle_followup(
         sim, s.noise, (a, b), (label(a) or "baseline", label(b) or "baseline"), why,
         followup.table.reset_index(drop=True), followup.starts, obs,
         np.random.default_rng([s.seed, 23]), seed=s.seed, copies=s.settle_copies, alpha=s.alpha,
+        n_perm=s.n_perm,
     )  # fmt: skip
     return settled_verdict(verdict, st), {"settle": st}

@@ -473,7 +473,8 @@ def run_discrepancy(
         Fibers measured after a first analysis of ``measured`` (at the starts its
         what-to-measure-next gave): the verdict's two hypotheses are tested on
         them (:mod:`.settle`). The analysis of ``measured`` is the same with or
-        without them; ``extra['verdict_first']`` keeps its verdict.
+        without them (their runs come on top of ``budget``);
+        ``extra['verdict_first']`` keeps its verdict.
     """
     s = settings or DiscrepancySettings()
     t0 = time.perf_counter()
@@ -489,8 +490,12 @@ def run_discrepancy(
     perm = rng.permutation(n)
     folds = [np.sort(perm[: n // 2]), np.sort(perm[n // 2 :])]
 
+    # the follow-up fibers' runs come on top of the budget, so the analysis of the
+    # first fibers, power and what-to-measure-next included, is the same without them
+    extra_runs = 2 * s.settle_copies * len(followup) if followup is not None else 0
     with Simulator(
-        field_, fiber, workers=s.workers, budget=s.budget, progress=progress,
+        field_, fiber, workers=s.workers, progress=progress,
+        budget=None if s.budget is None else s.budget + extra_runs,
         executor=s.executor, scheduler=s.scheduler, planned=plan.total(n),
         tracks=has_tracks(obs_names), candidates=candidates, flow=flow, cache_dir=cache_dir,
     ) as sim:  # fmt: skip
@@ -512,13 +517,17 @@ def run_discrepancy(
 
         verdict = decide(st.gap, heldout, st.region_text, rng, s.alpha, list(st.sets),
                          show=show, declared=[c.name for c in s.declared])  # fmt: skip
-        extra = next_steps(verdict, heldout, st.fold_values, candidates, maker, sim, plan, s,
-                           obs_names, rng, show=show)  # fmt: skip
-        if followup is not None:
-            extra["verdict_first"] = verdict
-            verdict, more = settle_followup(verdict, heldout, st.fold_values, followup, sim, s,
+        first, more = verdict, {}
+        if followup is not None:  # first: the budget beyond s.budget is for its runs only
+            used0 = sim.used
+            verdict, more = settle_followup(first, heldout, st.fold_values, followup, sim, s,
                                             obs_names, show)  # fmt: skip
-            extra.update(more)
+            more["verdict_first"] = first
+            if s.budget is not None:  # what it did not use is not the next stages'
+                sim.budget = s.budget + (sim.used - used0)
+        extra = next_steps(first, heldout, st.fold_values, candidates, maker, sim, plan, s,
+                           obs_names, rng, show=show)  # fmt: skip
+        extra.update(more)
         used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
         extra["runs_by_stage"] = dict(sim.used_by_stage)
         extra["seconds_by_stage"] = {k: round(v, 1) for k, v in sim.seconds_by_stage.items()}

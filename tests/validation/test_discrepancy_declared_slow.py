@@ -96,11 +96,15 @@ def test_a_coarser_flow_grid_is_named_by_the_fibers_the_report_asks_for(
     """The same 100 fibers (ambiguous, above), then what the report asks for.
 
     What-to-measure-next gives the starts where its two hypotheses differ most and
-    how many fibers settle them; that many fibers, shared over its five best starts,
-    are synthesised on the dx = 5 µm field (seeds 10522 + j) and put to the two
-    hypotheses (:mod:`fibersweep.discrepancy.settle`, one-sided tests at alpha =
-    0.05 each: a wrong pick has probability at most 0.05). The grid must be named.
+    how many fibers settle them with power 0.8. An experimenter who wants the
+    answer measures twice that (power about 0.97 by the same estimate), near the
+    five best starts: synthesised on the dx = 5 µm field from a box of three start
+    noise sd either side of each (seeds 10522 + j; aiming fibers at a point exactly
+    is not what the copies assume), then put to the two hypotheses
+    (:mod:`fibersweep.discrepancy.settle`: one-sided tests at alpha = 0.05 each, a
+    wrong pick has probability at most 0.05). The grid must be named.
     """
+    from fibersweep.discrepancy.copies import NoiseModel
     from fibersweep.discrepancy.workflow import settle_result
     from fibersweep.flow.cache import get_flow_field
 
@@ -114,13 +118,17 @@ def test_a_coarser_flow_grid_is_named_by_the_fibers_the_report_asks_for(
     assert {"flow.dx=5"} in [set(a) for a in res.verdict.alternatives], res.verdict.text
     nx = res.extra["next"]
     assert nx.fibers_needed is not None and nx.fibers_needed <= 50, nx.fibers_needed
-    best = nx.best[:5]
-    share = [nx.fibers_needed // len(best) + (j < nx.fibers_needed % len(best))
-             for j in range(len(best))]  # fmt: skip
+    best, total = nx.best[:5], 2 * nx.fibers_needed
+    share = [total // len(best) + (j < total % len(best)) for j in range(len(best))]
+    sd = NoiseModel()
     parts = []
     for j, (b, k) in enumerate(zip(best, share, strict=True)):
         if k:
-            box = {"theta0": (b.theta0,) * 2, "y0": (b.y0,) * 2, "length": (b.length,) * 2}
+            box = {
+                "theta0": (b.theta0 - 3 * sd.theta0, b.theta0 + 3 * sd.theta0),
+                "y0": (b.y0 - 3 * sd.y0, b.y0 + 3 * sd.y0),
+                "length": (b.length - 3 * sd.length, b.length + 3 * sd.length),
+            }
             t, _ = synthesize(coarse5, FIBER, box, k, seed=10522 + j, workers=2,
                               progress=False)  # fmt: skip
             t["fiber_id"] = [f"m{j}-{i}" for i in range(len(t))]

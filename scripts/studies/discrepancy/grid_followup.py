@@ -4,9 +4,10 @@ Fibers are synthesised on a field of another grid (``--truth-dx``) and analysed 
 the study model (dx = 4 µm) and ``flow.dx=<truth>`` declared. When the verdict is
 ambiguous (or unexplained), the report's what-to-measure-next names the starts where
 its two hypotheses differ most and how many fibers there would settle it. This script
-then "measures" those fibers (synthesised on the truth field at the suggested starts,
-shared out over the best starts, with the workflow's own start and outcome noise) and
-puts them to the verdict's two hypotheses (``discrepancy --followup``: the analysis of
+then "measures" ``--factor`` times that many fibers (default 2: the report's count is
+for power 0.8), synthesised on the truth field within three start-noise sd of the
+suggested starts, shared out over the best starts, with the workflow's own start and
+outcome noise, and puts them to the verdict's two hypotheses (``discrepancy --followup``: the analysis of
 the first fibers stands, the follow-up fibers test A against B), as an experimenter would.
 
 Usage::
@@ -23,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -33,6 +35,7 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import BOX, DEFAULT_CACHE, STUDY_FLOW, study_field  # noqa: E402
 
+from fibersweep.discrepancy.copies import NoiseModel  # noqa: E402
 from fibersweep.discrepancy.declared import parse_candidate  # noqa: E402
 from fibersweep.discrepancy.report import summary  # noqa: E402
 from fibersweep.discrepancy.schema import validate_measured  # noqa: E402
@@ -70,10 +73,15 @@ def measure_more(truth_field, best, fibers: int, seed: int, workers: int) -> pd.
     share = np.full(len(best), fibers // len(best))
     share[: fibers % len(best)] += 1
     parts = []
+    sd = NoiseModel()  # fibers arrive near a start, not on it: three start-noise sd either side
     for j, (b, k) in enumerate(zip(best, share, strict=True)):
         if k == 0:
             continue
-        box = {"theta0": (b.theta0, b.theta0), "y0": (b.y0, b.y0), "length": (b.length,) * 2}
+        box = {
+            "theta0": (b.theta0 - 3 * sd.theta0, b.theta0 + 3 * sd.theta0),
+            "y0": (b.y0 - 3 * sd.y0, b.y0 + 3 * sd.y0),
+            "length": (b.length - 3 * sd.length, b.length + 3 * sd.length),
+        }
         t, _ = synthesize(truth_field, FIBER, box, int(k), seed=seed + 1 + j, workers=workers,
                           progress=False)  # fmt: skip
         t["fiber_id"] = [f"m{j:02d}-{i:03d}" for i in range(len(t))]
@@ -87,6 +95,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n", type=int, default=100, help="fibers of the first data set")
     ap.add_argument("--seed", type=int, default=9521)
     ap.add_argument("--max-more", type=int, default=300, help="most fibers to add")
+    ap.add_argument(
+        "--factor",
+        type=float,
+        default=2.0,
+        help="fibers measured per fiber the report asks for (it asks for power 0.8)",
+    )
     ap.add_argument("--starts", type=int, default=5, help="best starts to share them over")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--cache", default=DEFAULT_CACHE)
@@ -105,7 +119,7 @@ def main(argv: list[str] | None = None) -> int:
     nxt = res.extra.get("next")
     if res.verdict.kind != "named" and nxt is not None and nxt.fibers_needed:
         best = nxt.best[: a.starts]
-        more = min(int(nxt.fibers_needed), a.max_more)
+        more = min(int(math.ceil(a.factor * nxt.fibers_needed)), a.max_more)
         out["fibers_added"] = {"fibers": more, "starts": len(best)}
         print(f"what to measure next: {nxt.labels[0]} against {nxt.labels[1]}; "
               f"{nxt.fibers_needed} fibers at the best starts; adding {more}")  # fmt: skip
