@@ -29,9 +29,16 @@ discrimination D contributes a z of D; n such fibers give D sqrt(n), so
     n = ceil(((z_{1 - alpha/2} + z_power) / D)²)
 
 fibers at the best starts settle the question (a two-sided test at alpha with
-the target power). The estimate is optimistic for categorical observables
-near a class boundary (a small start error flips the class): the copies'
-spread includes that start noise, so s accounts for it.
+the target power). The copies' spread includes the start noise, so s accounts
+for a class that a small start error flips.
+
+The best of a grid of estimates from two copies each overstates its start
+(the winner's curse: measured on the flow-grid case, 2.5 per fiber at the best
+start against 0.2-0.3 from 16 new copies). So the best starts are measured
+again with new copies at ``CONFIRM_POINTS`` points each, uniform within
+``WINDOW`` start-noise sd of the start: where the fibers measured "at" that
+start will in fact be. Their mean D² is the start's discrimination, and gives
+the fibers needed.
 """
 
 from __future__ import annotations
@@ -63,6 +70,13 @@ __all__ = [
     "next_hypotheses",
     "start_grid",
 ]
+
+
+#: Half-width of the window around a proposed start, in start-noise sd: the fibers
+#: measured "at" a start are those whose measured start falls within it.
+WINDOW = 3.0
+#: Points per best start where what-to-measure-next measures its discrimination again.
+CONFIRM_POINTS = 8
 
 
 def component_names(observables: Sequence[str]) -> list[str]:
@@ -110,14 +124,19 @@ class Discrimination:
     grid : ndarray, shape (g, 3)
         Candidate starts.
     d : ndarray, shape (g,)
-        Discrimination of one fiber at each start.
+        Discrimination of one fiber at each start (``copies`` copies).
     best : list of Suggestion
-        The best starts, most discriminating first.
+        The best starts, most discriminating first (by the window's estimate).
     fibers_needed : int or None
-        Fibers at the best starts that settle it (None when nothing discriminates).
+        Fibers within the window of the best starts that settle it (None when
+        nothing discriminates).
     fibers_needed_measured : int or None
         The same at the measured starts (their mean D²).
     simulations : int
+    window : ndarray, shape (3,), or None
+        Half-width (θ0 [deg], y0 [/h_obs], L [/l_obs]) of the window around each
+        best start within which its ``d`` and ``fibers_needed`` hold; None: at the
+        start itself, from the grid's copies.
     """
 
     labels: tuple[str, str]
@@ -127,6 +146,7 @@ class Discrimination:
     fibers_needed: int | None
     fibers_needed_measured: int | None
     simulations: int
+    window: np.ndarray | None = None
 
 
 def start_grid(starts: np.ndarray, n_theta: int = 5, n_y: int = 8, n_len: int = 3) -> np.ndarray:
@@ -157,6 +177,64 @@ def _label(effects: Mapping[str, float]) -> str:
     return " + ".join(f"{k} = {v:.3g}" for k, v in effects.items()) or "baseline"
 
 
+def _values(
+    maker: CopyMaker,
+    hypotheses: tuple[Mapping[str, float], Mapping[str, float]],
+    copies: int,
+    observables: Sequence[str],
+    tag: str,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Both hypotheses' copies on the scoring scale, each shape (copies, points, components)."""
+    out = []
+    for h, t in zip(hypotheses, "AB", strict=True):
+        cps = maker.copies(range(copies), dict(h), desc=f"{tag}: {t}")
+        out.append(np.stack(standardised_values(cps, observables)))
+    return out[0], out[1]
+
+
+def _noise(xa: np.ndarray, xb: np.ndarray) -> np.ndarray:
+    """Per-component noise of one fiber: the copies' spread around their hypothesis' mean."""
+    copies = xa.shape[0]
+    both = np.concatenate([xa, xb], axis=0)
+    with warnings.catch_warnings():  # a component undefined at a start: NaN, as meant
+        warnings.simplefilter("ignore", RuntimeWarning)
+        resid = np.concatenate([xa - np.nanmean(xa, 0), xb - np.nanmean(xb, 0)], axis=0)
+        s = np.sqrt(np.nanmean(resid**2, axis=(0, 1)) * copies / (copies - 1))
+        floor = np.nanstd(both, axis=(0, 1)) * 0.05  # no component counts as noiseless
+    return np.maximum(np.where(np.isfinite(s), s, 0.0), floor)
+
+
+def _shift2(xa: np.ndarray, xb: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Unbiased squared standardised shift per point and component, shape (points, c).
+
+    Paired (common random numbers) per-copy differences; their mean squared, less the
+    noise of that mean (its variance).
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        delta = (xa - xb) / s
+        cnt = np.isfinite(delta).sum(axis=0)
+        mean = np.where(cnt > 0, np.nansum(delta, axis=0) / np.maximum(cnt, 1), np.nan)
+        ss = np.nansum((delta - mean) ** 2, axis=0)
+        var = np.where(cnt > 1, ss / np.maximum(cnt - 1, 1) / np.maximum(cnt, 1), 0.0)
+    diff = np.where(np.isfinite(mean), mean, 0.0)
+    return np.clip(diff**2 - np.where(np.isfinite(var), var, 0.0), 0.0, None)
+
+
+def window_points(
+    centres: np.ndarray, noise: NoiseModel, m: int, rng: np.random.Generator, width: float = WINDOW
+) -> np.ndarray:
+    """``m`` starts uniform within ``width`` start-noise sd of each centre.
+
+    Returns
+    -------
+    ndarray, shape (len(centres) * m, 3)
+        Centre j's points are rows j*m .. j*m + m - 1.
+    """
+    c = np.repeat(np.asarray(centres, dtype=np.float64), m, axis=0)
+    half = width * np.array([noise.theta0, noise.y0, noise.length])
+    return c + rng.uniform(-1.0, 1.0, size=c.shape) * half
+
+
 def discriminate(
     sim: Simulator,
     noise: NoiseModel,
@@ -170,6 +248,7 @@ def discriminate(
     alpha: float = 0.05,
     power: float = 0.8,
     show: Callable[[Mapping[str, float]], str] | None = None,
+    confirm: int = CONFIRM_POINTS,
 ) -> Discrimination:
     """Rank candidate starts by how well one fiber there separates the hypotheses.
 
@@ -189,6 +268,12 @@ def discriminate(
     show : callable, optional
         ``{name: value} -> text`` for the two labels (each value in its
         candidate's unit); default ``name = value``.
+    confirm : int
+        Points per best start at which its discrimination is measured again with
+        new copies, uniform within ``WINDOW`` start-noise sd of it (0: keep the
+        grid's estimate). The best of many noisy estimates overstates its start
+        (the winner's curse); new copies, within the window a measured fiber
+        will fall in, give the discrimination and the fibers needed.
     """
     label = show or _label
     if copies < 2:
@@ -196,51 +281,40 @@ def discriminate(
     g = start_grid(starts) if grid is None else np.asarray(grid, dtype=np.float64)
     pts = np.vstack([g, np.asarray(starts, dtype=np.float64)])
     used0 = sim.used
-    maker = CopyMaker(pts, noise, seed + 104729, sim)
-    xa = np.stack(standardised_values(
-        maker.copies(range(copies), dict(hypotheses[0]), desc="next: A"), observables
-    ))  # fmt: skip
-    xb = np.stack(standardised_values(
-        maker.copies(range(copies), dict(hypotheses[1]), desc="next: B"), observables
-    ))  # fmt: skip
-    both = np.concatenate([xa, xb], axis=0)  # (2 copies, points, components)
-    # per-component noise of one fiber: spread of the copies around their hypothesis' mean
-    with warnings.catch_warnings():  # a component undefined at a start: NaN, as meant
-        warnings.simplefilter("ignore", RuntimeWarning)
-        resid = np.concatenate([xa - np.nanmean(xa, 0), xb - np.nanmean(xb, 0)], axis=0)
-    s = np.sqrt(np.nanmean(resid**2, axis=(0, 1)) * copies / (copies - 1))
-    floor = np.nanstd(both, axis=(0, 1)) * 0.05  # no component counts as noiseless
-    s = np.maximum(np.where(np.isfinite(s), s, 0.0), floor)
-    # paired (common random numbers) per-copy differences; their mean squared, less the
-    # noise of that mean (its variance), is an unbiased estimate of the squared shift
-    with np.errstate(invalid="ignore", divide="ignore"):
-        delta = (xa - xb) / s
-        cnt = np.isfinite(delta).sum(axis=0)
-        mean = np.where(cnt > 0, np.nansum(delta, axis=0) / np.maximum(cnt, 1), np.nan)
-        ss = np.nansum((delta - mean) ** 2, axis=0)
-        var = np.where(cnt > 1, ss / np.maximum(cnt - 1, 1) / np.maximum(cnt, 1), 0.0)
-    diff = np.where(np.isfinite(mean), mean, 0.0)
-    d2 = np.clip(diff**2 - np.where(np.isfinite(var), var, 0.0), 0.0, None)
+    xa, xb = _values(CopyMaker(pts, noise, seed + 104729, sim), hypotheses, copies, observables,
+                     "next")  # fmt: skip
+    s = _noise(xa, xb)
+    d2 = _shift2(xa, xb, s)
     d_all = np.sqrt(d2.sum(axis=1))
     ng = len(g)
     d, d_meas = d_all[:ng], d_all[ng:]
-    names = component_names(observables)
     order = np.argsort(-d)[:top]
+    d_best, d2_best = d[order], d2[order]
+    if confirm and len(order):
+        w = window_points(g[order], noise, confirm, np.random.default_rng([seed, 104743]))
+        wa, wb = _values(CopyMaker(w, noise, seed + 104759, sim), hypotheses, 2, observables,
+                         "next: confirm")  # fmt: skip
+        d2w = _shift2(wa, wb, s).reshape(len(order), confirm, -1).mean(axis=1)
+        d2_best = d2w
+        d_best = np.sqrt(d2w.sum(axis=1))
+        resort = np.argsort(-d_best, kind="stable")
+        order, d_best, d2_best = order[resort], d_best[resort], d2_best[resort]
+    names = component_names(observables)
     best = []
-    for i in order:
-        j = int(np.argmax(d2[i]))
+    for i, di, d2i in zip(order, d_best, d2_best, strict=True):
+        j = int(np.argmax(d2i))
         best.append(
             Suggestion(
                 float(g[i, 0]),
                 float(g[i, 1]),
                 float(g[i, 2]),
-                float(d[i]),
+                float(di),
                 names[j],
                 float(np.nanmean(xa[:, i, j])),
                 float(np.nanmean(xb[:, i, j])),
             )  # fmt: skip
         )
-    d_top = float(np.sqrt(np.mean(d[order] ** 2))) if len(order) else 0.0
+    d_top = float(np.sqrt(np.mean(d_best**2))) if len(order) else 0.0
     d_m = float(np.sqrt(np.mean(d_meas**2))) if len(d_meas) else 0.0
     return Discrimination(
         labels=(label(hypotheses[0]) or "baseline", label(hypotheses[1]) or "baseline"),
@@ -250,6 +324,7 @@ def discriminate(
         fibers_needed=_needed(d_top, alpha, power),
         fibers_needed_measured=_needed(d_m, alpha, power),
         simulations=sim.used - used0,
+        window=WINDOW * np.array([noise.theta0, noise.y0, noise.length]) if confirm else None,
     )
 
 
@@ -377,7 +452,8 @@ def followup(
     if hyp is not None:
         a, b, why = hyp
         grid = start_grid(maker.starts)
-        cost = 2 * s.next_copies * (len(grid) + maker.n)
+        # + the best starts measured again (two copies per window point)
+        cost = 2 * s.next_copies * (len(grid) + maker.n) + 4 * CONFIRM_POINTS * min(8, len(grid))
         if cost <= sim.remaining:
             out["next"] = discriminate(
                 sim, s.noise, (a, b), maker.starts, obs, seed=s.seed,

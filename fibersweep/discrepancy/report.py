@@ -219,6 +219,7 @@ def _next_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
         "best": [b.__dict__ for b in nx.best],
         "fibers_needed": nx.fibers_needed,
         "fibers_needed_at_measured_starts": nx.fibers_needed_measured,
+        "window": None if nx.window is None else [float(w) for w in nx.window],
         "simulations": nx.simulations,
     }
 

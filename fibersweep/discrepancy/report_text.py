@@ -395,6 +395,13 @@ def _power(s: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _window(w: list[float] | None) -> str:
+    """', or within θ0 ±3°, y0 ±0.03 h_obs, L ±0.03 l_obs of them', or '' (no window)."""
+    if not w:
+        return ""
+    return f", or within θ0 ±{w[0]:.2g}°, y0 ±{w[1]:.2g} h_obs, L ±{w[2]:.2g} l_obs of them"
+
+
 def _next(s: dict[str, Any]) -> list[str]:
     nx = s["next"]
     if nx is None:
@@ -409,8 +416,8 @@ def _next(s: dict[str, Any]) -> list[str]:
         "## What to measure next",
         "",
         f"Why: {nx['reason']}. To separate **{a}** from **{b}**, measure fibers at these "
-        "starts (separation per fiber: the two predictions' difference over the noise of one "
-        "measured fiber, summed over the observables):",
+        f"starts{_window(nx.get('window'))} (separation per fiber: the two predictions' "
+        "difference over the noise of one measured fiber, summed over the observables):",
         "",
         "| θ0 [deg] | y0 [h_obs] | L [l_obs] | separation per fiber | observable | "
         "prediction A | prediction B |",
@@ -424,7 +431,9 @@ def _next(s: dict[str, Any]) -> list[str]:
     lines += [
         "",
         f"About {_f(nx['fibers_needed'], 'd')} fibers at these starts would settle it "
-        f"(at the measured starts: {_f(nx['fibers_needed_at_measured_starts'], 'd')}).",
+        f"(at the measured starts: {_f(nx['fibers_needed_at_measured_starts'], 'd')}). "
+        "Once measured, give them to the same command with `--followup`: they are put to "
+        "the two hypotheses directly (docs/discrepancy.md, *Settling it*).",
     ]
     return lines
 

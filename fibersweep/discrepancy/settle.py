@@ -58,6 +58,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pandas as pd
 from scipy.stats import norm
 
 from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
@@ -331,7 +332,7 @@ def settle(
     hypotheses: tuple[Mapping[str, float], Mapping[str, float]],
     labels: tuple[str, str],
     reason: str,
-    table,
+    table: pd.DataFrame,
     starts: np.ndarray,
     observables: Sequence[str],
     rng: np.random.Generator,
