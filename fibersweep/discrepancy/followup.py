@@ -20,25 +20,28 @@ included). Per start and observable component the *discrimination* is
 
     D = |mean_k (x_A,k - x_B,k)| / s
 
-(its square debiased by the variance of that mean over the k copies), with s
-the component's spread among the copies of both hypotheses (noise of one
-measured fiber). A start's discrimination is the root sum of squares over
-its components (independent evidence). A fiber measured at a start with
-discrimination D contributes a z of D; n such fibers give D sqrt(n), so
+(its square debiased by the variance of that mean over the k copies, averaged
+before it is clipped at 0), with s the component's spread among the copies of
+both hypotheses (noise of one measured fiber); a start's D is the root sum of
+squares over its components. Two copies per start are enough to rank the grid,
+not to size the measurement: the best of many noisy estimates overstates itself
+(the winner's curse; on the flow-grid case 2.5 per fiber at the best start
+against 0.2-0.3 from 16 new copies there).
 
-    n = ceil(((z_{1 - alpha/2} + z_power) / D)²)
+So the ``CONFIRM_STARTS`` best starts are measured again: at ``CONFIRM_POINTS``
+points each, uniform within ``WINDOW`` start-noise sd of the start (where a
+fiber measured "at" it lands), with as many new copies per point as the
+follow-up test uses, scored by that test's own statistic (the log-likelihood
+ratio λ of :mod:`.settle`). A start's separation per fiber is
+(g_A - g_B) / sd, λ's mean under each hypothesis over its sd, and the fibers
+needed, shared over these starts, are those for which each of the follow-up
+test's one-sided tests rejects the false hypothesis with the target power
+(:func:`.settle.fibers_needed`). The count at the measured starts is the
+grid's two-copy estimate for a two-sided test with known predictions,
+``ceil(((z_{1 - alpha/2} + z_power) / D)²)``: a lower bound, for comparison.
 
-fibers at the best starts settle the question (a two-sided test at alpha with
-the target power). The copies' spread includes the start noise, so s accounts
-for a class that a small start error flips.
-
-The best of a grid of estimates from two copies each overstates its start
-(the winner's curse: measured on the flow-grid case, 2.5 per fiber at the best
-start against 0.2-0.3 from 16 new copies). So the best starts are measured
-again with new copies at ``CONFIRM_POINTS`` points each, uniform within
-``WINDOW`` start-noise sd of the start: where the fibers measured "at" that
-start will in fact be. Their mean D² is the start's discrimination, and gives
-the fibers needed.
+The follow-up fibers (``--followup``) then test the hypotheses
+(:func:`settle_followup`, :mod:`.settle`).
 """
 
 from __future__ import annotations
@@ -57,7 +60,14 @@ from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.decide import HeldOut, Verdict
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.power import analyse_power, standardised_values
+from fibersweep.discrepancy.schema import MeasuredData
 from fibersweep.discrepancy.settings import DiscrepancySettings, Plan
+from fibersweep.discrepancy.settle import (
+    fibers_needed,
+    settle,
+    settled_verdict,
+    window_separation,
+)
 from fibersweep.discrepancy.simulate import Simulator
 
 __all__ = [
@@ -68,15 +78,19 @@ __all__ = [
     "discriminate",
     "followup",
     "next_hypotheses",
+    "settle_followup",
     "start_grid",
+    "window_points",
 ]
 
 
 #: Half-width of the window around a proposed start, in start-noise sd: the fibers
 #: measured "at" a start are those whose measured start falls within it.
 WINDOW = 3.0
-#: Points per best start where what-to-measure-next measures its discrimination again.
-CONFIRM_POINTS = 8
+#: Points per best start, and best starts, where what-to-measure-next measures the
+#: separation again with the follow-up test's statistic.
+CONFIRM_POINTS = 4
+CONFIRM_STARTS = 5
 
 
 def component_names(observables: Sequence[str]) -> list[str]:
@@ -251,6 +265,8 @@ def discriminate(
     power: float = 0.8,
     show: Callable[[Mapping[str, float]], str] | None = None,
     confirm: int = CONFIRM_POINTS,
+    confirm_starts: int = CONFIRM_STARTS,
+    confirm_copies: int = 24,
 ) -> Discrimination:
     """Rank candidate starts by how well one fiber there separates the hypotheses.
 
@@ -266,16 +282,18 @@ def discriminate(
     observables : sequence of str
         Observables that would be measured.
     copies : int
-        Copies per hypothesis and start (>= 2).
+        Copies per hypothesis and grid start (>= 2): enough to rank them.
     show : callable, optional
         ``{name: value} -> text`` for the two labels (each value in its
         candidate's unit); default ``name = value``.
-    confirm : int
-        Points per best start at which its discrimination is measured again with
-        new copies, uniform within ``WINDOW`` start-noise sd of it (0: keep the
-        grid's estimate). The best of many noisy estimates overstates its start
-        (the winner's curse); new copies, within the window a measured fiber
-        will fall in, give the discrimination and the fibers needed.
+    confirm, confirm_starts, confirm_copies : int
+        The ``confirm_starts`` best grid starts are measured again at ``confirm``
+        points each, uniform within ``WINDOW`` start-noise sd (where a fiber
+        measured "at" the start lands), with ``confirm_copies`` new copies per
+        point and hypothesis, scored by the follow-up test's own statistic
+        (:func:`.settle.window_separation`): their separation per fiber and the
+        fibers needed are those of :func:`.settle.settle_test` (``confirm`` 0:
+        the grid's estimates, optimistic by the winner's curse).
     """
     label = show or _label
     if copies < 2:
@@ -285,31 +303,38 @@ def discriminate(
     used0 = sim.used
     xa, xb = _values(CopyMaker(pts, noise, seed + 104729, sim), hypotheses, copies, observables,
                      "next")  # fmt: skip
-    s = _noise(xa, xb)
-    raw = _shift2(xa, xb, s)  # (points, components), unclipped
+    raw = _shift2(xa, xb, _noise(xa, xb))  # (points, components), unclipped
     ng = len(g)
     d = np.sqrt(np.clip(raw[:ng], 0.0, None).sum(axis=1))  # ranks the grid
     order = np.argsort(-d)[:top]
-    d2_best = raw[order]
+    d_best = d[order]
+    need = _needed(float(np.sqrt(max(raw[order].sum(axis=1).mean(), 0.0))), alpha, power)
+    window = None
     if confirm and len(order):
+        order = order[:confirm_starts]
+        k_ref = max(confirm_copies, 6) // 3
         w = window_points(g[order], noise, confirm, np.random.default_rng([seed, 104743]))
-        wa, wb = _values(CopyMaker(w, noise, seed + 104759, sim), hypotheses, 2, observables,
-                         "next: confirm")  # fmt: skip
-        d2_best = _shift2(wa, wb, s).reshape(len(order), confirm, -1).mean(axis=1)
-    start2 = d2_best.sum(axis=1)  # averaged, then clipped: unbiased up to the clip
-    d_best = np.sqrt(np.clip(start2, 0.0, None))
-    if confirm and len(order):
+        wa, wb = _values(CopyMaker(w, noise, seed + 104759, sim), hypotheses,
+                         max(confirm_copies, 6), observables, "next: confirm")  # fmt: skip
+        sep = []  # per start: g_A, g_B, sd_A, sd_B
+        for j in range(len(order)):
+            sl = slice(j * confirm, (j + 1) * confirm)
+            sep.append(window_separation(wa[:k_ref, sl], wb[:k_ref, sl], wa[k_ref:, sl],
+                                         wb[k_ref:, sl]))  # fmt: skip
+        sep = np.array(sep)
+        gap = sep[:, 0] - sep[:, 1]
+        sd = np.sqrt((sep[:, 2] ** 2 + sep[:, 3] ** 2) / 2)
+        d_best = np.where(sd > 0, np.clip(gap, 0.0, None) / np.where(sd > 0, sd, 1.0), 0.0)
         resort = np.argsort(-d_best, kind="stable")
-        order, d_best, d2_best, start2 = (
-            order[resort],
-            d_best[resort],
-            d2_best[resort],
-            start2[resort],
-        )
+        order, d_best = order[resort], d_best[resort]
+        # fibers shared equally over these starts: per-fiber mean and variance averaged
+        need = fibers_needed(float(gap.mean()), float(np.sqrt(np.mean(sep[:, 2] ** 2))),
+                             float(np.sqrt(np.mean(sep[:, 3] ** 2))), alpha, power)  # fmt: skip
+        window = WINDOW * np.array([noise.theta0, noise.y0, noise.length])
     names = component_names(observables)
     best = []
-    for i, di, d2i in zip(order, d_best, d2_best, strict=True):
-        j = int(np.argmax(d2i))
+    for i, di in zip(order, d_best, strict=True):
+        j = int(np.argmax(raw[i]))  # the component that separates most there, on the grid
         best.append(
             Suggestion(
                 float(g[i, 0]),
@@ -321,7 +346,6 @@ def discriminate(
                 float(np.nanmean(xb[:, i, j])),
             )  # fmt: skip
         )
-    d_top = float(np.sqrt(max(np.mean(start2), 0.0))) if len(order) else 0.0
     meas2 = raw[ng:].sum(axis=1)
     d_m = float(np.sqrt(max(np.mean(meas2), 0.0))) if len(meas2) else 0.0
     return Discrimination(
@@ -329,10 +353,10 @@ def discriminate(
         grid=g,
         d=d,
         best=best,
-        fibers_needed=_needed(d_top, alpha, power),
+        fibers_needed=need,
         fibers_needed_measured=_needed(d_m, alpha, power),
         simulations=sim.used - used0,
-        window=WINDOW * np.array([noise.theta0, noise.y0, noise.length]) if confirm else None,
+        window=window,
     )
 
 
@@ -460,14 +484,71 @@ def followup(
     if hyp is not None:
         a, b, why = hyp
         grid = start_grid(maker.starts)
-        # + the best starts measured again (two copies per window point)
-        cost = 2 * s.next_copies * (len(grid) + maker.n) + 4 * CONFIRM_POINTS * min(8, len(grid))
+        # + the best starts measured again in their windows
+        again = 2 * s.settle_copies * CONFIRM_POINTS * min(CONFIRM_STARTS, len(grid))
+        cost = 2 * s.next_copies * (len(grid) + maker.n) + again
         if cost <= sim.remaining:
             out["next"] = discriminate(
                 sim, s.noise, (a, b), maker.starts, obs, seed=s.seed,
                 copies=s.next_copies, grid=grid, alpha=s.alpha, show=show,
+                confirm_copies=s.settle_copies,
             )  # fmt: skip
             out["next_reason"] = why
         else:
             out["next_skipped"] = f"the budget leaves {sim.remaining} runs, it needs {cost}"
     return out
+
+
+def settle_followup(
+    verdict: Verdict,
+    heldout: Sequence[HeldOut],
+    fold_values: Mapping[str, list[float]],
+    followup: MeasuredData,
+    sim: Simulator,
+    s: DiscrepancySettings,
+    observables: Sequence[str],
+    show: Callable[[Mapping[str, float]], str] | None = None,
+) -> tuple[Verdict, dict[str, Any]]:
+    """The verdict's two-way question (:func:`.followup.next_hypotheses`) put to follow-up fibers.
+
+    Parameters
+    ----------
+    verdict, heldout, fold_values
+        The analysis of the first fibers.
+    followup : MeasuredData
+        Fibers measured after it (typically at the starts what-to-measure-next gave).
+    s : DiscrepancySettings
+        ``settle_copies``, ``noise``, ``seed``, ``alpha``.
+    observables : sequence of str
+        The first fibers' observables; those the follow-up table also has are scored.
+    show : callable, optional
+        ``{name: value} -> text`` for the labels (each value in its candidate's unit).
+
+    Returns
+    -------
+    verdict : Verdict
+        :func:`settled_verdict`.
+    extra : dict
+        ``settle`` (Settlement), or ``settle_skipped`` with the reason.
+    """
+    label = show or (lambda v: " + ".join(f"{k} = {x:.3g}" for k, x in v.items()))
+    hyp = next_hypotheses(verdict, list(heldout), dict(fold_values), show)
+    if hyp is None:
+        why = f"the verdict ({verdict.kind}) leaves no two hypotheses to separate"
+        return verdict, {"settle_skipped": why}
+    obs = tuple(o for o in observables if o in followup.observed)
+    if not obs:
+        why = f"the follow-up fibers measure none of {', '.join(observables)}"
+        return verdict, {"settle_skipped": why}
+    cost = 2 * s.settle_copies * len(followup)
+    if cost > sim.remaining:
+        why = f"the budget leaves {sim.remaining} runs, it needs {cost}"
+        return verdict, {"settle_skipped": why}
+    a, b, why = hyp
+    st = settle(
+        sim, s.noise, (a, b), (label(a) or "baseline", label(b) or "baseline"), why,
+        followup.table.reset_index(drop=True), followup.starts, obs,
+        np.random.default_rng([s.seed, 23]), seed=s.seed, copies=s.settle_copies, alpha=s.alpha,
+        n_perm=s.n_perm,
+    )  # fmt: skip
+    return settled_verdict(verdict, st), {"settle": st}

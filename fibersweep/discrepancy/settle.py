@@ -53,31 +53,28 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pandas as pd
 from scipy.stats import norm
 
 from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
-from fibersweep.discrepancy.decide import HeldOut, Verdict
-from fibersweep.discrepancy.followup import next_hypotheses
+from fibersweep.discrepancy.decide import Verdict
 from fibersweep.discrepancy.gap import GapResult, assess_gap, value_matrices
 from fibersweep.discrepancy.power import standardised_values
-from fibersweep.discrepancy.schema import MeasuredData
-from fibersweep.discrepancy.settings import DiscrepancySettings
 from fibersweep.discrepancy.simulate import Simulator
 
 __all__ = [
     "Settlement",
     "SettleTest",
     "discriminant",
+    "fibers_needed",
     "settle",
-    "settle_followup",
     "settle_test",
     "settled_verdict",
+    "window_separation",
 ]
 
 #: Null draws of the sum Λ per hypothesis (resolution of the p-values: 1/(n_draws + 1)).
@@ -223,7 +220,7 @@ def settle_test(
     )
     ma, mb = (float(sum(q.mean() for q in p if len(q))) for p in pools)
     sa, sb = (float(np.sqrt(sum(q.var(ddof=1) for q in p if len(q) > 1))) for p in pools)
-    need = _needed((ma, mb), (sa, sb), n, alpha)
+    need = fibers_needed((ma - mb) / n, sa / math.sqrt(n), sb / math.sqrt(n), alpha)
     return SettleTest(lam, stat, (ma, mb), (sa, sb), (p_a, p_b), outcome, need, failed)
 
 
@@ -244,21 +241,52 @@ def _sum_draws(
     return np.concatenate([total, [lam.sum()]])
 
 
-def _needed(m: tuple[float, float], sd: tuple[float, float], n: int, alpha: float) -> int | None:
-    """Fibers like these for which each one-sided test rejects the false hypothesis with
-    power 0.8 (at alpha).
+def fibers_needed(
+    gap: float, sd_a: float, sd_b: float, alpha: float, power: float = 0.8
+) -> int | None:
+    """Fibers for which each one-sided test rejects the false hypothesis with ``power``.
 
-    Per fiber Λ has mean g_H and sd σ_H under hypothesis H (from the n fibers
-    measured); rejecting B when A is true needs N (g_A - g_B) >= √N (z_{1-alpha} σ_B +
-    z_0.8 σ_A), and the reverse with A and B swapped; the larger N of the two.
+    Per fiber λ has mean g_H and sd σ_H under hypothesis H (``gap`` = g_A - g_B).
+    Rejecting B when A is true needs N gap >= √N (z_{1-alpha} σ_B + z_power σ_A),
+    and the reverse with A and B swapped; the larger N of the two. None when
+    nothing separates them (gap <= 0).
     """
-    gap = (m[0] - m[1]) / n
     if not np.isfinite(gap) or gap <= 0.0:
         return None
-    za, zp = norm.ppf(1 - alpha), norm.ppf(0.8)
-    sa, sb = sd[0] / math.sqrt(n), sd[1] / math.sqrt(n)
-    worst = max(za * sb + zp * sa, za * sa + zp * sb)
+    za, zp = norm.ppf(1 - alpha), norm.ppf(power)
+    worst = max(za * sd_b + zp * sd_a, za * sd_a + zp * sd_b)
     return max(1, int(math.ceil((worst / gap) ** 2)))
+
+
+def window_separation(
+    ref_a: np.ndarray, ref_b: np.ndarray, null_a: np.ndarray, null_b: np.ndarray
+) -> tuple[float, float, float, float]:
+    """λ of one fiber measured anywhere in a window, under A and under B.
+
+    Parameters
+    ----------
+    ref_a, ref_b : ndarray, shape (k_ref, m, c)
+        Reference copies at m points of the window (means and spread, as the test).
+    null_a, null_b : ndarray, shape (k_null, m, c)
+        Independent copies there.
+
+    Returns
+    -------
+    (g_A, g_B, sd_A, sd_B)
+        Mean and sd of λ over the points and copies (failed copies left out): a
+        fiber at a random point of the window. :func:`fibers_needed` of
+        ``g_A - g_B`` is what :func:`settle_test` would need there.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        mu_a, mu_b = np.nanmean(ref_a, axis=0), np.nanmean(ref_b, axis=0)
+    s = _spread(np.asarray(ref_a, float), np.asarray(ref_b, float))
+    out = []
+    for null in (np.asarray(null_a, float), np.asarray(null_b, float)):
+        ok = np.isfinite(null).any(axis=2)
+        lam = discriminant(null, mu_a, mu_b, s)[ok]
+        out.append((float(lam.mean()), float(lam.std(ddof=1))) if lam.size > 1 else (0.0, 0.0))
+    return out[0][0], out[1][0], out[0][1], out[1][1]
 
 
 @dataclass(frozen=True)
@@ -408,58 +436,3 @@ def settled_verdict(verdict: Verdict, st: Settlement) -> Verdict:
     label = st.labels[0 if st.outcome == "A" else 1]
     text = f"{label}: {st.text()}. On the first fibers alone: {verdict.text}"
     return Verdict("named", dict(win), verdict.observable, verdict.region, text, (dict(win),))
-
-
-def settle_followup(
-    verdict: Verdict,
-    heldout: Sequence[HeldOut],
-    fold_values: Mapping[str, list[float]],
-    followup: MeasuredData,
-    sim: Simulator,
-    s: DiscrepancySettings,
-    observables: Sequence[str],
-    show: Callable[[Mapping[str, float]], str] | None = None,
-) -> tuple[Verdict, dict[str, Any]]:
-    """The verdict's two-way question (:func:`.followup.next_hypotheses`) put to follow-up fibers.
-
-    Parameters
-    ----------
-    verdict, heldout, fold_values
-        The analysis of the first fibers.
-    followup : MeasuredData
-        Fibers measured after it (typically at the starts what-to-measure-next gave).
-    s : DiscrepancySettings
-        ``settle_copies``, ``noise``, ``seed``, ``alpha``.
-    observables : sequence of str
-        The first fibers' observables; those the follow-up table also has are scored.
-    show : callable, optional
-        ``{name: value} -> text`` for the labels (each value in its candidate's unit).
-
-    Returns
-    -------
-    verdict : Verdict
-        :func:`settled_verdict`.
-    extra : dict
-        ``settle`` (Settlement), or ``settle_skipped`` with the reason.
-    """
-    label = show or (lambda v: " + ".join(f"{k} = {x:.3g}" for k, x in v.items()))
-    hyp = next_hypotheses(verdict, list(heldout), dict(fold_values), show)
-    if hyp is None:
-        why = f"the verdict ({verdict.kind}) leaves no two hypotheses to separate"
-        return verdict, {"settle_skipped": why}
-    obs = tuple(o for o in observables if o in followup.observed)
-    if not obs:
-        why = f"the follow-up fibers measure none of {', '.join(observables)}"
-        return verdict, {"settle_skipped": why}
-    cost = 2 * s.settle_copies * len(followup)
-    if cost > sim.remaining:
-        why = f"the budget leaves {sim.remaining} runs, it needs {cost}"
-        return verdict, {"settle_skipped": why}
-    a, b, why = hyp
-    st = settle(
-        sim, s.noise, (a, b), (label(a) or "baseline", label(b) or "baseline"), why,
-        followup.table.reset_index(drop=True), followup.starts, obs,
-        np.random.default_rng([s.seed, 23]), seed=s.seed, copies=s.settle_copies, alpha=s.alpha,
-        n_perm=s.n_perm,
-    )  # fmt: skip
-    return settled_verdict(verdict, st), {"settle": st}

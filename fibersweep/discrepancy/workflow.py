@@ -45,6 +45,7 @@ from fibersweep.discrepancy.dispersion import dispersion_test, spread_test
 from fibersweep.discrepancy.estimate import Fit, score_interval
 from fibersweep.discrepancy.fit import fold_fits, pooled_refit
 from fibersweep.discrepancy.followup import followup as next_steps
+from fibersweep.discrepancy.followup import settle_followup
 from fibersweep.discrepancy.gap import (
     GapResult,
     assess_gap,
@@ -66,7 +67,6 @@ from fibersweep.discrepancy.settings import (
     Plan,
     plan_budget,
 )
-from fibersweep.discrepancy.settle import settle_followup
 from fibersweep.discrepancy.signatures import (
     Signature,
     choose_candidates,
