@@ -9,13 +9,11 @@ without any effect, N = 60, candidates declared; at most 3 named (P(X >= 4) = 1.
 for a binomial(20, 0.05): an alarm rate at alpha fails this test in 1.6 % of runs).
 
 Each test makes its own data and runs on its own; select one with -k: E3e5, E1e5,
-without_the_candidate, smooth_pillar, coarser_flow_grid_is_named (the 100 fibers
-alone), asks_for (the same, then the follow-up fibers), false_alarms.
+without_the_candidate, smooth_pillar, coarser_flow_grid, false_alarms.
 """
 
 from __future__ import annotations
 
-import pandas as pd
 import pytest
 
 from fibersweep.discrepancy.declared import parse_candidate
@@ -87,57 +85,6 @@ def test_a_coarser_flow_grid_is_named(coarse_field, coarse_settings, flow_cache_
                       cache=flow_cache_dir, truth_field=coarse5)  # fmt: skip
     assert res.verdict.kind == "named", res.verdict.text
     assert list(res.verdict.effects) == ["flow.dx=5"]
-
-
-@pytest.mark.slow
-def test_a_coarser_flow_grid_is_named_by_the_fibers_the_report_asks_for(
-    coarse_field, coarse_settings, flow_cache_dir
-):
-    """The same 100 fibers (ambiguous, above), then what the report asks for.
-
-    What-to-measure-next gives the starts where its two hypotheses differ most and
-    how many fibers settle them with power 0.8. An experimenter who wants the
-    answer measures twice that (power about 0.97 by the same estimate), near the
-    five best starts: synthesised on the dx = 5 µm field from a box of three start
-    noise sd either side of each (seeds 10522 + j; aiming fibers at a point exactly
-    is not what the copies assume), then put to the two hypotheses
-    (:mod:`fibersweep.discrepancy.settle`: one-sided tests at alpha = 0.05 each, a
-    wrong pick has probability at most 0.05). The grid must be named.
-    """
-    from fibersweep.discrepancy.copies import NoiseModel
-    from fibersweep.discrepancy.workflow import settle_result
-    from fibersweep.flow.cache import get_flow_field
-
-    coarse5, _ = get_flow_field(FlowSettings(dx=5.0), flow_cache_dir)
-    table, _ = synthesize(coarse5, FIBER, BOX, 100, seed=9521, workers=2, progress=False)
-    cands = (parse_candidate("flow.dx=5", FIBER, coarse_settings),)
-    s = DiscrepancySettings(seed=9521, workers=2, declared=cands, power_fibers=0)
-    res = run_discrepancy(validate_measured(table), coarse_field, FIBER, s, progress=False,
-                          flow=coarse_settings, cache_dir=flow_cache_dir)  # fmt: skip
-    assert res.verdict.kind == "ambiguous", res.verdict.text
-    assert {"flow.dx=5"} in [set(a) for a in res.verdict.alternatives], res.verdict.text
-    nx = res.extra["next"]
-    assert nx.fibers_needed is not None and nx.fibers_needed <= 50, nx.fibers_needed
-    best, total = nx.best[:5], 2 * nx.fibers_needed
-    share = [total // len(best) + (j < total % len(best)) for j in range(len(best))]
-    sd = NoiseModel()
-    parts = []
-    for j, (b, k) in enumerate(zip(best, share, strict=True)):
-        if k:
-            box = {
-                "theta0": (b.theta0 - 3 * sd.theta0, b.theta0 + 3 * sd.theta0),
-                "y0": (b.y0 - 3 * sd.y0, b.y0 + 3 * sd.y0),
-                "length": (b.length - 3 * sd.length, b.length + 3 * sd.length),
-            }
-            t, _ = synthesize(coarse5, FIBER, box, k, seed=10522 + j, workers=2,
-                              progress=False)  # fmt: skip
-            t["fiber_id"] = [f"m{j}-{i}" for i in range(len(t))]
-            parts.append(t)
-    more = validate_measured(pd.concat(parts, ignore_index=True))
-    res2 = settle_result(res, more, coarse_field, FIBER, progress=False, flow=coarse_settings,
-                         cache_dir=flow_cache_dir)  # fmt: skip
-    assert res2.verdict.kind == "named", (res2.verdict.text, res2.extra["settle"].test)
-    assert list(res2.verdict.effects) == ["flow.dx=5"], res2.verdict.text
 
 
 @pytest.mark.slow
