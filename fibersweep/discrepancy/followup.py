@@ -36,9 +36,10 @@ ratio λ of :mod:`.settle`). A start's separation per fiber is
 (g_A - g_B) / sd, λ's mean under each hypothesis over its sd, and the fibers
 needed, shared over these starts, are those for which each of the follow-up
 test's one-sided tests rejects the false hypothesis with the target power
-(:func:`.settle.fibers_needed`). The count at the measured starts is the
-grid's two-copy estimate for a two-sided test with known predictions,
-``ceil(((z_{1 - alpha/2} + z_power) / D)²)``: a lower bound, for comparison.
+(:func:`.settle.fibers_needed`). The count at the measured starts
+(``fibers_needed_measured``) is of another kind, for comparison only: the
+grid's two-copy D averaged over the measured starts, for a two-sided test with
+known predictions, ``ceil(((z_{1 - alpha/2} + z_power) / D)²)``.
 
 The follow-up fibers (``--followup``) then test the hypotheses
 (:func:`settle_followup`, :mod:`.settle`).
@@ -47,7 +48,6 @@ The follow-up fibers (``--followup``) then test the hypotheses
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -59,11 +59,13 @@ from fibersweep.discrepancy.candidates import Candidate
 from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.decide import HeldOut, Verdict
 from fibersweep.discrepancy.observables import OBSERVABLES
-from fibersweep.discrepancy.power import analyse_power, standardised_values
+from fibersweep.discrepancy.power import analyse_power
 from fibersweep.discrepancy.schema import MeasuredData
 from fibersweep.discrepancy.settings import DiscrepancySettings, Plan
 from fibersweep.discrepancy.settle import (
     fibers_needed,
+    hypothesis_copies,
+    noise_spread,
     settle,
     settled_verdict,
     window_separation,
@@ -89,7 +91,7 @@ __all__ = [
 WINDOW = 3.0
 #: Points per best start, and best starts, where what-to-measure-next measures the
 #: separation again with the follow-up test's statistic.
-CONFIRM_POINTS = 4
+CONFIRM_POINTS = 8
 CONFIRM_STARTS = 5
 
 
@@ -191,33 +193,6 @@ def _label(effects: Mapping[str, float]) -> str:
     return " + ".join(f"{k} = {v:.3g}" for k, v in effects.items()) or "baseline"
 
 
-def _values(
-    maker: CopyMaker,
-    hypotheses: tuple[Mapping[str, float], Mapping[str, float]],
-    copies: int,
-    observables: Sequence[str],
-    tag: str,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Both hypotheses' copies on the scoring scale, each shape (copies, points, components)."""
-    out = []
-    for h, t in zip(hypotheses, "AB", strict=True):
-        cps = maker.copies(range(copies), dict(h), desc=f"{tag}: {t}")
-        out.append(np.stack(standardised_values(cps, observables)))
-    return out[0], out[1]
-
-
-def _noise(xa: np.ndarray, xb: np.ndarray) -> np.ndarray:
-    """Per-component noise of one fiber: the copies' spread around their hypothesis' mean."""
-    copies = xa.shape[0]
-    both = np.concatenate([xa, xb], axis=0)
-    with warnings.catch_warnings():  # a component undefined at a start: NaN, as meant
-        warnings.simplefilter("ignore", RuntimeWarning)
-        resid = np.concatenate([xa - np.nanmean(xa, 0), xb - np.nanmean(xb, 0)], axis=0)
-        s = np.sqrt(np.nanmean(resid**2, axis=(0, 1)) * copies / (copies - 1))
-        floor = np.nanstd(both, axis=(0, 1)) * 0.05  # no component counts as noiseless
-    return np.maximum(np.where(np.isfinite(s), s, 0.0), floor)
-
-
 def _shift2(xa: np.ndarray, xb: np.ndarray, s: np.ndarray) -> np.ndarray:
     """Unbiased squared standardised shift per point and component, shape (points, c).
 
@@ -301,9 +276,9 @@ def discriminate(
     g = start_grid(starts) if grid is None else np.asarray(grid, dtype=np.float64)
     pts = np.vstack([g, np.asarray(starts, dtype=np.float64)])
     used0 = sim.used
-    xa, xb = _values(CopyMaker(pts, noise, seed + 104729, sim), hypotheses, copies, observables,
-                     "next")  # fmt: skip
-    raw = _shift2(xa, xb, _noise(xa, xb))  # (points, components), unclipped
+    xa, xb, _, _ = hypothesis_copies(CopyMaker(pts, noise, seed + 104729, sim), hypotheses,
+                                     copies, observables, "next")  # fmt: skip
+    raw = _shift2(xa, xb, noise_spread(xa, xb))  # (points, components), unclipped
     ng = len(g)
     d = np.sqrt(np.clip(raw[:ng], 0.0, None).sum(axis=1))  # ranks the grid
     order = np.argsort(-d)[:top]
@@ -314,22 +289,28 @@ def discriminate(
         order = order[:confirm_starts]
         k_ref = max(confirm_copies, 6) // 3
         w = window_points(g[order], noise, confirm, np.random.default_rng([seed, 104743]))
-        wa, wb = _values(CopyMaker(w, noise, seed + 104759, sim), hypotheses,
-                         max(confirm_copies, 6), observables, "next: confirm")  # fmt: skip
+        wa, wb, oka, okb = hypothesis_copies(CopyMaker(w, noise, seed + 104759, sim), hypotheses,
+                                             max(confirm_copies, 6), observables,
+                                             "next: confirm")  # fmt: skip
         sep = []  # per start: g_A, g_B, sd_A, sd_B
         for j in range(len(order)):
             sl = slice(j * confirm, (j + 1) * confirm)
+            ok = (oka[:k_ref, sl], okb[:k_ref, sl], oka[k_ref:, sl], okb[k_ref:, sl])
             sep.append(window_separation(wa[:k_ref, sl], wb[:k_ref, sl], wa[k_ref:, sl],
-                                         wb[k_ref:, sl]))  # fmt: skip
-        sep = np.array(sep)
+                                         wb[k_ref:, sl], ok=ok))  # fmt: skip
+        sep = np.nan_to_num(np.array(sep))  # a side without two valid copies: no separation
         gap = sep[:, 0] - sep[:, 1]
         sd = np.sqrt((sep[:, 2] ** 2 + sep[:, 3] ** 2) / 2)
         d_best = np.where(sd > 0, np.clip(gap, 0.0, None) / np.where(sd > 0, sd, 1.0), 0.0)
         resort = np.argsort(-d_best, kind="stable")
         order, d_best = order[resort], d_best[resort]
-        # fibers shared equally over these starts: per-fiber mean and variance averaged
-        need = fibers_needed(float(gap.mean()), float(np.sqrt(np.mean(sep[:, 2] ** 2))),
-                             float(np.sqrt(np.mean(sep[:, 3] ** 2))), alpha, power)  # fmt: skip
+        # fibers shared equally over these starts: all their points at once, as the
+        # follow-up test scores them (its noise floor is over all its fibers)
+        ok = (oka[:k_ref], okb[:k_ref], oka[k_ref:], okb[k_ref:])
+        g_a, g_b, sd_a, sd_b = window_separation(wa[:k_ref], wb[:k_ref], wa[k_ref:],
+                                                 wb[k_ref:], ok=ok)  # fmt: skip
+        need = fibers_needed(g_a - g_b, sd_a, sd_b, alpha, power,
+                             k_null=max(confirm_copies, 6) - k_ref)  # fmt: skip
         window = WINDOW * np.array([noise.theta0, noise.y0, noise.length])
     names = component_names(observables)
     best = []
@@ -531,7 +512,7 @@ def settle_followup(
     extra : dict
         ``settle`` (Settlement), or ``settle_skipped`` with the reason.
     """
-    label = show or (lambda v: " + ".join(f"{k} = {x:.3g}" for k, x in v.items()))
+    label = show or _label
     hyp = next_hypotheses(verdict, list(heldout), dict(fold_values), show)
     if hyp is None:
         why = f"the verdict ({verdict.kind}) leaves no two hypotheses to separate"

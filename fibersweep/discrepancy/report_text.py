@@ -396,10 +396,14 @@ def _power(s: dict[str, Any]) -> list[str]:
 
 
 def _window(w: list[float] | None) -> str:
-    """', or within θ0 ±3°, y0 ±0.03 h_obs, L ±0.03 l_obs of them', or '' (no window)."""
+    """Where the fibers should start: spread over the window around each start, or at it."""
     if not w:
-        return ""
-    return f", or within θ0 ±{w[0]:.2g}°, y0 ±{w[1]:.2g} h_obs, L ±{w[2]:.2g} l_obs of them"
+        return "at these starts"
+    return (
+        f"with starts spread over θ0 ±{w[0]:.2g}°, y0 ±{w[1]:.2g} h_obs, L ±{w[2]:.2g} l_obs "
+        "around these starts (the count and the follow-up test assume starts scattered over "
+        "that window, not aimed at one point)"
+    )
 
 
 def _next(s: dict[str, Any]) -> list[str]:
@@ -415,8 +419,8 @@ def _next(s: dict[str, Any]) -> list[str]:
         "",
         "## What to measure next",
         "",
-        f"Why: {nx['reason']}. To separate **{a}** from **{b}**, measure fibers at these "
-        f"starts{_window(nx.get('window'))} (separation per fiber: the two predictions' "
+        f"Why: {nx['reason']}. To separate **{a}** from **{b}**, measure fibers "
+        f"{_window(nx.get('window'))} (separation per fiber: the two predictions' "
         "difference over the noise of one measured fiber, summed over the observables):",
         "",
         "| θ0 [deg] | y0 [h_obs] | L [l_obs] | separation per fiber | observable | "
@@ -430,10 +434,11 @@ def _next(s: dict[str, Any]) -> list[str]:
         )
     lines += [
         "",
-        f"About {_f(nx['fibers_needed'], 'd')} fibers at these starts would settle it "
-        f"(at the measured starts: {_f(nx['fibers_needed_at_measured_starts'], 'd')}). "
-        "Once measured, give them to the same command with `--followup`: they are put to "
-        "the two hypotheses directly (docs/discrepancy.md, *Settling it*).",
+        f"About {_f(nx['fibers_needed'], 'd')} fibers there, shared over these starts, "
+        "would settle it with power 0.8 (a rough figure at the measured starts: "
+        f"{_f(nx['fibers_needed_at_measured_starts'], 'd')}). Once measured, give them to "
+        "the same command with `--followup`, once: they are put to the two hypotheses "
+        "directly (docs/discrepancy.md, *Settling it*).",
     ]
     return lines
 

@@ -14,15 +14,18 @@ the discriminant
     λ_i = Σ_c [(x_ic - μB_ic)² - (x_ic - μA_ic)²] / (2 s_c²)
 
 is the Gaussian log-likelihood ratio of A over B (μ: the mean of the *reference*
-copies of each hypothesis at the fiber's start; s_c: their spread around those
-means; a component undefined in x or μ adds nothing). It is only a statistic:
+copies of each hypothesis at the fiber's start; s_c: the spread of both
+hypotheses' reference copies around those means, pooled over all fibers; a
+component undefined in x or μ adds nothing). It is only a statistic:
 its distribution under each hypothesis is that of *null* copies of the
 hypothesis (independent of the reference copies, measurement noise included)
 scored the same way, so the test needs no Gaussian assumption. For the sum
 Λ = Σ_i λ_i the null distribution is drawn by taking, per fiber, one value of
 its pool (its null copies' λ and its own measured λ_i, as a permutation test
-keeps the observed designation among its draws), ``n_draws`` times; a failed
-copy is left out of its fiber's pool. Then
+keeps the observed designation among its draws), ``n_draws`` times. A copy
+whose run failed is left out of its fiber's pool (and of the reference means);
+an outcome that is undefined by its observable's rule (no contact, a trapped
+fiber) is scored the same way in the copies as in the measured fibers. Then
 
     p_A = P(Λ* <= Λ | A)   (fibers further from A than A's own copies are),
     p_B = P(Λ* >= Λ | B),
@@ -32,12 +35,15 @@ and the follow-up fibers' starts are spread as the copies assume (the measured
 start within the start noise of the true one, not aimed at a point exactly),
 the chance of rejecting it is at most alpha, and so is the chance of a wrong
 pick. A hypothesis whose fitted value is off (a continuous effect fitted within
-its interval) is rejected more often the more follow-up fibers there are.
+its interval) is rejected more often the more follow-up fibers there are. The
+bound holds for one test of fresh fibers: testing again as more fibers are
+added to the same follow-up (the copies are seeded the same) is a sequential
+test, whose chance of a wrong pick grows with the number of looks.
 
-Outcome: B rejected and A not: "A"; the reverse: "B"; both: "neither" (the
-fibers lie between the two, e.g. the truth is a value between two fitted
-values); none: "undecided" (too few or too weakly discriminating fibers: the
-report says how many such fibers would do). The test looks along the
+Outcome: B rejected and A not: "A"; the reverse: "B"; both rejected:
+"neither" (the fibers lie between the two, e.g. the truth is a value between
+two fitted values); none rejected: "undecided" (too few or too weakly
+discriminating fibers: the report says how many such fibers would do). The test looks along the
 difference of the two predictions only, so the winner is then checked on the
 follow-up fibers as every fitted effect is on the first ones
 (:func:`.gap.assess_gap` against its copies): a significant gap left, and it
@@ -69,8 +75,11 @@ from fibersweep.discrepancy.simulate import Simulator
 __all__ = [
     "Settlement",
     "SettleTest",
+    "copy_values",
     "discriminant",
     "fibers_needed",
+    "hypothesis_copies",
+    "noise_spread",
     "settle",
     "settle_test",
     "settled_verdict",
@@ -90,8 +99,8 @@ def discriminant(x: np.ndarray, mu_a: np.ndarray, mu_b: np.ndarray, s: np.ndarra
         Component values (scoring scale) of n fibers.
     mu_a, mu_b : ndarray, shape (n, c)
         The hypotheses' mean predictions at the same starts.
-    s : ndarray, shape (c,)
-        Noise of one fiber per component (> 0).
+    s : ndarray, shape (c,) or (n, c)
+        Noise of one fiber per component (> 0), the same at every start or per start.
 
     Returns
     -------
@@ -104,18 +113,33 @@ def discriminant(x: np.ndarray, mu_a: np.ndarray, mu_b: np.ndarray, s: np.ndarra
         raise ValueError(
             f"shapes differ: x {x.shape}, mu_a {np.shape(mu_a)}, mu_b {np.shape(mu_b)}"
         )
-    if np.shape(s) != x.shape[-1:]:
-        raise ValueError(f"s must have shape {x.shape[-1:]}, got {np.shape(s)}")
+    if np.shape(s) not in (x.shape[-1:], x.shape[-2:]):
+        raise ValueError(f"s must have shape {x.shape[-1:]} or {x.shape[-2:]}, got {np.shape(s)}")
     with np.errstate(invalid="ignore"):
         term = ((x - mu_b) ** 2 - (x - mu_a) ** 2) / (2.0 * np.asarray(s) ** 2)
     return np.where(np.isfinite(term), term, 0.0).sum(axis=-1)
 
 
-def _spread(ref_a: np.ndarray, ref_b: np.ndarray) -> np.ndarray:
-    """Noise of one fiber per component: the reference copies around their means.
+def noise_spread(ref_a: np.ndarray, ref_b: np.ndarray) -> np.ndarray:
+    """Noise of one fiber per component: the copies of each hypothesis around their means.
 
-    As :func:`.followup.discriminate`: pooled over both hypotheses and all fibers,
-    with a floor of 5 % of the components' spread so none counts as noiseless.
+    Pooled over all starts: a noise per start, from its few copies, is itself so
+    noisy that the log-likelihood ratio weighted by it has heavy tails (on the
+    flow-grid case the fibers needed grew from hundreds to 10^5).
+
+    Parameters
+    ----------
+    ref_a, ref_b : ndarray, shape (k, n, c)
+        Copies of each hypothesis at n starts (scoring scale; NaN where undefined
+        or the run failed); k >= 2.
+
+    Returns
+    -------
+    ndarray, shape (c,)
+        The residual rms pooled over both hypotheses and all starts (k/(k-1)
+        corrected), floored at 5 % of the component's spread over all copies and
+        starts so that no component counts as noiseless (1 where even that is 0
+        or undefined).
     """
     k = ref_a.shape[0]
     with warnings.catch_warnings():  # a component undefined at a start: NaN, as meant
@@ -126,6 +150,53 @@ def _spread(ref_a: np.ndarray, ref_b: np.ndarray) -> np.ndarray:
     s = np.where(np.isfinite(s), s, 0.0)
     floor = np.where(np.isfinite(floor) & (floor > 0), floor, 1.0)
     return np.maximum(s, floor)
+
+
+def copy_values(
+    cps: Sequence[pd.DataFrame], observables: Sequence[str]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Copies on the scoring scale, with the runs that failed marked.
+
+    Parameters
+    ----------
+    cps : sequence of DataFrame
+        k copies of n fibers (:meth:`.copies.CopyMaker.copies`).
+
+    Returns
+    -------
+    values : ndarray, shape (k, n, c)
+        :func:`.power.standardised_values`; a failed run's row is NaN.
+    ok : ndarray of bool, shape (k, n)
+        The run did not fail (``status == 'ok'``). A failed run is no outcome; an
+        outcome undefined by its observable's rule (no contact) is one.
+    """
+    vals = np.stack(standardised_values(list(cps), observables))
+    ok = np.stack([(c["status"] == "ok").to_numpy() if "status" in c
+                   else np.ones(len(c), bool) for c in cps])  # fmt: skip
+    vals[~ok] = np.nan
+    return vals, ok
+
+
+def hypothesis_copies(
+    maker: CopyMaker,
+    hypotheses: tuple[Mapping[str, float], Mapping[str, float]],
+    copies: int,
+    observables: Sequence[str],
+    tag: str,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Both hypotheses' copies at the maker's starts (common random numbers).
+
+    Returns
+    -------
+    values_a, values_b : ndarray, shape (copies, n, c)
+    ok_a, ok_b : ndarray of bool, shape (copies, n)
+        As :func:`copy_values`.
+    """
+    (va, oka), (vb, okb) = (
+        copy_values(maker.copies(range(copies), dict(h), desc=f"{tag}: {t}"), observables)
+        for h, t in zip(hypotheses, "AB", strict=True)
+    )
+    return va, vb, oka, okb
 
 
 @dataclass(frozen=True)
@@ -139,9 +210,11 @@ class SettleTest:
     statistic : float
         Λ = Σ λ_i.
     expected : (float, float)
-        Mean of Λ under A and under B (from the null copies).
+        Mean of Λ under A and under B (from the null copies: n times the mean per
+        fiber).
     spread : (float, float)
-        Its standard deviation under A and under B.
+        Its standard deviation under A and under B (√n times the sd within a
+        fiber's pool).
     p_values : (float, float)
         p of "A is true" (Λ as low or lower under A) and of "B is true".
     outcome : {'A', 'B', 'neither', 'undecided'}
@@ -149,7 +222,7 @@ class SettleTest:
         Fibers of the same discrimination for which each test rejects the false
         hypothesis with power 0.8 (None when the copies do not separate them).
     failed : int
-        Null copies left out because their run failed.
+        Copies (reference and null) left out because their run failed.
     """
 
     per_fiber: np.ndarray
@@ -171,13 +244,14 @@ def settle_test(
     rng: np.random.Generator,
     alpha: float = 0.05,
     n_draws: int = N_DRAWS,
+    ok: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> SettleTest:
     """Test A against B on measured fibers, with copies of each.
 
     Parameters
     ----------
     x : ndarray, shape (n, c)
-        The measured fibers' components (scoring scale; NaN where undefined).
+        The measured fibers' components (scoring scale; NaN where undefined); n >= 1.
     ref_a, ref_b : ndarray, shape (k_ref, n, c)
         Reference copies of each hypothesis at the fibers' starts (their means
         and spread define λ).
@@ -189,28 +263,41 @@ def settle_test(
         Level of each one-sided test.
     n_draws : int
         Null draws of Λ per hypothesis.
+    ok : (ndarray, ndarray, ndarray, ndarray) of bool, optional
+        Which runs of ref_a, ref_b, null_a, null_b did not fail, shapes (k, n);
+        default all. A failed run is left out; an undefined outcome is not.
+
+    Returns
+    -------
+    SettleTest
     """
     x = np.asarray(x, dtype=np.float64)
+    if x.ndim != 2 or x.shape[0] < 1:
+        raise ValueError(f"x must have shape (n, c) with n >= 1, got {x.shape}")
     n, c = x.shape
-    for name, arr in (("ref_a", ref_a), ("ref_b", ref_b), ("null_a", null_a), ("null_b", null_b)):
-        if np.ndim(arr) != 3 or np.shape(arr)[1:] != (n, c):
-            raise ValueError(f"{name} must have shape (k, {n}, {c}), got {np.shape(arr)}")
-    if len(ref_a) < 2 or len(ref_b) < 2 or len(null_a) < 2 or len(null_b) < 2:
-        raise ValueError("every copy set needs at least 2 copies")
+    sets = [np.array(a, dtype=np.float64) for a in (ref_a, ref_b, null_a, null_b)]
+    for name, arr in zip(("ref_a", "ref_b", "null_a", "null_b"), sets, strict=True):
+        if arr.ndim != 3 or arr.shape[1:] != (n, c):
+            raise ValueError(f"{name} must have shape (k, {n}, {c}), got {arr.shape}")
+        if len(arr) < 2:
+            raise ValueError(f"{name} needs at least 2 copies, got {len(arr)}")
+    masks = [np.ones(a.shape[:2], bool) for a in sets] if ok is None else [
+        np.asarray(m, bool) for m in ok]  # fmt: skip
+    for arr, m in zip(sets, masks, strict=True):
+        if m.shape != arr.shape[:2]:
+            raise ValueError(f"an ok mask must have shape {arr.shape[:2]}, got {m.shape}")
+        arr[~m] = np.nan  # a failed run: no outcome
+    ra, rb, na, nb = sets
     with warnings.catch_warnings():  # all copies undefined at a start: NaN mean, adds 0
         warnings.simplefilter("ignore", RuntimeWarning)
-        mu_a, mu_b = np.nanmean(ref_a, axis=0), np.nanmean(ref_b, axis=0)
-    s = _spread(np.asarray(ref_a, float), np.asarray(ref_b, float))
+        mu_a, mu_b = np.nanmean(ra, axis=0), np.nanmean(rb, axis=0)
+    s = noise_spread(ra, rb)
     lam = discriminant(x, mu_a, mu_b, s)
     stat = float(lam.sum())
-    pools, failed = [], 0
-    for null in (np.asarray(null_a, float), np.asarray(null_b, float)):
-        # a failed run (every component undefined) is no outcome: left out of its fiber's
-        # pool, where it would count as lambda = 0
-        ok = np.isfinite(null).any(axis=2)  # (k_null, n)
-        failed += int((~ok).sum())
+    pools = []
+    for null, m in ((na, masks[2]), (nb, masks[3])):
         lam_k = discriminant(null, mu_a, mu_b, s)
-        pools.append([lam_k[ok[:, i], i] for i in range(n)])
+        pools.append([lam_k[m[:, i], i] for i in range(n)])
     draws = [_sum_draws(lam, p, rng, n_draws) for p in pools]
     p_a = float(np.mean(draws[0] <= stat))
     p_b = float(np.mean(draws[1] >= stat))
@@ -218,10 +305,19 @@ def settle_test(
     outcome = {(False, True): "A", (True, False): "B", (True, True): "neither"}.get(
         (bool(rej_a), bool(rej_b)), "undecided"
     )
-    ma, mb = (float(sum(q.mean() for q in p if len(q))) for p in pools)
-    sa, sb = (float(np.sqrt(sum(q.var(ddof=1) for q in p if len(q) > 1))) for p in pools)
-    need = fibers_needed((ma - mb) / n, sa / math.sqrt(n), sb / math.sqrt(n), alpha)
-    return SettleTest(lam, stat, (ma, mb), (sa, sb), (p_a, p_b), outcome, need, failed)
+    # per fiber: mean and variance of lambda under each hypothesis, over the fibers
+    # whose pool has at least two values
+    stats = []
+    for p in pools:
+        used = [q for q in p if len(q) > 1]
+        stats.append((float(np.mean([q.mean() for q in used])) if used else np.nan,
+                      float(np.mean([q.var(ddof=1) for q in used])) if used else np.nan))
+    (ga, va), (gb, vb) = stats
+    k_null = int(min(masks[2].sum(axis=0).min(), masks[3].sum(axis=0).min()))
+    need = fibers_needed(ga - gb, math.sqrt(va), math.sqrt(vb), alpha, k_null=k_null)
+    failed = int(sum((~m).sum() for m in masks))
+    return SettleTest(lam, stat, (n * ga, n * gb), (math.sqrt(n * va), math.sqrt(n * vb)),
+                      (p_a, p_b), outcome, need, failed)  # fmt: skip
 
 
 def _sum_draws(
@@ -231,8 +327,14 @@ def _sum_draws(
 
     With the measured value in each pool (as a permutation test keeps the observed
     designation among its draws) the test is exact under exchangeability, however
-    few the copies; without it, k copies make the null too narrow by k/(k+1).
-    Returns shape (n_draws + 1,): the draws and Λ itself.
+    few the copies; drawing from the k copies alone gives a null whose variance is
+    (k - 1)/k of the copies' (an anti-conservative test). A fiber with no valid
+    copy contributes its own λ_i to every draw.
+
+    Returns
+    -------
+    ndarray, shape (n_draws + 1,)
+        The draws and Λ itself.
     """
     total = np.zeros(n_draws)
     for i, q in enumerate(pools):
@@ -242,24 +344,40 @@ def _sum_draws(
 
 
 def fibers_needed(
-    gap: float, sd_a: float, sd_b: float, alpha: float, power: float = 0.8
+    gap: float,
+    sd_a: float,
+    sd_b: float,
+    alpha: float,
+    power: float = 0.8,
+    k_null: int | None = None,
 ) -> int | None:
     """Fibers for which each one-sided test rejects the false hypothesis with ``power``.
 
     Per fiber λ has mean g_H and sd σ_H under hypothesis H (``gap`` = g_A - g_B).
     Rejecting B when A is true needs N gap >= √N (z_{1-alpha} σ_B + z_power σ_A),
-    and the reverse with A and B swapped; the larger N of the two. None when
-    nothing separates them (gap <= 0).
+    and the reverse with A and B swapped; the larger N of the two. With
+    ``k_null`` null copies per fiber, the measured λ_i in each pool pulls the
+    null towards it by 1/(k_null + 1) of the gap: N grows by ((k+1)/k)².
+
+    Returns
+    -------
+    int or None
+        None when nothing separates them (gap <= 0), or the inputs are not finite.
     """
-    if not np.isfinite(gap) or gap <= 0.0:
+    if not all(np.isfinite(v) for v in (gap, sd_a, sd_b)) or gap <= 0.0:
         return None
     za, zp = norm.ppf(1 - alpha), norm.ppf(power)
     worst = max(za * sd_b + zp * sd_a, za * sd_a + zp * sd_b)
-    return max(1, int(math.ceil((worst / gap) ** 2)))
+    pull = 1.0 if not k_null else ((k_null + 1) / k_null) ** 2
+    return max(1, int(math.ceil(pull * (worst / gap) ** 2)))
 
 
 def window_separation(
-    ref_a: np.ndarray, ref_b: np.ndarray, null_a: np.ndarray, null_b: np.ndarray
+    ref_a: np.ndarray,
+    ref_b: np.ndarray,
+    null_a: np.ndarray,
+    null_b: np.ndarray,
+    ok: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> tuple[float, float, float, float]:
     """λ of one fiber measured anywhere in a window, under A and under B.
 
@@ -269,23 +387,38 @@ def window_separation(
         Reference copies at m points of the window (means and spread, as the test).
     null_a, null_b : ndarray, shape (k_null, m, c)
         Independent copies there.
+    ok : as :func:`settle_test`
+        Runs that did not fail (default all).
 
     Returns
     -------
     (g_A, g_B, sd_A, sd_B)
-        Mean and sd of λ over the points and copies (failed copies left out): a
-        fiber at a random point of the window. :func:`fibers_needed` of
-        ``g_A - g_B`` is what :func:`settle_test` would need there.
+        λ's mean over the points and copies, and its sd within a point (pooled
+        over the points), under each hypothesis: a fiber at a random point of the
+        window, with the spread :func:`settle_test`'s null has given the starts.
+        :func:`fibers_needed` of them is what the test would need there. NaN for a
+        hypothesis with fewer than two valid copies at every point.
     """
+    sets = [np.array(a, dtype=np.float64) for a in (ref_a, ref_b, null_a, null_b)]
+    if ok is not None:
+        for arr, m in zip(sets, ok, strict=True):
+            arr[~np.asarray(m, bool)] = np.nan
+    ra, rb, na, nb = sets
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        mu_a, mu_b = np.nanmean(ref_a, axis=0), np.nanmean(ref_b, axis=0)
-    s = _spread(np.asarray(ref_a, float), np.asarray(ref_b, float))
+        mu_a, mu_b = np.nanmean(ra, axis=0), np.nanmean(rb, axis=0)
+    s = noise_spread(ra, rb)
     out = []
-    for null in (np.asarray(null_a, float), np.asarray(null_b, float)):
-        ok = np.isfinite(null).any(axis=2)
-        lam = discriminant(null, mu_a, mu_b, s)[ok]
-        out.append((float(lam.mean()), float(lam.std(ddof=1))) if lam.size > 1 else (0.0, 0.0))
+    for j, null in ((2, na), (3, nb)):
+        valid = np.ones(null.shape[:2], bool) if ok is None else np.asarray(ok[j], bool)
+        lam = discriminant(null, mu_a, mu_b, s)
+        cols = [lam[valid[:, i], i] for i in range(lam.shape[1])]
+        cols = [q for q in cols if len(q) > 1]
+        if not cols:
+            out.append((np.nan, np.nan))
+            continue
+        within = float(np.mean([q.var(ddof=1) for q in cols]))
+        out.append((float(np.mean(np.concatenate(cols))), math.sqrt(within)))
     return out[0][0], out[1][0], out[0][1], out[1][1]
 
 
@@ -388,8 +521,18 @@ def settle(
     copies : int
         Copies per hypothesis and fiber: a third for the reference means, the
         rest for the null distributions (>= 6).
+    rng : Generator
+        For the test's null draws and the winner's permutations.
+    seed : int
+        Seeds the copies (the same seed gives the same copies).
+    alpha : float
+        Level of each one-sided test and of the winner's gap test.
     n_perm : int
         Permutations of the winner's gap test.
+
+    Returns
+    -------
+    Settlement
     """
     if copies < 6:
         raise ValueError(f"copies must be >= 6, got {copies}")
@@ -401,9 +544,10 @@ def settle(
         maker.copies(range(copies), dict(h), desc=f"follow-up: {tag}")
         for h, tag in zip(hypotheses, "AB", strict=True)
     ]
-    va, vb = (np.stack(standardised_values(c, observables)) for c in cps)
+    (va, oka), (vb, okb) = (copy_values(c, observables) for c in cps)
     x = standardised_values([table], observables)[0]
-    test = settle_test(x, va[:k_ref], vb[:k_ref], va[k_ref:], vb[k_ref:], rng, alpha)
+    test = settle_test(x, va[:k_ref], vb[:k_ref], va[k_ref:], vb[k_ref:], rng, alpha,
+                       ok=(oka[:k_ref], okb[:k_ref], oka[k_ref:], okb[k_ref:]))  # fmt: skip
     adequacy = None
     if test.outcome in ("A", "B"):
         win = cps[0 if test.outcome == "A" else 1]

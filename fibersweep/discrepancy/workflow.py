@@ -574,19 +574,30 @@ def settle_result(
 
     The same as :func:`run_discrepancy` with ``followup``, without running the
     analysis of the first fibers again. ``field_``, ``fiber``, ``flow`` and
-    ``cache_dir``: those of that analysis.
+    ``cache_dir``: those of that analysis. A result already settled is settled
+    again from its first verdict (the new follow-up replaces the old; the test's
+    error bound is for one look at fresh fibers, :mod:`.settle`).
     """
     s = res.settings
     by_name = {c.name: c for c in s.candidates_of()}
+    scored = tuple(o for o in res.observables if o in followup.observed)
+    first = res.extra.get("verdict_first", res.verdict)  # a settled result: its first verdict
     with Simulator(
         field_, fiber, workers=s.workers, budget=None, progress=progress, executor=s.executor,
-        scheduler=s.scheduler, tracks=has_tracks(res.observables),
+        scheduler=s.scheduler, tracks=has_tracks(scored),
         candidates=list(by_name.values()), flow=flow, cache_dir=cache_dir,
     ) as sim:  # fmt: skip
         verdict, more = settle_followup(
-            res.verdict, res.heldout, res.extra["fold_values"], followup, sim, s,
+            first, res.heldout, res.extra["fold_values"], followup, sim, s,
             res.observables, lambda v: show_values(dict(v), by_name),
         )  # fmt: skip
-        used = sim.used
-    extra = {**res.extra, "verdict_first": res.verdict, **more}
-    return replace(res, verdict=verdict, extra=extra, simulations=res.simulations + used)
+        used, failed = sim.used, sim.failed
+        stages = {k: res.extra.get("runs_by_stage", {}).get(k, 0) + v
+                  for k, v in sim.used_by_stage.items()}  # fmt: skip
+        failed_stages = {k: res.failed_by_stage.get(k, 0) + v
+                         for k, v in sim.failed_by_stage.items()}  # fmt: skip
+    extra = {**res.extra, "verdict_first": first, **more,
+             "runs_by_stage": {**res.extra.get("runs_by_stage", {}), **stages}}  # fmt: skip
+    return replace(res, verdict=verdict, extra=extra, simulations=res.simulations + used,
+                   failed_runs=res.failed_runs + failed,
+                   failed_by_stage={**res.failed_by_stage, **failed_stages})  # fmt: skip

@@ -17,6 +17,7 @@ from fibersweep.discrepancy.settle import (
     Settlement,
     SettleTest,
     discriminant,
+    fibers_needed,
     settle_test,
     settled_verdict,
 )
@@ -36,6 +37,9 @@ def test_discriminant_is_the_gaussian_log_likelihood_ratio():
         discriminant(x, mu_a[:1], mu_b, s)
     with pytest.raises(ValueError, match="s must have shape"):
         discriminant(x, mu_a, mu_b, s[:1])
+    # a noise per start: fiber 1's first component counts four times less
+    per = np.array([[1.0, 2.0], [2.0, 2.0]])
+    np.testing.assert_allclose(discriminant(x, mu_a, mu_b, per), [1.0, 0.125], rtol=0, atol=1e-15)
 
 
 def _gaussian(rng, mu, k, sd=1.0):
@@ -87,9 +91,9 @@ def test_size_holds_with_the_copies_the_workflow_uses(n):
     """The true hypothesis is rejected at most alpha of the time with 8 reference and
     16 null copies (the default 24), for one to nine fibers.
 
-    4000 trials: binomial sd 0.0034; the size must be <= alpha + 3 sd = 0.060 (a
-    null too narrow by 16/17, the error the measured value in each pool removes,
-    gives about 0.061 at n = 9 and 1/17 = 0.059 at n = 1 against the exact 0.047).
+    4000 trials: binomial sd 0.0034; the size must be <= alpha + 3 sd = 0.060 (drawing
+    from the 16 copies alone, the error the measured value in each pool removes,
+    gives about 0.066 at n = 4 and 9; the exact size with it is at most 0.05).
     """
     rng = np.random.default_rng(100 + n)
     alpha, trials = 0.05, 4000
@@ -112,11 +116,70 @@ def test_failed_copies_are_left_out_not_counted_as_zero():
     clean = settle_test(x, ref_a, ref_b, null_a, null_b, np.random.default_rng(1))
     # half of A's null copies of every fiber fail: the expected sum under A stays
     # n D²/2 = 12 (not halved towards 0), the count is reported
-    broken = null_a.copy()
-    broken[:8] = np.nan
-    t = settle_test(x, ref_a, ref_b, broken, null_b, np.random.default_rng(1))
-    assert t.failed == 8 * n and clean.failed == 0
+    ok = [np.ones(a.shape[:2], bool) for a in (ref_a, ref_b, null_a, null_b)]
+    ok[2][:8] = False
+    ok[0][0, 0] = False  # and one reference copy
+    t = settle_test(x, ref_a, ref_b, null_a, null_b, np.random.default_rng(1), ok=tuple(ok))
+    assert t.failed == 8 * n + 1 and clean.failed == 0
     assert abs(t.expected[0] - clean.expected[0]) < 0.3 * clean.expected[0], (t, clean)
+
+
+def test_size_holds_when_outcomes_are_often_undefined():
+    """An outcome undefined by its rule (no contact: NaN in every component) is an
+    outcome, in the copies as in the measured fibers (λ = 0 in both), not a failure.
+
+    20 fibers, one component (D = 1) undefined half the time under both hypotheses,
+    A true, 8 reference and 16 null copies. 1000 trials: binomial sd 0.0069; the size
+    must be <= alpha + 3 sd = 0.071 (dropping such copies as failed gives about 0.2).
+    """
+    rng = np.random.default_rng(17)
+    n, alpha, trials = 20, 0.05, 1000
+
+    def draw(mu, k):
+        v = _gaussian(rng, mu, k)
+        v[rng.random(v.shape) < 0.5] = np.nan
+        return v
+
+    mu_a, mu_b = np.zeros((n, 1)), np.full((n, 1), 1.0)
+    rejected = 0
+    for _ in range(trials):
+        t = settle_test(draw(mu_a, 1)[0], draw(mu_a, 8), draw(mu_b, 8), draw(mu_a, 16),
+                        draw(mu_b, 16), rng, alpha=alpha, n_draws=199)  # fmt: skip
+        rejected += t.p_values[0] <= alpha
+    assert rejected / trials <= alpha + 3 * np.sqrt(alpha * (1 - alpha) / trials), rejected
+
+
+def test_the_count_it_gives_has_the_power_it_states():
+    """Power 0.8 at the fibers it says are needed, with the workflow's 8 + 16 copies.
+
+    One component, D = 0.5 per fiber. The count: the median of 60 estimates from
+    10-fiber pilots (the reference means' noise and the measured value in each pool
+    included; the closed form without either is 25). 300 trials at that count under
+    each hypothesis: binomial sd 0.023; power within 0.8 ± 0.08 (three sd and the
+    pilot median's own spread).
+    """
+    rng = np.random.default_rng(11)
+    d = 0.5
+
+    def trial(n, truth):
+        mu = {"A": np.zeros((n, 1)), "B": np.full((n, 1), d)}
+        return settle_test(_gaussian(rng, mu[truth], 1)[0], _gaussian(rng, mu["A"], 8),
+                           _gaussian(rng, mu["B"], 8), _gaussian(rng, mu["A"], 16),
+                           _gaussian(rng, mu["B"], 16), rng, n_draws=999)  # fmt: skip
+
+    need = int(np.median([trial(10, "A").fibers_needed or 10**6 for _ in range(60)]))
+    assert 25 < need < 120, need
+    for truth, wrong in (("A", 1), ("B", 0)):
+        power = np.mean([trial(need, truth).p_values[wrong] <= 0.05 for _ in range(300)])
+        assert abs(power - 0.8) < 0.08, (truth, need, power)
+
+
+def test_fibers_needed_is_none_without_a_separation():
+    assert fibers_needed(0.0, 1.0, 1.0, 0.05) is None
+    assert fibers_needed(1.0, np.nan, 1.0, 0.05) is None
+    # closed form ((z_0.95 + z_0.8) / 1)² = 6.18 -> 7; 16 null copies: × (17/16)² -> 7
+    assert fibers_needed(1.0, 1.0, 1.0, 0.05) == 7
+    assert fibers_needed(0.5, 1.0, 1.0, 0.05, k_null=16) == 28
 
 
 def test_outcomes():
@@ -144,6 +207,10 @@ def test_shapes_are_checked():
         settle_test(x, ok, ok, ok, np.zeros((4, 2, 2)), rng)
     with pytest.raises(ValueError, match="at least 2 copies"):
         settle_test(x, ok[:1], ok, ok, ok, rng)
+    with pytest.raises(ValueError, match="n >= 1"):
+        settle_test(np.zeros((0, 2)), ok[:, :0], ok[:, :0], ok[:, :0], ok[:, :0], rng)
+    with pytest.raises(ValueError, match="ok mask"):
+        settle_test(x, ok, ok, ok, ok, rng, ok=(np.ones((4, 3), bool),) * 3 + (np.ones(3, bool),))
 
 
 def _gap(left: bool) -> GapResult:
@@ -184,3 +251,4 @@ def test_an_ambiguous_verdict_is_named_only_when_the_follow_up_settles_it():
     assert settled_verdict(un, _settlement("A")) is un
     assert "do not separate" in _settlement("undecided").text()
     assert "rejecting both" in _settlement("neither").text()
+

@@ -45,3 +45,19 @@ def test_follow_up_fibers_pick_the_truth_between_two_hypotheses(coarse_field):
     assert outcomes["B"].settled and outcomes["A"].settled
     # the expected sums are well apart: the fibers needed for power 0.8 are few
     assert outcomes["A"].test.fibers_needed <= 4
+
+
+def test_follow_up_fibers_are_kept_by_their_measured_start(coarse_field):
+    """synthesize_near: every kept fiber's reported start within the window (3 sd) of its
+    centre, the shares 3 and 2, the true starts wider than the window (scatter 6 sd)."""
+    from fibersweep.discrepancy.synth import synthesize_near
+
+    noise = NoiseModel()
+    centres = np.array([[0.0, 0.4, 1.0], [5.0, 0.3, 0.8]])
+    t = synthesize_near(coarse_field, FiberSettings(), centres, 5, seed=2, workers=1)
+    half = 3.0 * np.array([noise.theta0, noise.y0, noise.length])
+    assert list(t["fiber_id"]) == ["m00-000", "m00-001", "m00-002", "m01-000", "m01-001"]
+    starts = t[["theta0", "y0", "length"]].to_numpy()
+    which = np.array([0, 0, 0, 1, 1])
+    assert np.all(np.abs(starts - centres[which]) <= half + 1e-12)
+    validate_measured(t)

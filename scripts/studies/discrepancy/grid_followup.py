@@ -5,10 +5,12 @@ the study model (dx = 4 µm) and ``flow.dx=<truth>`` declared. When the verdict 
 ambiguous (or unexplained), the report's what-to-measure-next names the starts where
 its two hypotheses differ most and how many fibers there would settle it. This script
 then "measures" ``--factor`` times that many fibers (default 2: the report's count is
-for power 0.8), synthesised on the truth field within three start-noise sd of the
-suggested starts, shared out over the best starts, with the workflow's own start and
-outcome noise, and puts them to the verdict's two hypotheses (``discrepancy --followup``: the analysis of
-the first fibers stands, the follow-up fibers test A against B), as an experimenter would.
+for power 0.8) on the truth field, shared out over the best starts, with the
+workflow's own start and outcome noise, as an experimenter would: fibers arrive
+scattered around each start, and those whose measured start lies within three
+start-noise sd of it are kept. It puts them to the verdict's two hypotheses
+(``discrepancy --followup``: the analysis of the first fibers stands, the follow-up
+fibers test A against B).
 
 Usage::
 
@@ -35,11 +37,10 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import BOX, DEFAULT_CACHE, STUDY_FLOW, study_field  # noqa: E402
 
-from fibersweep.discrepancy.copies import NoiseModel  # noqa: E402
 from fibersweep.discrepancy.declared import parse_candidate  # noqa: E402
 from fibersweep.discrepancy.report import summary  # noqa: E402
 from fibersweep.discrepancy.schema import validate_measured  # noqa: E402
-from fibersweep.discrepancy.synth import synthesize  # noqa: E402
+from fibersweep.discrepancy.synth import synthesize, synthesize_near  # noqa: E402
 from fibersweep.discrepancy.workflow import (  # noqa: E402
     DiscrepancySettings,
     run_discrepancy,
@@ -68,33 +69,13 @@ def reported(res, seconds: float) -> dict:
     return {k: s[k] for k in keep} | {"seconds": round(seconds, 1)}
 
 
-def measure_more(truth_field, best, fibers: int, seed: int, workers: int) -> pd.DataFrame:
-    """``fibers`` synthesised fibers shared out over the suggested starts ``best``."""
-    share = np.full(len(best), fibers // len(best))
-    share[: fibers % len(best)] += 1
-    parts = []
-    sd = NoiseModel()  # fibers arrive near a start, not on it: three start-noise sd either side
-    for j, (b, k) in enumerate(zip(best, share, strict=True)):
-        if k == 0:
-            continue
-        box = {
-            "theta0": (b.theta0 - 3 * sd.theta0, b.theta0 + 3 * sd.theta0),
-            "y0": (b.y0 - 3 * sd.y0, b.y0 + 3 * sd.y0),
-            "length": (b.length - 3 * sd.length, b.length + 3 * sd.length),
-        }
-        t, _ = synthesize(truth_field, FIBER, box, int(k), seed=seed + 1 + j, workers=workers,
-                          progress=False)  # fmt: skip
-        t["fiber_id"] = [f"m{j:02d}-{i:03d}" for i in range(len(t))]
-        parts.append(t)
-    return pd.concat(parts, ignore_index=True)
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--truth-dx", type=float, default=5.0, help="grid of the truth [µm]")
     ap.add_argument("--n", type=int, default=100, help="fibers of the first data set")
     ap.add_argument("--seed", type=int, default=9521)
-    ap.add_argument("--max-more", type=int, default=300, help="most fibers to add")
+    ap.add_argument("--max-more", type=int, default=300,
+                    help="most fibers to add (0: the first analysis only)")  # fmt: skip
     ap.add_argument(
         "--factor",
         type=float,
@@ -117,13 +98,15 @@ def main(argv: list[str] | None = None) -> int:
     out = {"truth_dx": a.truth_dx, "n": a.n, "seed": a.seed, "first": reported(res, sec)}
     print(f"first ({len(table)} fibers): {res.verdict.text} [{res.simulations} runs, {sec:.0f} s]")
     nxt = res.extra.get("next")
-    if res.verdict.kind != "named" and nxt is not None and nxt.fibers_needed:
+    if res.verdict.kind != "named" and nxt is not None and nxt.fibers_needed and a.max_more:
         best = nxt.best[: a.starts]
         more = min(int(math.ceil(a.factor * nxt.fibers_needed)), a.max_more)
         out["fibers_added"] = {"fibers": more, "starts": len(best)}
         print(f"what to measure next: {nxt.labels[0]} against {nxt.labels[1]}; "
               f"{nxt.fibers_needed} fibers at the best starts; adding {more}")  # fmt: skip
-        extra = measure_more(truth_field, best, more, a.seed + 1000, a.workers)
+        centres = np.array([[b.theta0, b.y0, b.length] for b in best])
+        extra = synthesize_near(truth_field, FIBER, centres, more, seed=a.seed + 1000,
+                                workers=a.workers)  # fmt: skip
         t0 = time.perf_counter()
         res2 = settle_result(res, validate_measured(extra), field, FIBER, progress=False,
                              flow=STUDY_FLOW, cache_dir=a.cache)  # fmt: skip
@@ -131,6 +114,9 @@ def main(argv: list[str] | None = None) -> int:
         out["followup"] = reported(res2, sec2)
         print(f"after {len(extra)} follow-up fibers: {res2.verdict.text} "
               f"[{res2.simulations - res.simulations} more runs, {sec2:.0f} s]")  # fmt: skip
+    elif nxt is not None:
+        print(f"what to measure next: {nxt.labels[0]} against {nxt.labels[1]}; "
+              f"{nxt.fibers_needed} fibers at the best starts; none added")  # fmt: skip
     else:
         print("no follow-up:", res.extra.get("next_skipped", "nothing to separate"))
     (a.out / "summary.json").write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")
