@@ -221,6 +221,14 @@ def discrepancy(
             "theta [deg]) of every fiber: adds y_out, theta_out, t_transit (docs/trajectories.md)."
         ),
     ] = None,
+    followup: Annotated[
+        Path | None,
+        typer.Option(
+            help="Fibers measured after a first analysis of MEASURED (same schema), e.g. at "
+            "the starts its 'what to measure next' gave: they test the verdict's two "
+            "hypotheses against each other (docs/discrepancy.md)."
+        ),
+    ] = None,
     ignore_extra_columns: Annotated[
         bool, typer.Option(help="Ignore columns of MEASURED the schema does not know.")
     ] = False,
@@ -228,7 +236,13 @@ def discrepancy(
     verbose: Verbose = False,
 ) -> None:
     """Where the model disagrees with fibers MEASURED past one pillar, which effects
-    explain it, and the gap left."""
+    explain it, and the gap left.
+
+    With --followup, MEASURED is analysed as without it (same seed, same
+    verdict), then the two hypotheses the verdict leaves are tested on the
+    follow-up fibers; an ambiguous verdict between them becomes named when those
+    fibers reject one and fit the other.
+    """
     _setup_logging(verbose)
     with _errors():
         cfg = _load(config, overrides)
@@ -243,6 +257,11 @@ def discrepancy(
             measured, trajectories, ignore_extra=ignore_extra_columns,
             geometry=cfg.flow.geometry.to_geometry(),
         )  # fmt: skip
+        more = (
+            load_measured(followup, ignore_extra=ignore_extra_columns)
+            if followup is not None
+            else None
+        )
         settings = DiscrepancySettings(
             copies=copies, budget=budget, seed=seed, alpha=alpha, pairs=pairs,
             power_fibers=40 if power else 0, next_copies=2 if next_ else 0,
@@ -252,10 +271,21 @@ def discrepancy(
         )  # fmt: skip
         for line in _plan_lines(len(data), settings):
             typer.echo(line)
+        if more is not None:
+            typer.echo(
+                f"  then {2 * settings.settle_copies * len(more)} more (beyond any --budget) for "
+                f"the {len(more)} follow-up fibers, if the verdict leaves two hypotheses"
+            )
         field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
         res = run_discrepancy(data, field, cfg.fiber, settings, flow=cfg.flow,
-                              cache_dir=cfg.run.cache_dir)  # fmt: skip
+                              cache_dir=cfg.run.cache_dir, followup=more)  # fmt: skip
         s = write_report(res, output, cfg.model_dump(mode="json"))
+    if s.get("settle"):
+        first = s["settle"]["verdict_first"]
+        typer.echo(f"verdict on MEASURED alone: {first['kind']}: {first['text']}")
+        typer.echo(f"follow-up: {s['settle']['text']}")
+    elif s.get("settle_skipped"):
+        typer.echo(f"follow-up not tested: {s['settle_skipped']}")
     typer.echo(f"verdict: {s['verdict']['kind']}: {s['verdict']['text']}")
     typer.echo(f"simulations: {s['simulations']} in {s['seconds']:.0f} s")
     typer.echo(f"wrote {output / 'report.md'} and {output / 'summary.json'}")

@@ -25,7 +25,8 @@ Modules, by concept:
   forward selection);
 - decision: :mod:`.decide` (out of sample: named, ambiguous, unexplained, none);
 - follow-up: :mod:`.power` (detection limits, look-alikes), :mod:`.followup`
-  (what to measure next, and when both run), :mod:`.advice` (what to try);
+  (what to measure next, and when both run), :mod:`.settle` (fibers measured
+  next test the verdict's two hypotheses), :mod:`.advice` (what to try);
 - the workflow: :mod:`.workflow` (:func:`~.workflow.run_discrepancy`, every
   stage within a budget);
 - report: :mod:`.report` (JSON summary, updated configs, all files),

@@ -71,9 +71,8 @@ def next_measurement(s: dict[str, Any]) -> list[str]:
             f"The measurement that would most reduce the doubt ({nx['reason']}): about "
             f"{nx['fibers_needed']} more fibers at the starts under 'What to measure "
             f"next' (best: θ0 {b['theta0']:.1f}°, y0 {b['y0']:.2f}, L {b['length']:.2f}, "
-            f"through {b['observable']}), against "
-            f"{nx.get('fibers_needed_at_measured_starts') or 'many'} at starts like "
-            "the measured ones."
+            f"through {b['observable']}); a rough figure at starts like the measured "
+            f"ones: {nx.get('fibers_needed_at_measured_starts') or 'many'}."
         )
     else:
         r = s.get("region") or {}

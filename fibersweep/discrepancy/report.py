@@ -3,7 +3,8 @@
 Files written into the output directory (each atomically):
 
 - ``summary.json``: verdict, gaps, ranking, fits (per half), held-out before/after,
-  sets of effects tried, power analysis, what to measure next; for scripts;
+  sets of effects tried, power analysis, what to measure next, the follow-up
+  fibers' test; for scripts;
 - ``report.md``: the same for people, with the figures (:mod:`.report_text`)
   and the advice (:mod:`.advice`);
 - figures (:mod:`.report_figures`): ``phase_before_after.png``,
@@ -218,7 +219,35 @@ def _next_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
         "best": [b.__dict__ for b in nx.best],
         "fibers_needed": nx.fibers_needed,
         "fibers_needed_at_measured_starts": nx.fibers_needed_measured,
+        "window": None if nx.window is None else [float(w) for w in nx.window],
         "simulations": nx.simulations,
+    }
+
+
+def _settle_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
+    st = res.extra.get("settle")
+    if st is None:
+        return None
+    t = st.test
+    first = res.extra.get("verdict_first")
+    return {
+        "reason": st.reason,
+        "hypotheses": list(st.labels),
+        "fibers": st.n,
+        "observables": list(st.observables),
+        "statistic": t.statistic,
+        "expected": list(t.expected),
+        "sd": list(t.spread),
+        "p_values": list(t.p_values),
+        "outcome": t.outcome,
+        "settled": st.settled,
+        "gap_left_by_winner": list(st.adequacy.flagged) if st.adequacy is not None else None,
+        "failed_copies": t.failed,
+        "fibers_needed": t.fibers_needed,
+        "per_fiber": [float(x) for x in t.per_fiber],
+        "simulations": st.simulations,
+        "text": st.text(),
+        "verdict_first": {"kind": first.kind, "text": first.text} if first else None,
     }
 
 
@@ -350,6 +379,8 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "power_skipped": res.extra.get("power_skipped"),
         "next": _next_dict(res),
         "next_skipped": res.extra.get("next_skipped"),
+        "settle": _settle_dict(res),
+        "settle_skipped": res.extra.get("settle_skipped"),
         "simulations": res.simulations,
         "simulations_planned": res.plan.cost(len(res.observed)),
         "simulations_by_stage": res.extra.get("runs_by_stage", {}),

@@ -395,6 +395,17 @@ def _power(s: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _window(w: list[float] | None) -> str:
+    """Where the fibers should start: spread over the window around each start, or at it."""
+    if not w:
+        return "at these starts"
+    return (
+        f"with starts spread over θ0 ±{w[0]:.2g}°, y0 ±{w[1]:.2g} h_obs, L ±{w[2]:.2g} l_obs "
+        "around these starts (the count and the follow-up test assume starts scattered over "
+        "that window, not aimed at one point)"
+    )
+
+
 def _next(s: dict[str, Any]) -> list[str]:
     nx = s["next"]
     if nx is None:
@@ -408,9 +419,9 @@ def _next(s: dict[str, Any]) -> list[str]:
         "",
         "## What to measure next",
         "",
-        f"Why: {nx['reason']}. To separate **{a}** from **{b}**, measure fibers at these "
-        "starts (separation per fiber: the two predictions' difference over the noise of one "
-        "measured fiber, summed over the observables):",
+        f"Why: {nx['reason']}. To separate **{a}** from **{b}**, measure fibers "
+        f"{_window(nx.get('window'))} (separation per fiber: the two predictions' "
+        "difference over the noise of one measured fiber, summed over the observables):",
         "",
         "| θ0 [deg] | y0 [h_obs] | L [l_obs] | separation per fiber | observable | "
         "prediction A | prediction B |",
@@ -423,9 +434,45 @@ def _next(s: dict[str, Any]) -> list[str]:
         )
     lines += [
         "",
-        f"About {_f(nx['fibers_needed'], 'd')} fibers at these starts would settle it "
-        f"(at the measured starts: {_f(nx['fibers_needed_at_measured_starts'], 'd')}).",
+        f"About {_f(nx['fibers_needed'], 'd')} fibers there, shared over these starts, "
+        "would settle it with power 0.8 (a rough figure at the measured starts: "
+        f"{_f(nx['fibers_needed_at_measured_starts'], 'd')}). Once measured, give them to "
+        "the same command with `--followup`, once: they are put to the two hypotheses "
+        "directly (docs/discrepancy.md, *Settling it*).",
     ]
+    return lines
+
+
+def _settle(s: dict[str, Any]) -> list[str]:
+    st = s.get("settle")
+    if st is None:
+        skipped = s.get("settle_skipped")
+        return ["", "## Follow-up fibers", "", f"Not tested: {skipped}."] if skipped else []
+    a, b = st["hypotheses"]
+    pa, pb = st["p_values"]
+    first = st.get("verdict_first") or {}
+    lines = [
+        "",
+        "## Follow-up fibers",
+        "",
+        f"Why: {st['reason']}. {st['fibers']} fibers measured after the first analysis test "
+        f"**{a}** (A) against **{b}** (B) on {', '.join(st['observables'])}: the sum of their "
+        "log-likelihood ratios of A over B, against its distribution under each hypothesis "
+        "from simulated copies (one-sided tests); the winner is then checked for a gap left "
+        "on these fibers.",
+        "",
+        "| | A | B |",
+        "|---|---|---|",
+        f"| expected sum (sd) | {st['expected'][0]:.3g} ({st['sd'][0]:.2g}) "
+        f"| {st['expected'][1]:.3g} ({st['sd'][1]:.2g}) |",
+        f"| p of this hypothesis | {_f(pa, '.2g')} | {_f(pb, '.2g')} |",
+        "",
+        f"Measured sum: {st['statistic']:.3g}. Outcome: {st['text']}.",
+    ]
+    if st.get("failed_copies"):
+        lines += ["", f"{st['failed_copies']} copies failed and were left out of the test."]
+    if first:
+        lines += ["", f"Verdict on the first fibers alone: {first['kind']}: {first['text']}"]
     return lines
 
 
@@ -434,7 +481,7 @@ def markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
     lines = _header(s) + _gap_table(s) + _fits(s) + _before_after(s)
     if s["advice"]:
         lines += ["", "## Advice", ""] + [f"- {a}" for a in s["advice"]]
-    lines += _power(s) + _next(s)
+    lines += _power(s) + _next(s) + _settle(s)
     if figures:
         lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
     if configs:

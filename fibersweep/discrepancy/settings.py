@@ -119,6 +119,10 @@ class DiscrepancySettings:
         Copies per hypothesis and start of what-to-measure-next
         (:mod:`.followup`; 0: none), run when the verdict is ambiguous or a
         fit is weakly identified.
+    settle_copies : int
+        Copies per hypothesis and follow-up fiber when follow-up fibers test
+        the verdict's two hypotheses (:mod:`.settle`): a third for the
+        hypotheses' means, the rest for the test's null distributions.
     alpha : float
         Family-wise error rate of every test.
     budget : int or None
@@ -150,6 +154,7 @@ class DiscrepancySettings:
     pairs: int = 3
     power_fibers: int = 40
     next_copies: int = 2
+    settle_copies: int = 24
     alpha: float = 0.05
     budget: int | None = None
     seed: int = 0
@@ -187,6 +192,7 @@ class DiscrepancySettings:
             "pairs": self.pairs >= 0,
             "power_fibers": self.power_fibers == 0 or self.power_fibers >= 8,
             "next_copies": self.next_copies in (0,) or self.next_copies >= 2,
+            "settle_copies": self.settle_copies >= 6,
             "alpha": 0.0 < self.alpha < 0.5,
             "workers": self.workers >= 1,
         }

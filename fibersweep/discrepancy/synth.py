@@ -33,6 +33,7 @@ __all__ = [
     "measured_table",
     "parse_effects",
     "synthesize",
+    "synthesize_near",
     "synthesize_with_tracks",
 ]
 
@@ -156,6 +157,71 @@ def synthesize(
         field, fiber, box, n, effects, noise, seed, workers, progress, executor, scheduler
     )
     return table, truth
+
+
+def synthesize_near(
+    field: FlowField,
+    fiber: FiberSettings,
+    centres: np.ndarray,
+    fibers: int,
+    effects: Mapping[str, float] | None = None,
+    noise: NoiseModel | None = None,
+    seed: int = 0,
+    window: float = 3.0,
+    scatter: float = 6.0,
+    workers: int = 2,
+) -> pd.DataFrame:
+    """Follow-up fibers near proposed starts, kept as an experimenter keeps them.
+
+    Fibers arrive anywhere around each centre (true starts uniform within
+    ``scatter`` start-noise sd either side); those whose *reported* start lies
+    within ``window`` sd of it are kept, until each centre has its share
+    (``fibers`` shared equally, the first centres one more). Selecting on the
+    reported start leaves the true start spread around it as the copies of the
+    follow-up test assume (:mod:`.settle`); selecting on the true start would not,
+    near the window's edges.
+
+    Parameters
+    ----------
+    centres : ndarray, shape (m, 3)
+        Proposed starts: θ0 [deg], y0 [/h_obs], L [/l_obs].
+    fibers : int
+        Fibers in all (>= 1).
+    window, scatter : float
+        Half-widths in start-noise sd (``scatter`` > ``window``).
+
+    Returns
+    -------
+    DataFrame
+        As :func:`synthesize`; fiber ids ``m<centre>-<k>``.
+    """
+    if fibers < 1 or scatter <= window:
+        raise ValueError(
+            f"need fibers >= 1 and scatter > window, got {fibers}, {scatter}, {window}"
+        )
+    noise = noise or NoiseModel()
+    centres = np.atleast_2d(np.asarray(centres, dtype=np.float64))
+    half = np.array([noise.theta0, noise.y0, noise.length])
+    share = np.full(len(centres), fibers // len(centres))
+    share[: fibers % len(centres)] += 1
+    accept = float(np.prod(np.where(half > 0, window / scatter, 1.0)))  # of those that arrive
+    parts = []
+    for j, (c, k) in enumerate(zip(centres, share, strict=True)):
+        box = {key: (v - scatter * h, v + scatter * h)
+               for key, v, h in zip(("theta0", "y0", "length"), c, half, strict=True)}  # fmt: skip
+        kept: list[pd.DataFrame] = []
+        rnd = 0
+        while sum(len(t) for t in kept) < k:
+            t, _ = synthesize(field, fiber, box, int(np.ceil(1.5 * k / accept)), effects, noise,
+                              seed=seed + 7919 * j + 104729 * rnd, workers=workers,
+                              progress=False)  # fmt: skip
+            dev = np.abs(t[["theta0", "y0", "length"]].to_numpy() - c)
+            kept.append(t[np.all(dev <= window * half + 1e-12, axis=1)])
+            rnd += 1
+        t = pd.concat(kept, ignore_index=True).iloc[: int(k)].copy()
+        t["fiber_id"] = [f"m{j:02d}-{i:03d}" for i in range(len(t))]
+        parts.append(t)
+    return pd.concat(parts, ignore_index=True)
 
 
 def synthesize_with_tracks(

@@ -9,8 +9,9 @@ few on each half and scores each half with the value fitted on the other
 baseline and decides; (6) when the best single effect leaves a gap, it tries
 adding other candidates to the significant ones that helped most and leave one
 (:mod:`.pairs`, forward selection); (7) after the verdict, the power analysis
-and what to measure next (:mod:`.followup`). The simulation count is planned up
-front and never exceeds ``budget``.
+and what to measure next (:mod:`.followup`); (8) with fibers measured after it
+(``followup``), the verdict's two hypotheses tested on them (:mod:`.settle`).
+The simulation count is planned up front and never exceeds ``budget``.
 
 Each step is a stage function over a frozen :class:`State` that returns a new
 state (:func:`noise_floor`, :func:`rank`, :func:`cross_fit`, :func:`refit`,
@@ -43,7 +44,8 @@ from fibersweep.discrepancy.decide import (
 from fibersweep.discrepancy.dispersion import dispersion_test, spread_test
 from fibersweep.discrepancy.estimate import Fit, score_interval
 from fibersweep.discrepancy.fit import fold_fits, pooled_refit
-from fibersweep.discrepancy.followup import followup
+from fibersweep.discrepancy.followup import followup as next_steps
+from fibersweep.discrepancy.followup import settle_followup
 from fibersweep.discrepancy.gap import (
     GapResult,
     assess_gap,
@@ -89,6 +91,7 @@ __all__ = [
     "rank",
     "refit",
     "run_discrepancy",
+    "settle_result",
 ]
 
 log = logging.getLogger(__name__)
@@ -448,6 +451,7 @@ def run_discrepancy(
     progress: bool = True,
     flow: Any = None,
     cache_dir: Any = None,
+    followup: MeasuredData | None = None,
 ) -> DiscrepancyResult:
     """Run the whole workflow (see the module docstring): the stages in turn, then the verdict.
 
@@ -465,6 +469,12 @@ def run_discrepancy(
     flow : FlowSettings, optional
         The field's settings, and ``cache_dir`` the flow cache: where a declared
         flow candidate's field is found or solved (:class:`.simulate.Simulator`).
+    followup : MeasuredData, optional
+        Fibers measured after a first analysis of ``measured`` (at the starts its
+        what-to-measure-next gave): the verdict's two hypotheses are tested on
+        them (:mod:`.settle`). The analysis of ``measured`` is the same with or
+        without them (their runs come on top of ``budget``);
+        ``extra['verdict_first']`` keeps its verdict.
     """
     s = settings or DiscrepancySettings()
     t0 = time.perf_counter()
@@ -480,8 +490,12 @@ def run_discrepancy(
     perm = rng.permutation(n)
     folds = [np.sort(perm[: n // 2]), np.sort(perm[n // 2 :])]
 
+    # the follow-up fibers' runs come on top of the budget, so the analysis of the
+    # first fibers, power and what-to-measure-next included, is the same without them
+    extra_runs = 2 * s.settle_copies * len(followup) if followup is not None else 0
     with Simulator(
-        field_, fiber, workers=s.workers, budget=s.budget, progress=progress,
+        field_, fiber, workers=s.workers, progress=progress,
+        budget=None if s.budget is None else s.budget + extra_runs,
         executor=s.executor, scheduler=s.scheduler, planned=plan.total(n),
         tracks=has_tracks(obs_names), candidates=candidates, flow=flow, cache_dir=cache_dir,
     ) as sim:  # fmt: skip
@@ -503,8 +517,17 @@ def run_discrepancy(
 
         verdict = decide(st.gap, heldout, st.region_text, rng, s.alpha, list(st.sets),
                          show=show, declared=[c.name for c in s.declared])  # fmt: skip
-        extra = followup(verdict, heldout, st.fold_values, candidates, maker, sim, plan, s,
-                         obs_names, rng, show=show)  # fmt: skip
+        first, more = verdict, {}
+        if followup is not None:  # first: the budget beyond s.budget is for its runs only
+            used0 = sim.used
+            verdict, more = settle_followup(first, heldout, st.fold_values, followup, sim, s,
+                                            obs_names, show)  # fmt: skip
+            more["verdict_first"] = first
+            if s.budget is not None:  # what it did not use is not the next stages'
+                sim.budget = s.budget + (sim.used - used0)
+        extra = next_steps(first, heldout, st.fold_values, candidates, maker, sim, plan, s,
+                           obs_names, rng, show=show)  # fmt: skip
+        extra.update(more)
         used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
         extra["runs_by_stage"] = dict(sim.used_by_stage)
         extra["seconds_by_stage"] = {k: round(v, 1) for k, v in sim.seconds_by_stage.items()}
@@ -536,3 +559,45 @@ def run_discrepancy(
         observables=obs_names,
         extra={"fold_values": dict(st.fold_values), "intervals": dict(st.intervals), **extra},
     )
+
+
+def settle_result(
+    res: DiscrepancyResult,
+    followup: MeasuredData,
+    field_: FlowField,
+    fiber: FiberSettings,
+    progress: bool = True,
+    flow: Any = None,
+    cache_dir: Any = None,
+) -> DiscrepancyResult:
+    """An analysis already run, with follow-up fibers put to its two-way question.
+
+    The same as :func:`run_discrepancy` with ``followup``, without running the
+    analysis of the first fibers again. ``field_``, ``fiber``, ``flow`` and
+    ``cache_dir``: those of that analysis. A result already settled is settled
+    again from its first verdict (the new follow-up replaces the old; the test's
+    error bound is for one look at fresh fibers, :mod:`.settle`).
+    """
+    s = res.settings
+    by_name = {c.name: c for c in s.candidates_of()}
+    scored = tuple(o for o in res.observables if o in followup.observed)
+    first = res.extra.get("verdict_first", res.verdict)  # a settled result: its first verdict
+    with Simulator(
+        field_, fiber, workers=s.workers, budget=None, progress=progress, executor=s.executor,
+        scheduler=s.scheduler, tracks=has_tracks(scored),
+        candidates=list(by_name.values()), flow=flow, cache_dir=cache_dir,
+    ) as sim:  # fmt: skip
+        verdict, more = settle_followup(
+            first, res.heldout, res.extra["fold_values"], followup, sim, s,
+            res.observables, lambda v: show_values(dict(v), by_name),
+        )  # fmt: skip
+        used, failed = sim.used, sim.failed
+        stages = {k: res.extra.get("runs_by_stage", {}).get(k, 0) + v
+                  for k, v in sim.used_by_stage.items()}  # fmt: skip
+        failed_stages = {k: res.failed_by_stage.get(k, 0) + v
+                         for k, v in sim.failed_by_stage.items()}  # fmt: skip
+    extra = {**res.extra, "verdict_first": first, **more,
+             "runs_by_stage": {**res.extra.get("runs_by_stage", {}), **stages}}  # fmt: skip
+    return replace(res, verdict=verdict, extra=extra, simulations=res.simulations + used,
+                   failed_runs=res.failed_runs + failed,
+                   failed_by_stage={**res.failed_by_stage, **failed_stages})  # fmt: skip

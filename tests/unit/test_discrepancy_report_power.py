@@ -37,7 +37,7 @@ def test_power_table_shows_each_limit_with_its_interval():
 
 def test_advice_of_an_unexplained_gap_names_the_next_measurement_and_the_unseen_sizes():
     adv = " ".join(_advice(_summary("unexplained")))
-    assert "about 23 more fibers" in adv and "against 140" in adv
+    assert "about 23 more fibers" in adv and "like the measured ones: 140" in adv
     assert "friction (+) up to 0.2" in adv
     assert "pillar_hydro" not in adv.split("May be present unseen")[1]  # no upper end
     # no gap: only the unseen sizes, no next measurement
@@ -75,3 +75,19 @@ def test_power_curve_numbers_for_the_leading_candidate_carry_their_interval():
         "about 140 fibers would detect a gap of this size (95 % over the simulated "
         "starts: 90 to more than 100000)" in text
     )
+
+
+def test_what_to_measure_next_asks_for_starts_spread_over_the_window():
+    """The count and the follow-up test assume starts scattered over the window, and
+    one test of the fibers: the report says both; without a window, the starts only."""
+    from fibersweep.discrepancy.report_text import _next
+
+    s = _summary("ambiguous")
+    s["next"] |= {"hypotheses": ["a = 1", "b = 2"],
+                  "best": [{"theta0": 4.0, "y0": 0.3, "length": 1.1, "d": 0.4,
+                            "observable": "t_pass", "a": 0.5, "b": 0.6}]}  # fmt: skip
+    text = "\n".join(_next(s | {"next": s["next"] | {"window": [3.0, 0.03, 0.03]}}))
+    assert "with starts spread over θ0 ±3°, y0 ±0.03 h_obs, L ±0.03 l_obs" in text
+    assert "not aimed at one point" in text and "`--followup`, once" in text
+    assert "About 23 fibers there" in text
+    assert "measure fibers at these starts" in "\n".join(_next(s))

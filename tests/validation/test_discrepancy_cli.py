@@ -38,6 +38,27 @@ def test_synth_then_discrepancy_writes_the_report(tmp_path, config):
     assert "Every observable the workflow knows was measured." in md
     assert (out / "residual_map.png").stat().st_size > 0
     assert not list(out.glob("updated_config*.yaml"))
+    # follow-up fibers: with no two hypotheses to separate they are not tested, the
+    # analysis of MEASURED is the same, and the report says why
+    more = tmp_path / "more.parquet"
+    r = runner.invoke(app, ["synth", str(config), "--n", "3", "--seed", "5", "-o", str(more)])
+    assert r.exit_code == 0, r.output
+    out2 = tmp_path / "report2"
+    r = runner.invoke(
+        app,
+        ["discrepancy", str(measured), str(config), "-o", str(out2), "--copies", "2",
+         "--no-power", "--followup", str(more)],
+    )  # fmt: skip
+    assert r.exit_code == 0, r.output
+    s2 = json.loads((out2 / "summary.json").read_text())
+    assert s2["verdict"] == s["verdict"] and s2["simulations"] == s["simulations"]
+    assert s2["settle"] is None and "no two hypotheses" in s2["settle_skipped"]
+    assert "follow-up not tested" in r.output
+    assert "## Follow-up fibers" in (out2 / "report.md").read_text()
+    r = runner.invoke(
+        app, ["discrepancy", str(measured), str(config), "--followup", str(tmp_path / "no.csv")]
+    )
+    assert r.exit_code == 2 and "no.csv: no such file" in r.output
 
 
 def test_bad_inputs_exit_2_with_a_named_problem(tmp_path, config):

@@ -9,7 +9,7 @@ without any effect, N = 60, candidates declared; at most 3 named (P(X >= 4) = 1.
 for a binomial(20, 0.05): an alarm rate at alpha fails this test in 1.6 % of runs).
 
 Each test makes its own data and runs on its own; select one with -k: E3e5, E1e5,
-without_the_candidate, smooth_pillar, coarser_flow_grid, false_alarms.
+without_the_candidate, smooth_pillar, coarser_flow_grid, finer_flow_grid, false_alarms.
 """
 
 from __future__ import annotations
@@ -85,6 +85,45 @@ def test_a_coarser_flow_grid_is_named(coarse_field, coarse_settings, flow_cache_
                       cache=flow_cache_dir, truth_field=coarse5)  # fmt: skip
     assert res.verdict.kind == "named", res.verdict.text
     assert list(res.verdict.effects) == ["flow.dx=5"]
+
+
+@pytest.mark.slow
+def test_a_finer_flow_grid_is_named_after_the_follow_up_fibers(
+    coarse_field, coarse_settings, flow_cache_dir
+):
+    """dx = 2 µm truth, dx = 4 µm model, ``flow.dx=2`` declared, seed 9522, N = 100.
+
+    The first fibers leave the grid and a 1.7 % faster inlet equally good (the grid's
+    field is 1.7 % faster on average, scripts/studies/discrepancy/grid_fields.py);
+    what-to-measure-next proposes starts and a count. Twice that count (power about
+    0.97 by its own estimate), kept by their measured start near the proposed starts,
+    must reject the inlet and leave the grid named. A wrong pick has probability at
+    most alpha = 0.05 (the follow-up test's size, tests/unit/test_discrepancy_settle.py).
+    """
+    import numpy as np
+
+    from fibersweep.discrepancy.synth import synthesize_near
+    from fibersweep.discrepancy.workflow import settle_result
+    from fibersweep.flow.cache import get_flow_field
+
+    fine, _ = get_flow_field(FlowSettings(dx=2.0), flow_cache_dir)
+    table, _ = synthesize(fine, FIBER, BOX, 100, seed=9522, workers=2, progress=False)
+    cands = (parse_candidate("flow.dx=2", FIBER, coarse_settings),)
+    s = DiscrepancySettings(seed=9522, workers=2, declared=cands, power_fibers=0)
+    res = run_discrepancy(validate_measured(table), coarse_field, FIBER, s, progress=False,
+                          flow=coarse_settings, cache_dir=flow_cache_dir)  # fmt: skip
+    assert res.verdict.kind in ("named", "ambiguous"), res.verdict.text
+    assert {"flow.dx=2": 1.0} in [dict(a) for a in res.verdict.alternatives], res.verdict.text
+    if res.verdict.kind == "ambiguous":
+        nxt = res.extra["next"]
+        assert nxt.fibers_needed is not None and nxt.fibers_needed <= 300, nxt.fibers_needed
+        centres = np.array([[b.theta0, b.y0, b.length] for b in nxt.best[:5]])
+        more = synthesize_near(fine, FIBER, centres, 2 * nxt.fibers_needed, seed=10522,
+                               workers=2)  # fmt: skip
+        res = settle_result(res, validate_measured(more), coarse_field, FIBER, progress=False,
+                            flow=coarse_settings, cache_dir=flow_cache_dir)  # fmt: skip
+    assert res.verdict.kind == "named", res.verdict.text
+    assert list(res.verdict.effects) == ["flow.dx=2"], res.verdict.text
 
 
 @pytest.mark.slow
