@@ -401,8 +401,7 @@ def _window(w: list[float] | None) -> str:
         return "at these starts"
     return (
         f"with starts spread over θ0 ±{w[0]:.2g}°, y0 ±{w[1]:.2g} h_obs, L ±{w[2]:.2g} l_obs "
-        "around these starts (the count and the follow-up test assume starts scattered over "
-        "that window, not aimed at one point)"
+        "around these starts"
     )
 
 
@@ -436,9 +435,11 @@ def _next(s: dict[str, Any]) -> list[str]:
         "",
         f"About {_f(nx['fibers_needed'], 'd')} fibers there, shared over these starts, "
         "would settle it with power 0.8 (a rough figure at the measured starts: "
-        f"{_f(nx['fibers_needed_at_measured_starts'], 'd')}). Once measured, give them to "
-        "the same command with `--followup`, once: they are put to the two hypotheses "
-        "directly (docs/discrepancy.md, *Settling it*).",
+        f"{_f(nx['fibers_needed_at_measured_starts'], 'd')})"
+        + (". The count and the follow-up test assume starts scattered over the window, "
+           "not aimed at one point" if nx.get("window") else "")
+        + ". Once measured, give them to the same command with `--followup`, once: they "
+        "are put to the two hypotheses directly (docs/discrepancy.md, *Settling it*).",
     ]
     return lines
 
