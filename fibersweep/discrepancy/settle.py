@@ -99,8 +99,8 @@ def discriminant(x: np.ndarray, mu_a: np.ndarray, mu_b: np.ndarray, s: np.ndarra
         Component values (scoring scale) of n fibers.
     mu_a, mu_b : ndarray, shape (n, c)
         The hypotheses' mean predictions at the same starts.
-    s : ndarray, shape (c,) or (n, c)
-        Noise of one fiber per component (> 0), the same at every start or per start.
+    s : ndarray, shape (c,)
+        Noise of one fiber per component (> 0).
 
     Returns
     -------
@@ -113,8 +113,8 @@ def discriminant(x: np.ndarray, mu_a: np.ndarray, mu_b: np.ndarray, s: np.ndarra
         raise ValueError(
             f"shapes differ: x {x.shape}, mu_a {np.shape(mu_a)}, mu_b {np.shape(mu_b)}"
         )
-    if np.shape(s) not in (x.shape[-1:], x.shape[-2:]):
-        raise ValueError(f"s must have shape {x.shape[-1:]} or {x.shape[-2:]}, got {np.shape(s)}")
+    if np.shape(s) != x.shape[-1:]:
+        raise ValueError(f"s must have shape {x.shape[-1:]}, got {np.shape(s)}")
     with np.errstate(invalid="ignore"):
         term = ((x - mu_b) ** 2 - (x - mu_a) ** 2) / (2.0 * np.asarray(s) ** 2)
     return np.where(np.isfinite(term), term, 0.0).sum(axis=-1)
@@ -281,23 +281,10 @@ def settle_test(
             raise ValueError(f"{name} must have shape (k, {n}, {c}), got {arr.shape}")
         if len(arr) < 2:
             raise ValueError(f"{name} needs at least 2 copies, got {len(arr)}")
-    masks = [np.ones(a.shape[:2], bool) for a in sets] if ok is None else [
-        np.asarray(m, bool) for m in ok]  # fmt: skip
-    for arr, m in zip(sets, masks, strict=True):
-        if m.shape != arr.shape[:2]:
-            raise ValueError(f"an ok mask must have shape {arr.shape[:2]}, got {m.shape}")
-        arr[~m] = np.nan  # a failed run: no outcome
-    ra, rb, na, nb = sets
-    with warnings.catch_warnings():  # all copies undefined at a start: NaN mean, adds 0
-        warnings.simplefilter("ignore", RuntimeWarning)
-        mu_a, mu_b = np.nanmean(ra, axis=0), np.nanmean(rb, axis=0)
-    s = noise_spread(ra, rb)
+    masks = _masks(sets, ok)
+    mu_a, mu_b, s, pools = _null_pools(sets, masks)
     lam = discriminant(x, mu_a, mu_b, s)
     stat = float(lam.sum())
-    pools = []
-    for null, m in ((na, masks[2]), (nb, masks[3])):
-        lam_k = discriminant(null, mu_a, mu_b, s)
-        pools.append([lam_k[m[:, i], i] for i in range(n)])
     draws = [_sum_draws(lam, p, rng, n_draws) for p in pools]
     p_a = float(np.mean(draws[0] <= stat))
     p_b = float(np.mean(draws[1] >= stat))
@@ -305,19 +292,55 @@ def settle_test(
     outcome = {(False, True): "A", (True, False): "B", (True, True): "neither"}.get(
         (bool(rej_a), bool(rej_b)), "undecided"
     )
-    # per fiber: mean and variance of lambda under each hypothesis, over the fibers
-    # whose pool has at least two values
-    stats = []
-    for p in pools:
-        used = [q for q in p if len(q) > 1]
-        stats.append((float(np.mean([q.mean() for q in used])) if used else np.nan,
-                      float(np.mean([q.var(ddof=1) for q in used])) if used else np.nan))
-    (ga, va), (gb, vb) = stats
+    (ga, sa), (gb, sb) = (_per_fiber(p) for p in pools)
     k_null = int(min(masks[2].sum(axis=0).min(), masks[3].sum(axis=0).min()))
-    need = fibers_needed(ga - gb, math.sqrt(va), math.sqrt(vb), alpha, k_null=k_null)
+    need = fibers_needed(ga - gb, sa, sb, alpha, k_null=k_null)
     failed = int(sum((~m).sum() for m in masks))
-    return SettleTest(lam, stat, (n * ga, n * gb), (math.sqrt(n * va), math.sqrt(n * vb)),
+    return SettleTest(lam, stat, (n * ga, n * gb), (math.sqrt(n) * sa, math.sqrt(n) * sb),
                       (p_a, p_b), outcome, need, failed)  # fmt: skip
+
+
+def _masks(sets: list[np.ndarray], ok: Sequence[np.ndarray] | None) -> list[np.ndarray]:
+    """The runs that did not fail, shape (k, n) per copy set; their rows set to NaN in place."""
+    masks = [np.ones(a.shape[:2], bool) for a in sets] if ok is None else [
+        np.asarray(m, bool) for m in ok]  # fmt: skip
+    for arr, m in zip(sets, masks, strict=True):
+        if m.shape != arr.shape[:2]:
+            raise ValueError(f"an ok mask must have shape {arr.shape[:2]}, got {m.shape}")
+        arr[~m] = np.nan  # a failed run: no outcome
+    return masks
+
+
+def _null_pools(
+    sets: list[np.ndarray], masks: list[np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[list[np.ndarray]]]:
+    """λ's definition from the reference copies, and each fiber's null λ under A and B.
+
+    ``sets``: ref_a, ref_b, null_a, null_b (failed runs NaN), ``masks`` their runs that
+    did not fail. Returns the reference means (n, c) of A and B, the noise (c,), and
+    per hypothesis a list of n arrays: the λ of the fiber's valid null copies.
+    """
+    ra, rb, na, nb = sets
+    with warnings.catch_warnings():  # all copies undefined at a start: NaN mean, adds 0
+        warnings.simplefilter("ignore", RuntimeWarning)
+        mu_a, mu_b = np.nanmean(ra, axis=0), np.nanmean(rb, axis=0)
+    s = noise_spread(ra, rb)
+    pools = []
+    for null, m in ((na, masks[2]), (nb, masks[3])):
+        lam_k = discriminant(null, mu_a, mu_b, s)
+        pools.append([lam_k[m[:, i], i] for i in range(lam_k.shape[1])])
+    return mu_a, mu_b, s, pools
+
+
+def _per_fiber(pools: list[np.ndarray]) -> tuple[float, float]:
+    """λ's mean and sd within a fiber's pool, averaged over the fibers with two or more
+    values (mean of the means; root of the mean variance); NaN when none has."""
+    used = [q for q in pools if len(q) > 1]
+    if not used:
+        return np.nan, np.nan
+    return float(np.mean([q.mean() for q in used])), math.sqrt(
+        float(np.mean([q.var(ddof=1) for q in used]))
+    )
 
 
 def _sum_draws(
@@ -393,33 +416,16 @@ def window_separation(
     Returns
     -------
     (g_A, g_B, sd_A, sd_B)
-        λ's mean over the points and copies, and its sd within a point (pooled
-        over the points), under each hypothesis: a fiber at a random point of the
-        window, with the spread :func:`settle_test`'s null has given the starts.
+        λ's mean and its sd within a point, averaged over the points, under each
+        hypothesis, exactly as :func:`settle_test` reads them per fiber: a fiber at
+        a random point of the window.
         :func:`fibers_needed` of them is what the test would need there. NaN for a
         hypothesis with fewer than two valid copies at every point.
     """
     sets = [np.array(a, dtype=np.float64) for a in (ref_a, ref_b, null_a, null_b)]
-    if ok is not None:
-        for arr, m in zip(sets, ok, strict=True):
-            arr[~np.asarray(m, bool)] = np.nan
-    ra, rb, na, nb = sets
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        mu_a, mu_b = np.nanmean(ra, axis=0), np.nanmean(rb, axis=0)
-    s = noise_spread(ra, rb)
-    out = []
-    for j, null in ((2, na), (3, nb)):
-        valid = np.ones(null.shape[:2], bool) if ok is None else np.asarray(ok[j], bool)
-        lam = discriminant(null, mu_a, mu_b, s)
-        cols = [lam[valid[:, i], i] for i in range(lam.shape[1])]
-        cols = [q for q in cols if len(q) > 1]
-        if not cols:
-            out.append((np.nan, np.nan))
-            continue
-        within = float(np.mean([q.var(ddof=1) for q in cols]))
-        out.append((float(np.mean(np.concatenate(cols))), math.sqrt(within)))
-    return out[0][0], out[1][0], out[0][1], out[1][1]
+    *_, pools = _null_pools(sets, _masks(sets, ok))
+    (ga, sa), (gb, sb) = (_per_fiber(p) for p in pools)
+    return ga, gb, sa, sb
 
 
 @dataclass(frozen=True)
