@@ -6,6 +6,9 @@ Usage::
         [--moduli ...]
         [--fractions ...] [--count N] [--rows R] [--spacing B] [--cores C]
         [--refine-runs M] [--contact rough|smooth] [--time-scale K] [--deadline S]
+    python3 scripts/studies/flexible/bandpass_map.py more OUT [--geometries ...] [--moduli ...]
+        [--target-se 0.05] [--max-count 40] [--refine-tol 6] [--refine-count 12]
+        [--rounds 3] [--cores C] [--deadline S] [--dry-run]
     python3 scripts/studies/flexible/bandpass_map.py summary OUT
     python3 scripts/studies/flexible/bandpass_map.py converge OUT_A OUT_B [OUT_C ...]
 
@@ -23,39 +26,15 @@ what is stored. ``--time-scale K`` multiplies ``fiber.classify.trap_time`` (2 s)
 ``fiber.step.t_max`` (30 s) by K: a longer observation before a slow fiber counts as
 trapped (the trap time also sets the integrator's largest step, trap_time / 20).
 
-``summary`` reads every geometry's results with the sort report's own functions
-(:func:`~fibersweep.sweep.sort_report.relabel`, ``migration_table``,
-``critical_table``) and writes to OUT:
+``more`` makes an existing map precise, in rounds: every (E, L) whose mean f has a
+standard error above ``--target-se`` gets the starts that bring it there (from its
+measured spread and trapped share, at most ``--max-count`` runs per point), and every
+f = 1/2 bracket wider than ``--refine-tol`` µm whose two lengths meet the target gets
+its midpoint (the sort report's refinement on the merged runs). Each round's starts
+are new seeded draws, stored beside the map as ``OUT/<geometry>+s<seed>``; ``summary``
+merges them with the geometry's map.
 
-- ``map.csv`` / ``map.parquet``: per (geometry, E, L) the runs, trapped share, mean f
-  with its standard error, the mode shares, and the fiber's bending length
-  ℓ_b = (B c / 8πμγ̇)^(1/4) and elasto-viscous number μ̄ = 8πμγ̇L⁴/(B c) = (L/ℓ_b)⁴,
-  with B = Eπa⁴/4, c = −ln(ε² e), ε = a/L, γ̇ = U_center / pillar_size (docs/flexible.md);
-- ``edges.csv``: every crossing of f = 1/2 with its standard error and bracket, the
-  lower edge (first rising crossing) and upper edge (first falling one above it) of
-  each band, each in µm and divided by gap, pillar, period_x, period_y and ℓ_b;
-- ``fits.csv``: per geometry and edge, the power law L_edge ∝ E^β fitted by weighted
-  least squares in log–log (weights from the edges' standard errors) with β's
-  standard error; and per E and edge, the spread (coefficient of variation) of the
-  edge over the geometries in each unit: the unit that collapses it best is what sets it;
-- ``map-f.png``, ``map-trapped.png``, ``map-edges.png``: f(L) and the trapped share
-  per geometry (one curve per E, ±1 standard error), the edges against E.
-
-``converge`` compares ``edges.csv`` and the trapped shares of maps that differ only in
-``--spacing``: per (geometry, E, edge) the change between two maps against the
-combined standard error.
-
-Geometries (triangles, shift 0.1, depth 40 µm; gap = period_y − pillar):
-
-====  ======  ========  ========  ====
-name  pillar  period_x  period_y  gap
-====  ======  ========  ========  ====
-G0    40      80        80        40   the shipped array (configs/array-flexible.yaml)
-G1    20      80        80        60   smaller pillar, same periods
-G2    40      120       120       80   same pillar, larger periods
-G3    80      120       120       40   G0's gap, larger pillar and periods
-G4    40      120       80        40   G0 with a longer period_x only
-====  ======  ========  ========  ====
+``summary`` and ``converge``: :mod:`bandpass_tables`, which also lists the geometries.
 
 Defaults: G0, G1, G2, G4; five moduli 10–100 kPa; nine lengths 0.2–2.05 period_x;
 six starts per length; b = a (``--spacing 0.5``, converged against b = a/2 at 10 kPa;
@@ -73,17 +52,17 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 import yaml
+from bandpass_tables import (
+    BEAD_RADIUS,
+    GEOMETRIES,
+    converge,
+    load_geometry,
+    result_folders,
+    summary,
+)
 
-GEOMETRIES = {
-    "G0": {"pillar_size": 40.0, "period_x": 80.0, "period_y": 80.0},
-    "G1": {"pillar_size": 20.0, "period_x": 80.0, "period_y": 80.0},
-    "G2": {"pillar_size": 40.0, "period_x": 120.0, "period_y": 120.0},
-    "G3": {"pillar_size": 80.0, "period_x": 120.0, "period_y": 120.0},
-    "G4": {"pillar_size": 40.0, "period_x": 120.0, "period_y": 80.0},
-}
 #: Default stiffnesses [Pa]: five, log-spaced over 10–100 kPa.
 MODULI = [1.0e4, 1.78e4, 3.16e4, 5.62e4, 1.0e5]
 #: Default lengths as fractions of period_x: from below the gap to beyond twice the period.
@@ -96,7 +75,6 @@ DEFAULT_GEOMETRIES = ["G0", "G1", "G2", "G4"]
 #: (measured on the shipped array, 10–100 kPa: 1.5 s at 80 µm, 16 s at 176 µm, 58 s at
 #: 264 µm), to share the workers among geometries by their expected cost.
 COST_80, COST_POWER = 1.5, 2.7
-BEAD_RADIUS = 2.0  # [µm]
 BLAS_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 
@@ -200,237 +178,127 @@ def run(args: argparse.Namespace) -> None:
     summary(args.out)
 
 
-def bending_length(e: float, length: float, mu: float, shear: float) -> float:
-    """ℓ_b [µm] = (B c / 8πμγ̇)^(1/4), B = Eπa⁴/4 [pN µm²], c = −ln(ε² e), ε = a/L."""
-    b = e * math.pi * BEAD_RADIUS**4 / 4.0
-    c = -math.log((BEAD_RADIUS / length) ** 2 * math.e)
-    return (b * c / (8.0 * math.pi * mu * shear)) ** 0.25
+#: Extra-start counts a ``more`` round rounds up to, so that a round needs few configs.
+MORE_BUCKETS = (4, 8, 12, 16, 24, 32, 48)
 
 
-def _load(folder: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict]:
-    """(migration table with geometry columns, runs, config) of one geometry's results."""
-    from fibersweep.analysis.modes import ModeSettings
-    from fibersweep.sweep import sort_report as sr
+def more_plan(table: pd.DataFrame, runs: pd.DataFrame, args: argparse.Namespace) -> pd.DataFrame:
+    """The next starts of one geometry: (E, length, count) rows.
 
-    runs, meta, cfg = sr.load_array_results(folder)
-    runs = sr.relabel(runs, meta, ModeSettings(), cfg["fiber"]["classify"]["trap_speed"])
-    table = sr.migration_table(runs)
-    table["E"] = [float(meta[s]["values"]["fiber.young_modulus"]) for s in table["setting"]]
-    arr = meta[0]["array"]
-    mu = float(meta[0]["flow"]["fluid"]["viscosity"])
-    u = float(meta[0]["u_center"])
-    shear = u / arr["pillar_size"]
-    table["geometry"] = folder.name
-    for k in ("pillar_size", "period_x", "period_y"):
-        table[k] = float(arr[k])
-    table["gap"] = table["period_y"] - table["pillar_size"]
-    table["shear_rate"] = shear
-    table["bending_length"] = [
-        bending_length(e, L, mu, shear) for e, L in zip(table["E"], table["length"], strict=True)
-    ]
-    table["mu_bar"] = (table["length"] / table["bending_length"]) ** 4
-    table["spacing"] = float(cfg["fiber"].get("bead_spacing", 1.0))
-    return table, runs, cfg
-
-
-def _edges(table: pd.DataFrame) -> pd.DataFrame:
-    """Every f = 1/2 crossing of each (geometry, E), and which are a band's edges."""
-    from fibersweep.sweep import sort_report as sr
+    - **Precision.** A point whose f has a standard error above ``--target-se`` gets the
+      starts that bring it there, n_moving (se / target)², and one more in ten, corrected
+      for its trapped share, within ``--max-count`` runs in all. A point whose moving
+      runs are too few for a standard error (under 2) gets ``--refine-count``.
+    - **Refinement.** Every bracket of f = 1/2 wider than ``--refine-tol`` [µm] whose two
+      lengths are both within the target (the sort report's refinement,
+      :func:`fibersweep.sweep.refine_lengths.length_brackets`, on the merged runs) gets
+      its midpoint with ``--refine-count`` starts.
+    """
+    from fibersweep.sweep.refine_lengths import length_brackets
 
     rows = []
-    for (geom, e), g in table.groupby(["geometry", "E"], sort=True):
-        crit = sr.critical_table(g.assign(setting=0)).sort_values("critical")
-        lower = crit[crit["rising"]]
-        lo = float(lower["critical"].iloc[0]) if len(lower) else math.nan
-        upper = crit[~crit["rising"] & (crit["critical"] > (lo if math.isfinite(lo) else -1))]
-        up = float(upper["critical"].iloc[0]) if len(upper) else math.nan
-        first = g.iloc[0]
-        for _, c in crit.iterrows():
-            edge = "lower" if c["critical"] == lo else "upper" if c["critical"] == up else "other"
-            lb = bending_length(e, c["critical"], 0.34, float(first["shear_rate"]))
-            rows.append(
-                {
-                    "geometry": geom,
-                    "E": e,
-                    "edge": edge,
-                    "critical": c["critical"],
-                    "se": c["se"],
-                    "lo": c["lo"],
-                    "hi": c["hi"],
-                    "rising": c["rising"],
-                    "per_gap": c["critical"] / first["gap"],
-                    "per_pillar": c["critical"] / first["pillar_size"],
-                    "per_period_x": c["critical"] / first["period_x"],
-                    "per_period_y": c["critical"] / first["period_y"],
-                    "per_bending_length": c["critical"] / lb,
-                }
-            )
-    return pd.DataFrame(rows)
-
-
-def _fits(edges: pd.DataFrame) -> pd.DataFrame:
-    """Power laws in E per geometry and edge; spread over geometries per E and edge."""
-    rows = []
-    for (geom, edge), g in edges[edges["edge"] != "other"].groupby(["geometry", "edge"]):
-        g = g[np.isfinite(g["se"]) & (g["se"] > 0)]
-        if len(g) < 3:
+    pick = table[table["E"].isin(args.moduli)] if args.moduli else table
+    for _, p in pick.iterrows():
+        n, moving, se = int(p["runs"]), int(p["moving"]), float(p["fraction_se"])
+        if n >= args.max_count:
             continue
-        x = np.log(g["E"].to_numpy(float))
-        y = np.log(g["critical"].to_numpy(float))
-        sy = (g["se"] / g["critical"]).to_numpy(float)
-        w = 1.0 / sy**2
-        a = np.column_stack([np.ones_like(x), x])
-        cov = np.linalg.inv(a.T @ (a * w[:, None]))
-        coef = cov @ (a.T @ (w * y))
-        chi2 = float(np.sum(w * (y - a @ coef) ** 2))
-        dof = len(x) - 2
-        scale = max(1.0, chi2 / dof) if dof > 0 else 1.0  # inflate when scatter exceeds errors
-        rows.append({"kind": "power_law", "geometry": geom, "edge": edge, "points": len(g),
-                     "beta": coef[1], "beta_se": math.sqrt(cov[1, 1] * scale),
-                     "chi2_dof": chi2 / dof if dof > 0 else math.nan})  # fmt: skip
-    units = ["critical", "per_gap", "per_pillar", "per_period_x", "per_period_y",
-             "per_bending_length"]  # fmt: skip
-    for (e, edge), g in edges[edges["edge"] != "other"].groupby(["E", "edge"]):
-        if g["geometry"].nunique() < 3:
+        if moving < 2:
+            want = args.refine_count if n < args.refine_count else 0
+        elif se > args.target_se:
+            need = math.ceil(1.1 * moving * (se / args.target_se) ** 2) - moving
+            want = math.ceil(need / max(moving / n, 0.25))
+        else:
+            want = 0
+        if want > 0:
+            bucket = next((b for b in MORE_BUCKETS if b >= want), MORE_BUCKETS[-1])
+            count = min(bucket, args.max_count - n)
+            rows.append({"E": float(p["E"]), "length": float(p["length"]), "count": count})
+    ok = table[table["fraction_se"] <= args.target_se]
+    good = {(float(e), float(L)) for e, L in zip(ok["E"], ok["length"], strict=True)}
+    points = runs.assign(group=runs["E"])
+    for _, b in length_brackets(points, group="group").iterrows():
+        e = float(b["group"])
+        if args.moduli and e not in args.moduli:
             continue
-        r = {"kind": "collapse", "E": e, "edge": edge, "points": len(g)}
-        for u in units:
-            v = g[u].to_numpy(float)
-            r[f"cv_{u}"] = float(np.std(v, ddof=1) / np.mean(v))
-        rows.append(r)
-    return pd.DataFrame(rows)
+        wide = float(b["hi"]) - float(b["lo"]) > args.refine_tol
+        if wide and (e, float(b["lo"])) in good and (e, float(b["hi"])) in good:
+            mid = round(0.5 * (float(b["lo"]) + float(b["hi"])), 1)
+            rows.append({"E": e, "length": mid, "count": args.refine_count})
+    return pd.DataFrame(rows, columns=["E", "length", "count"])
 
 
-def _figures(table: pd.DataFrame, edges: pd.DataFrame, out: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    geoms = sorted(table["geometry"].unique())
-    for col, err, name, ylab in (
-        ("fraction_mean", "fraction_se", "map-f.png", "mean f (moving runs)"),
-        ("trapped", None, "map-trapped.png", "trapped share"),
-    ):
-        fig, axes = plt.subplots(1, len(geoms), figsize=(4 * len(geoms), 3.4), squeeze=False)
-        for ax, geom in zip(axes[0], geoms, strict=True):
-            g = table[table["geometry"] == geom]
-            for e, ge in g.groupby("E"):
-                ge = ge.sort_values("length")
-                ax.errorbar(ge["length"], ge[col], yerr=None if err is None else ge[err],
-                            marker="o", ms=3, capsize=2, label=f"{e / 1e3:.3g} kPa")  # fmt: skip
-            first = g.iloc[0]
-            for x, ls in ((first["gap"], ":"), (first["period_x"], "--")):
-                ax.axvline(x, color="0.5", ls=ls, lw=0.8)
-            ax.set_title(f"{geom}: pillar {first['pillar_size']:g}, "
-                         f"λ {first['period_x']:g}×{first['period_y']:g}, gap {first['gap']:g}",
-                         fontsize=8)  # fmt: skip
-            ax.set_xlabel("L [µm] (dotted: gap, dashed: period_x)")
-            ax.set_ylabel(ylab)
-            ax.set_ylim(-0.05, 1.05)
-        axes[0][0].legend(fontsize=7)
-        fig.tight_layout()
-        fig.savefig(out / name, dpi=120)
-        plt.close(fig)
-    if len(edges):
-        fig, ax = plt.subplots(figsize=(5, 3.6))
-        for (geom, edge), g in edges[edges["edge"] != "other"].groupby(["geometry", "edge"]):
-            ax.errorbar(g["E"], g["critical"], yerr=g["se"], marker="o" if edge == "lower"
-                        else "s", ms=4, capsize=2, label=f"{geom} {edge}")  # fmt: skip
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("E [Pa]")
-        ax.set_ylabel("band edge [µm]")
-        ax.legend(fontsize=6)
-        fig.tight_layout()
-        fig.savefig(out / "map-edges.png", dpi=120)
-        plt.close(fig)
+def _more_configs(out: Path, geom: str, plan: pd.DataFrame, base: dict, taken: int) -> list:
+    """One config per (E, count) of a plan; folder ``<geom>+s<seed>``, seeds unused so far."""
+    todo = []
+    for k, ((e, count), g) in enumerate(plan.groupby(["E", "count"], sort=True)):
+        seed = taken + k + 1
+        cfg = yaml.safeload_geometry(yaml.safe_dump(base))
+        cfg["sweep"]["fiber.young_modulus"] = [float(e)]
+        cfg["sweep"]["length"] = sorted(float(L) for L in g["length"].unique())
+        cfg["sweep"]["random"] = {"count": int(count), "seed": seed}
+        cfg["sweep"].pop("refine", None)
+        cfg["run"]["workers"] = 1
+        cfg["run"]["output"] = str(out / f"{geom}+s{seed}")
+        cost = float(count) * sum(COST_80 * (L / 80.0) ** COST_POWER for L in g["length"])
+        todo.append((cost, geom, seed, cfg))
+    return todo
 
 
-def summary(out_dir: str) -> None:
-    """Write map.csv/.parquet, edges.csv, fits.csv and the figures of a map folder."""
-    out = Path(out_dir)
-    tables, costs = [], []
-    for folder in sorted(p for p in out.iterdir() if p.is_dir() and (p / "manifest.json").exists()):
-        table, runs, _ = _load(folder)
-        tables.append(table)
-        if "cpu_time" in runs:
-            costs.append((folder.name, len(runs), float(runs["cpu_time"].sum()),
-                          float(runs["cpu_time"].max())))  # fmt: skip
-    if not tables:
-        print(f"{out}: no results yet")
-        return
-    table = pd.concat(tables, ignore_index=True)
-    cols = ["geometry", "pillar_size", "period_x", "period_y", "gap", "E", "length", "runs",
-            "moving", "trapped", "fraction_mean", "fraction_se", "fraction_std", "angle_mean",
-            "zigzag", "displacement", "wrap-and-jump", "mixed", "bending_length", "mu_bar",
-            "shear_rate", "spacing"]  # fmt: skip
-    table = table[[c for c in cols if c in table]]
-    table.to_csv(out / "map.csv", index=False)
-    table.to_parquet(out / "map.parquet", index=False)
-    edges = _edges(table)
-    edges.to_csv(out / "edges.csv", index=False)
-    fits = _fits(edges) if len(edges) else pd.DataFrame()
-    fits.to_csv(out / "fits.csv", index=False)
-    _figures(table, edges, out)
-    with pd.option_context("display.width", 200, "display.max_rows", 500,
-                           "display.float_format", "{:.3g}".format):  # fmt: skip
-        print(table[["geometry", "E", "length", "runs", "trapped", "fraction_mean",
-                     "fraction_se", "mu_bar"]].to_string(index=False))  # fmt: skip
-        if len(edges):
-            print(edges[["geometry", "E", "edge", "critical", "se", "lo", "hi", "per_gap",
-                         "per_period_x", "per_bending_length"]].to_string(index=False))  # fmt: skip
-        if len(fits):
-            print(fits.to_string(index=False))
-    se = table["fraction_se"]
-    print(f"points {len(table)}; f standard error: median {se.median():.3f}, largest "
-          f"{se.max():.3f}; points with se > 0.05: {int((se > 0.05).sum())}")  # fmt: skip
-    for geom, n, cpu, worst in costs:
-        print(f"{geom}: {n} runs, CPU {cpu:.0f} s ({cpu / max(n, 1):.2f} s/run, largest "
-              f"{worst:.1f} s)")  # fmt: skip
-    if costs:
-        print(f"total CPU {sum(c[2] for c in costs):.0f} s over {sum(c[1] for c in costs)} runs")
-
-
-def converge(dirs: list[str]) -> None:
-    """Edges and trapped shares of maps that differ in bead spacing, side by side."""
-    maps = []
-    for d in dirs:
-        if not (Path(d) / "map.csv").exists():
-            print(f"{d}: no summary (no runs stored); left out")
-            continue
-        e = (
-            pd.read_csv(Path(d) / "edges.csv")
-            if (Path(d) / "edges.csv").stat().st_size > 1
-            else pd.DataFrame(columns=["geometry", "E", "edge", "critical", "se"])
-        )
-        t = pd.read_csv(Path(d) / "map.csv")
-        sp = float(t["spacing"].iloc[0])
-        maps.append((sp, e[e["edge"] != "other"], t))
-    maps.sort(key=lambda m: -m[0])
-    key = ["geometry", "E", "edge"]
-    for (s1, e1, t1), (s2, e2, t2) in zip(maps, maps[1:], strict=False):
-        m = e1.merge(e2, on=key, suffixes=("_1", "_2"))
-        m["change"] = m["critical_2"] - m["critical_1"]
-        m["se_comb"] = np.hypot(m["se_1"], m["se_2"])
-        m["converged"] = m["change"].abs() < m["se_comb"]
-        print(f"b/2a {s1:g} -> {s2:g}: band edges [µm]")
-        print(m[key + ["critical_1", "critical_2", "change", "se_comb", "converged"]]
-              .to_string(index=False))  # fmt: skip
-        tk = ["geometry", "E", "length"]
-        tt = t1.merge(t2, on=tk, suffixes=("_1", "_2"))
-        n = np.minimum(tt["runs_1"], tt["runs_2"])
-        p = 0.5 * (tt["trapped_1"] + tt["trapped_2"])
-        tt["se_trap"] = np.sqrt(np.maximum(p * (1 - p), 0.25 / n) * 2 / n)
-        tt["d_trapped"] = tt["trapped_2"] - tt["trapped_1"]
-        tt["d_f"] = tt["fraction_mean_2"] - tt["fraction_mean_1"]
-        tt["se_f"] = np.hypot(tt["fraction_se_1"], tt["fraction_se_2"])
-        print(tt[tk + ["trapped_1", "trapped_2", "d_trapped", "se_trap", "fraction_mean_1",
-                       "fraction_mean_2", "d_f", "se_f"]].to_string(index=False))  # fmt: skip
-        n_t = int((tt["d_trapped"].abs() < 2 * tt["se_trap"]).sum())
-        n_f = int((tt["d_f"].abs() < 2 * tt["se_f"]).sum())
-        print(f"trapped share: |change| < 2 se at {n_t} of {len(tt)} points; "
-              f"f: |change| < 2 se at {n_f} of {int(tt['se_f'].notna().sum())}")  # fmt: skip
+def more(args: argparse.Namespace) -> None:
+    """Rounds of more starts where f is not yet known to the target, and finer lengths
+    at the edges, until nothing is left to do, ``--rounds`` are done or the deadline."""
+    out = Path(args.out)
+    env = dict(os.environ, **{v: "1" for v in BLAS_ENV})
+    t0 = time.time()
+    for rnd in range(1, args.rounds + 1):
+        folders = result_folders(out)
+        todo = []
+        for geom in args.geometries or sorted(folders):
+            if geom not in folders:
+                print(f"{geom}: no results under {out}; run the map first", flush=True)
+                continue
+            table, runs, _ = load_geometry(folders[geom])
+            plan = more_plan(table, runs, args)
+            base = yaml.safeload_geometry((out / "configs" / f"{geom}.yaml").read_text())
+            got = _more_configs(out, geom, plan, base, len(folders[geom]) - 1)
+            runs_new = int(plan["count"].sum()) if len(plan) else 0
+            print(f"round {rnd} {geom}: {len(plan)} points, {runs_new} runs in {len(got)} "
+                  f"configs", flush=True)  # fmt: skip
+            todo.extend(got)
+            if args.dry_run and len(plan):
+                print(plan.to_string(index=False), flush=True)
+        if args.dry_run:
+            print(f"expected ~{sum(t[0] for t in todo):.0f} CPU s at b = a", flush=True)
+            return
+        if not todo:
+            break
+        # the costliest first, so that the cores stay busy to the end
+        todo.sort(key=lambda t: -t[0])
+        live: list = []
+        while todo or live:
+            while todo and len(live) < args.cores:
+                _, geom, seed, cfg = todo.pop(0)
+                path = out / "configs" / f"{geom}+s{seed}.yaml"
+                path.write_text(yaml.safe_dump(cfg, sort_keys=False))
+                log = open(out / f"{geom}.log", "a")
+                cmd = [sys.executable, "-m", "fibersweep", "run", str(path)]
+                live.append((subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT,
+                                              start_new_session=True), log))  # fmt: skip
+            time.sleep(2.0)
+            if args.deadline and time.time() - t0 > args.deadline:
+                for p, log in live:
+                    if p.poll() is None:
+                        os.killpg(p.pid, signal.SIGTERM)
+                    p.wait()
+                    log.close()
+                print(f"deadline reached in round {rnd}; stored runs kept", flush=True)
+                summary(args.out)
+                return
+            for p, log in [x for x in live if x[0].poll() is not None]:
+                log.close()
+                live.remove((p, log))
+        print(f"round {rnd} done at {time.time() - t0:.0f} s", flush=True)
+    summary(args.out)
 
 
 def main() -> None:
@@ -455,11 +323,25 @@ def main() -> None:
     r.add_argument("--deadline", type=float, default=0.0, help="stop the runs after S s")
     s = sub.add_parser("summary")
     s.add_argument("out")
+    m = sub.add_parser("more")
+    m.add_argument("out")
+    m.add_argument("--geometries", nargs="+", choices=sorted(GEOMETRIES))
+    m.add_argument("--moduli", type=float, nargs="+", help="only these E [Pa]")
+    m.add_argument("--target-se", type=float, default=0.05, help="standard error of f")
+    m.add_argument("--max-count", type=int, default=40, help="most runs per (E, L)")
+    m.add_argument("--refine-tol", type=float, default=6.0, help="edge bracket width [µm]")
+    m.add_argument("--refine-count", type=int, default=12, help="starts per new length")
+    m.add_argument("--rounds", type=int, default=3)
+    m.add_argument("--cores", type=int, default=os.cpu_count() or 1)
+    m.add_argument("--deadline", type=float, default=0.0, help="stop the runs after S s")
+    m.add_argument("--dry-run", action="store_true", help="print the first round's plan only")
     c = sub.add_parser("converge")
     c.add_argument("outs", nargs="+")
     args = ap.parse_args()
     if args.cmd == "run":
         run(args)
+    elif args.cmd == "more":
+        more(args)
     elif args.cmd == "summary":
         summary(args.out)
     else:

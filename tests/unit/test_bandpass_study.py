@@ -1,0 +1,121 @@
+"""The band-pass study's planning and reading (scripts/studies/flexible/bandpass_map.py and
+bandpass_tables.py).
+
+The driver's runs are studies; what is tested here is the arithmetic that decides how
+many more starts a point gets and which array scale a pair of edges follows.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+STUDY = Path(__file__).parents[2] / "scripts" / "studies" / "flexible"
+
+
+@pytest.fixture(scope="module")
+def bm():
+    """The driver, imported as its command line runs it: beside bandpass_tables."""
+    sys.path.insert(0, str(STUDY))
+    try:
+        yield importlib.import_module("bandpass_map")
+    finally:
+        sys.path.remove(str(STUDY))
+
+
+@pytest.fixture(scope="module")
+def bt(bm):
+    return sys.modules["bandpass_tables"]
+
+
+def _args(**kw) -> argparse.Namespace:
+    base = {"moduli": None, "target_se": 0.05, "max_count": 40, "refine_tol": 6.0,
+            "refine_count": 12}  # fmt: skip
+    return argparse.Namespace(**{**base, **kw})
+
+
+def _point(E, L, runs, moving, se):
+    return {"E": E, "length": L, "runs": runs, "moving": moving, "fraction_se": se}
+
+
+@pytest.mark.parametrize("moving,se", [(6, 0.1), (6, 0.2), (12, 0.07), (5, 0.06), (20, 0.051)])
+def test_more_starts_reach_the_target_standard_error(bm, moving, se):
+    """The starts a point gets bring the standard error of its mean f to the target.
+
+    The spread of f is taken as measured (sd = se √moving); with the planned count
+    and no trapping the new standard error sd / √(moving + count) is at most the
+    target (0.05), unless the cap of 40 runs binds, when the count is the cap's rest.
+    """
+    table = pd.DataFrame([_point(1e4, 40.0, moving, moving, se)])
+    runs = pd.DataFrame({"E": [1e4] * moving, "length": [40.0] * moving, "status": "ok",
+                         "mode": "zigzag", "fraction": 0.5})  # fmt: skip
+    plan = bm.more_plan(table, runs, _args())
+    assert len(plan) == 1
+    count = int(plan["count"].iloc[0])
+    sd = se * math.sqrt(moving)
+    if moving + count < 40:
+        assert sd / math.sqrt(moving + count) <= 0.05
+    else:
+        assert moving + count == 40
+
+
+def test_more_starts_skip_points_within_the_target_and_correct_for_trapping(bm):
+    """se ≤ target: nothing; half the runs trapped: about twice the starts; too few
+    moving runs for a standard error: ``refine_count`` starts (no cap binds: 100 runs)."""
+    table = pd.DataFrame([
+        _point(1e4, 20.0, 6, 6, 0.04),
+        _point(1e4, 40.0, 12, 6, 0.1),
+        _point(1e4, 60.0, 6, 6, 0.1),
+        _point(1e4, 80.0, 6, 1, math.nan),
+    ])  # fmt: skip
+    runs = pd.DataFrame({"E": 1e4, "length": [20.0, 40.0, 60.0, 80.0], "status": "ok",
+                         "mode": "zigzag", "fraction": 0.0})  # fmt: skip
+    plan = bm.more_plan(table, runs, _args(max_count=100)).set_index("length")["count"]
+    assert 20.0 not in plan.index
+    assert plan[40.0] == 48  # 21 moving starts needed, half of them trap: 42, to a bucket
+    assert plan[60.0] == 24  # 21 needed, rounded up to a bucket
+    assert plan[80.0] == 12
+
+
+def test_more_refines_a_located_crossing_and_only_a_located_one(bm):
+    """A bracket of f = 1/2 whose two lengths meet the target gets its midpoint; one
+    whose lengths do not, or that is narrower than the tolerance, does not."""
+    rng = np.random.default_rng(0)
+    rows, pts = [], []
+    for E, lengths, se in ((1e4, (30.0, 50.0), 0.03), (2e4, (30.0, 50.0), 0.2),
+                           (3e4, (30.0, 34.0), 0.03)):  # fmt: skip
+        for L, f in zip(lengths, (0.2, 0.8), strict=True):
+            pts.append(_point(E, L, 30, 30, se))
+            for _ in range(30):
+                rows.append({"E": E, "length": L, "status": "ok", "mode": "displacement",
+                             "fraction": f + 0.01 * rng.standard_normal()})  # fmt: skip
+    plan = bm.more_plan(pd.DataFrame(pts), pd.DataFrame(rows), _args(max_count=30))
+    assert plan[["E", "length", "count"]].values.tolist() == [[1e4, 40.0, 12]]
+
+
+def test_pairs_name_the_scale_an_edge_follows(bt):
+    """G1 and G5 differ in period_x only (80 → 120 µm). An edge 1.5 × longer in G5
+    follows the period: z for period_x is 0 and for the gap (unchanged) and the
+    bending length (unchanged) (1.5 − 1) / se = 10 with se 0.05."""
+    edges = pd.DataFrame([
+        {"geometry": "G1", "E": 3e4, "edge": "lower", "critical": 50.0, "se": 0.0,
+         "per_bending_length": 5.0},
+        {"geometry": "G5", "E": 3e4, "edge": "lower", "critical": 75.0, "se": 75.0 * 0.05 / 1.5,
+         "per_bending_length": 7.5},
+        {"geometry": "G0", "E": 3e4, "edge": "other", "critical": 10.0, "se": 1.0,
+         "per_bending_length": 1.0},
+    ])  # fmt: skip
+    p = bt.pairs_table(edges)
+    assert len(p) == 1
+    r = p.iloc[0]
+    assert (r["a"], r["b"], r["changed"]) == ("G1", "G5", "period_x")
+    assert r["ratio"] == pytest.approx(1.5) and r["ratio_se"] == pytest.approx(0.05)
+    assert r["z_period_x"] == pytest.approx(0.0, abs=1e-12)
+    assert r["z_gap"] == pytest.approx(10.0) and r["z_bending_length"] == pytest.approx(10.0)
