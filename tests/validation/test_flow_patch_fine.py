@@ -37,8 +37,9 @@ def test_patch_matches_the_whole_fine_grid(flow_cache_dir):
     coarse = solve_nested(channel)
     errors = {}
     for margin in (40.0, 160.0):
-        s = channel.model_copy(update={"patch": {"dx": 2.0, "margin": margin}})
-        s = FlowSettings.model_validate(s.model_dump())
+        s = FlowSettings.model_validate(
+            {**channel.model_dump(), "patch": {"dx": 2.0, "margin": margin}}
+        )
         patched = solve_patched(s, coarse=coarse)
         assert patched.ux.shape == fine.ux.shape and patched.dx == 2.0
         mask = _near(fine)
