@@ -119,3 +119,33 @@ def test_pairs_name_the_scale_an_edge_follows(bt):
     assert r["ratio"] == pytest.approx(1.5) and r["ratio_se"] == pytest.approx(0.05)
     assert r["z_period_x"] == pytest.approx(0.0, abs=1e-12)
     assert r["z_gap"] == pytest.approx(10.0) and r["z_bending_length"] == pytest.approx(10.0)
+
+
+def test_more_configs_are_valid_sweeps_of_new_draws(bm, tmp_path):
+    """Each (E, count) of a plan becomes one valid config (the schema accepts it) with a
+    single stiffness, the plan's lengths, a seed after the last used one, its own folder
+    ``<geometry>+s<seed>``, and starts that differ from the map's (seed 0) at the same
+    length: independent draws, never the map's runs again."""
+    from fibersweep.config.draws import start_points
+    from fibersweep.config.loading import parse_config
+
+    args = argparse.Namespace(fractions=[0.5, 1.0], moduli=[1e4, 3e4], count=4, seed=0,
+                              rows=20, spacing=0.5, contact="rough", time_scale=1.0,
+                              refine_runs=0, refine_tol=4.0, cache="c", out=str(tmp_path),
+                              tag="")  # fmt: skip
+    base = bm.config_of("G1", args, 1)
+    plan = pd.DataFrame({"E": [1e4, 1e4, 3e4], "length": [40.0, 80.0, 60.0],
+                         "count": [8, 8, 12]})  # fmt: skip
+    todo = bm._more_configs(tmp_path, "G1", plan, base, last_seed=3)
+    seeds = sorted(t[2] for t in todo)
+    assert seeds == [4, 5]
+    for _, _geom, seed, cfg in todo:
+        cfg_ok = parse_config(cfg)
+        assert cfg["run"]["output"] == str(tmp_path / f"G1+s{seed}")
+        assert len(cfg["sweep"]["fiber.young_modulus"]) == 1
+        ts, ys, Ls = start_points(cfg_ok)
+        assert len(ts) == cfg["sweep"]["random"]["count"] * len(cfg["sweep"]["length"])
+        same_lengths = {**base["sweep"], "length": cfg["sweep"]["length"]}
+        old = start_points(parse_config({**base, "sweep": same_lengths}))
+        new_starts = set(zip(ts.round(9), ys.round(9), strict=True))
+        assert not new_starts & set(zip(old[0].round(9), old[1].round(9), strict=True))

@@ -6,6 +6,7 @@ Usage::
         [--moduli ...]
         [--fractions ...] [--count N] [--rows R] [--spacing B] [--cores C]
         [--refine-runs M] [--contact rough|smooth] [--time-scale K] [--deadline S]
+        [--tag TAG]
     python3 scripts/studies/flexible/bandpass_map.py more OUT [--geometries ...] [--moduli ...]
         [--target-se 0.05] [--max-count 40] [--refine-tol 6] [--refine-count 12]
         [--rounds 3] [--cores C] [--deadline S] [--dry-run]
@@ -25,6 +26,8 @@ kept; a later ``run`` into the same OUT resumes them) and the summary is written
 what is stored. ``--time-scale K`` multiplies ``fiber.classify.trap_time`` (2 s) and
 ``fiber.step.t_max`` (30 s) by K: a longer observation before a slow fiber counts as
 trapped (the trap time also sets the integrator's largest step, trap_time / 20).
+``--tag T`` adds to an existing map (other stiffnesses or lengths of the same
+geometries) in folders ``<geometry>+T``, which the summary merges with the map.
 
 ``more`` makes an existing map precise, in rounds: every (E, L) whose mean f has a
 standard error above ``--target-se`` gets the starts that bring it there (from its
@@ -117,10 +120,16 @@ def config_of(geom: str, args: argparse.Namespace, workers: int) -> dict:
         "sweep": sweep,
         "run": {
             "workers": workers,
-            "output": str(Path(args.out) / geom),
+            "output": str(Path(args.out) / folder_of(geom, args)),
             "cache_dir": args.cache,
         },
     }
+
+
+def folder_of(geom: str, args: argparse.Namespace) -> str:
+    """A geometry's results folder: ``G1``, or ``G1+<tag>`` for more of the same map
+    (other stiffnesses or lengths), which the summary merges with it."""
+    return f"{geom}+{args.tag}" if args.tag else geom
 
 
 def expected_cpu(geom: str, fractions: list[float]) -> float:
@@ -149,7 +158,7 @@ def run(args: argparse.Namespace) -> None:
     procs = {}
     t0 = time.time()
     for geom in args.geometries:
-        path = out / "configs" / f"{geom}.yaml"
+        path = out / "configs" / f"{folder_of(geom, args)}.yaml"
         cfg = config_of(geom, args, share[geom])
         path.write_text(yaml.safe_dump(cfg, sort_keys=False))
         log = open(out / f"{geom}.log", "a")
@@ -227,12 +236,13 @@ def more_plan(table: pd.DataFrame, runs: pd.DataFrame, args: argparse.Namespace)
     return pd.DataFrame(rows, columns=["E", "length", "count"])
 
 
-def _more_configs(out: Path, geom: str, plan: pd.DataFrame, base: dict, taken: int) -> list:
-    """One config per (E, count) of a plan; folder ``<geom>+s<seed>``, seeds unused so far."""
+def _more_configs(out: Path, geom: str, plan: pd.DataFrame, base: dict, last_seed: int) -> list:
+    """One config per (E, count) of a plan, in folder ``<geom>+s<seed>``, seeds after
+    ``last_seed``."""
     todo = []
     for k, ((e, count), g) in enumerate(plan.groupby(["E", "count"], sort=True)):
-        seed = taken + k + 1
-        cfg = yaml.safeload_geometry(yaml.safe_dump(base))
+        seed = last_seed + k + 1
+        cfg = yaml.safe_load(yaml.safe_dump(base))
         cfg["sweep"]["fiber.young_modulus"] = [float(e)]
         cfg["sweep"]["length"] = sorted(float(L) for L in g["length"].unique())
         cfg["sweep"]["random"] = {"count": int(count), "seed": seed}
@@ -259,8 +269,9 @@ def more(args: argparse.Namespace) -> None:
                 continue
             table, runs, _ = load_geometry(folders[geom])
             plan = more_plan(table, runs, args)
-            base = yaml.safeload_geometry((out / "configs" / f"{geom}.yaml").read_text())
-            got = _more_configs(out, geom, plan, base, len(folders[geom]) - 1)
+            base = yaml.safe_load((out / "configs" / f"{geom}.yaml").read_text())
+            used = [int(f.name.split("+s")[1]) for f in folders[geom] if "+s" in f.name]
+            got = _more_configs(out, geom, plan, base, max(used, default=0))
             runs_new = int(plan["count"].sum()) if len(plan) else 0
             print(f"round {rnd} {geom}: {len(plan)} points, {runs_new} runs in {len(got)} "
                   f"configs", flush=True)  # fmt: skip
@@ -321,6 +332,7 @@ def main() -> None:
     r.add_argument("--cores", type=int, default=os.cpu_count() or 1)
     r.add_argument("--cache", default=".fibersweep-cache")
     r.add_argument("--deadline", type=float, default=0.0, help="stop the runs after S s")
+    r.add_argument("--tag", default="", help="add to an existing map: folders <geometry>+TAG")
     s = sub.add_parser("summary")
     s.add_argument("out")
     m = sub.add_parser("more")
