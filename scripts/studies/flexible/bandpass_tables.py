@@ -158,32 +158,48 @@ def edges_table(table: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _power_law(g: pd.DataFrame) -> dict | None:
+    """L_edge ∝ E^β by weighted least squares in log–log; None under three points."""
+    g = g[np.isfinite(g["se"]) & (g["se"] > 0)]
+    if len(g) < 3:
+        return None
+    x = np.log(g["E"].to_numpy(float))
+    y = np.log(g["critical"].to_numpy(float))
+    w = 1.0 / (g["se"] / g["critical"]).to_numpy(float) ** 2
+    a = np.column_stack([np.ones_like(x), x])
+    cov = np.linalg.inv(a.T @ (a * w[:, None]))
+    coef = cov @ (a.T @ (w * y))
+    chi2 = float(np.sum(w * (y - a @ coef) ** 2))
+    dof = len(x) - 2
+    scale = max(1.0, chi2 / dof)  # inflate when the scatter exceeds the errors
+    se = math.sqrt(cov[1, 1] * scale)
+    # β against the bending length's 1/4 and against no dependence on E
+    return {"points": len(g), "E_min": g["E"].min(), "E_max": g["E"].max(), "beta": coef[1],
+            "beta_se": se, "chi2_dof": chi2 / dof, "z_quarter": (coef[1] - 0.25) / se,
+            "z_zero": coef[1] / se}  # fmt: skip
+
+
 def fits_table(edges: pd.DataFrame) -> pd.DataFrame:
-    """Power laws in E per geometry and edge; spread over geometries per E and edge."""
+    """Power laws in E per geometry and edge; spread over geometries per E and edge.
+
+    ``power_law``: every lower (upper) edge of the geometry; ``power_law_band``: only
+    those at stiffnesses where the geometry has a band (both edges), so that a
+    high-pass filter's cut-off is not fitted with a band's edge.
+    """
     rows = []
-    for (geom, edge), g in edges[edges["edge"] != "other"].groupby(["geometry", "edge"]):
-        g = g[np.isfinite(g["se"]) & (g["se"] > 0)]
-        if len(g) < 3:
-            continue
-        x = np.log(g["E"].to_numpy(float))
-        y = np.log(g["critical"].to_numpy(float))
-        sy = (g["se"] / g["critical"]).to_numpy(float)
-        w = 1.0 / sy**2
-        a = np.column_stack([np.ones_like(x), x])
-        cov = np.linalg.inv(a.T @ (a * w[:, None]))
-        coef = cov @ (a.T @ (w * y))
-        chi2 = float(np.sum(w * (y - a @ coef) ** 2))
-        dof = len(x) - 2
-        scale = max(1.0, chi2 / dof) if dof > 0 else 1.0  # inflate when scatter exceeds errors
-        rows.append({"kind": "power_law", "geometry": geom, "edge": edge, "points": len(g),
-                     "beta": coef[1], "beta_se": math.sqrt(cov[1, 1] * scale),
-                     "chi2_dof": chi2 / dof if dof > 0 else math.nan})  # fmt: skip
+    e = edges[edges["edge"] != "other"]
+    both = e.groupby(["geometry", "E"])["edge"].transform(lambda v: v.nunique() == 2)
+    for kind, sub in (("power_law", e), ("power_law_band", e[both])):
+        for (geom, edge), g in sub.groupby(["geometry", "edge"]):
+            fit = _power_law(g)
+            if fit is not None:
+                rows.append({"kind": kind, "geometry": geom, "edge": edge, **fit})
     units = ["critical", "per_gap", "per_pillar", "per_period_x", "per_period_y",
              "per_bending_length"]  # fmt: skip
-    for (e, edge), g in edges[edges["edge"] != "other"].groupby(["E", "edge"]):
+    for (modulus, edge), g in e.groupby(["E", "edge"]):
         if g["geometry"].nunique() < 3:
             continue
-        r = {"kind": "collapse", "E": e, "edge": edge, "points": len(g)}
+        r = {"kind": "collapse", "E": modulus, "edge": edge, "points": len(g)}
         for u in units:
             v = g[u].to_numpy(float)
             r[f"cv_{u}"] = float(np.std(v, ddof=1) / np.mean(v))
