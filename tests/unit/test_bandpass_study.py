@@ -149,3 +149,22 @@ def test_more_configs_are_valid_sweeps_of_new_draws(bm, tmp_path):
         old = start_points(parse_config({**base, "sweep": same_lengths}))
         new_starts = set(zip(ts.round(9), ys.round(9), strict=True))
         assert not new_starts & set(zip(old[0].round(9), old[1].round(9), strict=True))
+
+
+def test_fits_recover_a_power_law_and_keep_band_edges_apart(bt):
+    """Edges exactly ∝ E^(1/4) with 2 % errors give β = 0.25 (to 1e-9), z_quarter = 0,
+    χ² = 0; a cut-off without an upper edge (E = 1e5) is in ``power_law`` only."""
+    moduli = [1e4, 2e4, 4e4, 8e4]
+    rows = []
+    for e in moduli:
+        for edge, c0 in (("lower", 50.0), ("upper", 90.0)):
+            c = c0 * (e / 1e4) ** 0.25
+            rows.append({"geometry": "G1", "E": e, "edge": edge, "critical": c, "se": 0.02 * c})
+    rows.append({"geometry": "G1", "E": 1e5, "edge": "lower", "critical": 30.0, "se": 1.0})
+    fits = bt.fits_table(pd.DataFrame(rows)).set_index(["kind", "edge"])
+    band = fits.loc[("power_law_band", "lower")]
+    assert band["beta"] == pytest.approx(0.25, abs=1e-9)
+    assert band["z_quarter"] == pytest.approx(0.0, abs=1e-6) and band["points"] == 4
+    assert band["chi2_dof"] == pytest.approx(0.0, abs=1e-12)
+    assert fits.loc[("power_law", "lower")]["points"] == 5
+    assert fits.loc[("power_law_band", "upper")]["beta"] == pytest.approx(0.25, abs=1e-9)
