@@ -265,17 +265,26 @@ def figures(table: pd.DataFrame, edges: pd.DataFrame, out: Path) -> None:
     import matplotlib.pyplot as plt
 
     geoms = sorted(table["geometry"].unique())
+    moduli = sorted(table["E"].unique())
+    # one colour per stiffness in every panel, softest dark
+    colour = {e: plt.cm.viridis(i / max(1, len(moduli) - 1)) for i, e in enumerate(moduli)}
     for col, err, name, ylab in (
         ("fraction_mean", "fraction_se", "map-f.png", "mean f (moving runs)"),
         ("trapped", None, "map-trapped.png", "trapped share"),
     ):
-        fig, axes = plt.subplots(1, len(geoms), figsize=(4 * len(geoms), 3.4), squeeze=False)
-        for ax, geom in zip(axes[0], geoms, strict=True):
+        ncol = min(4, len(geoms))
+        nrow = math.ceil(len(geoms) / ncol)
+        fig, axes = plt.subplots(nrow, ncol, figsize=(4 * ncol + 1, 3.4 * nrow), squeeze=False,
+                                 layout="constrained")  # fmt: skip
+        for ax in axes.flat[len(geoms) :]:
+            ax.set_visible(False)
+        for ax, geom in zip(axes.flat, geoms, strict=False):
             g = table[table["geometry"] == geom]
             for e, ge in g.groupby("E"):
                 ge = ge.sort_values("length")
                 ax.errorbar(ge["length"], ge[col], yerr=None if err is None else ge[err],
-                            marker="o", ms=3, capsize=2, label=f"{e / 1e3:.3g} kPa")  # fmt: skip
+                            marker="o", ms=3, capsize=2, color=colour[e],
+                            label=f"{e / 1e3:.3g} kPa")  # fmt: skip
             first = g.iloc[0]
             for x, ls in ((first["gap"], ":"), (first["period_x"], "--")):
                 ax.axvline(x, color="0.5", ls=ls, lw=0.8)
@@ -285,8 +294,9 @@ def figures(table: pd.DataFrame, edges: pd.DataFrame, out: Path) -> None:
             ax.set_xlabel("L [µm] (dotted: gap, dashed: period_x)")
             ax.set_ylabel(ylab)
             ax.set_ylim(-0.05, 1.05)
-        axes[0][0].legend(fontsize=7)
-        fig.tight_layout()
+        handles = [plt.Line2D([], [], color=colour[e], marker="o", ms=3) for e in moduli]
+        fig.legend(handles, [f"{e / 1e3:.3g} kPa" for e in moduli], fontsize=7,
+                   loc="outside right center")  # fmt: skip
         fig.savefig(out / name, dpi=120)
         plt.close(fig)
     if len(edges):
