@@ -300,16 +300,26 @@ def figures(table: pd.DataFrame, edges: pd.DataFrame, out: Path) -> None:
         fig.savefig(out / name, dpi=120)
         plt.close(fig)
     if len(edges):
-        fig, ax = plt.subplots(figsize=(5, 3.6))
-        for (geom, edge), g in edges[edges["edge"] != "other"].groupby(["geometry", "edge"]):
-            ax.errorbar(g["E"], g["critical"], yerr=g["se"], marker="o" if edge == "lower"
-                        else "s", ms=4, capsize=2, label=f"{geom} {edge}")  # fmt: skip
+        e = edges[edges["edge"] != "other"]
+        fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
+        for k, geom in enumerate(sorted(e["geometry"].unique())):
+            for edge, style in (("lower", "o-"), ("upper", "s--")):
+                g = e[(e["geometry"] == geom) & (e["edge"] == edge)].sort_values("E")
+                if len(g):
+                    ax.errorbar(g["E"], g["critical"], yerr=g["se"], fmt=style, ms=4,
+                                capsize=2, color=f"C{k}", label=f"{geom} {edge}")  # fmt: skip
+        # what an edge set by the bending length would do: L ∝ E^(1/4)
+        e_lo, e_hi = float(e["E"].min()), float(e["E"].max())
+        if e_hi > e_lo:
+            mid = float(np.median(e["critical"]))
+            x = np.array([e_lo, e_hi])
+            ax.plot(x, mid * (x / math.sqrt(e_lo * e_hi)) ** 0.25, ":", color="0.4",
+                    label="∝ E^(1/4) (bending length)")  # fmt: skip
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("E [Pa]")
-        ax.set_ylabel("band edge [µm]")
-        ax.legend(fontsize=6)
-        fig.tight_layout()
+        ax.set_ylabel("edge: f = 1/2 crossing [µm]")
+        fig.legend(fontsize=6, loc="outside right center")
         fig.savefig(out / "map-edges.png", dpi=120)
         plt.close(fig)
 
