@@ -36,13 +36,15 @@ def bt(bm):
 
 
 def _args(**kw) -> argparse.Namespace:
-    base = {"moduli": None, "target_se": 0.05, "max_count": 40, "refine_tol": 6.0,
-            "refine_count": 12}  # fmt: skip
+    base = {"moduli": None, "target_se": 0.05, "trap_se": 0.1, "max_count": 40,
+            "refine_tol": 6.0, "refine_count": 12}  # fmt: skip
     return argparse.Namespace(**{**base, **kw})
 
 
 def _point(E, L, runs, moving, se):
-    return {"E": E, "length": L, "runs": runs, "moving": moving, "fraction_se": se}
+    trapped = (runs - moving) / runs
+    return {"E": E, "length": L, "runs": runs, "moving": moving, "fraction_se": se,
+            "trapped": trapped}  # fmt: skip
 
 
 @pytest.mark.parametrize("moving,se", [(6, 0.1), (6, 0.2), (12, 0.07), (5, 0.06), (20, 0.051)])
@@ -168,3 +170,13 @@ def test_fits_recover_a_power_law_and_keep_band_edges_apart(bt):
     assert band["chi2_dof"] == pytest.approx(0.0, abs=1e-12)
     assert fits.loc[("power_law", "lower")]["points"] == 5
     assert fits.loc[("power_law_band", "upper")]["beta"] == pytest.approx(0.25, abs=1e-9)
+
+
+def test_more_starts_measure_a_trapped_share(bm):
+    """Four of six trapped, f known (se 0.01): runs to bring the trapped share's binomial
+    error to 0.1, p(1 − p)/0.1² = 23 in all (17 more, bucket 24)."""
+    table = pd.DataFrame([_point(1e4, 40.0, 6, 2, 0.01)])
+    runs = pd.DataFrame({"E": [1e4] * 6, "length": 40.0, "status": "ok", "mode": "trapped",
+                         "fraction": math.nan})  # fmt: skip
+    plan = bm.more_plan(table, runs, _args(max_count=100))
+    assert plan["count"].tolist() == [24]

@@ -8,7 +8,8 @@ Usage::
         [--refine-runs M] [--contact rough|smooth] [--time-scale K] [--deadline S]
         [--tag TAG]
     python3 scripts/studies/flexible/bandpass_map.py more OUT [--geometries ...] [--moduli ...]
-        [--target-se 0.05] [--max-count 40] [--refine-tol 6] [--refine-count 12]
+        [--target-se 0.05] [--trap-se 0.1] [--max-count 40] [--refine-tol 6]
+        [--refine-count 12]
         [--rounds 3] [--cores C] [--deadline S] [--dry-run]
     python3 scripts/studies/flexible/bandpass_map.py summary OUT
     python3 scripts/studies/flexible/bandpass_map.py converge OUT_A OUT_B [OUT_C ...]
@@ -197,7 +198,9 @@ def more_plan(table: pd.DataFrame, runs: pd.DataFrame, args: argparse.Namespace)
     - **Precision.** A point whose f has a standard error above ``--target-se`` gets the
       starts that bring it there, n_moving (se / target)², and one more in ten, corrected
       for its trapped share, within ``--max-count`` runs in all. A point whose moving
-      runs are too few for a standard error (under 2) gets ``--refine-count``.
+      runs are too few for a standard error (under 2) gets ``--refine-count``. A point
+      with trapped runs gets the runs that bring its trapped share's binomial error
+      √(p(1 − p)/n) to ``--trap-se``.
     - **Refinement.** Every bracket of f = 1/2 wider than ``--refine-tol`` [µm] whose two
       lengths are both within the target (the sort report's refinement,
       :func:`fibersweep.sweep.refine_lengths.length_brackets`, on the merged runs) gets
@@ -218,6 +221,10 @@ def more_plan(table: pd.DataFrame, runs: pd.DataFrame, args: argparse.Namespace)
             want = math.ceil(need / max(moving / n, 0.25))
         else:
             want = 0
+        trapped = float(p["trapped"]) if "trapped" in p else 0.0
+        if trapped > 0.0:  # the trapped share's binomial error, from at least p = 0.1
+            q = min(max(trapped, 0.1), 0.9)
+            want = max(want, math.ceil(q * (1.0 - q) / args.trap_se**2) - n)
         if want > 0:
             bucket = next((b for b in MORE_BUCKETS if b >= want), MORE_BUCKETS[-1])
             count = min(bucket, args.max_count - n)
@@ -341,6 +348,8 @@ def main() -> None:
     m.add_argument("--moduli", type=float, nargs="+", help="only these E [Pa]")
     m.add_argument("--target-se", type=float, default=0.05, help="standard error of f")
     m.add_argument("--max-count", type=int, default=40, help="most runs per (E, L)")
+    m.add_argument("--trap-se", type=float, default=0.1, help="standard error of the "
+                   "trapped share")  # fmt: skip
     m.add_argument("--refine-tol", type=float, default=6.0, help="edge bracket width [µm]")
     m.add_argument("--refine-count", type=int, default=12, help="starts per new length")
     m.add_argument("--rounds", type=int, default=3)
