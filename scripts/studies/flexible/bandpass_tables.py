@@ -73,12 +73,18 @@ def load_geometry(folders: list[Path]) -> tuple[pd.DataFrame, pd.DataFrame, dict
 
     ``folders``: the geometry's map folder and its ``more`` folders (``<geometry>+s<seed>``),
     whose runs are merged per (E, L): each folder's starts are independent seeded draws.
+    A ``more`` folder with no runs stored yet (just started, or stopped before its
+    first) is left out.
     """
     from fibersweep.analysis.modes import ModeSettings
     from fibersweep.sweep import sort_report as sr
+    from fibersweep.sweep.store import read_runs
 
     parts, meta0, cfg0 = [], None, None
     for folder in folders:
+        if folder is not folders[0] and read_runs(folder).empty:
+            print(f"{folder.name}: no runs stored yet; left out", flush=True)
+            continue
         runs, meta, cfg = sr.load_array_results(folder)
         trap = cfg["fiber"]["classify"]["trap_speed"]
         runs = sr.relabel(runs, meta, ModeSettings(), trap)
