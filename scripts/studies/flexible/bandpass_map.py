@@ -277,7 +277,8 @@ def more(args: argparse.Namespace) -> None:
             table, runs, _ = load_geometry(folders[geom])
             plan = more_plan(table, runs, args)
             base = yaml.safe_load((out / "configs" / f"{geom}.yaml").read_text())
-            used = [int(f.name.split("+s")[1]) for f in folders[geom] if "+s" in f.name]
+            tags = [f.name.partition("+")[2] for f in folders[geom]]
+            used = [int(t[1:]) for t in tags if t[:1] == "s" and t[1:].isdigit()]
             got = _more_configs(out, geom, plan, base, max(used, default=0))
             runs_new = int(plan["count"].sum()) if len(plan) else 0
             print(f"round {rnd} {geom}: {len(plan)} points, {runs_new} runs in {len(got)} "
