@@ -180,3 +180,4 @@ def test_more_starts_measure_a_trapped_share(bm):
                          "fraction": math.nan})  # fmt: skip
     plan = bm.more_plan(table, runs, _args(max_count=100))
     assert plan["count"].tolist() == [24]
+    assert bm.more_plan(table, runs, _args(max_count=100, trap_se=0.0)).empty

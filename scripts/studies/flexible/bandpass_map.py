@@ -200,7 +200,7 @@ def more_plan(table: pd.DataFrame, runs: pd.DataFrame, args: argparse.Namespace)
       for its trapped share, within ``--max-count`` runs in all. A point whose moving
       runs are too few for a standard error (under 2) gets ``--refine-count``. A point
       with trapped runs gets the runs that bring its trapped share's binomial error
-      √(p(1 − p)/n) to ``--trap-se``.
+      √(p(1 − p)/n) to ``--trap-se`` (0: no runs for the trapped share).
     - **Refinement.** Every bracket of f = 1/2 wider than ``--refine-tol`` [µm] whose two
       lengths are both within the target (the sort report's refinement,
       :func:`fibersweep.sweep.refine_lengths.length_brackets`, on the merged runs) gets
@@ -222,7 +222,7 @@ def more_plan(table: pd.DataFrame, runs: pd.DataFrame, args: argparse.Namespace)
         else:
             want = 0
         trapped = float(p["trapped"]) if "trapped" in p else 0.0
-        if trapped > 0.0:  # the trapped share's binomial error, from at least p = 0.1
+        if trapped > 0.0 and args.trap_se > 0.0:  # its binomial error, from p = 0.1 up
             q = min(max(trapped, 0.1), 0.9)
             want = max(want, math.ceil(q * (1.0 - q) / args.trap_se**2) - n)
         if want > 0:
@@ -350,7 +350,7 @@ def main() -> None:
     m.add_argument("--target-se", type=float, default=0.05, help="standard error of f")
     m.add_argument("--max-count", type=int, default=40, help="most runs per (E, L)")
     m.add_argument("--trap-se", type=float, default=0.1, help="standard error of the "
-                   "trapped share")  # fmt: skip
+                   "trapped share (0: off)")  # fmt: skip
     m.add_argument("--refine-tol", type=float, default=6.0, help="edge bracket width [µm]")
     m.add_argument("--refine-count", type=int, default=12, help="starts per new length")
     m.add_argument("--rounds", type=int, default=3)
