@@ -55,6 +55,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 import yaml
@@ -150,6 +151,28 @@ def workers_of(geoms: list[str], fractions: list[float], cores: int) -> dict[str
     return share
 
 
+def _start(path: Path, cfg: dict, log_path: Path, env: dict) -> tuple[subprocess.Popen, Any]:
+    """Write a sweep's config and start ``fibersweep run`` on it, logging to ``log_path``.
+
+    The sweep gets its own process group, so that :func:`_stop` stops its workers with it.
+    """
+    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
+    log = open(log_path, "a")
+    cmd = [sys.executable, "-m", "fibersweep", "run", str(path)]
+    return subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT,
+                            start_new_session=True), log  # fmt: skip
+
+
+def _stop(live: list[tuple[subprocess.Popen, Any]]) -> None:
+    """Stop the sweeps still running (their stored runs are kept) and close every log."""
+    for p, _ in live:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGTERM)
+    for p, log in live:
+        p.wait()
+        log.close()
+
+
 def run(args: argparse.Namespace) -> None:
     """Write the configs, run every geometry at once, then summarise."""
     out = Path(args.out)
@@ -160,29 +183,17 @@ def run(args: argparse.Namespace) -> None:
     t0 = time.time()
     for geom in args.geometries:
         path = out / "configs" / f"{folder_of(geom, args)}.yaml"
-        cfg = config_of(geom, args, share[geom])
-        path.write_text(yaml.safe_dump(cfg, sort_keys=False))
-        log = open(out / f"{geom}.log", "a")
-        cmd = [sys.executable, "-m", "fibersweep", "run", str(path)]
         est = expected_cpu(geom, args.fractions) * len(args.moduli) * args.count
-        print(" ".join(cmd), f"(workers {share[geom]}, expected ~{est:.0f} CPU s at b = a)",
-              flush=True)  # fmt: skip
-        # own process group, so that the deadline stops the sweep's workers with it
-        proc = subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT,
-                                start_new_session=True)  # fmt: skip
-        procs[geom] = (proc, log)
+        print(f"fibersweep run {path} (workers {share[geom]}, expected ~{est:.0f} CPU s at "
+              "b = a)", flush=True)  # fmt: skip
+        procs[geom] = _start(path, config_of(geom, args, share[geom]), out / f"{geom}.log", env)
     while any(p.poll() is None for p, _ in procs.values()):
         if args.deadline and time.time() - t0 > args.deadline:
-            for geom, (p, _) in procs.items():
-                if p.poll() is None:
-                    print(f"{geom}: deadline reached, stopping", flush=True)
-                    os.killpg(p.pid, signal.SIGTERM)
-            for p, _ in procs.values():
-                p.wait()
+            print("deadline reached, stopping", flush=True)
             break
         time.sleep(2.0)
-    for geom, (p, log) in procs.items():
-        log.close()
+    _stop(list(procs.values()))
+    for geom, (p, _) in procs.items():
         print(f"{geom}: exit {p.returncode}", flush=True)
     print(f"wall {time.time() - t0:.0f} s", flush=True)
     summary(args.out)
@@ -298,18 +309,10 @@ def more(args: argparse.Namespace) -> None:
             while todo and len(live) < args.cores:
                 _, geom, seed, cfg = todo.pop(0)
                 path = out / "configs" / f"{geom}+s{seed}.yaml"
-                path.write_text(yaml.safe_dump(cfg, sort_keys=False))
-                log = open(out / f"{geom}.log", "a")
-                cmd = [sys.executable, "-m", "fibersweep", "run", str(path)]
-                live.append((subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT,
-                                              start_new_session=True), log))  # fmt: skip
+                live.append(_start(path, cfg, out / f"{geom}.log", env))
             time.sleep(2.0)
             if args.deadline and time.time() - t0 > args.deadline:
-                for p, log in live:
-                    if p.poll() is None:
-                        os.killpg(p.pid, signal.SIGTERM)
-                    p.wait()
-                    log.close()
+                _stop(live)
                 print(f"deadline reached in round {rnd}; stored runs kept", flush=True)
                 summary(args.out)
                 return
