@@ -2,28 +2,36 @@
 
 One pillar in a shallow channel, or a tilted pillar array that sorts fibers by
 length: the flow is solved once (lattice Boltzmann, cached), then one fiber run
-per point of a sweep, stored as Parquet; ``fibersweep.load`` reads a results
-folder back with the unit and meaning of every column.
+per point of a sweep, stored as Parquet.
+
+The public Python API (:mod:`fibersweep.api`) is reachable from here, and each
+command of the CLI is one call into it::
+
+    import fibersweep
+    res = fibersweep.run("configs/quick.yaml", "run.output=results/q")
+    res = fibersweep.load("results/q")
+
+The API is imported when first used, so ``import fibersweep`` stays light (the
+worker processes of a sweep import the package too).
 """
 
-from importlib.metadata import PackageNotFoundError, version
+from typing import Any
 
-try:
-    __version__ = version("fibersweep")
-except PackageNotFoundError:  # running from a source tree without install
-    __version__ = "0.0.0+unknown"
+from fibersweep.version import __version__
 
-__all__ = ["__version__", "load"]
+#: The functions of :mod:`fibersweep.api` offered at the top level.
+API = ("run", "simulate", "flow_field", "sort_report", "classify", "discrepancy", "load")
+
+__all__ = ["__version__", *API]
 
 
-def load(results, trajectories: bool = True):
-    """A sweep's output folder in one call: runs, trajectories, settings and units.
+def __getattr__(name: str) -> Any:
+    if name in API:
+        from fibersweep import api
 
-    ``res = fibersweep.load("results/quick")`` gives ``res.runs`` and
-    ``res.trajectories`` (pandas), ``res.settings`` (the resolved config),
-    ``res.units`` and ``res.docs`` (per column) and ``res.provenance``; see
-    :func:`fibersweep.results.load_results`.
-    """
-    from fibersweep.results import load_results
+        return getattr(api, name)
+    raise AttributeError(f"module 'fibersweep' has no attribute {name!r}")
 
-    return load_results(results, trajectories)
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

@@ -3,7 +3,7 @@
 Numba's ``cache=True`` checks only the source file of the cached function, not
 the files of the functions it calls or inlines. The fiber integrators call into
 other modules (contact forces, mobility, flow interpolation) and compile in the
-kernel stages of every effect module (:mod:`fibersweep.fiber.hooks`), so after
+kernel stages of every effect module (:mod:`fibersweep.fiber.kernel.hooks`), so after
 an upgrade or an edit of one of those files a stale cached integrator would run
 the old physics without a word. This module hashes every source file of the
 packages with cached kernels and, when the hash differs from the one stamped

@@ -27,7 +27,7 @@ import pyarrow.parquet as pq
 
 from fibersweep.errors import InputError
 
-__all__ = ["ARRAY_COLUMNS", "Results", "load_results"]
+__all__ = ["ARRAY_COLUMNS", "Results", "load_array_results", "load_results"]
 
 log = logging.getLogger(__name__)
 
@@ -107,14 +107,14 @@ class Results:
         ``moving`` counts the runs averaged. These are the numbers ``sort-report``
         prints (with the stored modes; ``sort-report`` can re-label them with other
         thresholds). Columns and their meaning:
-        :data:`fibersweep.sweep.sort_report.MIGRATION_DOCS`.
+        :data:`fibersweep.sorting.report.MIGRATION_DOCS`.
 
         Raises
         ------
         InputError
             The results are not a pillar array's.
         """
-        from fibersweep.sweep.sort_report import migration_table, with_settings
+        from fibersweep.sorting.report import migration_table, with_settings
 
         if self.geometry != "array":
             raise InputError(
@@ -204,3 +204,46 @@ def load_results(results: str | Path, trajectories: bool = True) -> Results:
         warnings=warnings,
         geometry="array" if array else "channel",
     )
+
+
+def load_array_results(results: str | Path) -> tuple[pd.DataFrame, list[dict], dict]:
+    """The runs, settings and config of an array sweep's results folder.
+
+    Returns
+    -------
+    runs : DataFrame
+        The runs table with ``setting`` (index into ``settings``) and
+        ``setting_label`` added, and the thinned trajectory of each run as list
+        columns ``traj_t`` [s], ``traj_xc``, ``traj_yc`` [µm], ``traj_th`` [rad],
+        ``traj_contact`` (0/1), ``traj_speed`` [µm/s].
+    settings : list of dict
+        Per setting combination: ``id``, ``label``, ``values`` (swept key -> value),
+        ``array`` (the flow.array settings), ``flow`` (all flow settings),
+        ``flow_key``, ``u_center`` [µm/s].
+    config : dict
+        The stored config (JSON).
+
+    Raises
+    ------
+    InputError
+        The folder holds no sweep, or its runs are not pillar-array runs.
+    """
+    from fibersweep.sorting.report import with_settings, with_tracks
+    from fibersweep.sweep.manifest import read_manifest
+    from fibersweep.sweep.store import read_runs, read_trajectories
+
+    results = Path(results)
+    man = read_manifest(results)
+    if man is None:
+        raise InputError(f"RESULTS: {results} holds no sweep (no manifest.json)")
+    runs = read_runs(results)
+    if "mode" not in runs or not runs["mode"].notna().any():
+        raise InputError(
+            f"RESULTS: {results} holds no pillar-array runs (sort-report reads a sweep of a "
+            "config with flow.array; a channel's results: plot-phase, plot-delta, classify)"
+        )
+    runs, settings = with_settings(runs[runs["mode"].notna()].copy(), man)
+    traj = read_trajectories(results, list(runs["id"]))
+    if traj.empty:
+        raise InputError(f"RESULTS: {results} holds no trajectories of its array runs")
+    return with_tracks(runs, traj), settings, man["config"]

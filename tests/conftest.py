@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -259,13 +259,16 @@ def flow_progress() -> Iterator[None]:
 def _load(path: Path, overrides: list[str] | None = None, max_points: int | None = None):
     from fibersweep.config import load_config
     from fibersweep.sweep.executors import EXECUTORS
+    from fibersweep.sweep.starts import PHYSICS
 
-    return load_config(path, overrides or (), max_points=max_points, executors=EXECUTORS)
+    return load_config(
+        path, overrides or (), max_points=max_points, executors=EXECUTORS, physics=PHYSICS
+    )
 
 
 def _version(value: bool) -> None:
     if value:
-        from fibersweep import __version__
+        from fibersweep.version import __version__
 
         typer.echo(f"fibersweep {__version__}")
         raise typer.Exit()

@@ -18,8 +18,8 @@ from fibersweep.cli._app import (
     _setup_logging,
     app,
 )
+from fibersweep.config.fiber import ARRAY_ROWS
 from fibersweep.errors import InputError
-from fibersweep.fiber.settings import ARRAY_ROWS
 
 
 @app.command("run-array", hidden=True)
@@ -91,7 +91,8 @@ def sort_report(
     _setup_logging(verbose)
     with _errors():
         from fibersweep.analysis.modes import ModeSettings
-        from fibersweep.sweep import sort_report as sr
+        from fibersweep.results import load_array_results
+        from fibersweep.sorting import report as sr
 
         try:
             edges = [float(e) for e in outlets.split(",") if e.strip()]
@@ -99,7 +100,7 @@ def sort_report(
             raise InputError(f"--outlets: not a list of numbers: {outlets!r}") from None
         edges = sr.check_edges(edges)
         target = _target(target_length, separate)
-        runs, settings, cfg = sr.load_array_results(results)
+        runs, settings, cfg = load_array_results(results)
         modes = ModeSettings(zigzag_max=zigzag_max, displacement_min=displacement_min)
         runs = sr.relabel(runs, settings, modes, cfg["fiber"]["classify"]["trap_speed"])
         key = _design_key(settings, setting, target)
@@ -146,7 +147,7 @@ def _target(target_length: float | None, separate: str | None) -> float | None:
 
 
 def _design_key(settings: list[dict], setting: str | None, target: float | None) -> str | None:
-    from fibersweep.sweep.sort_design import design_key
+    from fibersweep.sorting.design import design_key
 
     key = design_key(settings, setting)
     if key is None and target is not None:
@@ -165,7 +166,7 @@ def _echo_migration(runs, table, crit, settings: list[dict], bead: float) -> Non
     """Per setting: the f summary per length, its critical lengths and lengths to add."""
     import pandas as pd
 
-    from fibersweep.sweep.sort_report import refine_lengths
+    from fibersweep.sorting.report import refine_lengths
 
     pd.set_option("display.width", 160)
     typer.echo(
@@ -241,7 +242,7 @@ def _warn_short(settings: list[dict], rows: int) -> None:
 
 
 def _name(meta: dict) -> str:
-    from fibersweep.sweep.sort_report import setting_name
+    from fibersweep.sorting.report import setting_name
 
     return setting_name(meta)
 
@@ -297,7 +298,7 @@ def _echo_outlets(out, settings: list[dict], n_rows: int) -> None:
 
 def _design(crit, table, settings, key: str, target, bead: float, separate):
     """Critical length against the swept setting; the answer for a target. Printed."""
-    from fibersweep.sweep import sort_design as sd
+    from fibersweep.sorting import design as sd
 
     curve = sd.critical_curve(crit, table, settings, key)
     name = key.rsplit(".", 1)[-1]
@@ -392,8 +393,8 @@ def _figures(
     results: Path, runs, table, crit, out, settings: list[dict], cfg: dict, key, curve, ans, target
 ) -> None:
     from fibersweep.analysis.modes import MODES
+    from fibersweep.config.flow import FlowSettings
     from fibersweep.flow.cache import get_flow_field
-    from fibersweep.flow.settings import FlowSettings
     from fibersweep.plots import array as pa
     from fibersweep.plots import array_design as pd_
     from fibersweep.plots.shapes import ShapeNotStored

@@ -21,8 +21,8 @@ from fibersweep.cli._app import (
     choices,
     flow_progress,
 )
+from fibersweep.config.fiber import LEGACY_MODELS, FiberSettings
 from fibersweep.errors import InputError
-from fibersweep.fiber.settings import LEGACY_MODELS, FiberSettings
 
 # the models FiberSettings accepts (the model registry matches them, tested), and former names
 Model = choices(

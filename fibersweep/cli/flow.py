@@ -59,9 +59,10 @@ def flow(
 def _distinct_fields(cfg) -> dict[str, tuple]:
     """Flow key -> (FlowSettings, the swept flow values that make it), in sweep order."""
     from fibersweep.flow.cache import cache_key
+    from fibersweep.sweep.starts import PHYSICS
 
     out: dict[str, tuple] = {}
-    for combo in cfg.combinations():
+    for combo in cfg.combinations(PHYSICS):
         key = cache_key(combo.config.flow)
         if key not in out:
             values = {k: v for k, v in combo.values.items() if k.startswith("flow.")}

@@ -26,6 +26,7 @@ from fibersweep.cli._app import (
 from fibersweep.errors import InputError, Terminated
 from fibersweep.plots import FORMATS
 from fibersweep.sweep.executors import EXECUTORS
+from fibersweep.sweep.starts import PHYSICS
 
 #: Seconds above which making kernels ready means they were compiled, not loaded.
 COMPILED_S = 5.0
@@ -56,7 +57,7 @@ def _with_run_overrides(cfg, **kw):
         return cfg
     data = cfg.model_dump(mode="json")
     data["run"].update(over)
-    return parse_config(data, source="command line")
+    return parse_config(data, source="command line", physics=PHYSICS)
 
 
 @app.command(rich_help_panel=SWEEP)

@@ -48,7 +48,7 @@ def _runs(results: Path, where: str | None = None):
 
 def _geometries(results: Path, runs) -> dict:
     """Geometry of each settings id of ``runs``, from the folder's manifest."""
-    from fibersweep.flow.settings import FlowSettings
+    from fibersweep.config.flow import FlowSettings
     from fibersweep.sweep.manifest import read_manifest
 
     man = read_manifest(results) or {}
@@ -70,9 +70,9 @@ def is_array(runs) -> bool:
 
 def _array_runs(results: Path, where: str | None):
     """Array runs that ``where`` selects, with their trajectories, settings and config
-    (:func:`fibersweep.sweep.sort_report.load_array_results`)."""
+    (:func:`fibersweep.results.load_array_results`)."""
     from fibersweep.plots.subset import select_runs
-    from fibersweep.sweep.sort_report import load_array_results
+    from fibersweep.results import load_array_results
 
     runs, settings, cfg = load_array_results(results)
     plain = runs[[c for c in runs.columns if not c.startswith("traj_")]]
@@ -82,7 +82,7 @@ def _array_runs(results: Path, where: str | None):
 
 def _cell_arrays(results: Path, runs) -> dict:
     """The pillar array of each settings id of ``runs``, from the folder's manifest."""
-    from fibersweep.flow.array_settings import ArraySettings
+    from fibersweep.config.array import ArraySettings
     from fibersweep.sweep.manifest import read_manifest
 
     man = read_manifest(results) or {}
@@ -96,7 +96,7 @@ def _cell_arrays(results: Path, runs) -> dict:
 
 
 def _arrays(settings: list[dict]) -> list:
-    from fibersweep.flow.array_settings import ArraySettings
+    from fibersweep.config.array import ArraySettings
 
     return [ArraySettings.model_validate(s["array"]).to_array() for s in settings]
 

@@ -23,6 +23,7 @@ from pydantic import (
 
 from fibersweep.config.errors import ConfigError, FieldError, error_parts
 from fibersweep.config.schema import Config, _unwrap
+from fibersweep.config.sweep_axes import PhysicsChecks
 
 
 @dataclass(frozen=True)
@@ -130,12 +131,15 @@ def parse_config(
     source: str = "config",
     *,
     executors: Mapping[str, type] | None = None,
+    physics: PhysicsChecks | None = None,
 ) -> Config:
     """Validate a config mapping.
 
     ``executors`` (name -> executor class, e.g. the sweep's ``EXECUTORS``) checks
-    ``run.executor`` and ``run.options`` against the registry; the config package
-    does not import the sweep, so the caller hands it in.
+    ``run.executor`` and ``run.options`` against the registry; ``physics`` (the
+    sweep's :data:`~fibersweep.sweep.starts.PHYSICS`) checks the start points and
+    the swept effects against the fiber model. The config package imports neither
+    the sweep nor the fiber, so the caller hands them in.
 
     Raises
     ------
@@ -147,7 +151,7 @@ def parse_config(
     if not isinstance(data, dict):
         raise ConfigError([f"<top level>: expected a mapping, got {type(data).__name__}"], source)
     try:
-        context = {"executors": executors} if executors else None
+        context = {"executors": executors, "physics": physics}
         return Config.model_validate(data, context=context)
     except ValidationError as exc:
         seen: list[str] = []
@@ -234,6 +238,7 @@ def load_config(
     *,
     max_points: int | None = None,
     executors: Mapping[str, type] | None = None,
+    physics: PhysicsChecks | None = None,
 ) -> Config:
     """Read and validate a YAML config file, with command-line overrides.
 
@@ -241,7 +246,8 @@ def load_config(
     the same schema with the same messages. ``max_points`` (the command line's
     ``--max-points``) replaces ``run.max_points`` before validation, so a large
     sweep can be allowed without editing the file. ``executors`` checks the
-    executor's name and options (see :func:`parse_config`).
+    executor's name and options, ``physics`` the starts and swept effects (see
+    :func:`parse_config`).
 
     Raises
     ------
@@ -277,4 +283,4 @@ def load_config(
     if max_points is not None and isinstance(data, dict):
         run = data.get("run") if isinstance(data.get("run"), dict) else {}
         data = {**data, "run": {**run, "max_points": max_points}}
-    return parse_config(data, located.lines, str(p), executors=executors)
+    return parse_config(data, located.lines, str(p), executors=executors, physics=physics)

@@ -22,15 +22,15 @@ from pydantic import BaseModel, Field, ValidationInfo, field_validator, model_va
 
 from fibersweep.config.axes import DEFAULT_MAX_POINTS, _Strict
 from fibersweep.config.errors import FieldError
-from fibersweep.config.starts import check_starts
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.config.sweep_axes import (
     Combination,
+    PhysicsChecks,
     RefineSettings,
     SweepSettings,
     combinations,
 )
-from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.settings import FlowSettings
 
 __all__ = [
     "Combination",
@@ -164,18 +164,18 @@ class Config(_Strict):
         return self
 
     @model_validator(mode="after")
-    def _combinations_valid(self) -> Config:
-        """Every setting combination is a valid config (same schema, same start check)."""
+    def _combinations_valid(self, info: ValidationInfo) -> Config:
+        """Every setting combination is a valid config (same schema, same physics checks)."""
         if self.sweep.setting_keys:
-            self.combinations()
+            self.combinations((info.context or {}).get("physics"))
         return self
 
-    def combinations(self) -> list[Combination]:
+    def combinations(self, physics: PhysicsChecks | None = None) -> list[Combination]:
         """The configs the sweep runs: one per combination of the setting axes.
 
         Each is this config with the combination's values applied and no setting
         axes left, validated by the same schema (its start points checked by
-        :func:`fibersweep.config.starts.check_starts`). Without setting axes:
+        :func:`fibersweep.sweep.starts.check_starts`). Without setting axes:
         ``[Combination({}, self)]`` (:func:`fibersweep.config.sweep_axes.combinations`).
 
         Raises
@@ -184,12 +184,12 @@ class Config(_Strict):
             A combination is invalid: at the axis whose value is at fault (its
             value named), or at the field that failed with the combination named.
         """
-        return combinations(self)
+        return combinations(self, physics)
 
     @model_validator(mode="after")
     def _random_refine_in_arrays_only(self) -> Config:
         """Random starts are refined along the length by the mean displacement fraction,
-        which only pillar-array runs have (:mod:`fibersweep.sweep.refine_lengths`)."""
+        which only pillar-array runs have (:mod:`fibersweep.sorting.lengths`)."""
         sw = self.sweep
         if sw.random is not None and sw.refine is not None and self.flow.array is None:
             raise FieldError(
@@ -200,12 +200,16 @@ class Config(_Strict):
         return self
 
     @model_validator(mode="after")
-    def _starts_fit(self) -> Config:
+    def _starts_fit(self, info: ValidationInfo) -> Config:
         """Every sweep point must be a fiber the grid resolves, in the channel, off the pillar.
 
-        Checked here, before any flow field is computed (:func:`check_starts`).
+        Checked here, before any flow field is computed, when the caller hands in the
+        physics checks (``load_config(..., physics=PHYSICS)``; the config imports no
+        fiber model).
         """
-        check_starts(self)
+        physics = (info.context or {}).get("physics")
+        if physics is not None:
+            physics.check(self)
         return self
 
 

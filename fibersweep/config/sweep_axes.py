@@ -13,6 +13,7 @@ from __future__ import annotations
 import copy
 import difflib
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,8 +37,6 @@ from fibersweep.config.axes import (
     setting_axis_values,
 )
 from fibersweep.config.errors import FieldError, error_parts
-from fibersweep.errors import InputError
-from fibersweep.fiber.result import FiberStart
 
 __all__ = [
     "Combination",
@@ -45,6 +44,7 @@ __all__ = [
     "RefineSettings",
     "SweepSettings",
     "combinations",
+    "PhysicsChecks",
 ]
 
 
@@ -119,7 +119,7 @@ class RandomStarts(_Strict):
     """Seeded random starts (``sweep.random``): ``count`` per length and setting combination.
 
     Each start is drawn uniform in the ``theta0`` and ``y0`` ranges ``[lo, hi]``
-    (:func:`fibersweep.config.draws.start_points`); a start that touches the pillar
+    (:func:`fibersweep.sweep.draws.start_points`); a start that touches the pillar
     (or a pillar of the array) is drawn again. The same config gives the same starts.
     """
 
@@ -345,13 +345,6 @@ class SweepSettings(_Strict):
         )  # fmt: skip
         return t.ravel(), y.ravel(), L.ravel()
 
-    def starts(self) -> list[FiberStart]:
-        """Cartesian product of the axes, ordered length, y0, theta0."""
-        return [
-            FiberStart(theta0=float(t), y0=float(y), length=float(L))
-            for t, y, L in zip(*self.grid(), strict=True)
-        ]
-
 
 _START_AXES = ("theta0", "y0", "length")
 
@@ -411,41 +404,42 @@ def _combination_error(
     return FieldError(locs[first], f"with {_show_assignment(assignment)}: {dotted}: {msg}{given_s}")
 
 
-def _check_effects(values: dict[str, Any], locs: dict[str, tuple]) -> list[str]:
-    """Swept effects exist and take the value (the registry checks names and ranges).
-
-    Returns
-    -------
-    list of str
-        The swept effect keys whose value is the effect's baseline (inactive).
-    """
-    keys = [k for k in values if k.startswith("fiber.effects.")]
-    if not keys:
-        return []
-    from fibersweep.fiber.effects import build_effects  # numba-backed: import lazily
-
-    off = []
-    for key in keys:
-        try:
-            made = build_effects({key.split(".", 2)[2]: values[key]})
-        except InputError as exc:
-            msg = str(exc).removeprefix("effects: ")
-            raise FieldError(locs[key], f"value {values[key]!r}: {msg}") from None
-        if not made.effects:
-            off.append(key)
-    return off
-
-
 def _show_assignment(assignment: dict[str, Any]) -> str:
     return ", ".join(f"{k} = {v!r}" for k, v in assignment.items())
 
 
-def combinations(cfg: Any) -> list[Combination]:
+@dataclass(frozen=True)
+class PhysicsChecks:
+    """The physics checks a config is validated with, handed in by the caller.
+
+    The config is the schema: it imports neither the fiber models nor the flow.
+    What needs them (a start clear of the pillar, an effect's value in its range)
+    is checked by functions of the sweep, handed in through the validation
+    context (``load_config(..., physics=PHYSICS)``, :data:`fibersweep.sweep.starts.PHYSICS`).
+
+    Attributes
+    ----------
+    check : callable
+        ``check(cfg)``: raises :class:`FieldError` at the first field with a bad
+        start point (a config without setting axes, or each combination).
+    effects_off : callable
+        ``effects_off(values, locs) -> list of str``: checks the swept effect
+        values (``fiber.effects.*`` keys of ``values``; ``locs`` their fields) and
+        returns the keys whose value is the effect's baseline (off).
+    """
+
+    check: Callable[[Any], None]
+    effects_off: Callable[[dict[str, Any], dict[str, tuple]], list[str]]
+
+
+def combinations(cfg: Any, physics: PhysicsChecks | None = None) -> list[Combination]:
     """The configs the sweep runs: one per combination of the setting axes.
 
     Each is ``cfg`` (a :class:`~fibersweep.config.schema.Config`) with the
     combination's values applied and no setting axes left, validated by the same
-    schema. Without setting axes: ``[Combination({}, cfg)]``.
+    schema. Without setting axes: ``[Combination({}, cfg)]``. With ``physics``
+    each combination's starts and swept effects are checked too, and an effect
+    swept to its baseline is left out of that combination's config.
 
     Raises
     ------
@@ -457,6 +451,7 @@ def combinations(cfg: Any) -> list[Combination]:
     if assignments == [{}]:
         return [Combination({}, cfg)]
     locs = {k: ("sweep", *loc) for loc, k, _ in cfg.sweep.axis_items()}
+    context = {"physics": physics} if physics is not None else None
     base = cfg.model_dump(mode="json")
     # refine: the sweep's; random starts: each combination draws its own
     base["sweep"] = {k: base["sweep"][k] for k in (*_START_AXES, "random") if k in base["sweep"]}
@@ -466,17 +461,17 @@ def combinations(cfg: Any) -> list[Combination]:
         for key, value in assignment.items():
             _set_path(data, key.split("."), value)
         try:
-            cfg = type(cfg).model_validate(data)
+            cfg = type(cfg).model_validate(data, context=context)
         except ValidationError as exc:
             raise _combination_error(exc, assignment, locs) from None
         dumped = cfg.model_dump(mode="json")
         values = {k: _get_path(dumped, k.split(".")) for k in assignment}
-        off = _check_effects(values, locs)
+        off = physics.effects_off(values, locs) if physics is not None else []
         if off:
             # An effect swept to its baseline is off: left out, so those runs keep the
             # ids of runs made without it (a folder swept later reuses them).
             for key in off:
                 data["fiber"]["effects"].pop(key.split(".", 2)[2])
-            cfg = type(cfg).model_validate(data)
+            cfg = type(cfg).model_validate(data, context=context)
         out.append(Combination(values, cfg))
     return out

@@ -38,12 +38,12 @@ import yaml
 from pydantic import ValidationError
 
 from fibersweep.config.errors import ConfigError
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.config.loading import apply_overrides
 from fibersweep.config.schema import setting_annotation, setting_column
 from fibersweep.discrepancy.candidates import LIBRARY, Candidate
 from fibersweep.errors import InputError
-from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.settings import FlowSettings
 
 __all__ = [
     "FLEXIBLE_INTEGRATOR",

@@ -59,7 +59,7 @@ def switch_cost(switch: tuple[tuple[str, object], ...]) -> tuple[str, float]:
         ``"model/integrator"`` (``""`` when the switch keeps the config's model) and
         the time of one of its runs relative to a rigid run (:data:`MODEL_COST`).
     """
-    from fibersweep.fiber.settings import FiberSettings
+    from fibersweep.config.fiber import FiberSettings
 
     sw = dict(switch)
     if "fiber.model" not in sw:

@@ -39,13 +39,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.candidates import Candidate
 from fibersweep.discrepancy.declared import apply_values
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.tracks import track_values
 from fibersweep.errors import FibersweepError, InputError
 from fibersweep.fiber.result import CLASSES
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 from fibersweep.progressbar import WarmingBar, finish, progress_bar
 from fibersweep.sweep.executors import EXECUTORS, make_executor
@@ -279,7 +279,7 @@ class Simulator:
         if not on:
             return None, self.settings
         if on not in self._variants:
-            from fibersweep.flow.settings import FlowSettings
+            from fibersweep.config.flow import FlowSettings
 
             flow = self._flow
             if flow is None:

@@ -18,13 +18,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.copies import NoiseModel
 from fibersweep.discrepancy.measured import validate_trajectories, with_tracks
 from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 
 __all__ = [

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.candidates import Candidate, show_values
 from fibersweep.discrepancy.copies import CopyMaker, crossfit_copies
 from fibersweep.discrepancy.decide import (
@@ -75,7 +76,6 @@ from fibersweep.discrepancy.signatures import (
 )
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 
 __all__ = [

@@ -29,11 +29,11 @@ import time
 import numpy as np
 
 from fibersweep.errors import InputError
-from fibersweep.fiber import record as R
-from fibersweep.fiber.models import integrator_of
+from fibersweep.fiber.kernel import record as R
+from fibersweep.fiber.models.registry import integrator_of
+from fibersweep.fiber.models.spacing import DEFAULT_SPACING, n_beads, offsets
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
 from fibersweep.fiber.setup import MIN_BEADS
-from fibersweep.fiber.spacing import DEFAULT_SPACING, n_beads, offsets
 
 __all__ = ["array_run_kernel", "n_beads_of", "simulate_array", "start_clear", "start_x"]
 
@@ -138,7 +138,7 @@ def simulate_array(field, settings, start: FiberStart, *, rng_seed: int | None =
         touching a pillar, or an effect that acts outside the kernels.
     """
     from fibersweep.analysis.modes import summarise_trajectory
-    from fibersweep.fiber.rigid import seed_numba
+    from fibersweep.fiber.models.rigid import seed_numba
     from fibersweep.fiber.rows import array_pillar, check_array_effects
 
     t_wall = time.perf_counter()
@@ -238,7 +238,7 @@ def _deformation(array, pillar, beads: np.ndarray, npil: np.ndarray, settings) -
     npil : ndarray, shape (rows,)
         Pillars in contact at each row.
     """
-    from fibersweep.fiber.deformation import deformation
+    from fibersweep.fiber.models.deformation import deformation
 
     cx, cy = array.shape.centroid
     mid = beads.mean(axis=1)

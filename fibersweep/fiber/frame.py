@@ -1,12 +1,12 @@
 """Where the pillars stand: the frame a fiber moves in (one pillar in its channel, or an array).
 
 A pillar geometry is a *set of pillars*: one outline (the run's
-:class:`~fibersweep.fiber.contact.PillarArrays`) and the translations at which
+:class:`~fibersweep.fiber.contact.pillar.PillarArrays`) and the translations at which
 copies of it stand, with one background field
-(:class:`~fibersweep.fiber.bundles.FlowArrays`) read at the beads. The
+(:class:`~fibersweep.fiber.kernel.bundles.FlowArrays`) read at the beads. The
 integrators never read the field or call the contact kernel themselves: they
 ask the run's *frame* through two stages, resolved at compile time on the
-frame's record type (as the effects' stages are, :mod:`fibersweep.fiber.hooks`):
+frame's record type (as the effects' stages are, :mod:`fibersweep.fiber.kernel.hooks`):
 
 ``velocity(frame, flow, x, y, u)``
     Background velocity at the bead centres ``x, y`` (m,) [µm] into ``u`` (m, 2)
@@ -23,7 +23,7 @@ Two frames:
   channel's (periodic along x), the pillar stands once. Its record has no
   fields and its stages are exactly the plain calls
   :func:`~fibersweep.flow.field.interpolate_ib` and
-  :func:`~fibersweep.fiber.contact.pillar_forces`, so a single-pillar run is
+  :func:`~fibersweep.fiber.contact.pillar.pillar_forces`, so a single-pillar run is
   bit for bit what it was before frames existed, at the same speed.
 - :class:`Lattice`, a tilted pillar array (:class:`fibersweep.geometry.array.PillarArray`):
   the fiber moves in unwrapped coordinates; the field is the unit cell padded
@@ -46,7 +46,7 @@ import numba as nb
 import numpy as np
 from numba.extending import overload
 
-from fibersweep.fiber.contact import pillar_forces
+from fibersweep.fiber.contact.pillar import pillar_forces
 from fibersweep.flow.field import interpolate_ib
 
 __all__ = [

@@ -161,7 +161,7 @@ class RunResult:
         Smallest bead-centre distance to the pillar outline minus a, over the run [µm].
     max_curvature : float
         Largest curvature of the fiber over the run [1/µm] (bead-spring models;
-        NaN for rigid; :mod:`fibersweep.fiber.deformation`).
+        NaN for rigid; :mod:`fibersweep.fiber.models.deformation`).
     min_end_to_end : float
         Smallest end-to-end distance over contour length over the run (NaN for rigid).
     max_tension : float

@@ -1,17 +1,17 @@
 """Fibers through many rows of a pillar array: the array case of the channel's integrators.
 
 An array run is the channel's fiber model and integrator
-(:mod:`fibersweep.fiber.models`: mobility, effects' stages, step rule, stop
+(:mod:`fibersweep.fiber.models.registry`: mobility, effects' stages, step rule, stop
 rule; for the rigid model its implicit stopped steps) in the
 :class:`~fibersweep.fiber.frame.Lattice` frame. This module only
-assembles the run's :class:`~fibersweep.fiber.bundles.Kernel`, as
-:func:`fibersweep.fiber.bundles.build_kernel` does for the channel:
+assembles the run's :class:`~fibersweep.fiber.kernel.bundles.Kernel`, as
+:func:`fibersweep.fiber.kernel.bundles.build_kernel` does for the channel:
 
 - the field: the unit cell padded with its periodic images
   (:meth:`fibersweep.flow.cell.CellField.extended`);
 - the pillar: the cell's own (row 0, column 0), rough or smooth, any shape;
   the frame sums the contact of every image within reach;
-- the scalars (:func:`~fibersweep.fiber.bundles.make_params`): no side walls;
+- the scalars (:func:`~fibersweep.fiber.kernel.bundles.make_params`): no side walls;
   the run passes when its rear end crosses ``x_end`` (after the configured
   rows), and is trapped, fails or times out by the channel's rule;
 - the effects: the settings' kernel effects (friction, pillar hydrodynamics,
@@ -20,7 +20,7 @@ assembles the run's :class:`~fibersweep.fiber.bundles.Kernel`, as
   meaning here yet and are refused by :func:`check_array_effects`.
 
 The fiber lives in unwrapped lab coordinates (x along the flow, y across,
-[µm]). The record is the channel's (:data:`fibersweep.fiber.record.COLS`);
+[µm]). The record is the channel's (:data:`fibersweep.fiber.kernel.record.COLS`);
 its ``contact`` column holds the number of pillars in contact (two when a
 fiber bridges a gap).
 """
@@ -31,15 +31,15 @@ import math
 
 import numpy as np
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.errors import InputError
 from fibersweep.fiber import frame as F
-from fibersweep.fiber.bundles import FlowArrays, Kernel, assemble, make_params
-from fibersweep.fiber.contact import Pillar, contact_force_scale, make_pillar
+from fibersweep.fiber.contact.pillar import Pillar, contact_force_scale, make_pillar
 from fibersweep.fiber.effects import DynamicsContext, EffectSet, build_effects
 from fibersweep.fiber.effects.base import Effect
-from fibersweep.fiber.models import get_integrator
-from fibersweep.fiber.settings import FiberSettings
-from fibersweep.fiber.spacing import bead_force_scale
+from fibersweep.fiber.kernel.bundles import FlowArrays, Kernel, assemble, make_params
+from fibersweep.fiber.models.registry import get_integrator
+from fibersweep.fiber.models.spacing import bead_force_scale
 
 __all__ = ["PAD", "array_kernel", "array_pillar", "check_array_effects", "run_array_fiber"]
 
@@ -139,7 +139,7 @@ def run_array_fiber(
     """Integrate one fiber from centre (x0, y0) [µm], angle th0 [rad] with ``model``.
 
     ``integrator``: one of the model's (None: its default); ``k`` must be built for it.
-    Returns the record (rows, :data:`fibersweep.fiber.record.NCOLS`) and the stop code.
+    Returns the record (rows, :data:`fibersweep.fiber.kernel.record.NCOLS`) and the stop code.
     """
     rec, _, code = get_integrator(model, integrator).integrate(k, x0, y0, th0, None)
     return rec, int(code)

@@ -23,16 +23,16 @@ from fibersweep.analysis.observables import (
     take,
     thin_indices,
 )
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.errors import InputError
-from fibersweep.fiber import record as R
-from fibersweep.fiber.bundles import Kernel, build_kernel
-from fibersweep.fiber.deformation import deformation
-from fibersweep.fiber.models import integrator_of
+from fibersweep.fiber.kernel import record as R
+from fibersweep.fiber.kernel.bundles import Kernel, build_kernel
+from fibersweep.fiber.models.deformation import deformation
+from fibersweep.fiber.models.registry import integrator_of
+from fibersweep.fiber.models.rigid import seed_numba
+from fibersweep.fiber.models.spacing import offsets
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
-from fibersweep.fiber.rigid import seed_numba
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.fiber.setup import Setup, prepare
-from fibersweep.fiber.spacing import offsets
 from fibersweep.flow.field import FlowField
 
 __all__ = ["simulate", "simulate_for", "simulate_reversible"]

@@ -7,12 +7,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.errors import InputError
-from fibersweep.fiber.contact import Pillar, contact_force_scale, make_pillar
+from fibersweep.fiber.contact.pillar import Pillar, contact_force_scale, make_pillar
 from fibersweep.fiber.effects import DynamicsContext, EffectSet, build_effects
+from fibersweep.fiber.models.spacing import bead_force_scale, n_beads, offsets
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.settings import FiberSettings
-from fibersweep.fiber.spacing import bead_force_scale, n_beads, offsets
 from fibersweep.flow.field import FlowField
 from fibersweep.units import Geometry
 

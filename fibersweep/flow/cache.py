@@ -25,13 +25,13 @@ from typing import Any
 
 import numpy as np
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.cell import CELL_SOLVER_VERSION
 from fibersweep.flow.cell_cache import cell_path, get_cell_field
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.ghost import GHOST_METHOD, extend_into_wall
 from fibersweep.flow.patch import PATCH_METHOD
 from fibersweep.flow.schemes import get_wall_scheme
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.solver import SOLVER_VERSION, solve_flow
 
 __all__ = [

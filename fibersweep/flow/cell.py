@@ -47,6 +47,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.errors import SolverError
 from fibersweep.flow.cuts import Cuts, pillar_cuts
 from fibersweep.flow.ghost import extend_into_wall
@@ -61,7 +62,6 @@ from fibersweep.flow.lbm import (
 )
 from fibersweep.flow.midplane import full_depth, midplane_average
 from fibersweep.flow.schemes import get_wall_scheme
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.steppers import make_stepper
 from fibersweep.geometry.array import PillarArray
 

@@ -18,9 +18,9 @@ from pathlib import Path
 import numpy as np
 
 from fibersweep.atomic import atomic_write
-from fibersweep.flow.array_settings import ArraySettings
+from fibersweep.config.array import ArraySettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.cell import CellField, field_of, solve_cell
-from fibersweep.flow.settings import FlowSettings
 
 __all__ = ["cell_path", "get_cell_field", "load_cell_field", "save_cell_field"]
 

@@ -10,14 +10,14 @@ from __future__ import annotations
 import math
 from dataclasses import asdict
 
-from fibersweep import __version__
+from fibersweep.config.flow import FlowSettings
 from fibersweep.errors import SolverError
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.ghost import GHOST_METHOD, extend_into_wall
 from fibersweep.flow.lbm import SOLVER_VERSION, LatticeSolution
 from fibersweep.flow.midplane import full_depth, midplane_average, midplane_centre_speed
 from fibersweep.flow.schemes import get_wall_scheme
-from fibersweep.flow.settings import FlowSettings
+from fibersweep.version import __version__
 
 __all__ = ["field_from_solution"]
 

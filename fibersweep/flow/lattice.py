@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fibersweep.config.array import EDGE_CELLS
 from fibersweep.geometry import Geometry
 
 __all__ = [
@@ -63,9 +64,6 @@ Q = 19
 CS2 = 1.0 / 3.0
 U_LATTICE = 1e-5  # empty duct's centre speed in lattice units: Mach ~ 2e-5, lattice Re ~ 2e-3
 MACH_LIMIT = 0.1  # |u| in lattice units above this means divergence
-# cells between a sub-grid pillar wall and the edge of a periodic box: the wall's link
-# interpolation (3 upstream nodes) and the IB ghost stencil are built for one pillar image
-EDGE_CELLS = 4
 
 # Velocity set: rest, 6 faces, 12 edges; opposite pairs are (1,2), (3,4), ... (17,18).
 E = np.array(

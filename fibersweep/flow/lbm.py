@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 import numba
 import numpy as np
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.errors import SolverError
 from fibersweep.flow import progress
 from fibersweep.flow.analytic import duct_center_velocity
@@ -27,7 +28,6 @@ from fibersweep.flow.initial import duct_guess, hele_shaw_guess, velocity_gradie
 from fibersweep.flow.lattice import MACH_LIMIT, U_LATTICE, Grid, make_grid
 from fibersweep.flow.prolong import prolong
 from fibersweep.flow.schemes import get_collision, get_wall_scheme
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.steppers import make_stepper
 
 __all__ = [

@@ -35,7 +35,7 @@ import time
 import numpy as np
 from scipy.ndimage import map_coordinates
 
-from fibersweep import __version__
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.channel_field import field_from_solution
 from fibersweep.flow.cuts import pillar_cuts
 from fibersweep.flow.field import FlowField
@@ -54,9 +54,9 @@ from fibersweep.flow.lbm import (
 )
 from fibersweep.flow.midplane import midplane_average, midplane_weights
 from fibersweep.flow.schemes import get_wall_scheme
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.steppers import PullStepper
 from fibersweep.geometry import Geometry
+from fibersweep.version import __version__
 
 __all__ = ["PatchBox", "patch_box", "PatchStepper", "solve_patched", "compose", "depth_factor"]
 

@@ -8,6 +8,7 @@ grids first where valid, or with a finer patch round the pillar,
 
 from __future__ import annotations
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.channel_field import field_from_solution
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.lattice import MACH_LIMIT, U_LATTICE
@@ -27,7 +28,6 @@ from fibersweep.flow.midplane import (
     midplane_weights,
 )
 from fibersweep.flow.patch import solve_patched
-from fibersweep.flow.settings import FlowSettings
 
 __all__ = [
     "SOLVER_VERSION",

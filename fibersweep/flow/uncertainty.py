@@ -25,10 +25,10 @@ import logging
 from dataclasses import dataclass
 from pathlib import Path
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.analysis import flux_separatrix
 from fibersweep.flow.cache import CorruptCacheError, cache_key, load_entry
 from fibersweep.flow.field import FlowField
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.streamlines import separatrix_y
 
 __all__ = ["SeparatrixEstimate", "separatrix_estimate", "other_level"]

@@ -10,7 +10,7 @@ Flexible fibers are drawn through all their beads
 (:func:`fibersweep.plots.shapes.fiber_points`).
 
 Runs are dicts (or Series) with the columns of
-:func:`fibersweep.sweep.sort_report.load_array_results`: ``traj_t`` [s],
+:func:`fibersweep.results.load_array_results`: ``traj_t`` [s],
 ``traj_xc``, ``traj_yc`` [µm], ``traj_th`` [rad], ``traj_contact``, optionally
 ``traj_beads`` (samples, n_beads, 2) [µm], and ``mode``, ``length``, ``n_beads``,
 ``model``, ``y0``, ``theta0``, ``fraction``.

@@ -1,7 +1,7 @@
 """The sorter designer's figures: f and migration against length with the critical
 lengths marked, purity and recovery per outlet, the critical length against a
-swept array setting. Data in (the tables of :mod:`fibersweep.sweep.sort_report`
-and :mod:`fibersweep.sweep.sort_design`), matplotlib Figures out.
+swept array setting. Data in (the tables of :mod:`fibersweep.sorting.report`
+and :mod:`fibersweep.sorting.design`), matplotlib Figures out.
 """
 
 from __future__ import annotations
@@ -39,13 +39,13 @@ def migration_figure(
     Parameters
     ----------
     table : DataFrame
-        :func:`fibersweep.sweep.sort_report.migration_table`.
+        :func:`fibersweep.sorting.report.migration_table`.
     tilts : dict
         Array tilt atan ε [deg] per setting.
     labels : dict
         Label per setting ('' for a single setting).
     crit : DataFrame, optional
-        :func:`fibersweep.sweep.sort_report.critical_table`.
+        :func:`fibersweep.sorting.report.critical_table`.
     """
     settings = sorted(table["setting"].unique())
     fig, (ax_f, ax_a, ax_t) = subplots(
@@ -120,7 +120,7 @@ def outlets_figure(outlets: pd.DataFrame, labels: dict[int, str]):
     Parameters
     ----------
     outlets : DataFrame
-        :func:`fibersweep.sweep.sort_report.outlet_table`.
+        :func:`fibersweep.sorting.report.outlet_table`.
     labels : dict
         Label per setting.
     """
@@ -194,7 +194,7 @@ def critical_figure(
     Parameters
     ----------
     curve : DataFrame
-        :func:`fibersweep.sweep.sort_design.critical_curve`.
+        :func:`fibersweep.sorting.design.critical_curve`.
     key : str
         The setting.
     unit : str

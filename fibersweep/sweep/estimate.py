@@ -25,9 +25,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.sweep.worker import SweepTask
 
 __all__ = [

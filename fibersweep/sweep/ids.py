@@ -15,8 +15,8 @@ import json
 from collections.abc import Iterable
 from typing import Any
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.settings import FiberSettings
 
 __all__ = [
     "ID_LENGTH",

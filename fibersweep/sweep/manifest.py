@@ -109,7 +109,7 @@ def revision() -> tuple[str | None, str | None]:
 
 def provenance(flow_key: str) -> dict[str, Any]:
     """Package version, git revision, flow-field hash, library versions, host and time."""
-    from fibersweep import __version__
+    from fibersweep.version import __version__
 
     rev, source = revision()
     return {

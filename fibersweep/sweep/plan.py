@@ -21,6 +21,7 @@ from fibersweep.config import Combination, Config
 from fibersweep.errors import InputError
 from fibersweep.sweep.ids import diff_settings, fiber_result_settings, run_ids, settings_id
 from fibersweep.sweep.manifest import read_manifest
+from fibersweep.sweep.starts import PHYSICS
 from fibersweep.sweep.store import (
     RUNS_DIR,
     TRAJ_DIR,
@@ -152,7 +153,7 @@ def sweep_settings(cfg: Config, flow_key: str | Sequence[str] | None = None) -> 
         None: each combination's own (:func:`fibersweep.flow.cache.cache_key`,
         nothing computed).
     """
-    combos = cfg.combinations()
+    combos = cfg.combinations(PHYSICS)
     if flow_key is None:
         from fibersweep.flow.cache import cache_key
 
@@ -192,7 +193,7 @@ def make_tasks(
     """
     settings = sweep_settings(cfg, flow_key) if settings is None else settings
     columns = cfg.sweep.setting_keys if columns is None else list(columns)
-    from fibersweep.config.draws import start_points
+    from fibersweep.sweep.draws import start_points
 
     tasks: dict[str, SweepTask] = {}
     t, y, L = start_points(cfg)

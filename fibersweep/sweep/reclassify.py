@@ -11,21 +11,16 @@ import pandas as pd
 from pydantic import ValidationError
 
 from fibersweep.analysis.classify import RULES, classify_all
+from fibersweep.analysis.tables import per_combination, trajectory_from_frame
+from fibersweep.config.fiber import ClassifySettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.errors import InputError
 from fibersweep.fiber.result import CLASSES
-from fibersweep.fiber.settings import ClassifySettings
-from fibersweep.flow.settings import FlowSettings
+from fibersweep.sorting.modes import is_array_table, mode_counts, relabel_modes
 from fibersweep.sweep.coldocs import rule_column
 from fibersweep.sweep.lock import output_lock
 from fibersweep.sweep.manifest import read_manifest
-from fibersweep.sweep.reclassify_modes import is_array_table, reclassify_modes
-from fibersweep.sweep.relabel import (
-    Reclassified,
-    classified_meta,
-    per_combination,
-    replace_labels,
-    trajectory_from_frame,
-)
+from fibersweep.sweep.relabel import Reclassified, classified_meta, replace_labels
 from fibersweep.sweep.store import RUNS_DIR, list_parts, read_runs, read_trajectories
 
 __all__ = [
@@ -158,7 +153,12 @@ def _reclassify(out: Path, thresholds: ClassifySettings) -> Reclassified:
     simulated = man.setdefault("simulated_classify", man["config"]["fiber"]["classify"])
     if is_array_table(runs):  # pillar-array runs: their transport modes
         meta = classified_meta(list_parts(out / RUNS_DIR), man, thresholds)
-        return reclassify_modes(out, man, runs, thresholds, meta)
+        traj = read_trajectories(out, list(runs["id"]))
+        if traj.empty:
+            raise InputError(f"{out}: no trajectories stored for its array runs")
+        runs, changed = relabel_modes(runs, traj, man, thresholds)
+        counts, counts_path = replace_labels(out, runs, meta, man, thresholds, mode_counts)
+        return Reclassified(len(runs), changed, counts, counts_path)
     geometry, u_center = _run_context(man, out)
     # A folder of several settings: each run's own geometry and speed, by its settings id.
     per_setting = {

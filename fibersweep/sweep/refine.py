@@ -23,11 +23,11 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.analysis.boundaries import COORDS, brackets
+from fibersweep.analysis.proposal import Proposal
 from fibersweep.config import RefineSettings
+from fibersweep.sorting.lengths import propose_lengths
 from fibersweep.sweep.ids import run_ids
 from fibersweep.sweep.plan import Setting
-from fibersweep.sweep.proposal import Proposal
-from fibersweep.sweep.refine_lengths import propose_lengths
 from fibersweep.sweep.worker import SweepTask
 
 __all__ = [
@@ -228,7 +228,7 @@ def _random_starts(settings: Sequence[Setting]) -> bool:
 
 def _drawer(settings: Sequence[Setting]):
     """(settings id, L) -> that length's seeded starts (theta0, y0), as the grid draws them."""
-    from fibersweep.config.draws import start_points
+    from fibersweep.sweep.draws import start_points
 
     by_id = {st.id: st for st in settings}
 

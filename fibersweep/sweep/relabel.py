@@ -14,14 +14,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
 
-from fibersweep import __version__
 from fibersweep.atomic import atomic_path
-from fibersweep.fiber.result import Trajectory
-from fibersweep.fiber.settings import ClassifySettings
+from fibersweep.config.fiber import ClassifySettings
 from fibersweep.sweep.manifest import revision, write_manifest
 from fibersweep.sweep.store import (
     META_KEY,
@@ -31,14 +28,13 @@ from fibersweep.sweep.store import (
     runs_table,
     write_table_atomic,
 )
+from fibersweep.version import __version__
 
 __all__ = [
     "COUNTS_FILE",
     "Reclassified",
     "classified_meta",
-    "per_combination",
     "replace_labels",
-    "trajectory_from_frame",
 ]
 
 #: The label counts of a results folder, per swept combination.
@@ -56,30 +52,6 @@ class Reclassified:
     warnings: tuple[str, ...] = ()
 
 
-def trajectory_from_frame(df: pd.DataFrame) -> Trajectory:
-    """Rebuild a :class:`Trajectory` from its stored samples (one id, sorted by sample)."""
-
-    def col(name: str) -> np.ndarray:
-        return df[name].to_numpy(dtype=np.float64)
-
-    beads = None
-    if "beads" in df and df["beads"].notna().all():
-        flat = np.stack([np.asarray(b, dtype=np.float64) for b in df["beads"]])
-        beads = flat.reshape(len(df), -1, 2)
-    return Trajectory(
-        t=col("t"),
-        x=col("x"),
-        y=col("y"),
-        theta=col("theta"),
-        head=np.column_stack([col("head_x"), col("head_y")]),
-        tail=np.column_stack([col("tail_x"), col("tail_y")]),
-        head_speed=col("head_speed"),
-        com_speed=col("com_speed"),
-        contact=df["contact"].to_numpy(dtype=bool),
-        beads=beads,
-    )
-
-
 def replace_labels(
     out: Path, runs: pd.DataFrame, meta: dict[str, Any], man: dict[str, Any],
     thresholds: ClassifySettings, counts_of,
@@ -90,7 +62,7 @@ def replace_labels(
     ``counts_of(runs, by=None)`` gives a table whose first column is the label
     (class or mode) and whose ``runs`` column the count
     (:func:`fibersweep.sweep.reclassify.class_counts`,
-    :func:`fibersweep.sweep.reclassify_modes.mode_counts`). Returns the counts per
+    :func:`fibersweep.sorting.modes.mode_counts`). Returns the counts per
     swept combination and the path they were written to.
     """
     old_parts = list_parts(out / RUNS_DIR)
@@ -110,17 +82,6 @@ def replace_labels(
     return counts, counts_path
 
 
-def per_combination(runs: pd.DataFrame, by: list[str], counts) -> pd.DataFrame:
-    """``counts(group)`` for each combination of the ``by`` columns' values, stacked,
-    the key columns first (one block per combination, fractions within it)."""
-    blocks = []
-    for values, group in runs.groupby(by, sort=True, dropna=False):
-        values = values if isinstance(values, tuple) else (values,)
-        block = counts(group)
-        for k, v in reversed(list(zip(by, values, strict=True))):
-            block.insert(0, k, v)
-        blocks.append(block)
-    return pd.concat(blocks, ignore_index=True)
 
 
 def classified_meta(parts: list[Path], man: dict, thresholds: ClassifySettings) -> dict[str, Any]:

@@ -42,8 +42,8 @@ import numpy as np
 from fibersweep.errors import RUN_ERRORS, RunBug
 
 if TYPE_CHECKING:  # pragma: no cover
+    from fibersweep.config.fiber import FiberSettings
     from fibersweep.fiber.result import FiberStart, RunResult
-    from fibersweep.fiber.settings import FiberSettings
     from fibersweep.flow.field import FlowField
 
 __all__ = [
@@ -233,7 +233,7 @@ def setting_for_field(field: FlowField, fiber: FiberSettings, settings: str = ""
     path = Path(ux.filename).parent if isinstance(ux, np.memmap) and ux.filename else None
     meta = field.meta or {}
     if path is not None and (path / "meta.json").is_file() and "settings" in meta:
-        from fibersweep.flow.settings import FlowSettings
+        from fibersweep.config.flow import FlowSettings
 
         flow = FlowSettings.model_validate(meta["settings"])
         key = str(meta.get("cache_key") or path.name)
@@ -251,8 +251,8 @@ def field_for(spec: SettingSpec) -> FlowField:
         if spec.field is not None:
             _FIELDS[spec.flow_key] = spec.field
         else:
+            from fibersweep.config.flow import FlowSettings
             from fibersweep.flow.cache import load_entry
-            from fibersweep.flow.settings import FlowSettings
 
             flow = FlowSettings.model_validate_json(spec.flow_json)
             if flow.array is not None:  # a pillar array's unit cell: one small .npz
@@ -293,7 +293,7 @@ def init_worker(spec: WorkerSpec, ignore_sigint: bool = True) -> None:
             level=spec.log_level,
             format="%(asctime)s %(name)s[%(process)d] %(levelname)s: %(message)s",
         )
-    from fibersweep.fiber.settings import FiberSettings
+    from fibersweep.config.fiber import FiberSettings
 
     t0 = time.perf_counter()
     specs = spec.all_settings()
@@ -457,7 +457,7 @@ def run_batch(task: RunBatch) -> list[tuple[int, Any]]:
     from fibersweep.fiber.result import FiberStart
 
     if task.setting is not None:
-        from fibersweep.fiber.settings import FiberSettings
+        from fibersweep.config.fiber import FiberSettings
 
         spec = task.setting
         if spec.fiber_json not in _FIBERS:

@@ -38,8 +38,8 @@ def child(dx: float, kernel: str) -> None:
     """Solve the cell in this process's tree (new API: with ``kernel``); print one JSON line."""
     import numba
 
+    from fibersweep.config.flow import FlowSettings
     from fibersweep.flow import cell
-    from fibersweep.flow.settings import FlowSettings
 
     coarse = FlowSettings.model_validate({"dx": 4.0, "tolerance": 1e-3, "array": ARRAY})
     settings = FlowSettings.model_validate({"dx": dx, "array": ARRAY})

@@ -30,11 +30,11 @@ import sys
 import time
 from pathlib import Path
 
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.

@@ -50,11 +50,11 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.config.fiber import FiberSettings, StepSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate, simulate_for
-from fibersweep.fiber.settings import FiberSettings, StepSettings
 from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.

@@ -23,11 +23,11 @@ import argparse
 import statistics
 import time
 
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 
 # One round of one run per case, on the tests' cached fields (scripts/benchmarks/run.py --smoke).
 SMOKE = ["--rounds", "1", "--repeat", "1", "--cache", "{cache}", "--sweep", "--sweep-points", "4"]
@@ -53,8 +53,8 @@ def _sweep_case(cache: str, points: int):
     """The quick config's field, fiber settings and (the first ``points`` of) its starts."""
     from pathlib import Path
 
-    from fibersweep.config.draws import start_points
     from fibersweep.config.loading import load_config
+    from fibersweep.sweep.draws import start_points
 
     cfg = load_config(Path(__file__).resolve().parents[2] / "configs" / "quick.yaml")
     field, _ = get_flow_field(cfg.flow, cache)

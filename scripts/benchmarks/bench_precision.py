@@ -27,12 +27,12 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.cuts import pillar_cuts
 from fibersweep.flow.initial import duct_guess, velocity_gradient
 from fibersweep.flow.lbm import coarser_settings, lattice_of, solve_lattice
 from fibersweep.flow.lbm import rates as solve_rates
 from fibersweep.flow.prolong import prolong
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.steppers import make_stepper
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs

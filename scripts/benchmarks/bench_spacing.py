@@ -44,10 +44,10 @@ import yaml  # noqa: E402
 
 from fibersweep.config import parse_config  # noqa: E402
 from fibersweep.fiber.array_run import start_clear  # noqa: E402
+from fibersweep.fiber.models.spacing import n_beads, spacing_um  # noqa: E402
 from fibersweep.fiber.result import FiberStart  # noqa: E402
 from fibersweep.fiber.rows import array_pillar  # noqa: E402
 from fibersweep.fiber.run import simulate  # noqa: E402
-from fibersweep.fiber.spacing import n_beads, spacing_um  # noqa: E402
 from fibersweep.flow.cache import get_flow_field  # noqa: E402
 
 TARGET_S = 30.0

@@ -24,19 +24,19 @@ import time
 import numba as nb
 import numpy as np
 
-from fibersweep.fiber import record as R
-from fibersweep.fiber import rosenbrock as I
-from fibersweep.fiber.beadspring import bead_velocity, force_jacobian, force_jacobian_fd
-from fibersweep.fiber.bundles import build_kernel
-from fibersweep.fiber.lu import lu_solve
-from fibersweep.fiber.mobility import fiber_offsets, rpy_fill
+from fibersweep.config.fiber import FiberSettings, StepSettings
+from fibersweep.config.flow import FlowSettings
+from fibersweep.fiber.hydro.rpy import fiber_offsets, rpy_fill
+from fibersweep.fiber.integrators import rosenbrock as I
+from fibersweep.fiber.integrators.lu import lu_solve
+from fibersweep.fiber.integrators.rosw import GAMMA2
+from fibersweep.fiber.kernel import record as R
+from fibersweep.fiber.kernel.bundles import build_kernel
+from fibersweep.fiber.models.beadspring import bead_velocity, force_jacobian, force_jacobian_fd
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.rosw import GAMMA2
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import FiberSettings, StepSettings
 from fibersweep.fiber.setup import prepare
 from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 
 #: Arguments of a run of seconds (scripts/benchmarks/run.py --smoke): the script runs
 #: end to end, its numbers mean nothing.

@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.discrepancy.candidates import LIBRARY
 from fibersweep.discrepancy.synth import STUDY_BOX
 from fibersweep.flow.field import FlowField
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.plots.fractions import wilson_interval
 
 __all__ = [

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from fibersweep.config import Config
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.copies import NoiseModel
 from fibersweep.discrepancy.followup import discriminate, start_grid
 from fibersweep.discrepancy.observables import scored
@@ -33,7 +34,6 @@ from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.plots.style import paper_style
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))

@@ -23,9 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate, simulate_for, simulate_reversible
-from fibersweep.fiber.settings import FiberSettings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 from common import DEFAULT_CACHE, study_field  # noqa: E402  (scripts/studies/common.py)

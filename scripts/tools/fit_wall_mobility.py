@@ -1,8 +1,8 @@
-"""Fit the sphere-wall kernels of fibersweep.fiber.wallmobility and print their coefficients.
+"""Fit the sphere-wall kernels of fibersweep.fiber.hydro.wall_mobility and print their coefficients.
 
 Each quiescent resistance is its exact lubrication and far-field terms plus a
 remainder x^m [P(x) + (1 − x) ln(h/δ) Q(x)], x = a/h, fitted by least squares
-in relative error to the exact bispherical values (fibersweep.fiber.wallexact)
+in relative error to the exact bispherical values (fibersweep.fiber.hydro.wall_exact)
 on gaps ε = δ/a from 1e-6 to 1e3. The shear force and torque factors are fitted
 to Goldman, Cox & Brenner's (1967b) table with their contact values imposed.
 Goren & O'Neill's normal push c_n is 1 + (9/8) x + (81/64 + 1/3) x² plus the
@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fibersweep.fiber import wallmobility as wm
-from fibersweep.fiber.wallexact import brenner_normal, normal_push, parallel_resistances
+from fibersweep.fiber.hydro import wall_mobility as wm
+from fibersweep.fiber.hydro.wall_exact import brenner_normal, normal_push, parallel_resistances
 
 # powers m of the remainders; P of degree 5 and Q of degree 2 for all four. The
 # first coefficient P₀ is imposed so that the far field is exact to O(x²)

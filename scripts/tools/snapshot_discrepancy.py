@@ -26,13 +26,13 @@ from pathlib import Path
 
 import pandas as pd
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy import simulate as sim_mod
 from fibersweep.discrepancy.measured import validate_trajectories, with_tracks
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.synth import STUDY_BOX as BOX
 from fibersweep.discrepancy.synth import synthesize_with_tracks
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
-from fibersweep.fiber.settings import FiberSettings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 from common import study_field  # noqa: E402  (scripts/studies/common.py)

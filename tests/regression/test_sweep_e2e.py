@@ -304,7 +304,7 @@ def test_classify_uses_the_speed_the_runs_moved_in(
     """With inlet_speed the runs move in a slower flow; classify must judge them with the
     U_center the runs used (thresholds are fractions of it), not the nominal speed."""
     import fibersweep.analysis.classify as classify_module
-    from fibersweep.fiber.settings import ClassifySettings
+    from fibersweep.config.fiber import ClassifySettings
     from fibersweep.sweep.reclassify import reclassify
 
     cfg = _config(tmp_path, flow_cache_dir, "slow", extra="  effects:\n    inlet_speed: -0.8\n")

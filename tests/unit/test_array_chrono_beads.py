@@ -7,10 +7,10 @@ import pandas as pd
 import pytest
 from matplotlib.collections import LineCollection
 
-from fibersweep.flow.settings import FlowSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.plots import array as pa
 from fibersweep.plots.shapes import ShapeNotStored
-from fibersweep.sweep.sort_report import _beads
+from fibersweep.sorting.report import _beads
 
 
 def test_stored_beads_come_back_as_samples_by_beads_by_two():
@@ -49,7 +49,7 @@ def test_a_bent_fiber_is_drawn_through_its_beads_not_as_a_rod():
 
 
 def test_settings_are_labelled_with_their_unit_and_ordered_by_value():
-    from fibersweep.sweep.sort_report import _order, _value_label
+    from fibersweep.sorting.report import _order, _value_label
 
     assert _value_label("fiber.young_modulus", 1e6) == "young_modulus = 1e+06 Pa"
     assert _value_label("flow.array.shift", 0.1) == "shift = 0.1"

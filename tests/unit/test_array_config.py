@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from fibersweep.config import FieldError, parse_config
-from fibersweep.config.draws import start_points
 from fibersweep.config.errors import ConfigError
-from fibersweep.fiber.settings import FiberSettings
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.cache import cache_key
-from fibersweep.flow.settings import FlowSettings
+from fibersweep.sweep.draws import start_points
 
 ARRAY = {"flow": {"dx": 4.0, "array": {}}, "sweep": {"length": [20.0], "y0": 0.9}}
 

@@ -73,7 +73,7 @@ def test_refine_lengths_bisects_where_the_mean_fraction_crosses_one_half():
     """The lengths sort-report proposes: midpoints of neighbours bracketing f = 1/2."""
     import pandas as pd
 
-    from fibersweep.sweep.sort_report import migration_table, refine_lengths
+    from fibersweep.sorting.report import migration_table, refine_lengths
 
     runs = pd.DataFrame(
         {

@@ -128,8 +128,8 @@ def test_more_configs_are_valid_sweeps_of_new_draws(bm, tmp_path):
     single stiffness, the plan's lengths, a seed after the last used one, its own folder
     ``<geometry>+s<seed>``, and starts that differ from the map's (seed 0) at the same
     length: independent draws, never the map's runs again."""
-    from fibersweep.config.draws import start_points
     from fibersweep.config.loading import parse_config
+    from fibersweep.sweep.draws import start_points
 
     args = argparse.Namespace(fractions=[0.5, 1.0], moduli=[1e4, 3e4], count=4, seed=0,
                               rows=20, spacing=0.5, contact="rough", time_scale=1.0,

@@ -170,9 +170,9 @@ def test_drawn_flexible_snapshots_have_all_their_beads(flexible):
     """The chronophotographs of sort-report, from the store: every snapshot every bead."""
     from matplotlib.collections import LineCollection
 
-    from fibersweep.flow.array_settings import ArraySettings
+    from fibersweep.config.array import ArraySettings
     from fibersweep.plots import array_chrono as ac
-    from fibersweep.sweep.sort_report import load_array_results
+    from fibersweep.results import load_array_results
 
     runs, settings, cfg = load_array_results(flexible)
     array = ArraySettings.model_validate(settings[0]["array"]).to_array()

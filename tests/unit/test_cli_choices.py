@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from fibersweep.analysis.classify import RULES
 from fibersweep.cli import fiber, sweep
-from fibersweep.fiber.models import MODELS
-from fibersweep.fiber.settings import LEGACY_MODELS
+from fibersweep.config.fiber import LEGACY_MODELS
+from fibersweep.fiber.models.registry import MODELS
 from fibersweep.sweep.executors import EXECUTORS
 
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from fibersweep.config import ConfigError, load_config, parse_config
+from fibersweep.sweep.starts import grid_starts
 
 
 def _write(tmp_path, text):
@@ -24,21 +25,21 @@ def test_axes_list_range_linspace(tmp_path):
             "  length: [0.8, 1.2]\n",
         )
     )
-    starts = cfg.sweep.starts()
+    starts = grid_starts(cfg.sweep)
     assert len(starts) == 5 * 4 * 2
     th = sorted({s.theta0 for s in starts})
     assert th == [-10.0, -5.0, 0.0, 5.0, 10.0]
     np.testing.assert_allclose(sorted({s.y0 for s in starts}), [0.3, 0.35, 0.4, 0.45], atol=1e-12)
     # a range whose stop is not hit exactly by float steps still includes it (0.1 * 3 != 0.3)
     cfg2 = parse_config({"sweep": {"y0": {"start": 0.0, "stop": 0.3, "step": 0.1}}})
-    assert len({s.y0 for s in cfg2.sweep.starts()}) == 4
+    assert len({s.y0 for s in grid_starts(cfg2.sweep)}) == 4
 
 
 def test_defaults_and_run_section():
     cfg = parse_config({})
     assert cfg.run.workers == 2 and cfg.run.executor == "local"
     assert cfg.fiber.record.trajectories is False
-    assert len(cfg.sweep.starts()) == 1
+    assert len(grid_starts(cfg.sweep)) == 1
 
 
 def test_unknown_key_names_path_line_and_suggestion(tmp_path):
@@ -78,12 +79,12 @@ def test_shipped_configs_are_valid(name):
     from pathlib import Path
 
     cfg = load_config(Path(__file__).parents[2] / "configs" / name)
-    n = len(cfg.sweep.starts())
+    n = len(grid_starts(cfg.sweep))
     assert n >= 20
     if name == "paper.yaml":
-        th = [s.theta0 for s in cfg.sweep.starts()]
-        y0 = [s.y0 for s in cfg.sweep.starts()]
-        L = [s.length for s in cfg.sweep.starts()]
+        th = [s.theta0 for s in grid_starts(cfg.sweep)]
+        y0 = [s.y0 for s in grid_starts(cfg.sweep)]
+        L = [s.length for s in grid_starts(cfg.sweep)]
         assert (min(th), max(th)) == (-10.0, 10.0)
         assert (min(y0), max(y0)) == (0.0, 1.0)
         assert (min(L), max(L)) == (0.5, 1.4)
@@ -104,7 +105,7 @@ def test_sweep_points_are_checked_before_any_flow_is_computed(tmp_path, text, ex
     """Starts outside the channel, unresolvable lengths: config error at the sweep field."""
     p = _write(tmp_path, text)
     if expected is None:
-        assert load_config(p).sweep.starts()  # a valid start far upstream of the pillar
+        assert grid_starts(load_config(p).sweep)  # a valid start far upstream of the pillar
         return
     with pytest.raises(ConfigError) as ei:
         load_config(p)
@@ -128,11 +129,11 @@ def test_fiber_that_does_not_fit_the_channel_length_names_fiber_x0(tmp_path):
 def test_prefiltered_start_check_keeps_every_failing_point():
     """Points skipped by the fast pre-check provably pass; every failing one is checked."""
     from fibersweep.config import Config, SweepSettings
-    from fibersweep.config.starts import starts_to_check
+    from fibersweep.config.fiber import FiberSettings
     from fibersweep.errors import InputError
-    from fibersweep.fiber.contact import make_pillar
-    from fibersweep.fiber.settings import FiberSettings
+    from fibersweep.fiber.contact.pillar import make_pillar
     from fibersweep.fiber.setup import check_start
+    from fibersweep.sweep.starts import starts_to_check
 
     # x0 on the pillar's column, y0 from wall to wall, one unresolvable length: many
     # points fail, for each of the three reasons. model_construct skips the config's
@@ -158,13 +159,13 @@ def test_prefiltered_start_check_keeps_every_failing_point():
                 first.setdefault(kind, str(exc))
         return first
 
-    every = first_problems(cfg.sweep.starts())
+    every = first_problems(grid_starts(cfg.sweep))
     assert set(every) == {"length", "y0", "y0 pillar"}
     kept = starts_to_check(cfg, geo, pillar.r_cut)
     assert first_problems(kept) == every  # the same first problem of each kind
     # Position problems can fail anywhere, so every such point must be kept; the
     # length rule depends on L alone, so one point per length is enough.
-    resolvable = [s for s in cfg.sweep.starts() if s.length > 0.02]
+    resolvable = [s for s in grid_starts(cfg.sweep) if s.length > 0.02]
     positions = [s for s in resolvable if first_problems([s])]
     assert positions and set(positions) <= set(kept)
     assert len(kept) < 0.6 * cfg.sweep.size  # and clear points are skipped

@@ -9,13 +9,13 @@ import math
 import numpy as np
 import pytest
 
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.discrepancy.candidates import LIBRARY, show_values
 from fibersweep.discrepancy.declared import FLEXIBLE_MODEL, apply_values, parse_candidate
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.units import Geometry
 
 FIBER, FLOW = FiberSettings(), FlowSettings(dx=4.0)

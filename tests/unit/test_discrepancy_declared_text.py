@@ -10,6 +10,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.discrepancy.advice import advice_lines
 from fibersweep.discrepancy.candidates import show_values
 from fibersweep.discrepancy.decide import Verdict, decide, evaluate_heldout
@@ -18,8 +20,6 @@ from fibersweep.discrepancy.followup import next_hypotheses
 from fibersweep.discrepancy.gap import assess_gap
 from fibersweep.discrepancy.power import EffectPower, limit_in_unit
 from fibersweep.discrepancy.report_figures import fitted_label
-from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.settings import FlowSettings
 
 STIFF = parse_candidate("fiber.young_modulus=1e4..3e7", FiberSettings(), FlowSettings(dx=4.0))
 

@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.errors import InputError
 from fibersweep.fiber.effects import build_effects
 from fibersweep.fiber.result import FiberStart, RunResult
-from fibersweep.flow.settings import FlowSettings
 
 
 def test_start_noise_has_the_stated_spread():
@@ -49,8 +49,8 @@ def test_simulate_reports_pillar_scale_runs_in_nominal_units(small_field):
     # a run with pillar_scale = ε is the nominal run at the transformed start, its δ
     # rescaled by 1 + ε and its positions [µm] stretched by 1 + ε about the pillar
     # centroid (the effect owns every unit change); simulate() returns the nominal start
+    from fibersweep.config.fiber import FiberSettings, RecordSettings
     from fibersweep.fiber.run import simulate
-    from fibersweep.fiber.settings import FiberSettings, RecordSettings
 
     eps, asked = 0.1, FiberStart(2.0, 0.9, 0.8)
     rec = RecordSettings(trajectories=True, samples=50)
@@ -79,8 +79,8 @@ def test_out_of_range_values_name_the_effect():
 
 def test_inlet_speed_scales_time_and_keeps_the_path(coarse_field):
     """Stokes flow: speed x (1 + eps) leaves the path and divides every time by 1 + eps."""
+    from fibersweep.config.fiber import FiberSettings
     from fibersweep.fiber.run import simulate
-    from fibersweep.fiber.settings import FiberSettings
 
     start = FiberStart(-3.0, 0.45, 0.9)  # touches the pillar
     base = simulate(coarse_field, FiberSettings(), start)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.simulate import BudgetExhausted, Simulator
 from fibersweep.errors import InputError
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 from fibersweep.units import Geometry
 

@@ -7,8 +7,8 @@ import pytest
 
 from fibersweep.analysis.classify import classify, longest_run
 from fibersweep.analysis.observables import fiber_angle, take, thin_indices
+from fibersweep.config.fiber import ClassifySettings
 from fibersweep.fiber.result import Trajectory
-from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.units import Geometry
 
 GEO = Geometry()

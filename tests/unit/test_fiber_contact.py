@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber.bezier import bezier_nearest, cubic_real_roots
-from fibersweep.fiber.contact import (
+from fibersweep.config.fiber import ContactSettings
+from fibersweep.fiber.contact.bezier import bezier_nearest, cubic_real_roots
+from fibersweep.fiber.contact.pillar import (
     ROUGH,
     SMOOTH,
     PillarArrays,
@@ -17,7 +18,6 @@ from fibersweep.fiber.contact import (
     outline_distance,
     pillar_forces,
 )
-from fibersweep.fiber.settings import ContactSettings
 from fibersweep.units import Geometry
 
 A = 2.0

@@ -8,13 +8,13 @@ import typing
 import numpy as np
 import pytest
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.errors import InputError
-from fibersweep.fiber import hooks
 from fibersweep.fiber.effects import EFFECTS, DynamicsContext, build_effects
-from fibersweep.fiber.models import MODELS
+from fibersweep.fiber.kernel import hooks
+from fibersweep.fiber.models.registry import MODELS
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate_for
-from fibersweep.fiber.settings import FiberSettings
 
 CTX = DynamicsContext(bead_radius=2.0, dx=4.0, depth=40.0)
 # Values a range check may reject; every effect must reject at least one finite one.

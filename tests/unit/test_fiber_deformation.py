@@ -1,4 +1,4 @@
-"""Deformation observables (fiber/deformation.py) on configurations with known answers."""
+"""Deformation observables (fiber/models/deformation.py) on configurations with known answers."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber.deformation import deformation
+from fibersweep.fiber.models.deformation import deformation
 
 A = 2.0
 NO_CIRCLE = np.zeros(3)

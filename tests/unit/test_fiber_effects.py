@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pytest
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.errors import InputError
 from fibersweep.fiber.effects import EFFECTS, DynamicsContext, build_effects
 from fibersweep.fiber.effects.off_midplane import KERNEL_SECOND_MOMENT, layer_factor
-from fibersweep.fiber.mobility import body_mobility
+from fibersweep.fiber.hydro.rpy import body_mobility
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate_for
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField, ib_phi
 from fibersweep.units import Geometry
 
@@ -124,8 +124,8 @@ def test_pillar_hydro_slows_a_fiber_passing_the_pillar():
     velocity with the pillar's wall drag is (R + Kᵀ Z K)⁻¹ R V₀, Z from the Faxén law
     ζ = k 6πμa β/(1 − β) exp(−(h − a)/H), β = 9a/16h, all computed here in numpy from
     the dense RPY matrix. Tolerance 1e-9 (round-off)."""
-    from fibersweep.fiber.contact import outline_distance
-    from fibersweep.fiber.mobility import fiber_offsets, rigid_map, rpy_matrix
+    from fibersweep.fiber.contact.pillar import outline_distance
+    from fibersweep.fiber.hydro.rpy import fiber_offsets, rigid_map, rpy_matrix
 
     geo = Geometry()
     field = FlowField.from_function(lambda X, Y: (600.0 + 0 * X, 0 * X), geo, 4.0)
@@ -160,7 +160,7 @@ def test_coulomb_friction_sticks_or_slides():
     θ = 0): strong friction stops its tangential (x) motion exactly; weak friction gives
     |F_t| = μ F_n and only slows it. Tolerances: round-off."""
     from fibersweep.fiber.effects.friction import coulomb_friction
-    from fibersweep.fiber.mobility import fiber_offsets
+    from fibersweep.fiber.hydro.rpy import fiber_offsets
 
     n = 8
     s = fiber_offsets(n, 2.0)

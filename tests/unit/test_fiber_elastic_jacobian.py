@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fibersweep.fiber.elastic import elastic_forces, elastic_jacobian
+from fibersweep.fiber.models.elastic import elastic_forces, elastic_jacobian
 
 A = 2.0  # bead radius [µm]
 

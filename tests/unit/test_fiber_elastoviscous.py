@@ -7,7 +7,7 @@ import math
 import pytest
 
 from fibersweep.config import parse_config
-from fibersweep.fiber.elastoviscous import (
+from fibersweep.fiber.models.elastoviscous import (
     bending_stiffness,
     elastoviscous_number,
     pillar_shear_rate,

@@ -1,4 +1,4 @@
-"""The self-exclusion of non-neighbouring beads (fibersweep/fiber/exclusion.py).
+"""The self-exclusion of non-neighbouring beads (fibersweep/fiber/models/exclusion.py).
 
 Its law against the pillar contact's, its analytic Jacobian against central
 differences, the balance of the pair forces, and the setting's plumbing.
@@ -11,15 +11,15 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber.bundles import make_params
-from fibersweep.fiber.contact import ROUGH, PillarArrays, pillar_forces
-from fibersweep.fiber.exclusion import (
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.fiber.contact.pillar import ROUGH, PillarArrays, pillar_forces
+from fibersweep.fiber.kernel.bundles import make_params
+from fibersweep.fiber.models.exclusion import (
     GAP,
     exclusion_forces,
     exclusion_jacobian,
     min_self_distance,
 )
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.sweep.ids import fiber_result_settings
 
 A = 2.0  # bead radius [µm]

@@ -14,10 +14,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fibersweep.fiber.bundles import FlowArrays
-from fibersweep.fiber.contact import make_pillar, pillar_forces
+from fibersweep.config.fiber import ContactSettings
+from fibersweep.fiber.contact.pillar import make_pillar, pillar_forces
 from fibersweep.fiber.frame import CHANNEL, frame_contact, frame_velocity, lattice
-from fibersweep.fiber.settings import ContactSettings
+from fibersweep.fiber.kernel.bundles import FlowArrays
 from fibersweep.flow.field import interpolate_ib
 from fibersweep.geometry.array import PillarArray
 

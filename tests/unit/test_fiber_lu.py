@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fibersweep.fiber.lu import lu_factor, lu_solve
+from fibersweep.fiber.integrators.lu import lu_factor, lu_solve
 
 
 @pytest.mark.parametrize("m", [1, 2, 7, 44])

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber.mobility import body_mobility, fiber_offsets, rpy_matrix, rpy_pair
+from fibersweep.fiber.hydro.rpy import body_mobility, fiber_offsets, rpy_matrix, rpy_pair
 
 A = 2.0
 MU = 0.34

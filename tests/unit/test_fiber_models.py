@@ -7,11 +7,11 @@ import logging
 import pytest
 from pydantic import ValidationError
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.errors import InputError
-from fibersweep.fiber.models import get_integrator, integrator_of
+from fibersweep.fiber.models.registry import get_integrator, integrator_of
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.sweep.ids import fiber_result_settings, run_id
 from fibersweep.sweep.store import PartWriter, read_runs
 
@@ -64,7 +64,7 @@ def test_the_former_model_name_reads_as_the_pair_with_a_logged_deprecation(caplo
     with a ``step.rosenbrock`` that agrees."""
     start = FiberStart(0.0, 0.4, 1.0)
     for method in ("ros2", "ros34pw2"):
-        with caplog.at_level(logging.WARNING, logger="fibersweep.fiber.settings"):
+        with caplog.at_level(logging.WARNING, logger="fibersweep.config.fiber"):
             old = FiberSettings(model="bead-spring-ros2", step={"rosenbrock": method})
         assert f"integrator: {method}" in caplog.text and "deprecated" in caplog.text
         new = FiberSettings(model="bead-spring", integrator=method)

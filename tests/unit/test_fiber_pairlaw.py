@@ -1,4 +1,5 @@
-"""The soft-core pair law, written once (:func:`fibersweep.fiber.pairlaw.soft_core`), against
+"""The soft-core pair law, written once (:func:`fibersweep.fiber.contact.pairlaw.soft_core`),
+against
 its closed form (SPEC.md §3), and its three users: rough and smooth pillar, self-exclusion."""
 
 from __future__ import annotations
@@ -8,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber.contact import ROUGH, SMOOTH, PillarArrays, pillar_forces
-from fibersweep.fiber.exclusion import exclusion_forces, exclusion_jacobian
-from fibersweep.fiber.pairlaw import soft_core
+from fibersweep.fiber.contact.pairlaw import soft_core
+from fibersweep.fiber.contact.pillar import ROUGH, SMOOTH, PillarArrays, pillar_forces
+from fibersweep.fiber.models.exclusion import exclusion_forces, exclusion_jacobian
 
 A = 2.0  # bead radius [µm]
 CHI = 1.1

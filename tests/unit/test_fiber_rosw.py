@@ -1,4 +1,5 @@
-"""ROS34PW2 (fibersweep/fiber/rosw.py): order conditions and measured order of convergence.
+"""ROS34PW2 (fibersweep/fiber/integrators/rosw.py): order conditions and
+measured order of convergence.
 
 The steps below use the kernel's own stage arithmetic (``stage_point``,
 ``stage_rhs``, ``combine``), its transformed coefficients and its LU, on small
@@ -13,8 +14,8 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
-from fibersweep.fiber.lu import lu_factor, lu_solve
-from fibersweep.fiber.rosw import (
+from fibersweep.fiber.integrators.lu import lu_factor, lu_solve
+from fibersweep.fiber.integrators.rosw import (
     ALPHA,
     BHAT,
     GAMMA3,
@@ -200,9 +201,9 @@ def test_fiber_kernel_agrees_with_ros2_in_free_flow(coarse_field):
     against 399). Measured 1.6e-5 µm; tolerance 1e-4 µm on every bead (ROS34PW2's
     own error at its 2 µm displacement bound is ~3e-5 µm over 0.3 s,
     docs/flexible.md)."""
+    from fibersweep.config.fiber import FiberSettings
     from fibersweep.fiber.result import FiberStart
     from fibersweep.fiber.run import simulate_for
-    from fibersweep.fiber.settings import FiberSettings
 
     start = FiberStart(0.0, 0.45, 0.5)
     out = {}
@@ -226,9 +227,9 @@ def test_reused_w_and_pi_controller_keep_the_solution(coarse_field, method, reus
     controlled per step. Against ROS2 with a fresh W at 1e-6 µm (E = 1 MPa,
     L = 0.5 l_obs, free flow to t = 0.2 s), every bead within 1e-4 µm at tolerance
     1e-4 µm (the bound of the ROS34PW2 test above, same run)."""
+    from fibersweep.config.fiber import FiberSettings
     from fibersweep.fiber.result import FiberStart
     from fibersweep.fiber.run import simulate_for
-    from fibersweep.fiber.settings import FiberSettings
 
     start = FiberStart(0.0, 0.45, 0.5)
 
@@ -246,7 +247,7 @@ def test_reused_w_and_pi_controller_keep_the_solution(coarse_field, method, reus
 
 def test_reuse_and_controller_defaults_are_not_written():
     """Configs that do not set the two step options keep their dump (and run ids)."""
-    from fibersweep.fiber.settings import FiberSettings
+    from fibersweep.config.fiber import FiberSettings
 
     step = FiberSettings().model_dump()["step"]
     assert "jacobian_reuse" not in step and "controller" not in step

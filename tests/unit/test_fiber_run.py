@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.errors import InputError
-from fibersweep.fiber.elastic import elastic_energy, elastic_forces
+from fibersweep.fiber.models.elastic import elastic_energy, elastic_forces
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 from fibersweep.units import Geometry
 

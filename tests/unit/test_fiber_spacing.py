@@ -1,4 +1,5 @@
-"""The bead spacing of a bead-spring chain (fibersweep/fiber/spacing.py, ``fiber.bead_spacing``).
+"""The bead spacing of a bead-spring chain
+(fibersweep/fiber/models/spacing.py, ``fiber.bead_spacing``).
 
 The setting's plumbing (hidden at its default, refused where it has no meaning),
 the chain it builds, and the per-bead scalings that give the chain one continuum
@@ -12,14 +13,14 @@ import math
 import numpy as np
 import pytest
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.errors import InputError
-from fibersweep.fiber.bundles import make_params
-from fibersweep.fiber.contact import ROUGH, SMOOTH, PillarArrays, pillar_forces, rough_beads
-from fibersweep.fiber.elastic import elastic_energy
-from fibersweep.fiber.exclusion import GAP, exclusion_forces
-from fibersweep.fiber.mobility import fiber_offsets
-from fibersweep.fiber.settings import FiberSettings
-from fibersweep.fiber.spacing import (
+from fibersweep.fiber.contact.pillar import ROUGH, SMOOTH, PillarArrays, pillar_forces, rough_beads
+from fibersweep.fiber.hydro.rpy import fiber_offsets
+from fibersweep.fiber.kernel.bundles import make_params
+from fibersweep.fiber.models.elastic import elastic_energy
+from fibersweep.fiber.models.exclusion import GAP, exclusion_forces
+from fibersweep.fiber.models.spacing import (
     bead_force_scale,
     exclusion_force_scale,
     exclusion_gap,
@@ -143,7 +144,7 @@ def _wall(kind, f_ref):
         r_eq = A + 0.6
         return PillarArrays(ROUGH, verts, beads[:, 0].copy(), beads[:, 1].copy(),
                             np.zeros((0, 3, 2)), 1.1 * r_eq, r_eq, f_ref)  # fmt: skip
-    from fibersweep.fiber.bezier import smooth_curves
+    from fibersweep.fiber.contact.bezier import smooth_curves
 
     return PillarArrays(SMOOTH, verts, np.zeros(0), np.zeros(0), smooth_curves(verts, 2.0),
                         1.1 * A, A, f_ref)  # fmt: skip

@@ -7,8 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber.mobility import body_mobility, body_velocity, rigid_map, rpy_matrix
-from fibersweep.fiber.wallhydro import mobility_with_wall_drag, rigid_wall_velocity, wall_drag
+from fibersweep.fiber.hydro.first_reflection import (
+    mobility_with_wall_drag,
+    rigid_wall_velocity,
+    wall_drag,
+)
+from fibersweep.fiber.hydro.rpy import body_mobility, body_velocity, rigid_map, rpy_matrix
 
 A, MU = 2.0, 0.34
 

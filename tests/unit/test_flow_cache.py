@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow import cache
 from fibersweep.flow.cache import cache_key, get_flow_field
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 
 TINY = FlowSettings(
     geometry=GeometrySettings(width=40.0, depth=32.0, length=48.0, pillar_height=12.0),

@@ -8,8 +8,8 @@ import yaml
 from typer.testing import CliRunner
 
 from fibersweep.cli import app
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.errors import SolverError
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.solver import solve_lattice
 
 runner = CliRunner()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.lattice import (
     CS2,
     MIRROR_Z,
@@ -21,7 +22,6 @@ from fibersweep.flow.lattice import (
 )
 from fibersweep.flow.lbm import solve_lattice
 from fibersweep.flow.prolong import prolong
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.solver import midplane_weights
 from fibersweep.units import Geometry
 

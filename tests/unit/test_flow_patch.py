@@ -11,12 +11,12 @@ import json
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.cache import cache_key
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.lattice import Grid, make_grid
 from fibersweep.flow.lbm import LatticeSolution, SolveReport
 from fibersweep.flow.patch import boundary_field, compose, patch_box, patch_geometry
-from fibersweep.flow.settings import FlowSettings
 
 GEO = {"width": 400.0, "length": 800.0}
 

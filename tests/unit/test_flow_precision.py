@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.cache import cache_key
 from fibersweep.flow.lattice import make_grid
 from fibersweep.flow.lbm import SOLVER_VERSION
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.steppers import make_stepper
 from fibersweep.units import Geometry
 

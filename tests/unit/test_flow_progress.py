@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import math
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.lbm import solve_lattice
 from fibersweep.flow.progress import on_progress
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 
 # A short duct (no pillar) converges in a few hundred steps at dx = 4 µm.
 DUCT = FlowSettings(

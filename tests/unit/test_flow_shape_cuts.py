@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.cuts import pillar_cuts
 from fibersweep.flow.ghost import ghost_stencil
 from fibersweep.flow.lbm import lattice_of
-from fibersweep.flow.settings import FlowSettings
 
 GEOMETRIES = {
     "circle": {"pillar_shape": "circle"},

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 from pydantic import ValidationError
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.cache import GEOMETRY_ADDED, cache_key
-from fibersweep.flow.settings import FlowSettings
 
 
 def _flow(**geometry) -> FlowSettings:

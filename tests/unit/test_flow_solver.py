@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import fibersweep.flow.lbm as lbm
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.initial import hele_shaw_pressure
 from fibersweep.flow.lattice import make_grid
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.units import Geometry
 
 TINY = FlowSettings(

@@ -51,8 +51,8 @@ def test_separatrix_on_coarse_interpolated_field(flow_cache_dir):
     # SPEC section 2: near 1/3. The interpolated-pillar field at dx = 4 µm must give
     # 1/3 within 0.04, the spread of the published and lattice values around it
     # (0.31..0.36 across placements and resolutions; measured 0.324).
+    from fibersweep.config.flow import FlowSettings
     from fibersweep.flow.cache import get_flow_field
-    from fibersweep.flow.settings import FlowSettings
 
     field, _ = get_flow_field(FlowSettings(dx=4.0, pillar_boundary="interpolated"), flow_cache_dir)
     sep = separatrix_y(field)
@@ -63,8 +63,8 @@ def test_separatrix_on_coarse_staircase_field(flow_cache_dir):
     # SPEC section 2: an independent coarse check (BGK tau = 1, dx = 4 µm, staircase
     # pillar, traced properly) gives 0.350; the staircase TRT field must match it
     # within 0.01 (measured 0.351).
+    from fibersweep.config.flow import FlowSettings
     from fibersweep.flow.cache import get_flow_field
-    from fibersweep.flow.settings import FlowSettings
 
     field, _ = get_flow_field(FlowSettings(dx=4.0, pillar_boundary="staircase"), flow_cache_dir)
     sep = separatrix_y(field)

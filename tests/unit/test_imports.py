@@ -1,55 +1,44 @@
 """The package's import graph: no circles, and no arrow back up the layers.
 
-Every module of ``fibersweep`` is read with :mod:`ast` (nothing is imported), and
-every import statement that names a module of the package is an arrow, wherever
-it stands:
-
-* at module level, inside a class body, a ``try`` or an ``if``;
-* inside a function (a function-local import still makes the module depend on
-  the other; it only runs later);
-* under ``if TYPE_CHECKING:``. Such an import never runs, so it cannot fail at
-  import time, but it still says that the module knows the other's types: a
-  circle closed by moving one import under ``TYPE_CHECKING`` is the same
-  responsibility in the wrong file, hidden from the interpreter. It counts.
-
-Relative imports are resolved against the importing module's package.
-``from P import name`` is an arrow to ``P.name`` when that is a module of the
-package, else to ``P`` (whose ``__init__`` runs). Importing ``a.b.c`` also runs
-the ``__init__`` of ``a`` and ``a.b``; those implicit arrows are not counted:
-they carry no dependency on what the parent holds. Imports made by name at run
-time (``importlib.import_module``: the effects package loading its effect
-modules) are not seen.
+The graph is read by ``scripts/tools/import_graph.py`` (every import statement that
+names a module of the package is an arrow: at module level, inside a function, or
+under ``if TYPE_CHECKING:``; a circle closed by a function-local or type-checking
+import is still a circle). Nothing is whitelisted.
 """
 
 from __future__ import annotations
 
-import ast
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
 
 import fibersweep
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts" / "tools"))
+from import_graph import Arrow, arrows, circles, discover, levels  # noqa: E402
+
 #: The layers of docs/architecture.md ("Layers and who imports whom"), lowest
 #: first. A module belongs to the layer of the longest name below that matches it;
 #: it may import its own layer and the layers below, never one above.
-#: * base: what every layer may use: the package's version (``fibersweep``, and
+#: * base: what every layer may use: the package's version (``version``, and
 #:   ``_version``, which a build writes), exception types, the atomic writer, the
 #:   stale-kernel-cache guard, the progress bars, the shipped example configs;
-#: * geometry < units < analysis < flow < fiber < config: the diagram's chain
-#:   (``analysis`` depends on nothing of the simulation; ``fiber`` reads the flow
-#:   field; ``config`` validates fiber and flow settings);
-#: * plots: figures from what the analysis, the config and the settings hand them
-#:   ("plots never read files"); below the sweep, so a plot cannot reach the store,
-#:   and below the discrepancy report, which draws its figures in the plots' style;
-#: * sweep, then ``results`` (``fibersweep.load`` reads a sweep's folder through
-#:   the store), then ``discrepancy`` (its batches run on the sweep's executors and
-#:   worker), then ``cli``, the top.
+#: * geometry < units < analysis < config: shapes, scales, pure analysis of
+#:   trajectories, and the config schema (which imports no simulation: the physics
+#:   checks are handed in by the sweep);
+#: * flow < fiber: the solver reads its settings; the fiber reads the flow field;
+#: * sorting: pure analysis of array results (tables in, tables out);
+#: * plots: figures from what the analysis and the settings hand them ("plots
+#:   never read files"); below the sweep, so a plot cannot reach the store;
+#: * sweep (orchestration), then ``results`` (a results folder read back), then
+#:   ``discrepancy`` (its batches run on the sweep's executors and worker), then
+#:   ``api`` (the public functions), ``cli`` (a thin layer over them), ``docgen``
+#:   and the top package, whose attributes are the API's functions.
 LAYERS: tuple[tuple[str, ...], ...] = (
     (
-        "fibersweep",
+        "fibersweep.version",
         "fibersweep._version",
         "fibersweep.errors",
         "fibersweep.atomic",
@@ -60,192 +49,20 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("fibersweep.geometry",),
     ("fibersweep.units",),
     ("fibersweep.analysis",),
+    ("fibersweep.config",),
     ("fibersweep.flow",),
     ("fibersweep.fiber",),
-    ("fibersweep.config",),
+    ("fibersweep.sorting",),
     ("fibersweep.plots",),
     ("fibersweep.sweep",),
     ("fibersweep.results",),
     ("fibersweep.discrepancy",),
+    ("fibersweep.api",),
     ("fibersweep.cli", "fibersweep.__main__"),
     # the reference pages read the command line, the config schema and the columns
     ("fibersweep.docgen",),
+    ("fibersweep",),
 )
-
-#: Arrows that run up the layers on purpose, each with the reason the
-#: architecture gives. They are left out of both checks (circles and layers).
-#: ``fibersweep.load`` is the documented convenience: the top package's
-#: function-local import of the results reader, run only when a user calls it.
-ALLOWED_UPWARD: Mapping[tuple[str, str], str] = {
-    ("fibersweep", "fibersweep.results"): "fibersweep.load, the documented convenience",
-}
-
-
-@dataclass(frozen=True)
-class Arrow:
-    """One import of a package module by another.
-
-    Attributes
-    ----------
-    source, target : str
-        Dotted module names (a package is its ``__init__``).
-    path : Path
-        File of ``source``.
-    line : int
-        Line of the import statement.
-    text : str
-        The statement as written (first line).
-    where : {'module', 'function', 'type-checking'}
-        Where it stands: run on import, run when its function is called, or never run.
-    """
-
-    source: str
-    target: str
-    path: Path
-    line: int
-    text: str
-    where: str
-
-    def show(self, root: Path) -> str:
-        try:
-            shown = self.path.relative_to(root.parent)
-        except ValueError:
-            shown = self.path
-        where = "" if self.where == "module" else f"  [{self.where}]"
-        return f"{shown}:{self.line}: {self.text}{where}"
-
-
-def discover(root: Path) -> dict[str, Path]:
-    """Every module of the package at ``root`` (a folder with ``__init__.py``): name -> file."""
-    modules: dict[str, Path] = {}
-    for path in sorted(root.rglob("*.py")):
-        rel = path.relative_to(root.parent).with_suffix("")
-        parts = list(rel.parts)
-        if not all((root.parent / Path(*parts[:i]) / "__init__.py").is_file()
-                   for i in range(1, len(parts))):  # fmt: skip
-            continue  # a script in a data folder, not a module of the package
-        if parts[-1] == "__init__":
-            parts.pop()
-        modules[".".join(parts)] = path
-    return modules
-
-
-def _is_type_checking(test: ast.expr) -> bool:
-    if isinstance(test, ast.Name):
-        return test.id == "TYPE_CHECKING"
-    return isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
-
-
-def _statements(tree: ast.Module) -> Iterable[tuple[ast.Import | ast.ImportFrom, str]]:
-    """Every import statement of a module with where it stands."""
-
-    def visit(node: ast.AST, where: str) -> Iterable[tuple[ast.Import | ast.ImportFrom, str]]:
-        if isinstance(node, (ast.Import, ast.ImportFrom)):
-            yield node, where
-        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-            inner = "type-checking" if where == "type-checking" else "function"
-            for child in ast.iter_child_nodes(node):
-                yield from visit(child, inner)
-        elif isinstance(node, ast.If) and _is_type_checking(node.test):
-            for stmt in node.body:
-                yield from visit(stmt, "type-checking")
-            for stmt in node.orelse:
-                yield from visit(stmt, where)
-        else:
-            for child in ast.iter_child_nodes(node):
-                yield from visit(child, where)
-
-    yield from visit(tree, "module")
-
-
-def _known(name: str, modules: Mapping[str, Path]) -> str | None:
-    """The longest prefix of ``name`` that is a module of the package (None if none)."""
-    parts = name.split(".")
-    for n in range(len(parts), 0, -1):
-        candidate = ".".join(parts[:n])
-        if candidate in modules:
-            return candidate
-    return None
-
-
-def arrows(modules: Mapping[str, Path]) -> list[Arrow]:
-    """Every import of a package module by a package module."""
-    out: list[Arrow] = []
-    for name, path in modules.items():
-        source = path.read_text(encoding="utf-8")
-        lines = source.splitlines()
-        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-        for stmt, where in _statements(ast.parse(source, filename=str(path))):
-            targets: list[str | None] = []
-            if isinstance(stmt, ast.Import):
-                targets = [_known(a.name, modules) for a in stmt.names]
-            else:
-                if stmt.level:
-                    base = package.split(".")
-                    base = base[: len(base) - (stmt.level - 1)]
-                    origin = ".".join(base + ([stmt.module] if stmt.module else []))
-                else:
-                    origin = stmt.module or ""
-                for a in stmt.names:
-                    sub = f"{origin}.{a.name}"
-                    targets.append(sub if sub in modules else _known(origin, modules))
-            text = lines[stmt.lineno - 1].strip()
-            for target in dict.fromkeys(t for t in targets if t is not None):
-                out.append(Arrow(name, target, path, stmt.lineno, text, where))
-    return out
-
-
-def circles(edges: Iterable[Arrow]) -> list[list[str]]:
-    """Strongly connected components of more than one module, and self-imports.
-
-    Tarjan's algorithm, iterative; each component sorted, the list sorted.
-    """
-    graph: dict[str, set[str]] = {}
-    selfs: set[str] = set()
-    for e in edges:
-        graph.setdefault(e.source, set()).add(e.target)
-        graph.setdefault(e.target, set())
-        if e.source == e.target:
-            selfs.add(e.source)
-    index: dict[str, int] = {}
-    low: dict[str, int] = {}
-    stack: list[str] = []
-    on_stack: set[str] = set()
-    found: list[list[str]] = []
-    for start in sorted(graph):
-        if start in index:
-            continue
-        work = [(start, iter(sorted(graph[start])))]
-        index[start] = low[start] = len(index)
-        stack.append(start)
-        on_stack.add(start)
-        while work:
-            node, children = work[-1]
-            child = next(children, None)
-            if child is not None:
-                if child not in index:
-                    index[child] = low[child] = len(index)
-                    stack.append(child)
-                    on_stack.add(child)
-                    work.append((child, iter(sorted(graph[child]))))
-                elif child in on_stack:
-                    low[node] = min(low[node], index[child])
-                continue
-            work.pop()
-            if work:
-                parent = work[-1][0]
-                low[parent] = min(low[parent], low[node])
-            if low[node] == index[node]:
-                component = []
-                while True:
-                    member = stack.pop()
-                    on_stack.discard(member)
-                    component.append(member)
-                    if member == node:
-                        break
-                if len(component) > 1 or node in selfs:
-                    found.append(sorted(component))
-    return sorted(found)
 
 
 def layer_of(module: str, layers: tuple[tuple[str, ...], ...] = LAYERS) -> int | None:
@@ -291,8 +108,7 @@ def upward(edges: list[Arrow], layers: tuple[tuple[str, ...], ...] = LAYERS) -> 
 
 def _package_edges(root: Path) -> tuple[dict[str, Path], list[Arrow]]:
     modules = discover(root)
-    edges = [e for e in arrows(modules) if (e.source, e.target) not in ALLOWED_UPWARD]
-    return modules, edges
+    return modules, arrows(modules)
 
 
 ROOT = Path(fibersweep.__file__).resolve().parent
@@ -373,9 +189,7 @@ def test_the_package_graph_is_seen():
     assert ("fibersweep.flow.cell", "fibersweep.flow.lattice") in seen
     # every module has a layer, so no module escapes the layer check
     assert [m for m in modules if layer_of(m) is None] == []
-    # each allowed arrow is still there (an exception for nothing is removed)
-    every = {(e.source, e.target) for e in arrows(modules)}
-    assert [a for a in ALLOWED_UPWARD if a not in every] == []
+    assert levels(edges, modules) > 5
 
 
 # --------------------------------------------------------------------------- the package

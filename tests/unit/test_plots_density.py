@@ -114,9 +114,9 @@ def test_facets_keep_the_length_in_a_title():
 
 
 def test_chronophotograph_colour_bar_no_taller_than_its_axes(coarse_field):
+    from fibersweep.config.fiber import FiberSettings
     from fibersweep.fiber.result import FiberStart
     from fibersweep.fiber.run import simulate
-    from fibersweep.fiber.settings import FiberSettings
     from fibersweep.plots.chrono import chrono_figure
 
     fiber = FiberSettings(record={"trajectories": True, "samples": 300})

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from fibersweep.sweep.refine_lengths import LEVEL, length_brackets, propose_lengths
+from fibersweep.sorting.lengths import LEVEL, length_brackets, propose_lengths
 
 
 def _points(fractions: dict[float, list[float]], modes=None, group="s1") -> pd.DataFrame:

@@ -16,14 +16,14 @@ import numpy as np
 import pytest
 
 from fibersweep.analysis.classify import RULES
+from fibersweep.config.fiber import INTEGRATORS, FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
 from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.errors import InputError
 from fibersweep.fiber.effects import EFFECTS, build_effects, get_effect
-from fibersweep.fiber.models import MODELS, get_integrator
-from fibersweep.fiber.settings import INTEGRATORS, FiberSettings
+from fibersweep.fiber.models.registry import MODELS, get_integrator
 from fibersweep.flow.schemes import COLLISIONS, WALL_SCHEMES, get_collision, get_wall_scheme
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.steppers import STEPPERS, make_stepper
 from fibersweep.sweep.executors import EXECUTORS, make_executor
 

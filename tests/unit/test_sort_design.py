@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fibersweep.sweep import sort_design as sd
-from fibersweep.sweep.sort_report import check_edges, critical_table
+from fibersweep.sorting import design as sd
+from fibersweep.sorting.report import check_edges, critical_table
 
 FLOW = {"dx": 2.0, "array": {"pillar_shape": "triangle", "pillar_size": 40.0, "period_x": 80.0,
                              "period_y": 80.0, "shift": 0.1, "depth": 40.0}}  # fmt: skip

@@ -8,10 +8,10 @@ import pytest
 from typer.testing import CliRunner
 
 from fibersweep.cli import app
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.lbm import lattice_of
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.sweep.estimate import estimate_uncached
 
 SMALL = GeometrySettings(width=400.0, depth=40.0, length=800.0, pillar_height=75.0)

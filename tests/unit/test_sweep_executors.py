@@ -178,9 +178,9 @@ def test_a_bug_in_a_run_stops_the_sweep(kind):
 def test_worker_records_failed_runs_and_raises_bugs(monkeypatch):
     """run_task: input and numerical errors are failed rows; any other exception a RunBug."""
     import fibersweep.fiber.run as run_module
+    from fibersweep.config.fiber import FiberSettings
     from fibersweep.errors import RunBug
     from fibersweep.errors import SolverError as Solver
-    from fibersweep.fiber.settings import FiberSettings
     from fibersweep.sweep import worker
 
     # a worker set up with a field that travels itself (no cache entry), no warm-up

@@ -6,12 +6,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from fibersweep.analysis.tables import trajectory_from_frame
 from fibersweep.config import parse_config
+from fibersweep.config.fiber import ClassifySettings
 from fibersweep.errors import InputError
-from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.sweep.manifest import write_manifest
 from fibersweep.sweep.reclassify import class_counts, reclassify, thresholds_for
-from fibersweep.sweep.relabel import trajectory_from_frame
 from fibersweep.sweep.store import PartWriter
 
 

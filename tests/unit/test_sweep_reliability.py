@@ -18,10 +18,11 @@ import pandas as pd
 import pytest
 
 from fibersweep.config import ConfigError, load_config
+from fibersweep.config.fiber import ClassifySettings
 from fibersweep.errors import ResultsError
-from fibersweep.fiber.settings import ClassifySettings
 from fibersweep.sweep import store
 from fibersweep.sweep.check import check_folder
+from fibersweep.sweep.starts import grid_starts
 from fibersweep.sweep.lock import LOCK_FILE, FolderLocked, lock_holder, output_lock
 from fibersweep.sweep.reclassify import reclassify
 from fibersweep.sweep.store import (
@@ -209,7 +210,7 @@ def test_duplicate_yaml_key_names_both_lines(tmp_path):
 
 @pytest.mark.parametrize("text", ["sweep:\n  y0: 3e-1\n", "sweep:\n  y0: [3e-1]\n"])
 def test_exponent_numbers_are_numbers_alone_or_in_lists(tmp_path, text):
-    assert load_config(_cfg(tmp_path, text)).sweep.starts()[0].y0 == pytest.approx(0.3)
+    assert grid_starts(load_config(_cfg(tmp_path, text)).sweep)[0].y0 == pytest.approx(0.3)
 
 
 def test_booleans_are_not_numbers_in_axes(tmp_path):

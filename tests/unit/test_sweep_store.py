@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pyarrow.parquet as pq
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.sweep.ids import diff_settings, run_id
 from fibersweep.sweep.store import (
     RUNS_DIR,

@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.analytic import duct_velocity
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.solver import solve_lattice
 
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.analytic import duct_velocity
 from fibersweep.flow.cell import (
     cell_solution,
@@ -19,7 +20,6 @@ from fibersweep.flow.cell import (
 )
 from fibersweep.flow.lattice import U_LATTICE
 from fibersweep.flow.schemes import get_collision
-from fibersweep.flow.settings import FlowSettings
 
 
 def _settings(eps: float, shape: str = "circle", **flow) -> FlowSettings:

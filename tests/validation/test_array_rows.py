@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 
 from fibersweep.analysis.modes import row_crossings
-from fibersweep.fiber import record as R
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.fiber.frame import frame_velocity
+from fibersweep.fiber.kernel import record as R
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.rows import run_array_fiber
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cell import field_of, first_streamline_width, solve_cell
 from fibersweep.flow.field import FlowField
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.units import Fluid
 
 

@@ -1,7 +1,7 @@
 """Validation of bead-spring chains finer than touching beads (``fiber.bead_spacing``).
 
 One fiber (radius a = 2 µm, length 92 µm, E = 1 MPa) discretised with beads b = 2a,
-a, a/2 and a/4 apart (23, 45, 89 and 177 beads; ``fibersweep/fiber/spacing.py``):
+a, a/2 and a/4 apart (23, 45, 89 and 177 beads; ``fibersweep/fiber/models/spacing.py``):
 
 - statics against Euler-Bernoulli: a free chain loaded by balanced transverse forces
   (a uniform load, or a central point load) relaxes, in a quiescent fluid, to the
@@ -24,15 +24,15 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber import record as R
-from fibersweep.fiber.beadspring import bead_velocity, force_jacobian
-from fibersweep.fiber.bundles import FlowArrays, build_kernel
-from fibersweep.fiber.mobility import rpy_matrix
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.fiber.hydro.rpy import rpy_matrix
+from fibersweep.fiber.integrators.rosenbrock import integrate_rosenbrock
+from fibersweep.fiber.kernel import record as R
+from fibersweep.fiber.kernel.bundles import FlowArrays, build_kernel
+from fibersweep.fiber.models.beadspring import bead_velocity, force_jacobian
+from fibersweep.fiber.models.spacing import offsets
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.rosenbrock import integrate_rosenbrock
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.fiber.setup import prepare
-from fibersweep.fiber.spacing import offsets
 
 A = 2.0  # bead radius [µm]
 E = 1e6  # [Pa]
@@ -215,8 +215,8 @@ def test_drag_per_unit_length_converges_with_spacing():
 @pytest.fixture(scope="module")
 def array_field():
     """Triangles 40 µm high, 80 µm periods, ε = 0.1, at dx = 4 µm (one cell)."""
+    from fibersweep.config.flow import FlowSettings
     from fibersweep.flow.cell import field_of, solve_cell
-    from fibersweep.flow.settings import FlowSettings
 
     flow = FlowSettings.model_validate({"dx": 4.0, "array": {}})
     return field_of(flow, solve_cell(flow))

@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import pytest
 
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.discrepancy.declared import parse_candidate
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.synth import STUDY_BOX as BOX
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
-from fibersweep.fiber.settings import FiberSettings
-from fibersweep.flow.settings import FlowSettings
 
 FIBER = FiberSettings()
 STIFFNESS = "fiber.young_modulus=1e4..3e7"

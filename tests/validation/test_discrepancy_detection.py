@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.candidates import get_candidates
 from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.followup import discriminate
@@ -13,7 +14,6 @@ from fibersweep.discrepancy.power import analyse_power
 from fibersweep.discrepancy.report_figures import next_figure
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import STUDY_BOX as BOX
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.plots.style import paper_style
 
 

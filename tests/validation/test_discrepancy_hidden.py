@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 
 from fibersweep.config import Config, load_config
+from fibersweep.config.fiber import ContactSettings, FiberSettings
 from fibersweep.discrepancy.candidates import LIBRARY
 from fibersweep.discrepancy.report import write_report
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.synth import STUDY_BOX as BOX
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
-from fibersweep.fiber.settings import ContactSettings, FiberSettings
 
 FAST = dict(
     copies=3, fit_copies=2, candidates=2, fit_evals=4, refits=1, n_perm=1999,

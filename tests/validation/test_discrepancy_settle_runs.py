@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.copies import NoiseModel
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.settle import settle
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import STUDY_BOX, synthesize
-from fibersweep.fiber.settings import FiberSettings
 
 
 def test_follow_up_fibers_pick_the_truth_between_two_hypotheses(coarse_field):

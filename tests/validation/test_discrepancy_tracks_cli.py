@@ -52,11 +52,11 @@ def test_hidden_effect_with_tracks_runs_the_whole_workflow(tmp_path, coarse_fiel
     fibers that touch the pillar, put t_transit's Holm p at 0.024, 0.50, 0.044, 0.040
     and 0.56 on seeds 1, 2, 3, 5, 6: a verdict within its own noise of 0.05.) With 4999
     permutations that floor lies ten times below alpha."""
+    from fibersweep.config.fiber import FiberSettings
     from fibersweep.discrepancy.measured import validate_trajectories, with_tracks
     from fibersweep.discrepancy.schema import validate_measured
     from fibersweep.discrepancy.synth import STUDY_BOX, synthesize_with_tracks
     from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
-    from fibersweep.fiber.settings import FiberSettings
 
     table, tracks, _ = synthesize_with_tracks(
         coarse_field, FiberSettings(), STUDY_BOX, 16, {"inlet_speed": 0.1}, seed=1, workers=1,

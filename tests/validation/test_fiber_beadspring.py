@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from fibersweep.fiber.bundles import DEFAULT_DT
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.fiber.kernel.bundles import DEFAULT_DT
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import FiberSettings
 
 
 @pytest.mark.slow

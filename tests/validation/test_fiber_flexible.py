@@ -16,15 +16,15 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber import record as R
-from fibersweep.fiber.beadspring import bead_velocity, force_jacobian
-from fibersweep.fiber.bundles import FlowArrays, build_kernel
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.fiber.effects import registry
-from fibersweep.fiber.mobility import fiber_offsets
+from fibersweep.fiber.hydro.rpy import fiber_offsets
+from fibersweep.fiber.integrators.rosenbrock import integrate_rosenbrock
+from fibersweep.fiber.kernel import record as R
+from fibersweep.fiber.kernel.bundles import FlowArrays, build_kernel
+from fibersweep.fiber.models.beadspring import bead_velocity, force_jacobian
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.rosenbrock import integrate_rosenbrock
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.fiber.setup import prepare
 
 A = 2.0  # bead radius [µm]

@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber.mobility import body_mobility, fiber_offsets
-from fibersweep.fiber.models import MODELS
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.fiber.hydro.rpy import body_mobility, fiber_offsets
+from fibersweep.fiber.models.registry import MODELS
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate_for
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.field import FlowField
 from fibersweep.units import Geometry
 

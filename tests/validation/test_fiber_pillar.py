@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from fibersweep.analysis.classify import classify
+from fibersweep.config.fiber import ClassifySettings, FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate, simulate_reversible
-from fibersweep.fiber.settings import ClassifySettings, FiberSettings
-from fibersweep.flow.settings import FlowSettings
 
 BASE = FiberSettings(record={"trajectories": True})
 FRICTION = FiberSettings(record={"trajectories": True}, effects={"friction": 0.3})

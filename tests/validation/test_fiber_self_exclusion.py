@@ -10,12 +10,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fibersweep.fiber import record as R
-from fibersweep.fiber.bundles import FlowArrays, build_kernel
-from fibersweep.fiber.exclusion import min_self_distance
-from fibersweep.fiber.models import get_integrator
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.fiber.kernel import record as R
+from fibersweep.fiber.kernel.bundles import FlowArrays, build_kernel
+from fibersweep.fiber.models.exclusion import min_self_distance
+from fibersweep.fiber.models.registry import get_integrator
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.fiber.setup import prepare
 
 A = 2.0  # bead radius [µm]
@@ -121,7 +121,7 @@ def test_kernel_jacobians_hold_the_pairs(coarse_field, path):
     the chain's whole force, springs and pairs: within 1e-6 of max |J| (truncation and
     round-off ~1e-8 relative; a missing pair block is O(1)). The fixed step reports that
     J left its band, so its W = M J is taken dense."""
-    from fibersweep.fiber.beadspring import bead_velocity, force_jacobian, force_jacobian_fd
+    from fibersweep.fiber.models.beadspring import bead_velocity, force_jacobian, force_jacobian_fd
 
     st = FiberSettings(model="bead-spring", integrator=path, young_modulus=1e4)
     length = 20 * 2 * A / coarse_field.geometry.pillar_base_length

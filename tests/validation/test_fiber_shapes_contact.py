@@ -15,10 +15,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fibersweep.fiber.contact import contact_forces, make_pillar
+from fibersweep.config.fiber import ContactSettings, FiberSettings
+from fibersweep.fiber.contact.pillar import contact_forces, make_pillar
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import ContactSettings, FiberSettings
 from fibersweep.flow.field import FlowField
 from fibersweep.units import Geometry
 

@@ -12,11 +12,11 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber.bundles import build_kernel
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.fiber.kernel.bundles import build_kernel
+from fibersweep.fiber.models.rigid import FD_STEP, rigid_velocity, ros2_step
 from fibersweep.fiber.result import FiberStart
-from fibersweep.fiber.rigid import FD_STEP, rigid_velocity, ros2_step
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.fiber.setup import prepare
 
 # Trapping starts at dx = 4 µm (theta0 deg, y0/h, L/l_obs), three lengths, both sides.

@@ -22,9 +22,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.analysis import peak_speeds
 from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.streamlines import separatrix_y
 
 

@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.lbm import solve_nested
 from fibersweep.flow.patch import solve_patched
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.streamlines import separatrix_y
 
 pytestmark = pytest.mark.slow

@@ -15,9 +15,9 @@ import math
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.analysis import flux_below_pillar, flux_separatrix
 from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.streamlines import separatrix_y
 
 pytestmark = pytest.mark.slow

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.analysis import flux_separatrix, fore_aft_asymmetry, peak_speeds
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.solver import field_from_solution, solve_lattice, solve_nested
 
 pytestmark = pytest.mark.slow

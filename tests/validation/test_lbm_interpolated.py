@@ -15,10 +15,10 @@ import math
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.analytic import duct_velocity
 from fibersweep.flow.cuts import slab_cuts
 from fibersweep.flow.lattice import Grid
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.solver import solve_lattice
 
 PAD = 2  # solid rows on each side

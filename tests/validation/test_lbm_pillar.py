@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.analysis import flux_separatrix, fore_aft_asymmetry, peak_speeds
 from fibersweep.flow.analytic import duct_velocity
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.solver import field_from_solution, solve_lattice
 
 SMALL = GeometrySettings(width=200.0, depth=40.0, length=400.0, pillar_height=75.0)

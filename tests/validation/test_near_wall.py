@@ -1,7 +1,7 @@
 """The ``near_wall`` effect assembled: a bead's near-wall mobility and flow push in the models.
 
 The sphere–plane coefficients are validated in test_wall_mobility.py; here their
-assembly (fibersweep.fiber.nearwall, fibersweep.fiber.effects.near_wall):
+assembly (fibersweep.fiber.hydro.nearwall, fibersweep.fiber.effects.near_wall):
 
 * a one-bead rigid fiber (a sphere) beside a plane wall in a simple shear moves
   with Goldman, Cox & Brenner's force-free, torque-free velocity (and across
@@ -25,25 +25,25 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber import nearwall as nw
-from fibersweep.fiber import wallmobility as wm
-from fibersweep.fiber.beadspring import bead_velocity
-from fibersweep.fiber.bundles import FlowArrays, assemble, make_params
-from fibersweep.fiber.contact import ROUGH, SMOOTH, Pillar, outline_distance, pillar_forces
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.fiber.contact.pillar import ROUGH, SMOOTH, Pillar, outline_distance, pillar_forces
 from fibersweep.fiber.effects import DynamicsContext, build_effects
 from fibersweep.fiber.effects.near_wall import NearWall
 from fibersweep.fiber.frame import CHANNEL, Lattice
-from fibersweep.fiber.mobility import body_mobility, body_velocity, rigid_map, rpy_matrix
-from fibersweep.fiber.nearwall import (
+from fibersweep.fiber.hydro import nearwall as nw
+from fibersweep.fiber.hydro import wall_mobility as wm
+from fibersweep.fiber.hydro.first_reflection import wall_drag
+from fibersweep.fiber.hydro.nearwall import (
     bead_wall_mobility,
     rigid_wall_body,
     surface_point,
     wall_terms,
     wall_terms_at,
 )
-from fibersweep.fiber.rigid import rigid_velocity, run_rigid
-from fibersweep.fiber.settings import FiberSettings
-from fibersweep.fiber.wallhydro import wall_drag
+from fibersweep.fiber.hydro.rpy import body_mobility, body_velocity, rigid_map, rpy_matrix
+from fibersweep.fiber.kernel.bundles import FlowArrays, assemble, make_params
+from fibersweep.fiber.models.beadspring import bead_velocity
+from fibersweep.fiber.models.rigid import rigid_velocity, run_rigid
 from fibersweep.flow.field import interpolate_ib
 
 A = 2.0  # bead radius [µm]
@@ -241,7 +241,7 @@ def test_the_plane_is_the_contact_surface():
             want = surface_point(ROUGH, poly, rough.circle, rough.curves, roots, px, py)
             assert nw.convex_point(sides, px, py) == pytest.approx(want, abs=1e-12)
 
-    from fibersweep.fiber.bezier import smooth_curves
+    from fibersweep.fiber.contact.bezier import smooth_curves
 
     curves = smooth_curves(tri, 2.0)
     smooth = Pillar(SMOOTH, tri, np.zeros((0, 2)), curves, 30.0, A, 1.0).arrays()
@@ -385,7 +385,7 @@ def test_one_bead_has_the_sphere_wall_mobility(gap, wall_angle):
     # a contact force through the rigid model (a still fluid: no push): a smooth square whose
     # repulsion reaches the bead (r_cut 2h)
     flow = _field(lambda x, y: 0.0 * x, lambda x, y: 0.0 * x)
-    from fibersweep.fiber.bezier import smooth_curves
+    from fibersweep.fiber.contact.bezier import smooth_curves
 
     centre = np.array([32.0, 60.0]) - (500.0 + h) * n
     sq = _square(wall_angle, centre)

@@ -85,7 +85,7 @@ def test_the_default_rule_is_confirmed_on_the_holdout_set(holdout):
     = 0.025); head-speed at most 0.70 (0.55 plus two, sqrt(.25/40) = 0.079); the default
     beats the source's rule by at least 0.25 (measured 0.425).
     """
-    from fibersweep.fiber.settings import ClassifySettings
+    from fibersweep.config.fiber import ClassifySettings
 
     done, got = holdout
     assert len(done) == 40 and done["label"].isin(CLASSES).all()

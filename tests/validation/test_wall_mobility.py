@@ -40,15 +40,15 @@ import math
 import numpy as np
 import pytest
 
-from fibersweep.fiber import wallmobility as wm
-from fibersweep.fiber.wallexact import (
+from fibersweep.fiber.hydro import wall_mobility as wm
+from fibersweep.fiber.hydro.first_reflection import wall_drag
+from fibersweep.fiber.hydro.wall_exact import (
     brenner_normal,
     normal_push,
     parallel_resistances,
     terms_needed,
     translation_force,
 )
-from fibersweep.fiber.wallhydro import wall_drag
 
 # Brenner (1961) Table 1, rigid plane: (α, λ⊥)
 BRENNER_1961 = (

@@ -15,7 +15,7 @@ Interface (see :class:`Effect`): override only the hooks you need.
 - ``kernel(DynamicsContext) -> record``: for an effect acting inside the Numba
   integrators, its kernel record (a NamedTuple of floats); the module also
   implements the kernel stages for that record type
-  (:mod:`fibersweep.fiber.hooks`), so the force or mobility change lives here,
+  (:mod:`fibersweep.fiber.kernel.hooks`), so the force or mobility change lives here,
   next to its parameter, and is compiled in only when the effect is on.
 - ``transform_result(RunResult, FiberStart, Geometry) -> RunResult``: the report;
   an effect that changes units changes every reported quantity back here.

@@ -71,7 +71,7 @@ class Effect:
         An effect that acts inside the Numba integrators returns its *kernel
         record* (a ``typing.NamedTuple`` of floats and scratch arrays, defined in its module) and
         implements the kernel stages it needs for that record type in the same
-        module (:func:`fibersweep.fiber.hooks.implements`); the integrators are
+        module (:func:`fibersweep.fiber.kernel.hooks.implements`); the integrators are
         compiled per set of active effects, so an effect that is off costs nothing.
         ``models`` lists the fiber models whose stages it implements.
     ``transform_result(result, start)``

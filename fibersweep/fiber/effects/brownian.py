@@ -18,7 +18,7 @@ import numpy as np
 
 from fibersweep.fiber.effects.base import DynamicsContext, Effect
 from fibersweep.fiber.effects.registry import register
-from fibersweep.fiber.hooks import implements
+from fibersweep.fiber.kernel.hooks import implements
 
 BOLTZMANN_PN_UM = 1.380649e-5  # k_B in pN·µm/K (1.380649e-23 J/K)
 ROOM_TEMPERATURE = 295.0  # K

@@ -21,8 +21,8 @@ import numpy as np
 
 from fibersweep.fiber.effects.base import DynamicsContext, Effect
 from fibersweep.fiber.effects.registry import register
-from fibersweep.fiber.hooks import implements
-from fibersweep.fiber.mobility import body_velocity
+from fibersweep.fiber.hydro.rpy import body_velocity
+from fibersweep.fiber.kernel.hooks import implements
 
 __all__ = ["Friction", "FrictionKernel", "coulomb_friction"]
 

@@ -5,7 +5,7 @@ Brenner: much more across the wall than along it) and is carried by the
 wall's flow more slowly than the fluid at its centre, across the wall (Goren &
 O'Neill) more than along it (Goldman, Cox & Brenner). This effect applies
 those exact sphere–plane results to each bead, with the local plane of the
-nearest pillar surface (:mod:`fibersweep.fiber.nearwall`, which says how the
+nearest pillar surface (:mod:`fibersweep.fiber.hydro.nearwall`, which says how the
 plane is taken at corners and how several beads and pillars combine). The
 value k multiplies every correction (λ − 1, c − 1); 1 is the theory. It
 differs from ``pillar_hydro`` (an isotropic first-reflection drag, no push,
@@ -27,15 +27,15 @@ import numpy as np
 
 from fibersweep.fiber.effects.base import DynamicsContext, Effect
 from fibersweep.fiber.effects.registry import register
-from fibersweep.fiber.hooks import implements
-from fibersweep.fiber.nearwall import (
+from fibersweep.fiber.hydro.nearwall import (
     bead_wall_mobility,
     new_scratch,
     rigid_wall_body,
     sides_of,
     wall_terms,
 )
-from fibersweep.fiber.rigid import FD_STEP
+from fibersweep.fiber.kernel.hooks import implements
+from fibersweep.fiber.models.rigid import FD_STEP
 
 __all__ = ["RIGID_REUSE", "NearWall", "NearWallKernel"]
 
@@ -57,7 +57,7 @@ class NearWallKernel(NamedTuple):
     ``px``, ``py``, ``sy`` periods and row shift; ``bounds`` of the one at the
     origin); scratch: ``roots`` (3,), ``b`` (NROWS, n) where each bead's terms
     were computed, its extra resistance, push map and force
-    (:func:`~fibersweep.fiber.nearwall.wall_terms`), ``nm`` (3, 3) the changed
+    (:func:`~fibersweep.fiber.hydro.nearwall.wall_terms`), ``nm`` (3, 3) the changed
     body mobility, ``m3`` (3, 3, 3) the rigid form's scratch.
     """
 

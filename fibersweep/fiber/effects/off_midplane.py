@@ -18,7 +18,7 @@ from typing import NamedTuple
 from fibersweep.errors import InputError
 from fibersweep.fiber.effects.base import DynamicsContext, Effect
 from fibersweep.fiber.effects.registry import register
-from fibersweep.fiber.hooks import implements
+from fibersweep.fiber.kernel.hooks import implements
 
 KERNEL_SECOND_MOMENT = 4.0 / 3.0 - 8.0 / math.pi**2  # in Δx², of φ(r) = ¼(1 + cos(πr/2))
 

@@ -6,7 +6,7 @@ the leading-order wall drag on each bead relative to its local fluid,
 ζ = k · 6πμa · β/(1 − β) · exp(−(h − a)/H_ch), β = (9/16) a/h, h the bead
 centre's distance to the pillar outline: the first-reflection (Faxén) drag
 increase of a sphere beside a plane wall, screened beyond the channel depth.
-k = 1 is that estimate. See :mod:`fibersweep.fiber.wallhydro` for the exact
+k = 1 is that estimate. See :mod:`fibersweep.fiber.hydro.first_reflection` for the exact
 rigid-body and bead-spring forms. The source estimated that fiber-pillar
 interactions slow the fiber by about 10 % near contact and turn it a little
 more.
@@ -21,8 +21,12 @@ import numpy as np
 
 from fibersweep.fiber.effects.base import DynamicsContext, Effect
 from fibersweep.fiber.effects.registry import register
-from fibersweep.fiber.hooks import implements
-from fibersweep.fiber.wallhydro import mobility_with_wall_drag, rigid_wall_velocity, wall_drag
+from fibersweep.fiber.hydro.first_reflection import (
+    mobility_with_wall_drag,
+    rigid_wall_velocity,
+    wall_drag,
+)
+from fibersweep.fiber.kernel.hooks import implements
 
 __all__ = ["PillarHydro", "PillarHydroKernel"]
 
@@ -62,7 +66,8 @@ class PillarHydro(Effect):
 
 @implements("rigid_mobility", PillarHydroKernel)
 def rigid_mobility(e, body, w, c, sn, vbx, vby, om, nm_eff):
-    """Rigid model: V = A⁻¹ V₀ and N' = A⁻¹ N (see :mod:`fibersweep.fiber.wallhydro`)."""
+    """Rigid model: V = A⁻¹ V₀ and N' = A⁻¹ N
+    (see :mod:`fibersweep.fiber.hydro.first_reflection`)."""
     if wall_drag(w.dist, e.a, e.strength, e.length, e.mu, e.zeta) > 0:
         vbx, vby, om = rigid_wall_velocity(body.s, nm_eff, e.zeta, vbx, vby, om, e.nm_eff)
         return vbx, vby, om, e.nm_eff

@@ -28,7 +28,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from fibersweep.config import parse_config
-from fibersweep.fiber.wallmobility import sphere_wall
+from fibersweep.fiber.hydro.wall_mobility import sphere_wall
 from fibersweep.flow.cell import solve_cell
 
 G = 40.0

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.dispersion import dispersion_test
 from fibersweep.discrepancy.estimate import Fit
@@ -40,7 +41,6 @@ from fibersweep.discrepancy.gap import assess_gap, observable_weights, value_mat
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
-from fibersweep.fiber.settings import FiberSettings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import BOX, DEFAULT_CACHE, study_field  # noqa: E402

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import t as student_t
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.candidates import get_candidates
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.estimate import Fit, _fiber_t, _slope_t
@@ -53,7 +54,6 @@ from fibersweep.discrepancy.workflow import (
     plan_budget,
     rank,
 )
-from fibersweep.fiber.settings import FiberSettings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import BOX, DEFAULT_CACHE, study_field  # noqa: E402

@@ -22,8 +22,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import DEFAULT_CACHE, STUDY_FLOW, study_field  # noqa: E402
 
+from fibersweep.config.flow import FlowSettings  # noqa: E402
 from fibersweep.flow.cache import get_flow_field  # noqa: E402
-from fibersweep.flow.settings import FlowSettings  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -37,6 +37,8 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import BOX, DEFAULT_CACHE, STUDY_FLOW, study_field  # noqa: E402
 
+from fibersweep.config.fiber import FiberSettings  # noqa: E402
+from fibersweep.config.flow import FlowSettings  # noqa: E402
 from fibersweep.discrepancy.declared import parse_candidate  # noqa: E402
 from fibersweep.discrepancy.report import summary  # noqa: E402
 from fibersweep.discrepancy.schema import validate_measured  # noqa: E402
@@ -46,9 +48,7 @@ from fibersweep.discrepancy.workflow import (  # noqa: E402
     run_discrepancy,
     settle_result,
 )
-from fibersweep.fiber.settings import FiberSettings  # noqa: E402
 from fibersweep.flow.cache import get_flow_field  # noqa: E402
-from fibersweep.flow.settings import FlowSettings  # noqa: E402
 
 FIBER = FiberSettings()
 

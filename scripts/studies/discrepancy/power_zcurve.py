@@ -18,12 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, value_matrices
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.power import _z_vector, ensemble_factor
 from fibersweep.discrepancy.simulate import Simulator
-from fibersweep.fiber.settings import FiberSettings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import DEFAULT_CACHE, study_field, uniform_starts  # noqa: E402

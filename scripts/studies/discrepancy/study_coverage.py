@@ -46,6 +46,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.estimate import score_interval
@@ -62,7 +63,6 @@ from fibersweep.discrepancy.workflow import (
     plan_budget,
     rank,
 )
-from fibersweep.fiber.settings import FiberSettings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import BOX, DEFAULT_CACHE, study_field, wilson  # noqa: E402

@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.config.fiber import ContactSettings, FiberSettings
 from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
 from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
 from fibersweep.discrepancy.dispersion import dispersion_test
@@ -52,7 +53,6 @@ from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
-from fibersweep.fiber.settings import ContactSettings, FiberSettings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import BOX, DEFAULT_CACHE, study_field, uniform_starts  # noqa: E402

@@ -31,10 +31,10 @@ import pandas as pd
 
 from fibersweep.analysis.classify import RULES, classify
 from fibersweep.analysis.observables import take, thin_indices
-from fibersweep.fiber.settings import ClassifySettings
-from fibersweep.flow.settings import FlowSettings
+from fibersweep.analysis.tables import trajectory_from_frame
+from fibersweep.config.fiber import ClassifySettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.sweep.manifest import read_manifest
-from fibersweep.sweep.relabel import trajectory_from_frame
 from fibersweep.sweep.store import read_runs, read_trajectories
 
 THRESHOLDS = (0.005, 0.01, 0.02, 0.03, 0.05)

@@ -19,11 +19,11 @@ from __future__ import annotations
 import argparse
 import logging
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.config.loading import load_config
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
 from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 
 EXAMPLES = ((-3.7, 0.373, 0.82), (8.0, 0.351, 0.75))  # the source's (θ0, y0/h, L/l_obs)
 SHORT = {"Above": "A", "Below": "B", "Trapping": "T", "Pole-vaulting": "PV"}

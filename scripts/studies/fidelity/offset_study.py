@@ -44,12 +44,12 @@ import time
 
 import numpy as np
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.analysis import flux_separatrix
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.field import FlowField
 from fibersweep.flow.lbm import solve_nested
 from fibersweep.flow.patch import compose, depth_factor, solve_patch_lattice
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.solver import field_from_solution
 from fibersweep.flow.streamlines import separatrix_y
 

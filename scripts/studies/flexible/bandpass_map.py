@@ -214,10 +214,10 @@ def more_plan(table: pd.DataFrame, runs: pd.DataFrame, args: argparse.Namespace)
       √(p(1 − p)/n) to ``--trap-se`` (0: no runs for the trapped share).
     - **Refinement.** Every bracket of f = 1/2 wider than ``--refine-tol`` [µm] whose two
       lengths are both within the target (the sort report's refinement,
-      :func:`fibersweep.sweep.refine_lengths.length_brackets`, on the merged runs) gets
+      :func:`fibersweep.sorting.lengths.length_brackets`, on the merged runs) gets
       its midpoint with ``--refine-count`` starts.
     """
-    from fibersweep.sweep.refine_lengths import length_brackets
+    from fibersweep.sorting.lengths import length_brackets
 
     rows = []
     pick = table[table["E"].isin(args.moduli)] if args.moduli else table

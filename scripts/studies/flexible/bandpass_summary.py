@@ -27,9 +27,10 @@ import numpy as np
 import pandas as pd
 
 from fibersweep.analysis.modes import ModeSettings
-from fibersweep.fiber.exclusion import min_self_distance
-from fibersweep.fiber.spacing import exclusion_gap
-from fibersweep.sweep import sort_report as sr
+from fibersweep.fiber.models.exclusion import min_self_distance
+from fibersweep.fiber.models.spacing import exclusion_gap
+from fibersweep.results import load_array_results
+from fibersweep.sorting import report as sr
 
 log = logging.getLogger(__name__)
 
@@ -44,7 +45,7 @@ ABBREV = {
 
 def summary(results: str) -> pd.DataFrame:
     """One row per (setting, length) of the sweep in ``results`` (see the module docstring)."""
-    runs, settings, cfg = sr.load_array_results(results)
+    runs, settings, cfg = load_array_results(results)
     runs = sr.relabel(runs, settings, ModeSettings(), cfg["fiber"]["classify"]["trap_speed"])
     has_beads = "traj_beads" in runs
     fiber_spacing = cfg["fiber"].get("bead_spacing", 1.0)
@@ -78,7 +79,7 @@ def summary(results: str) -> pd.DataFrame:
 
 def tension_by_mode(results: str) -> pd.DataFrame:
     """Median ``max_tension`` [nN] and runs per (setting, mode)."""
-    runs, settings, cfg = sr.load_array_results(results)
+    runs, settings, cfg = load_array_results(results)
     runs = sr.relabel(runs, settings, ModeSettings(), cfg["fiber"]["classify"]["trap_speed"])
     runs["label"] = runs["setting"].map(lambda i: settings[i]["label"])
     g = runs.groupby(["label", "mode"])["max_tension"]

@@ -1,7 +1,7 @@
 """The band-pass map's tables and figures, read from its results folders.
 
 ``summary`` reads every geometry's results with the sort report's own functions
-(:func:`~fibersweep.sweep.sort_report.relabel`, ``migration_table``,
+(:func:`~fibersweep.sorting.report.relabel`, ``migration_table``,
 ``critical_table``) and writes to OUT:
 
 - ``map.csv`` / ``map.parquet``: per (geometry, E, L) the runs, trapped share, mean f
@@ -77,7 +77,8 @@ def load_geometry(folders: list[Path]) -> tuple[pd.DataFrame, pd.DataFrame, dict
     first) is left out.
     """
     from fibersweep.analysis.modes import ModeSettings
-    from fibersweep.sweep import sort_report as sr
+    from fibersweep.results import load_array_results
+    from fibersweep.sorting import report as sr
     from fibersweep.sweep.store import read_runs
 
     parts, meta0, cfg0 = [], None, None
@@ -85,7 +86,7 @@ def load_geometry(folders: list[Path]) -> tuple[pd.DataFrame, pd.DataFrame, dict
         if folder is not folders[0] and read_runs(folder).empty:
             print(f"{folder.name}: no runs stored yet; left out", flush=True)
             continue
-        runs, meta, cfg = sr.load_array_results(folder)
+        runs, meta, cfg = load_array_results(folder)
         trap = cfg["fiber"]["classify"]["trap_speed"]
         runs = sr.relabel(runs, meta, ModeSettings(), trap)
         runs["E"] = [float(meta[s]["values"]["fiber.young_modulus"]) for s in runs["setting"]]
@@ -131,7 +132,7 @@ def result_folders(out: Path) -> dict[str, list[Path]]:
 
 def edges_table(table: pd.DataFrame) -> pd.DataFrame:
     """Every f = 1/2 crossing of each (geometry, E), and which are a band's edges."""
-    from fibersweep.sweep import sort_report as sr
+    from fibersweep.sorting import report as sr
 
     rows = []
     for (geom, e), g in table.groupby(["geometry", "E"], sort=True):

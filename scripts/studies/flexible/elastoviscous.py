@@ -2,7 +2,7 @@
 
 For each setting combination of CONFIG (with KEY=VALUE overrides) and each length of
 its sweep, μ̄ = 8πμγ̇L⁴/(Bc) with γ̇ = U_center / (pillar size)
-(:mod:`fibersweep.fiber.elastoviscous`), printed as a Markdown table: one row per
+(:mod:`fibersweep.fiber.models.elastoviscous`), printed as a Markdown table: one row per
 Young's modulus, one column per length. Lengths are µm in a pillar array and l_obs
 in a channel (converted to µm here).
 
@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 
 from fibersweep.config import axis_values, load_config
-from fibersweep.fiber.elastoviscous import elastoviscous_number, pillar_shear_rate
+from fibersweep.fiber.models.elastoviscous import elastoviscous_number, pillar_shear_rate
 
 
 def main() -> None:

@@ -24,11 +24,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.config.flow import FlowSettings
 from fibersweep.fiber.result import CLASSES, FiberStart
 from fibersweep.fiber.run import simulate
-from fibersweep.fiber.settings import FiberSettings
 from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.plots.chrono import chronophotograph
 from fibersweep.plots.style import paper_style, save_figure, subplots
 

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 from scipy.ndimage import binary_dilation
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.analysis import (
     flux_below_pillar,
     flux_separatrix,
@@ -45,7 +46,6 @@ from fibersweep.flow.analysis import (
     stream_function,
 )
 from fibersweep.flow.cache import cache_key, get_flow_field, load_entry
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.streamlines import separatrix_y
 
 DEFAULT_CACHE = Path(".fibersweep-cache/convergence")

@@ -21,9 +21,9 @@ import math
 import resource
 import time
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.analysis import flux_separatrix, peak_speeds
 from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.streamlines import separatrix_y
 
 

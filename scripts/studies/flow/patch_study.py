@@ -19,10 +19,10 @@ import time
 
 import numpy as np
 
+from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.cache import get_flow_field
 from fibersweep.flow.lbm import solve_nested
 from fibersweep.flow.patch import solve_patched
-from fibersweep.flow.settings import FlowSettings
 from fibersweep.flow.solver import field_from_solution
 from fibersweep.flow.streamlines import separatrix_y
 

@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.config.flow import FlowSettings, GeometrySettings
 from fibersweep.flow.analysis import flux_separatrix, peak_speeds
 from fibersweep.flow.cache import get_flow_field
-from fibersweep.flow.settings import FlowSettings, GeometrySettings
 from fibersweep.flow.streamlines import separatrix_y
 
 

@@ -1,0 +1,1 @@
+"""Fiber-pillar contact: the soft-core pair law, the rough and smooth pillar outlines."""

@@ -1,0 +1,1 @@
+"""Hydrodynamics of the beads: RPY mobility, and the sphere-wall resistances near the pillar."""

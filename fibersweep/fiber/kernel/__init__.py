@@ -1,0 +1,1 @@
+"""What every fiber kernel shares: typed input bundles, effect stages, the record and stop rule."""

@@ -1,0 +1,394 @@
+"""The inverse question of a sorter design: which array setting gives a critical length.
+
+A sweep over an array setting (``flow.array.shift``, a period, the pillar size or
+shape) gives a critical length per value (:func:`fibersweep.sorting.report.critical_table`).
+:func:`critical_curve` lays them out against the setting with their uncertainty;
+:func:`answer` reads the curve backwards: for a target critical length, the value
+of the setting that gives it, by linear interpolation between the two simulated
+values whose critical lengths bracket the target, with
+
+* its statistical error (the critical lengths' standard errors, propagated);
+* whether the simulated lengths decide it whatever the interpolation: each
+  critical length lies between two simulated lengths, so when neither bracket
+  holds the target the answer lies between the two values;
+* the values the lattice allows (a row shift ε λy and the periods must be whole
+  numbers of cells), and the runs to add to be sure: the answered value itself,
+  and where a critical length's bracket is wider than one bead, the lengths that
+  bisect it (:func:`fibersweep.sorting.report.refine_lengths`).
+
+A categorical setting (the pillar shape) is not interpolated: the answer is the
+simulated value whose critical length is nearest the target. Pure functions of
+the tables; nothing is simulated here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+__all__ = [
+    "ARRAY_KEYS",
+    "DesignAnswer",
+    "answer",
+    "critical_curve",
+    "design_key",
+    "lattice_neighbours",
+    "swept_keys",
+]
+
+#: Array settings a designer sweeps; any other swept numeric setting is taken too.
+ARRAY_KEYS = (
+    "flow.array.shift",
+    "flow.array.period_x",
+    "flow.array.period_y",
+    "flow.array.pillar_size",
+    "flow.array.pillar_shape",
+    "flow.array.pillar_rotation",
+)
+
+
+def swept_keys(settings: list[dict]) -> list[str]:
+    """Swept keys whose value differs between the setting combinations (sweep order)."""
+    keys: list[str] = []
+    for s in settings:
+        for k in s.get("values") or {}:
+            if k not in keys:
+                keys.append(k)
+    return [k for k in keys if len({repr((s.get("values") or {}).get(k)) for s in settings}) > 1]
+
+
+def design_key(settings: list[dict], key: str | None = None) -> str | None:
+    """The swept setting the critical length is read against, or None when none varies.
+
+    ``key`` names it (it must vary); otherwise the first swept array setting, else the
+    first swept setting.
+
+    Raises
+    ------
+    InputError
+        ``key`` is not a swept setting of these results (the valid ones listed).
+    """
+    from fibersweep.errors import InputError
+
+    keys = swept_keys(settings)
+    if key is not None:
+        if key not in keys:
+            raise InputError(
+                f"--setting {key!r}: not a swept setting of these results; valid: "
+                + (", ".join(keys) or "none (one setting combination)")
+            )
+        return key
+    array = [k for k in keys if k in ARRAY_KEYS]
+    return (array or keys or [None])[0]
+
+
+def critical_curve(
+    crit: pd.DataFrame, table: pd.DataFrame, settings: list[dict], key: str
+) -> pd.DataFrame:
+    """The critical length of each setting combination against ``key``.
+
+    The first length where f rises through 1/2 (the lower edge of a high-pass or
+    band-pass sorter); where f never rises through 1/2, the first where it falls
+    through it (a low-pass sorter, or a band's upper edge alone in the swept lengths).
+
+    Parameters
+    ----------
+    crit : DataFrame
+        :func:`fibersweep.sorting.report.critical_table`.
+    table : DataFrame
+        :func:`fibersweep.sorting.report.migration_table` (for the combinations
+        without a crossing: is f above or below 1/2 at every length?).
+    settings : list of dict
+        The settings of :func:`fibersweep.results.load_array_results`.
+    key : str
+        The swept setting (:func:`design_key`).
+
+    Returns
+    -------
+    DataFrame
+        One row per combination: ``setting``, ``value`` (of ``key``), ``group`` (the
+        other swept values, '' when only ``key`` varies), ``critical``, ``se``, ``lo``,
+        ``hi`` [µm], ``rising`` (f rises through 1/2 there; None without a crossing).
+        Without a crossing ``critical`` is NaN, and ``lo`` is the longest length when
+        f < 1/2 at every length, ``hi`` the shortest when f > 1/2 at every length.
+    """
+    others = [k for k in swept_keys(settings) if k != key]
+    rows = []
+    for i, s in enumerate(settings):
+        vals = s.get("values") or {}
+        mine = crit[crit["setting"] == i]
+        c = mine[mine["rising"].eq(True).fillna(False).to_numpy(bool)]
+        c = c if len(c) else mine  # no rising crossing: the first falling one
+        row = {
+            "setting": i,
+            "value": vals.get(key),
+            "group": ", ".join(f"{k.rsplit('.', 1)[-1]} = {vals.get(k)}" for k in others),
+            "rising": None,
+        }
+        if len(c):
+            r = c.iloc[0]
+            row.update(critical=r["critical"], se=r["se"], lo=r["lo"], hi=r["hi"],
+                       rising=bool(r["rising"]))  # fmt: skip
+        else:
+            g = table[table["setting"] == i].sort_values("length")
+            f = g["fraction_mean"].to_numpy(float)
+            below = bool(np.nanmax(f) < 0.5) if np.isfinite(f).any() else False
+            row.update(
+                critical=math.nan,
+                se=math.nan,
+                lo=float(g["length"].max()) if below else math.nan,
+                hi=math.nan if below else float(g["length"].min()),
+            )
+        rows.append(row)
+    columns = ["setting", "value", "group", "critical", "se", "lo", "hi", "rising"]
+    return pd.DataFrame(rows, columns=columns)
+
+
+def lattice_neighbours(key: str, value: float, flow: dict) -> tuple[float, float]:
+    """The nearest values of ``key`` at or below and at or above ``value`` that the
+    lattice allows (ε λy and the periods whole numbers of cells of ``flow['dx']``).
+
+    A setting the sub-grid wall resolves at any value (pillar size, rotation) is
+    returned as it is.
+    """
+    from fibersweep.config.array import ArraySettings
+    from fibersweep.geometry.array import ArrayError
+
+    name = key.rsplit(".", 1)[-1]
+    dx = float(flow["dx"])
+    arr = dict(flow["array"])
+    if name == "shift":
+        step = dx / float(arr["period_y"])
+    elif name in ("period_x", "period_y"):
+        step = dx
+    else:
+        return value, value
+
+    def valid(v: float) -> bool:
+        try:
+            ArraySettings.model_validate({**arr, name: v}).to_array().check_lattice(dx)
+        except (ArrayError, ValueError):
+            return False
+        return True
+
+    base = value / step
+    lo = next(
+        (
+            round(k * step, 12)
+            for k in range(math.floor(base + 1e-9), -1, -1)
+            if valid(round(k * step, 12))
+        ),
+        math.nan,
+    )
+    hi = next(
+        (
+            round(k * step, 12)
+            for k in range(math.ceil(base - 1e-9), math.ceil(base) + 200)
+            if valid(round(k * step, 12))
+        ),
+        math.nan,
+    )
+    return lo, hi
+
+
+@dataclass(frozen=True)
+class DesignAnswer:
+    """Which value of a swept setting gives a target critical length.
+
+    Attributes
+    ----------
+    key : str
+        The setting.
+    target : float
+        Target critical length [µm].
+    value : float or str or None
+        The answer (interpolated; for a categorical setting the nearest simulated one);
+        None when the target is outside the simulated critical lengths.
+    se : float
+        Statistical error of ``value`` (NaN when not interpolated).
+    span : tuple of float
+        The two simulated values the answer lies between whatever the interpolation:
+        the brackets of their critical lengths lie on either side of the target (NaN
+        when a bracket holds the target: the simulated lengths do not decide yet).
+    between : tuple
+        The two simulated values it was interpolated between (or the nearest ones).
+    lattice : tuple of float
+        Nearest values the lattice allows, at or below and at or above ``value``.
+    text : str
+        The answer in one sentence.
+    add : list of str
+        What to run to be sure.
+    """
+
+    key: str
+    target: float
+    value: float | str | None
+    se: float = math.nan
+    span: tuple[float, float] = (math.nan, math.nan)
+    between: tuple = ()
+    lattice: tuple[float, float] = (math.nan, math.nan)
+    text: str = ""
+    add: list[str] = field(default_factory=list)
+
+
+def _interp(v0: float, v1: float, c0: float, c1: float, target: float) -> float:
+    return v0 + (target - c0) / (c1 - c0) * (v1 - v0)
+
+
+def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float) -> DesignAnswer:
+    """The value of ``key`` whose critical length is ``target`` [µm] (module docstring).
+
+    Parameters
+    ----------
+    curve : DataFrame
+        :func:`critical_curve` of one group (the other swept values fixed).
+    key : str
+    target : float
+        Target critical length [µm].
+    flow : dict
+        The flow settings of the sweep (``dx``, ``array``): the lattice's allowed values.
+    bead : float
+        Length of one bead, 2a [µm]: brackets this narrow are located (a fiber has
+        round(L / 2a) beads, so lengths closer than that are the same fiber).
+    """
+    name = key.rsplit(".", 1)[-1]
+    c = curve.dropna(subset=["critical"])
+    if not pd.api.types.is_numeric_dtype(curve["value"]):
+        if c.empty:
+            return DesignAnswer(
+                key,
+                target,
+                None,
+                text="no value of the setting has a critical length in the swept lengths",
+            )
+        best = c.iloc[int(np.argmin(np.abs(c["critical"].to_numpy() - target)))]
+        return DesignAnswer(
+            key,
+            target,
+            best["value"],
+            between=(best["value"],),
+            text=f"{name} = {best['value']} gives the critical length nearest {target:g} µm: "
+            f"{best['critical']:.1f} ± {best['se']:.1f} µm (not interpolated: {name} is "
+            "not a number)",
+        )
+    c = c.sort_values("value")
+    v = c["value"].to_numpy(float)
+    lc = c["critical"].to_numpy(float)
+    se = np.nan_to_num(c["se"].to_numpy(float))
+    lo, hi = c["lo"].to_numpy(float), c["hi"].to_numpy(float)
+    add: list[str] = []
+    # a curve without the column (made by hand, or read from an older critical.csv): rising
+    rising = (
+        ~c["rising"].eq(False).fillna(False).to_numpy(bool)
+        if "rising" in c
+        else np.ones(len(c), bool)
+    )
+    mixed = False
+    for k in range(len(v) - 1):
+        if (lc[k] - target) * (lc[k + 1] - target) > 0 or lc[k] == lc[k + 1]:
+            continue
+        if rising[k] != rising[k + 1]:
+            mixed = True
+            continue  # a lower edge and an upper edge are not one curve
+        w = (target - lc[k]) / (lc[k + 1] - lc[k])
+        val = v[k] + w * (v[k + 1] - v[k])
+        sig = (
+            abs(v[k + 1] - v[k])
+            / abs(lc[k + 1] - lc[k])
+            * math.hypot((1 - w) * se[k], w * se[k + 1])
+        )
+        # model-free: the crossing lies in each bracket [lo, hi] whatever the interpolation;
+        # when neither bracket holds the target, the answer lies between the two values
+        decided = not (lo[k] <= target <= hi[k] or lo[k + 1] <= target <= hi[k + 1])
+        span = (min(v[k], v[k + 1]), max(v[k], v[k + 1])) if decided else (math.nan, math.nan)
+        grid = lattice_neighbours(key, val, flow)
+        for j in (k, k + 1):
+            if hi[j] - lo[j] > bead * (1 + 1e-9):
+                add.append(
+                    f"{name} = {v[j]:g}: its critical length is bracketed by {lo[j]:g} and "
+                    f"{hi[j]:g} µm; add the length {0.5 * (lo[j] + hi[j]):g} µm to narrow it"
+                )
+        near = grid[0] if abs(grid[0] - val) <= abs(grid[1] - val) else grid[1]
+        done = np.flatnonzero(np.isclose(v, near, rtol=0, atol=1e-9))
+        if done.size:  # the check has run: what it says
+            j = int(done[0])
+            holds = lo[j] <= target <= hi[j]
+            one_bead = hi[j] - lo[j] <= bead * (1 + 1e-9)
+            checked = (
+                f"; {name} = {near:g}, the value the lattice allows nearest, is simulated: "
+                f"its critical length {lc[j]:.1f} ± {se[j]:.1f} µm, between the simulated "
+                f"{lo[j]:g} and {hi[j]:g} µm"
+                + (
+                    f", which hold {target:g} µm"
+                    + (
+                        " (to one bead: as close as lengths go)"
+                        if one_bead
+                        else "; narrow the bracket to be sure (below)"
+                    )
+                    if holds
+                    else f", which do not hold {target:g} µm"
+                )
+            )  # fmt: skip
+            text = (
+                f"{name} = {val:.4g} ± {sig:.2g} gives a critical length of {target:g} µm "
+                f"(interpolated between {name} = {v[k]:g}: {lc[k]:.1f} µm and {name} = "
+                f"{v[k + 1]:g}: {lc[k + 1]:.1f} µm){checked}"
+            )
+            return DesignAnswer(key, target, float(val), float(sig), span, (v[k], v[k + 1]),
+                                grid, text, add)  # fmt: skip
+        if grid[0] != grid[1] and math.isfinite(near):
+            add.insert(
+                0,
+                f"{name} = {near:g} (the value the lattice allows nearest {val:.4g}; "
+                f"the other side: {grid[1] if near == grid[0] else grid[0]:g}), with "
+                f"lengths around {target:g} µm: the check",
+            )
+        else:
+            add.insert(0, f"{name} = {val:.4g} with lengths around {target:g} µm: the check")
+        text = (
+            f"{name} = {val:.4g} ± {sig:.2g} gives a critical length of {target:g} µm "
+            f"(interpolated between {name} = {v[k]:g}: {lc[k]:.1f} µm and {name} = "
+            f"{v[k + 1]:g}: {lc[k + 1]:.1f} µm)"
+        )
+        if decided:
+            text += (
+                f"; whatever the interpolation, between {span[0]:g} and {span[1]:g} (the "
+                f"brackets of their critical lengths lie on either side of {target:g} µm)"
+            )
+        else:
+            text += (
+                f"; not yet decided: a critical length's bracket of simulated lengths holds "
+                f"{target:g} µm, narrow it first (below)"
+            )
+        return DesignAnswer(
+            key, target, float(val), float(sig), span, (v[k], v[k + 1]), grid, text, add
+        )
+    if c.empty:
+        text = f"no value of {name} has a critical length in the swept lengths: widen sweep.length"
+        return DesignAnswer(key, target, None, text=text)
+    if mixed:
+        text = (
+            f"the critical lengths on either side of {target:g} µm are a lower edge (f rises "
+            f"through 1/2) and an upper edge (f falls): not one curve, nothing to interpolate"
+        )
+        add = [f"values of {name} between those two, to find where the edge of one kind "
+               f"reaches {target:g} µm"]  # fmt: skip
+        return DesignAnswer(key, target, None, text=text, add=add)
+    k_near = int(np.argmin(np.abs(lc - target)))
+    rng = f"{lc.min():.1f} to {lc.max():.1f} µm over {name} = {v.min():g} to {v.max():g}"
+    side = "above" if target > lc.max() else "below" if target < lc.min() else "inside"
+    text = (
+        f"{target:g} µm is {side} the critical lengths simulated ({rng}); nothing to "
+        f"interpolate: the nearest is {lc[k_near]:.1f} µm at {name} = {v[k_near]:g}"
+    )
+    if side != "inside":
+        grow = (lc[-1] - lc[0]) * (1 if side == "above" else -1) > 0
+        edge = v.max() if grow else v.min()
+        add.append(
+            f"values of {name} {'beyond' if grow else 'below'} {edge:g}, where the "
+            "critical length moves towards the target"
+        )
+    return DesignAnswer(key, target, None, between=(v[k_near],), text=text, add=add)
