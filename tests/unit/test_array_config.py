@@ -16,6 +16,7 @@ from fibersweep.config.fiber import FiberSettings
 from fibersweep.config.flow import FlowSettings
 from fibersweep.flow.cache import cache_key
 from fibersweep.sweep.draws import start_points
+from fibersweep.sweep.starts import PHYSICS
 
 ARRAY = {"flow": {"dx": 4.0, "array": {}}, "sweep": {"length": [20.0], "y0": 0.9}}
 
@@ -67,7 +68,7 @@ def test_an_array_takes_the_channels_collision_settings_and_keeps_3d(tmp_path):
 )
 def test_bad_array_configs_name_the_field(data, field):
     with pytest.raises((ConfigError, FieldError, ValueError)) as exc:
-        parse_config(data)
+        parse_config(data, physics=PHYSICS)
     assert field in str(exc.value)
 
 

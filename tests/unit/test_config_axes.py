@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from fibersweep.config import ConfigError, load_config, parse_config, setting_column
+from fibersweep.sweep.starts import PHYSICS
 
 
 def _write(tmp_path, text):
@@ -121,7 +122,7 @@ def test_bad_axes_name_the_key_and_line(tmp_path, line, expected):
     if "y0:" not in line:
         text += "  y0: 0.8\n"
     with pytest.raises(ConfigError) as ei:
-        load_config(_write(tmp_path, text))
+        load_config(_write(tmp_path, text), physics=PHYSICS)
     assert expected in str(ei.value), str(ei.value)
     assert len(ei.value.problems) == 1
 
@@ -147,10 +148,10 @@ def test_bad_axis_in_an_override_is_named_as_the_override(tmp_path):
 def test_each_combination_gets_the_fast_start_check():
     """A start inside the channel for one pillar height is outside it for another: named."""
     ok = {"sweep": {"y0": 2.0, "flow.geometry.pillar_height": [75, 200]}}
-    assert len(parse_config(ok).combinations()) == 2
+    assert len(parse_config(ok, physics=PHYSICS).combinations(PHYSICS)) == 2
     bad = {"sweep": {"y0": 2.0, "flow.geometry.pillar_height": [75, 300]}}
     with pytest.raises(ConfigError) as ei:
-        parse_config(bad)
+        parse_config(bad, physics=PHYSICS)
     msg = str(ei.value)
     assert "sweep.flow.geometry.pillar_height: with flow.geometry.pillar_height = 300: " in msg
     assert "sweep.y0: y0/h = 2.0" in msg and "outside the channel" in msg, msg

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from fibersweep.config import ConfigError, load_config, parse_config
-from fibersweep.sweep.starts import grid_starts
+from fibersweep.sweep.starts import PHYSICS, grid_starts
 
 
 def _write(tmp_path, text):
@@ -105,10 +105,10 @@ def test_sweep_points_are_checked_before_any_flow_is_computed(tmp_path, text, ex
     """Starts outside the channel, unresolvable lengths: config error at the sweep field."""
     p = _write(tmp_path, text)
     if expected is None:
-        assert grid_starts(load_config(p).sweep)  # a valid start far upstream of the pillar
+        assert grid_starts(load_config(p, physics=PHYSICS).sweep)  # far upstream: valid
         return
     with pytest.raises(ConfigError) as ei:
-        load_config(p)
+        load_config(p, physics=PHYSICS)
     assert expected in str(ei.value)
     assert len(ei.value.problems) == 1
 
@@ -117,13 +117,13 @@ def test_start_on_the_pillar_is_a_config_error(tmp_path):
     # x0 at the pillar's centre puts every bead of a centred fiber inside it.
     p = _write(tmp_path, "fiber:\n  x0: 1200\nsweep:\n  y0: 0.333\n")
     with pytest.raises(ConfigError, match=r"sweep\.y0 \(line 4\): .*overlaps the pillar"):
-        load_config(p)
+        load_config(p, physics=PHYSICS)
 
 
 def test_fiber_that_does_not_fit_the_channel_length_names_fiber_x0(tmp_path):
     p = _write(tmp_path, "fiber:\n  x0: 1\nsweep:\n  y0: 0.9\n")
     with pytest.raises(ConfigError, match=r"fiber\.x0 \(line 2\): the fiber at x0 = 1"):
-        load_config(p)
+        load_config(p, physics=PHYSICS)
 
 
 def test_prefiltered_start_check_keeps_every_failing_point():

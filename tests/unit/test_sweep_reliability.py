@@ -22,9 +22,9 @@ from fibersweep.config.fiber import ClassifySettings
 from fibersweep.errors import ResultsError
 from fibersweep.sweep import store
 from fibersweep.sweep.check import check_folder
-from fibersweep.sweep.starts import grid_starts
 from fibersweep.sweep.lock import LOCK_FILE, FolderLocked, lock_holder, output_lock
 from fibersweep.sweep.reclassify import reclassify
+from fibersweep.sweep.starts import grid_starts
 from fibersweep.sweep.store import (
     RUNS_DIR,
     TRAJ_DIR,
