@@ -6,11 +6,13 @@ __all__ = [
     "RUN_ERRORS",
     "FibersweepError",
     "FieldError",
+    "FieldErrors",
     "InputError",
     "ResultsError",
     "RunBug",
     "SolverError",
     "Terminated",
+    "UnreadableResults",
 ]
 
 
@@ -36,14 +38,36 @@ class FieldError(ValueError):
         self.path = tuple(path) if isinstance(path, tuple) else tuple(path.split("."))
 
 
+class FieldErrors(ValueError):
+    """Several independent checks of one model that failed, each a :class:`FieldError`.
+
+    Raised by a model validator that runs all its checks (instead of stopping at the
+    first); the config loader reports each at its own field and line.
+    """
+
+    def __init__(self, errors: list[FieldError]) -> None:
+        super().__init__("; ".join(str(e) for e in errors))
+        self.errors = list(errors)
+
+
 class SolverError(FibersweepError, RuntimeError):
     """A computation that failed (divergence, NaN). CLI exit code 1."""
 
 
 class ResultsError(FibersweepError, OSError):
-    """Stored results that cannot be read or written (a broken part, a full disk). Exit 1.
+    """Stored results that cannot be written (a full disk) or read. Exit 1, but see
+    :class:`UnreadableResults` (exit 2).
 
     The message names the file and the cause; nothing that was not read is deleted.
+    """
+
+
+class UnreadableResults(ResultsError, InputError):
+    """A stored part (or other results file) a command was given and cannot read. Exit 2.
+
+    Bad input to the command that reads it (an :class:`InputError`), named once in
+    the message with the cause and the repair; still a :class:`ResultsError` (and
+    an OSError) for the code that handles broken results.
     """
 
 

@@ -18,7 +18,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from fibersweep.errors import FieldError
+from fibersweep.config.errors import FieldError, all_checks
 from fibersweep.geometry import PILLAR_SHAPES, check_shape_name
 from fibersweep.geometry.array import ArrayError, PillarArray
 
@@ -27,7 +27,7 @@ from fibersweep.geometry.array import ArrayError, PillarArray
 #: pillar image (the flow's lattice reads it from here).
 EDGE_CELLS = 4
 
-__all__ = ["ArraySettings", "check_array_flow"]
+__all__ = ["ArraySettings", "array_on_lattice", "check_array_flow"]
 
 
 class ArraySettings(BaseModel):
@@ -79,30 +79,51 @@ def check_array_flow(array: ArraySettings, dx: float, boundary: str, symmetry: b
     """The unit cell's lattice: whole cells, enough depth nodes, the wall clear of the edges.
 
     Checked when the settings are, before any field is computed
-    (:func:`fibersweep.flow.cell.solve_cell` relies on them).
+    (:func:`fibersweep.flow.cell.solve_cell` relies on them). A length within
+    :data:`~fibersweep.geometry.array.LATTICE_TOLERANCE` (1e-3 µm) of a whole number
+    of cells counts as that number (:func:`array_on_lattice` gives the settings
+    with it). Every problem is reported, each at its field.
 
     Raises
     ------
-    FieldError
+    FieldError or FieldErrors
         At ``array.<field>`` (a length or the shift not whole in cells) or ``dx``.
     """
     arr = array.to_array()
-    try:
-        arr.check_lattice(dx)
-    except ArrayError as exc:
-        raise FieldError(("array", exc.field), str(exc)) from None
-    nz = int(round(arr.depth / dx))
-    if nz < 8 or (symmetry and nz % 2):
-        raise FieldError(
-            "dx",
-            f"dx = {dx} µm gives {nz} nodes across the array's depth {arr.depth} µm; at least "
-            "8 (an even number with symmetry: true) are needed",
-        )
-    x0, y0, x1, y1 = arr.shape.bounds
-    edge = min(x0, y0, arr.period_x - x1, arr.period_y - y1) / dx
-    if boundary != "staircase" and edge < EDGE_CELLS:
-        raise FieldError(
-            "dx",
-            f"the pillar is {edge:.1f} cells from the unit cell's edge; the sub-grid wall "
-            f"needs {EDGE_CELLS} (refine dx, widen the gaps, or pillar_boundary: staircase)",
-        )
+    checks: list = [
+        lambda e=e: _raise(FieldError(("array", e.field), str(e))) for e in arr.lattice_problems(dx)
+    ]
+
+    def depth_nodes() -> None:
+        nz = int(round(arr.depth / dx))
+        if nz < 8 or (symmetry and nz % 2):
+            raise FieldError(
+                "dx",
+                f"dx = {dx} µm gives {nz} nodes across the array's depth {arr.depth} µm; at "
+                "least 8 (an even number with symmetry: true) are needed",
+            )
+
+    def edge_clear() -> None:
+        x0, y0, x1, y1 = arr.shape.bounds
+        edge = min(x0, y0, arr.period_x - x1, arr.period_y - y1) / dx
+        if boundary != "staircase" and edge < EDGE_CELLS:
+            raise FieldError(
+                "dx",
+                f"the pillar is {edge:.1f} cells from the unit cell's edge; the sub-grid wall "
+                f"needs {EDGE_CELLS} (refine dx, widen the gaps, or pillar_boundary: staircase)",
+            )
+
+    all_checks(*checks, depth_nodes, edge_clear)
+
+
+def array_on_lattice(array: ArraySettings, dx: float) -> ArraySettings:
+    """``array`` with the lengths :func:`check_array_flow` took as whole numbers of cells
+    set to them exactly (the same object when all are whole as written), so the flow's
+    lattice and the fibers' array are the same and a config gives the same results
+    however its values were rounded."""
+    update = array.to_array().on_lattice(dx)
+    return array.model_copy(update=update) if update else array
+
+
+def _raise(exc: Exception) -> None:
+    raise exc

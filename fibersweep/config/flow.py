@@ -15,9 +15,10 @@ from pydantic import (
     model_validator,
 )
 
-from fibersweep.config.array import ArraySettings, check_array_flow
-from fibersweep.errors import FieldError
+from fibersweep.config.array import ArraySettings, array_on_lattice, check_array_flow
+from fibersweep.config.errors import FieldError, all_checks
 from fibersweep.geometry import PILLAR_SHAPES, ConvexPolygon, Geometry, check_shape_name
+from fibersweep.geometry.array import LATTICE_TOLERANCE, on_lattice, whole_cells
 from fibersweep.units import Fluid
 
 __all__ = [
@@ -210,11 +211,10 @@ class FlowSettings(_Strict):
                 f"{geom.depth} µm; at least {MIN_DEPTH_NODES} are needed"
             )
         for name in ("width", "depth", "length"):
-            n = getattr(geom, name) / dx
-            if abs(n - round(n)) > 1e-9:
+            if whole_cells(getattr(geom, name), dx) is None:
                 raise ValueError(
                     f"geometry.{name} = {getattr(geom, name)} µm is not a whole "
-                    f"number of dx = {dx} µm"
+                    f"number of dx = {dx} µm (within {LATTICE_TOLERANCE:g} µm)"
                 )
         return dx
 
@@ -245,42 +245,67 @@ class FlowSettings(_Strict):
         return data
 
     @model_validator(mode="after")
-    def _array_cell(self) -> FlowSettings:
+    def _checks(self) -> FlowSettings:
+        """The array's cell, the patch's grid and the tolerance, all checked (each failure
+        at its field); then the lengths taken as whole numbers of cells are set to them
+        (:meth:`_on_lattice`)."""
+        all_checks(self._array_cell, self._patch_grid, self._reachable_tolerance)
+        self._on_lattice()
+        return self
+
+    def _on_lattice(self) -> None:
+        """Lengths accepted within :data:`~fibersweep.geometry.array.LATTICE_TOLERANCE` of
+        a whole number of cells become that number exactly (a value whole as written keeps
+        its bits), so the solver's lattice, the fibers' geometry, the cache key and the
+        run ids all use one value. Set during validation (the model is frozen after)."""
+        if self.array is not None:
+            snapped = array_on_lattice(self.array, self.dx)
+            if snapped is not self.array:
+                object.__setattr__(self, "array", snapped)
+            return
+        geo = self.geometry
+        update = {n: on_lattice(getattr(geo, n), self.dx) for n in ("width", "depth", "length")}
+        update = {n: v for n, v in update.items() if v != getattr(geo, n)}
+        if update:
+            object.__setattr__(self, "geometry", geo.model_copy(update=update))
+        if self.patch is not None:
+            k = round(self.dx / self.patch.dx)
+            if abs(self.dx / self.patch.dx - k) > 1e-9:
+                patch = self.patch.model_copy(update={"dx": self.dx / k})
+                object.__setattr__(self, "patch", patch)
+
+    def _array_cell(self) -> None:
         """With ``array``: the settings that cannot apply to a unit cell are refused away
         from their defaults, with the reason, and the lattice must fit the cell
         (:func:`check_array_flow`)."""
         if self.array is None:
-            return self
+            return
         for name, why in _NOT_FOR_ARRAYS.items():
             if getattr(self, name) != type(self).model_fields[name].default:
                 raise FieldError(name, f"not used with flow.array: {why}; leave flow.{name} out")
         check_array_flow(self.array, self.dx, self.pillar_boundary, self.symmetry)
-        return self
 
-    @model_validator(mode="after")
-    def _patch_grid(self) -> FlowSettings:
+    def _patch_grid(self) -> None:
         """A patch divides dx a whole number of times (2 or more) and the depth into whole
-        (even with symmetry) nodes; no keep_3d with a patch."""
+        (even with symmetry) nodes, within 1e-3 µm; no keep_3d with a patch."""
         if self.patch is None:
-            return self
+            return
         if self.keep_3d:
             raise ValueError("keep_3d: true is not available with a patch (patch: null)")
-        ratio = self.dx / self.patch.dx
-        if ratio < 2 - 1e-9 or abs(ratio - round(ratio)) > 1e-9:
+        k = whole_cells(self.dx, self.patch.dx)
+        if k is None or k < 2:
             raise ValueError(
                 f"patch.dx = {self.patch.dx} µm must divide dx = {self.dx} µm a whole number "
-                "of times (2 or more)"
+                f"of times (2 or more, within {LATTICE_TOLERANCE:g} µm)"
             )
-        n = self.geometry.depth / self.patch.dx
-        if abs(n - round(n)) > 1e-9 or (self.symmetry and round(n) % 2):
+        n = whole_cells(self.geometry.depth, self.dx / k)
+        if n is None or (self.symmetry and n % 2):
             raise ValueError(
                 f"patch.dx = {self.patch.dx} µm must give a whole (even with symmetry) "
                 f"number of nodes across the depth {self.geometry.depth} µm"
             )
-        return self
 
-    @model_validator(mode="after")
-    def _reachable_tolerance(self) -> FlowSettings:
+    def _reachable_tolerance(self) -> None:
         """float32 populations cannot resolve a tolerance below 1e-7."""
         if self.precision == "float32" and self.tolerance < FLOAT32_MIN_TOLERANCE:
             raise ValueError(
@@ -288,4 +313,3 @@ class FlowSettings(_Strict):
                 f"resolve (the relative change per check levels off near 7e-8); use a "
                 f"tolerance >= {FLOAT32_MIN_TOLERANCE:g} or precision: float64"
             )
-        return self

@@ -21,7 +21,7 @@ from pydantic import (
     ValidationError,
 )
 
-from fibersweep.config.errors import ConfigError, FieldError, error_parts
+from fibersweep.config.errors import ConfigError, FieldError, error_parts, expand
 from fibersweep.config.schema import Config, _unwrap
 from fibersweep.config.sweep_axes import PhysicsChecks
 
@@ -150,16 +150,39 @@ def parse_config(
         data = {}
     if not isinstance(data, dict):
         raise ConfigError([f"<top level>: expected a mapping, got {type(data).__name__}"], source)
+    context = {"executors": executors, "physics": physics}
     try:
-        context = {"executors": executors, "physics": physics}
         return Config.model_validate(data, context=context)
     except ValidationError as exc:
+        errors = [*exc.errors(), *_whole_config_errors(data, exc.errors(), context)]
         seen: list[str] = []
-        for err in exc.errors():
-            msg = _describe(err, lines or {})
-            if msg not in seen:
-                seen.append(msg)
+        for err in errors:
+            for one in expand(err):  # a model's several failed checks, each at its field
+                msg = _describe(one, lines or {})
+                if msg not in seen:
+                    seen.append(msg)
         raise ConfigError(seen, source) from None
+
+
+def _whole_config_errors(data: dict, errors: list, context: dict[str, Any]) -> list:
+    """The whole config's checks that a section's problem kept from running.
+
+    Pydantic runs a model's own checks only when all its fields are valid, so a
+    misspelled key in one section would hide, say, a start point on the pillar
+    (checked with flow, fiber and sweep). The config is validated again with the
+    failed sections (and unknown top-level keys) left at their defaults, and each
+    whole-config check runs when the sections it reads are valid
+    (:meth:`Config._whole_config`); its problems are reported with the sections'.
+    """
+    if any(not err["loc"] for err in errors):  # the whole config's checks ran already
+        return []
+    failed = {err["loc"][0] for err in errors}
+    kept = {k: v for k, v in data.items() if k in Config.model_fields and k not in failed}
+    try:
+        Config.model_validate(kept, context={**context, "failed_sections": failed})
+    except ValidationError as exc:
+        return [err for err in exc.errors() if not err["loc"]]
+    return []
 
 
 def apply_overrides(

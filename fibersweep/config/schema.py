@@ -21,7 +21,7 @@ from typing import Any
 from pydantic import BaseModel, Field, ValidationInfo, field_validator, model_validator
 
 from fibersweep.config.axes import DEFAULT_MAX_POINTS, _Strict
-from fibersweep.config.errors import FieldError
+from fibersweep.config.errors import FieldError, all_checks
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.config.flow import FlowSettings
 from fibersweep.config.sweep_axes import (
@@ -74,6 +74,11 @@ class RunSettings(_Strict):
     )
 
     @model_validator(mode="after")
+    def _checks(self, info: ValidationInfo) -> RunSettings:
+        """The executor and the scheduler, both checked (each failure at its field)."""
+        all_checks(lambda: self._known_executor(info), self._scheduler_address)
+        return self
+
     def _known_executor(self, info: ValidationInfo) -> RunSettings:
         """Check the executor's name and options against the registry the caller passes.
 
@@ -98,7 +103,6 @@ class RunSettings(_Strict):
                 )
         return self
 
-    @model_validator(mode="after")
     def _scheduler_address(self) -> RunSettings:
         """A scheduler is an address like tcp://HOST:PORT."""
         if self.scheduler is not None and "://" not in self.scheduler:
@@ -143,8 +147,39 @@ class Config(_Strict):
         return sweep
 
     @model_validator(mode="after")
-    def _size_within_limit(self) -> Config:
-        """Refuse huge sweeps at once, before any point is made (counted, not listed).
+    def _whole_config(self, info: ValidationInfo) -> Config:
+        """The checks across sections, all of them (each failure at its field).
+
+        Each runs when the sections it reads are valid: the loader validates a
+        config whose sections failed again with those at their defaults, naming them
+        in the context (``failed_sections``), so the other checks still report
+        (:func:`fibersweep.config.loading.parse_config`). The checks that make the
+        sweep's points (combinations, starts) run only on a sweep within
+        ``run.max_points``.
+        """
+        context = info.context or {}
+        failed = set(context.get("failed_sections") or ())
+        physics = context.get("physics")
+
+        def ready(*sections: str) -> bool:
+            return not failed.intersection(sections)
+
+        checks = []
+        size = self._size_problem()
+        if size is not None and ready("sweep", "run"):
+            checks.append(lambda: _raise(size))
+        if ready("sweep", "flow"):
+            checks.append(self._random_refine_in_arrays_only)
+        # the points are made only for a sweep of a size allowed (by the default limit
+        # when the run section failed)
+        if size is None and ready("flow", "fiber", "sweep"):
+            checks.append(lambda: self._combinations_valid(physics))
+            checks.append(lambda: self._starts_fit(physics))
+        all_checks(*checks)
+        return self
+
+    def _size_problem(self) -> FieldError | None:
+        """Huge sweeps are refused at once, before any point is made (counted, not listed).
 
         Every setting combination counts: the limit is on start points times
         combinations.
@@ -156,19 +191,17 @@ class Config(_Strict):
             how = f" ({starts:,} starts x {combos:,} setting combinations)" if combos > 1 else ""
             if extra:
                 how += f" (with the {extra:,} refinement runs of sweep.refine.max_runs)"
-            raise FieldError(
+            return FieldError(
                 "sweep",
                 f"{n:,} points{how}, more than run.max_points ({self.run.max_points:,}); "
                 "use fewer points, or raise run.max_points (or --max-points) if you mean it",
             )
-        return self
+        return None
 
-    @model_validator(mode="after")
-    def _combinations_valid(self, info: ValidationInfo) -> Config:
+    def _combinations_valid(self, physics: PhysicsChecks | None) -> None:
         """Every setting combination is a valid config (same schema, same physics checks)."""
         if self.sweep.setting_keys:
-            self.combinations((info.context or {}).get("physics"))
-        return self
+            self.combinations(physics)
 
     def combinations(self, physics: PhysicsChecks | None = None) -> list[Combination]:
         """The configs the sweep runs: one per combination of the setting axes.
@@ -186,8 +219,7 @@ class Config(_Strict):
         """
         return combinations(self, physics)
 
-    @model_validator(mode="after")
-    def _random_refine_in_arrays_only(self) -> Config:
+    def _random_refine_in_arrays_only(self) -> None:
         """Random starts are refined along the length by the mean displacement fraction,
         which only pillar-array runs have (:mod:`fibersweep.sorting.lengths`)."""
         sw = self.sweep
@@ -197,20 +229,20 @@ class Config(_Strict):
                 "with sweep.random, refinement locates a pillar array's critical length "
                 "(flow.array); a channel sweep refines a grid of starts (no sweep.random)",
             )
-        return self
 
-    @model_validator(mode="after")
-    def _starts_fit(self, info: ValidationInfo) -> Config:
+    def _starts_fit(self, physics: PhysicsChecks | None) -> None:
         """Every sweep point must be a fiber the grid resolves, in the channel, off the pillar.
 
         Checked here, before any flow field is computed, when the caller hands in the
         physics checks (``load_config(..., physics=PHYSICS)``; the config imports no
         fiber model).
         """
-        physics = (info.context or {}).get("physics")
         if physics is not None:
             physics.check(self)
-        return self
+
+
+def _raise(exc: Exception) -> None:
+    raise exc
 
 
 def _unwrap(ann: Any) -> Any:

@@ -36,7 +36,7 @@ from fibersweep.config.axes import (
     setting_axis_count,
     setting_axis_values,
 )
-from fibersweep.config.errors import FieldError, error_parts
+from fibersweep.config.errors import FieldError, all_checks, error_parts
 
 __all__ = [
     "Combination",
@@ -195,6 +195,12 @@ class SweepSettings(_Strict):
         return data
 
     @model_validator(mode="after")
+    def _checks(self) -> SweepSettings:
+        """The refine axes, the random ranges and the setting axes, all checked (each
+        failure at its field)."""
+        all_checks(self._refine_axes_swept, self._random_ranges, self._setting_axes_valid)
+        return self
+
     def _refine_axes_swept(self) -> SweepSettings:
         """A refine axis needs at least two grid values to bisect between."""
         if self.refine is not None:
@@ -207,7 +213,6 @@ class SweepSettings(_Strict):
                     )
         return self
 
-    @model_validator(mode="after")
     def _random_ranges(self) -> SweepSettings:
         """With ``random``: theta0 and y0 are ranges [lo, hi] (or one value); refinement
         along the length only (a pillar array's critical length, checked with the flow)."""
@@ -229,7 +234,6 @@ class SweepSettings(_Strict):
                 )
         return self
 
-    @model_validator(mode="after")
     def _setting_axes_valid(self) -> SweepSettings:
         """Keys are dotted, values are axis forms, zipped lists are equally long.
 

@@ -34,7 +34,33 @@ import numpy as np
 from fibersweep.geometry.channel import Geometry
 from fibersweep.geometry.pillars import unit_width
 
-__all__ = ["PillarArray", "ArrayError"]
+__all__ = ["LATTICE_TOLERANCE", "PillarArray", "ArrayError", "on_lattice", "whole_cells"]
+
+#: A length within this of a whole number of lattice cells counts as that whole number
+#: [µm] (e.g. ε λy = 0.0909 × 44 µm = 3.9996 µm is 4 µm, one cell of dx = 4 µm): values
+#: written with a few digits (1/11 as 0.0909) are accepted, and replaced by the whole
+#: number (:func:`on_lattice`) so the flow and the fibers use the same, reproducible
+#: lattice. 1e-3 µm is far below any resolved length (a cell is 0.25 µm or more).
+LATTICE_TOLERANCE = 1e-3
+
+
+def whole_cells(length: float, dx: float) -> int | None:
+    """``length / dx`` rounded when ``length`` is within :data:`LATTICE_TOLERANCE` of that
+    many cells [µm], else None."""
+    n = round(length / dx)
+    return int(n) if abs(length - n * dx) <= LATTICE_TOLERANCE else None
+
+
+def on_lattice(length: float, dx: float, exact: float = 1e-9) -> float:
+    """``length`` [µm] as the whole number of cells of ``dx`` it is taken as.
+
+    Within ``exact`` cells of it (a whole number up to float rounding) the value is
+    kept as written, so a config that was already whole keeps its bits (the same
+    cache key and run ids); farther (but within :data:`LATTICE_TOLERANCE`): that
+    number of cells times ``dx``. Call it on a length :func:`whole_cells` accepted.
+    """
+    n = round(length / dx)
+    return length if abs(length / dx - n) <= exact else float(n * dx)
 
 
 class ArrayError(ValueError):
@@ -170,28 +196,62 @@ class PillarArray:
                 f"diameter 2a = {2.0 * bead_radius:g} µm: widen period_y or shrink pillar_size",
             )
 
+    def lattice_problems(self, dx: float) -> list[ArrayError]:
+        """What keeps the array off a lattice of spacing ``dx``: each period, the depth
+        and the row shift ε λy must be whole numbers of cells (within
+        :data:`LATTICE_TOLERANCE`); one :class:`ArrayError` per setting at fault."""
+        out = []
+        for name in ("period_x", "period_y", "depth"):
+            if whole_cells(getattr(self, name), dx) is None:
+                out.append(ArrayError(name, f"{name} = {getattr(self, name)} µm is not a whole "
+                                      f"number of dx = {dx} µm (within {LATTICE_TOLERANCE:g} "
+                                      "µm)"))  # fmt: skip
+        if whole_cells(self.lateral_shift, dx) is None:
+            k = max(round(self.lateral_shift / dx), 1)
+            out.append(
+                ArrayError(
+                    "shift",
+                    f"the row shift ε λy = {self.shift:g} × {self.period_y:g} µm = "
+                    f"{self.lateral_shift:.6g} µm is not a whole number of lattice cells "
+                    f"(dx = {dx:g} µm, within {LATTICE_TOLERANCE:g} µm): the unit cell's "
+                    f"shifted periodic boundary needs a whole number; choose ε λy = k dx, "
+                    f"e.g. shift = {k * dx / self.period_y:.6g}",
+                )
+            )
+        return out
+
     def check_lattice(self, dx: float) -> int:
         """Row shift in lattice cells; ArrayError naming ``shift`` unless it is whole.
 
         The shifted periodic boundary copies whole lattice columns, so ε λy must
-        be a whole number of cells Δx (no interpolation across the boundary).
+        be a whole number of cells Δx (no interpolation across the boundary); so
+        must the periods and the depth. A length within :data:`LATTICE_TOLERANCE`
+        (1e-3 µm) of a whole number of cells counts as that number
+        (:meth:`on_lattice` gives the array with the whole numbers).
         """
+        problems = self.lattice_problems(dx)
+        if problems:
+            raise problems[0]
+        return int(round(self.lateral_shift / dx))
+
+    def on_lattice(self, dx: float) -> dict[str, float]:
+        """The settings that :meth:`check_lattice` took as whole numbers of cells and
+        that are not written so, with their whole values: periods and depth ``n dx``,
+        the shift ``k dx / λy`` ({} when every one is whole as written, up to float
+        rounding). Call it on an array that passed :meth:`check_lattice`."""
+        out: dict[str, float] = {}
         for name in ("period_x", "period_y", "depth"):
-            n = getattr(self, name) / dx
-            if abs(n - round(n)) > 1e-9:
-                raise ArrayError(name, f"{name} = {getattr(self, name)} µm is not a whole "
-                                 f"number of dx = {dx} µm")  # fmt: skip
-        s = self.lateral_shift / dx
-        if abs(s - round(s)) > 1e-6:
-            raise ArrayError(
-                "shift",
-                f"the row shift ε λy = {self.shift:g} × {self.period_y:g} µm = "
-                f"{self.lateral_shift:.6g} µm is not a whole number of lattice cells "
-                f"(dx = {dx:g} µm): the unit cell's shifted periodic boundary needs a whole "
-                f"number; choose ε λy = k dx, e.g. shift = "
-                f"{max(round(s), 1) * dx / self.period_y:.6g}",
-            )
-        return int(round(s))
+            v = on_lattice(getattr(self, name), dx)
+            if v != getattr(self, name):
+                out[name] = v
+        period_y = out.get("period_y", self.period_y)
+        k = round(self.lateral_shift / dx)
+        # the shift was accepted within 1e-6 cells before the tolerance: kept as written
+        if abs(self.lateral_shift / dx - k) > 1e-6 or "period_y" in out:
+            shift = k * dx / period_y
+            if shift != self.shift:
+                out["shift"] = shift
+        return out
 
     # ------------------------------------------------------------ lattice
     def centre(self, row: int, col: int) -> tuple[float, float]:

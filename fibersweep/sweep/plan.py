@@ -20,11 +20,13 @@ import numpy as np
 from fibersweep.config import Combination, Config
 from fibersweep.errors import InputError
 from fibersweep.sweep.ids import diff_settings, fiber_result_settings, run_ids, settings_id
-from fibersweep.sweep.manifest import read_manifest
 from fibersweep.sweep.starts import PHYSICS
 from fibersweep.sweep.store import (
     RUNS_DIR,
     TRAJ_DIR,
+    expected_data,
+    kept_data,
+    load_manifest,
     quarantine,
     read_runs,
     trajectory_ids,
@@ -38,6 +40,7 @@ __all__ = [
     "base_settings",
     "make_tasks",
     "move_aside",
+    "keeps_trajectories",
     "plan_sweep",
     "result_settings",
     "sweep_settings",
@@ -67,6 +70,15 @@ def _other_revision(manifest: dict[str, Any] | None, resuming: bool) -> str | No
         "a change of the model between the two is not detected; if one changed results, "
         "run again with --no-resume"
     )
+
+
+def keeps_trajectories(cfg: Config) -> tuple[bool, bool]:
+    """Whether each run of ``cfg`` stores its trajectory, and its beads' positions.
+
+    A pillar array's run always keeps its trajectory (its mode is re-labelled from
+    it); see :func:`fibersweep.sweep.store.kept_data`.
+    """
+    return kept_data(cfg.model_dump(mode="json", include={"flow": {"array"}, "fiber": True}))
 
 
 def result_settings(cfg: Config, flow_key: str) -> dict[str, Any]:
@@ -306,7 +318,7 @@ def plan_sweep(
         The output holds results made with different settings and ``resume`` is on.
     """
     out = Path(cfg.run.output)
-    manifest = read_manifest(out)
+    manifest = load_manifest(out)
     settings = sweep_settings(cfg, flow_key)
     swept = list(cfg.sweep.setting_keys)
     stored_swept = [k for k in (manifest or {}).get("swept", []) if k not in swept]
@@ -319,7 +331,10 @@ def plan_sweep(
     bad = [p for p, _ in unreadable_parts(out)]
     if bad and repair:
         where = quarantine(out, bad)
-        notes.append(f"{len(bad)} unreadable part(s) moved to {where}; their runs are run again")
+        notes.append(
+            f"{len(bad)} unreadable part(s) moved to {where}; the runs that lost their row "
+            "or trajectory with them are run again"
+        )
         bad = []
     elif bad:
         notes.append(
@@ -371,15 +386,16 @@ def plan_sweep(
     if fresh:
         runs = runs.iloc[0:0]
     status = dict(zip(runs["id"], runs["status"], strict=True))
-    if cfg.fiber.record.trajectories and (bad or any(out.glob(f"quarantine-*/{TRAJ_DIR}"))):
-        # A trajectory part was lost: its ids are unknown, so every ok run without a
-        # trajectory is run again (the new row and trajectory replace the old row).
-        have = trajectory_ids(out, skip=bad)
-        lost = [i for i, st in status.items() if st == "ok" and i not in have]
-        for i in lost:
-            del status[i]
-        if lost:
-            notes.append(f"{len(lost)} run(s) lost their trajectory and are run again")
+    lost = _lost_data(cfg, out, runs, tasks, bad)
+    for i in lost:
+        del status[i]  # not done: run again; its new row replaces the old (same id)
+    if lost:
+        how = (
+            "; --retry-failed runs only failed runs: a plain `fibersweep run` runs them"
+            if retry_failed
+            else " and are run again"
+        )
+        notes.append(f"{len(lost)} ok run(s) lost their stored trajectory or beads{how}")
     ids = {t.key for t in tasks}
     done_ok = sum(1 for t in tasks if status.get(t.key) == "ok")
     done_failed = sum(1 for t in tasks if status.get(t.key) == "failed")
@@ -403,6 +419,32 @@ def plan_sweep(
         settings=settings,
         columns=columns,
     )
+
+
+def _lost_data(
+    cfg: Config, out: Path, runs: Any, tasks: list[SweepTask], bad: list[Path]
+) -> list[str]:
+    """Ok runs of this sweep whose trajectory (or bead positions) the store should hold
+    and does not: a trajectory part lost, moved aside or unreadable.
+
+    Their rows are there, so they would count as done; they are run again instead
+    (same ids: the new row and trajectory replace the old ones). A healthy folder
+    has none, and nothing changes for it.
+    """
+    if runs.empty:
+        return []
+    need_traj, need_beads = expected_data(runs, cfg.model_dump(mode="json"))
+    keys = {t.key for t in tasks}
+    ids = runs["id"].to_numpy()
+    ok = (runs["status"] == "ok").to_numpy() & np.array([i in keys for i in ids], bool)
+    if not (ok & need_traj).any():
+        return []
+    have = np.isin(ids, list(trajectory_ids(out, skip=bad)))
+    lost = ok & need_traj & ~have
+    if (ok & need_beads).any():
+        with_beads = np.isin(ids, list(trajectory_ids(out, skip=bad, with_column="beads")))
+        lost |= ok & need_beads & ~with_beads
+    return [str(i) for i in ids[lost]]
 
 
 def _points_redone(runs: Any, tasks: list[SweepTask]) -> int:

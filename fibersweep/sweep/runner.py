@@ -27,6 +27,7 @@ from fibersweep.sweep.lock import output_lock
 from fibersweep.sweep.manifest import provenance, read_manifest, write_manifest
 from fibersweep.sweep.plan import (
     SweepPlan,
+    keeps_trajectories,
     move_aside,
     plan_sweep,
     result_settings,
@@ -210,7 +211,7 @@ def _run_locked(
     # workers leave Ctrl-C to us when the executor says we handle it (the local pool)
     initargs = (spec, ex.parent_handles_ctrl_c)
     # an array run always keeps its trajectory: its mode is re-labelled from it
-    keep_traj = cfg.fiber.record.trajectories or cfg.flow.array is not None
+    keep_traj, _ = keeps_trajectories(cfg)
     t0 = time.perf_counter()
     state = "stopped"
     writer = PartWriter(out, meta, cfg.run.flush_every, cfg.run.flush_seconds)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import shlex
 import threading
 import time
 from collections.abc import Mapping, Sequence
@@ -32,7 +33,7 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from fibersweep.atomic import TMP_GLOB, atomic_path
-from fibersweep.errors import ResultsError
+from fibersweep.errors import ResultsError, UnreadableResults
 from fibersweep.fiber.result import ARRAY_COLUMNS, Column, record_columns
 from fibersweep.sweep.coldocs import RUN_EXTRA_DOCS, TRAJ_COLUMN_DOCS, docs_for, with_docs
 
@@ -47,13 +48,17 @@ __all__ = [
     "clean_temporaries",
     "compact",
     "describe_os_error",
+    "expected_data",
+    "kept_data",
     "list_parts",
+    "load_manifest",
     "part_name",
     "read_runs",
     "read_trajectories",
     "rewrite_runs",
     "runs_table",
     "quarantine",
+    "repair_command",
     "trajectory_ids",
     "unreadable_parts",
     "write_table_atomic",
@@ -217,15 +222,25 @@ def _traj_table(run_id: str, cols: Mapping[str, np.ndarray]) -> pa.Table:
     return with_docs(pa.table(data), TRAJ_COLUMN_DOCS)
 
 
+def _cause(exc: BaseException, path: Path) -> str:
+    """Why ``path`` could not be read, without the path (the message names it once)."""
+    text = describe_os_error(exc) if isinstance(exc, OSError) and exc.strerror else str(exc)
+    for quoted in (f" '{path}'", f' "{path}"', f"{path}: ", str(path)):
+        text = text.replace(quoted, "")
+    text = text.replace("Could not open Parquet input source: ", "")
+    return " ".join(text.split()).rstrip(".") or type(exc).__name__
+
+
 def _read_part(path: Path, **kw: Any) -> pa.Table:
-    """One part, or :class:`ResultsError` naming it (never a silent skip)."""
+    """One part, or :class:`UnreadableResults` naming it once (never a silent skip)."""
     try:
         return pq.read_table(path, **kw)
     except (OSError, pa.ArrowException) as exc:
-        raise ResultsError(
-            f"{path}: unreadable result part ({exc}); `fibersweep check {path.parent.parent}` "
-            "reports the folder, and `fibersweep run` on it moves the part aside and re-runs "
-            "its runs"
+        out = path.parent.parent
+        raise UnreadableResults(
+            f"{path}: unreadable result part ({_cause(exc, path)}). `fibersweep check` on its "
+            "folder lists all that is damaged; the sweep's own command moves the part aside "
+            f"and runs its runs again: {repair_command(out)}"
         ) from None
 
 
@@ -251,8 +266,156 @@ def unreadable_parts(out: Path) -> list[tuple[Path, str]]:
             try:
                 pq.read_table(p, columns=cols)
             except (OSError, pa.ArrowException) as exc:
-                bad.append((p, str(exc)))
+                bad.append((p, _cause(exc, p)))
     return bad
+
+
+def kept_data(config: Mapping[str, Any] | None) -> tuple[bool, bool]:
+    """What every ok run of a sweep stores besides its row: (a trajectory, its beads).
+
+    Parameters
+    ----------
+    config : Mapping or None
+        The sweep's config as JSON (``Config.model_dump(mode="json")``, or a
+        manifest's ``config``); None: nothing is known to be kept.
+
+    Returns
+    -------
+    trajectories : bool
+        ``fiber.record.trajectories``, or a pillar array's run (always kept: its
+        mode is re-labelled from it).
+    beads : bool
+        Every bead's position in the trajectory (``fiber.record.all_beads`` of a
+        bead-spring fiber, or of any fiber in a channel).
+    """
+    if not config:
+        return False, False
+    fiber = config.get("fiber") or {}
+    record = fiber.get("record") or {}
+    array = (config.get("flow") or {}).get("array") is not None
+    traj = bool(record.get("trajectories")) or array
+    beads = traj and bool(record.get("all_beads")) and (fiber.get("model") != "rigid" or not array)
+    return traj, beads
+
+
+def expected_data(
+    runs: pd.DataFrame, config: Mapping[str, Any] | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per row of ``runs``: should the store hold its trajectory, and its beads' positions?
+
+    From the sweep's config (:func:`kept_data`), with each run's own settings where
+    they differ: a swept ``fiber.record.trajectories`` or ``fiber.record.all_beads``
+    column, and the run's ``model`` (a rigid fiber in a pillar array keeps no beads).
+
+    Returns
+    -------
+    trajectory, beads : ndarray of bool, one per row
+    """
+    n = len(runs)
+    if not config or n == 0:
+        return np.zeros(n, bool), np.zeros(n, bool)
+    fiber = config.get("fiber") or {}
+    record = fiber.get("record") or {}
+    array = (config.get("flow") or {}).get("array") is not None
+
+    def setting(key: str, default: Any) -> np.ndarray:
+        col = f"fiber.record.{key}"
+        if col not in runs:
+            return np.full(n, bool(default))
+        return runs[col].astype(object).where(runs[col].notna(), default).astype(bool).to_numpy()
+
+    traj = setting("trajectories", record.get("trajectories", False)) | array
+    beads = traj & setting("all_beads", record.get("all_beads", False))
+    if array:
+        model = runs["model"] if "model" in runs else pd.Series([fiber.get("model")] * n)
+        beads &= (model.astype(object).fillna(fiber.get("model")) != "rigid").to_numpy()
+    return traj, beads
+
+
+def load_manifest(out: Path) -> dict[str, Any] | None:
+    """The manifest of ``out`` (None if there is none); :class:`UnreadableResults` naming
+    it once when it cannot be read (exit code 2)."""
+    from fibersweep.sweep.manifest import MANIFEST, read_manifest
+
+    try:
+        man = read_manifest(out)
+    except (OSError, ValueError) as exc:  # cut short, not JSON, unreadable
+        p = Path(out) / MANIFEST
+        raise UnreadableResults(
+            f"{p}: unreadable manifest ({_cause(exc, p)}); the runs and trajectories are "
+            "kept in their parts, but the settings that made them are lost with it: move it "
+            "aside and run the sweep's config with --no-resume, or restore it"
+        ) from None
+    if man is not None and not isinstance(man, dict):
+        p = Path(out) / MANIFEST
+        raise UnreadableResults(f"{p}: unreadable manifest (not a JSON object)")
+    return man
+
+
+_VALUE_OPTIONS = ("-w", "--workers", "--executor", "--scheduler", "--max-points")
+_DROPPED_OPTIONS = ("-o", "--output")  # the folder is named by -o OUT instead
+
+
+def _run_argv(argv: Sequence[str]) -> tuple[str, list[str]] | None:
+    """(config, kept options) of a recorded ``fibersweep run`` command line, or None."""
+    if len(argv) < 3 or argv[1] != "run":
+        return None
+    name = Path(str(argv[0])).name
+    if name not in ("fibersweep", "__main__.py", "fibersweep.exe"):
+        return None
+    config, options, args = None, [], list(argv[2:])
+    while args:
+        a = str(args.pop(0))
+        opt, eq, _ = a.partition("=")
+        if opt in _VALUE_OPTIONS or opt in _DROPPED_OPTIONS:
+            value = [a] if eq else [a, str(args.pop(0))] if args else [a]
+            if opt in _VALUE_OPTIONS:
+                options += value
+        elif a.startswith("-"):
+            continue  # --no-resume, --retry-failed, --dry-run, -v: not for a repair
+        elif config is None:
+            config = a
+    return None if config is None else (config, options)
+
+
+def repair_command(out: Path, manifest: Mapping[str, Any] | None = None) -> str:
+    """The ``fibersweep run`` line that repairs ``out``: the one that made it.
+
+    The config file is taken from the command line the manifest recorded, the
+    overrides from the manifest; ``-o OUT`` is added unless the config's
+    ``run.output`` is ``out`` seen from here. When the manifest does not say (a
+    sweep started from Python, or no manifest), a template with ``CONFIG`` for the
+    config file that made the folder.
+    """
+    out = Path(out)
+    if manifest is None:
+        try:
+            manifest = load_manifest(out)
+        except UnreadableResults:  # the template
+            manifest = None
+    manifest = manifest or {}
+    argv = (manifest.get("provenance") or {}).get("argv") or []
+    found = _run_argv([str(a) for a in argv]) if isinstance(argv, list) else None
+    config, options = found if found is not None else ("CONFIG", [])
+    overrides = [str(o) for o in manifest.get("overrides") or []]
+    words = ["fibersweep", "run", config, *overrides, *options]
+    stored = ((manifest.get("config") or {}).get("run") or {}).get("output")
+    for o in overrides:  # the last run.output= override wins over the file's
+        if o.startswith("run.output="):
+            stored = o.partition("=")[2]
+    # a relative config that is not here: the command runs where the sweep was started
+    elsewhere = found is not None and not Path(config).is_absolute() and not Path(config).exists()
+    if stored is None or Path(str(stored)).resolve() != out.resolve():
+        words += ["-o", str(out.resolve() if elsewhere else out)]
+    line = " ".join(w if w == "CONFIG" else shlex.quote(w) for w in words)
+    if elsewhere:
+        return f"`{line}` (from the folder the sweep was started in: {config} is relative)"
+    if found is None:
+        return (
+            f"`{line}` (CONFIG: the config file that made the folder; its manifest.json "
+            "holds the settings)"
+        )
+    return f"`{line}`"
 
 
 def quarantine(out: Path, parts: Sequence[Path]) -> Path | None:
@@ -271,10 +434,29 @@ def quarantine(out: Path, parts: Sequence[Path]) -> Path | None:
     return dest
 
 
-def trajectory_ids(out: Path, skip: Sequence[Path] = ()) -> set[str]:
-    """Ids that have a stored trajectory (parts in ``skip`` left out)."""
-    t = _read_parts(Path(out) / TRAJ_DIR, columns=["id"], skip=frozenset(skip))
+def trajectory_ids(
+    out: Path, skip: Sequence[Path] = (), with_column: str | None = None
+) -> set[str]:
+    """Ids that have a stored trajectory (parts in ``skip`` left out).
+
+    ``with_column``: only the trajectories of parts that hold this column (``beads``:
+    the runs whose bead positions are stored).
+    """
+    d = Path(out) / TRAJ_DIR
+    if with_column is not None:
+        skip = [
+            *skip,
+            *(p for p in list_parts(d) if p not in skip and not _has_column(p, with_column)),
+        ]
+    t = _read_parts(d, columns=["id"], skip=frozenset(skip))
     return set() if t is None else set(pc.unique(t.column("id")).to_pylist())
+
+
+def _has_column(part: Path, name: str) -> bool:
+    try:
+        return name in pq.read_schema(part).names
+    except (OSError, pa.ArrowException) as exc:
+        raise UnreadableResults(f"{part}: unreadable result part ({_cause(exc, part)})") from None
 
 
 def read_runs(out: Path, skip: Sequence[Path] = ()) -> pd.DataFrame:

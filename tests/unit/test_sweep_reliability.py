@@ -24,7 +24,7 @@ from fibersweep.sweep import store
 from fibersweep.sweep.check import check_folder
 from fibersweep.sweep.lock import LOCK_FILE, FolderLocked, lock_holder, output_lock
 from fibersweep.sweep.reclassify import reclassify
-from fibersweep.sweep.starts import grid_starts
+from fibersweep.sweep.starts import PHYSICS, grid_starts
 from fibersweep.sweep.store import (
     RUNS_DIR,
     TRAJ_DIR,
@@ -141,8 +141,9 @@ def test_check_reports_unreadable_parts_and_missing_trajectories(tmp_path):
     assert not rep.healthy
     assert rep.rows == 12 and rep.missing_trajectories == 4
     text = "\n".join(rep.lines())
-    assert f"UNREADABLE {broken}: " in text
-    assert "4 ok runs have no stored trajectory" in text and text.endswith("NOT ok")
+    assert f"UNREADABLE {broken}: " in text and text.count(str(broken)) == 1
+    assert "MISSING the trajectory of 4 ok run(s)" in text and text.endswith("NOT ok")
+    assert "  repair: `fibersweep run CONFIG -o " in text  # no command line recorded here
 
 
 # ----------------------------------------------------------------------------- writes
@@ -237,8 +238,8 @@ def test_huge_sweep_is_refused_at_once_with_its_count(tmp_path, monkeypatch):
     def never(self):
         raise AssertionError("the points were listed")
 
-    monkeypatch.setattr(SweepSettings, "starts", never)  # counted, never listed
-    monkeypatch.setattr(SweepSettings, "grid", never)
+    monkeypatch.setattr(SweepSettings, "grid", never)  # counted, never listed
+    monkeypatch.setattr("fibersweep.sweep.starts.grid_starts", never)
     text = (
         "sweep:\n  y0: {start: 0.6, stop: 0.9, num: 1000}\n"
         "  theta0: {start: -10, stop: 10, num: 1000}\n  length: [1, 1.2, 1.4]\n"
@@ -246,8 +247,8 @@ def test_huge_sweep_is_refused_at_once_with_its_count(tmp_path, monkeypatch):
     with pytest.raises(
         ConfigError,
         match=r"sweep \(line 1\): 3,000,000 points, more than run.max_points \(200,000\);",
-    ):
-        load_config(_cfg(tmp_path, text))
+    ):  # with the physics checks too: they make no point of a sweep over the limit
+        load_config(_cfg(tmp_path, text), physics=PHYSICS)
     with pytest.raises(ConfigError, match=r"sweep.y0 \(line 2\): range has 900,000,001 values"):
         load_config(_cfg(tmp_path, "sweep:\n  y0: {start: 0.1, stop: 1, step: 1e-9}\n"))
 
