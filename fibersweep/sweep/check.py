@@ -11,13 +11,13 @@ import pyarrow.parquet as pq
 from fibersweep.atomic import TMP_GLOB
 from fibersweep.errors import InputError, UnreadableResults
 from fibersweep.sweep.lock import LockHolder, lock_holder
+from fibersweep.sweep.manifest import read_manifest
 from fibersweep.sweep.rules import mixed_rules_message
 from fibersweep.sweep.store import (
     RUNS_DIR,
     TRAJ_DIR,
     expected_data,
     list_parts,
-    load_manifest,
     read_runs,
     repair_command,
     trajectory_ids,
@@ -162,7 +162,7 @@ def check_folder(out: Path) -> FolderReport:
         raise InputError(f"{out}: no such folder")
     manifest_error = None
     try:
-        man = load_manifest(out)
+        man = read_manifest(out)
     except UnreadableResults as exc:
         man, manifest_error = None, str(exc)
     bad = unreadable_parts(out)

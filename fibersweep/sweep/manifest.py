@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from fibersweep.atomic import atomic_write
+from fibersweep.errors import UnreadableResults
 
 __all__ = [
     "MANIFEST",
@@ -125,11 +126,29 @@ def provenance(flow_key: str) -> dict[str, Any]:
 
 
 def read_manifest(out: Path) -> dict[str, Any] | None:
-    """The manifest of an output directory, or None if there is none."""
+    """The manifest of an output directory, or None if there is none.
+
+    Raises
+    ------
+    UnreadableResults
+        The file exists but is not a readable JSON object (cut short, not JSON):
+        named once, exit code 2 at the command line.
+    """
     p = Path(out) / MANIFEST
     if not p.exists():
         return None
-    return json.loads(p.read_text())
+    try:
+        man = json.loads(p.read_text())
+    except (OSError, ValueError) as exc:  # cut short, not JSON, unreadable
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise UnreadableResults(
+            f"{p}: unreadable manifest ({why}); the runs and trajectories are kept in their "
+            "parts, but the settings that made them are lost with it: move it aside and run "
+            "the sweep's config with --no-resume, or restore it"
+        ) from None
+    if not isinstance(man, dict):
+        raise UnreadableResults(f"{p}: unreadable manifest (not a JSON object)")
+    return man
 
 
 def write_manifest(out: Path, manifest: dict[str, Any]) -> Path:

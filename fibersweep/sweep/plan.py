@@ -20,13 +20,13 @@ import numpy as np
 from fibersweep.config import Combination, Config
 from fibersweep.errors import InputError
 from fibersweep.sweep.ids import diff_settings, fiber_result_settings, run_ids, settings_id
+from fibersweep.sweep.manifest import read_manifest
 from fibersweep.sweep.starts import PHYSICS
 from fibersweep.sweep.store import (
     RUNS_DIR,
     TRAJ_DIR,
     expected_data,
     kept_data,
-    load_manifest,
     quarantine,
     read_runs,
     trajectory_ids,
@@ -318,7 +318,7 @@ def plan_sweep(
         The output holds results made with different settings and ``resume`` is on.
     """
     out = Path(cfg.run.output)
-    manifest = load_manifest(out)
+    manifest = read_manifest(out)
     settings = sweep_settings(cfg, flow_key)
     swept = list(cfg.sweep.setting_keys)
     stored_swept = [k for k in (manifest or {}).get("swept", []) if k not in swept]

@@ -36,6 +36,7 @@ from fibersweep.atomic import TMP_GLOB, atomic_path
 from fibersweep.errors import ResultsError, UnreadableResults
 from fibersweep.fiber.result import ARRAY_COLUMNS, Column, record_columns
 from fibersweep.sweep.coldocs import RUN_EXTRA_DOCS, TRAJ_COLUMN_DOCS, docs_for, with_docs
+from fibersweep.sweep.manifest import read_manifest
 
 __all__ = [
     "COLUMN_DOCS",
@@ -51,7 +52,6 @@ __all__ = [
     "expected_data",
     "kept_data",
     "list_parts",
-    "load_manifest",
     "part_name",
     "read_runs",
     "read_trajectories",
@@ -332,26 +332,6 @@ def expected_data(
     return traj, beads
 
 
-def load_manifest(out: Path) -> dict[str, Any] | None:
-    """The manifest of ``out`` (None if there is none); :class:`UnreadableResults` naming
-    it once when it cannot be read (exit code 2)."""
-    from fibersweep.sweep.manifest import MANIFEST, read_manifest
-
-    try:
-        man = read_manifest(out)
-    except (OSError, ValueError) as exc:  # cut short, not JSON, unreadable
-        p = Path(out) / MANIFEST
-        raise UnreadableResults(
-            f"{p}: unreadable manifest ({_cause(exc, p)}); the runs and trajectories are "
-            "kept in their parts, but the settings that made them are lost with it: move it "
-            "aside and run the sweep's config with --no-resume, or restore it"
-        ) from None
-    if man is not None and not isinstance(man, dict):
-        p = Path(out) / MANIFEST
-        raise UnreadableResults(f"{p}: unreadable manifest (not a JSON object)")
-    return man
-
-
 _VALUE_OPTIONS = ("-w", "--workers", "--executor", "--scheduler", "--max-points")
 _DROPPED_OPTIONS = ("-o", "--output")  # the folder is named by -o OUT instead
 
@@ -390,7 +370,7 @@ def repair_command(out: Path, manifest: Mapping[str, Any] | None = None) -> str:
     out = Path(out)
     if manifest is None:
         try:
-            manifest = load_manifest(out)
+            manifest = read_manifest(out)
         except UnreadableResults:  # the template
             manifest = None
     manifest = manifest or {}
