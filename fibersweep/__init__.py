@@ -8,8 +8,9 @@ The public Python API (:mod:`fibersweep.api`) is reachable from here, and each
 command of the CLI is one call into it::
 
     import fibersweep
-    res = fibersweep.run("configs/quick.yaml", "run.output=results/q")
-    res = fibersweep.load("results/q")
+    done = fibersweep.run("configs/quick.yaml", "run.output=results/q")
+    res = fibersweep.load("results/q")          # or done.load()
+    one = fibersweep.simulate("configs/quick.yaml", theta0=-8, y0=0.39, length=1)
 
 The API is imported when first used, so ``import fibersweep`` stays light (the
 worker processes of a sweep import the package too).
@@ -20,7 +21,10 @@ from typing import Any
 from fibersweep.version import __version__
 
 #: The functions of :mod:`fibersweep.api` offered at the top level.
-API = ("run", "simulate", "flow_field", "sort_report", "classify", "discrepancy", "load")
+API = (
+    "load_config", "run", "estimate", "simulate", "flow_field", "sort_report", "classify",
+    "discrepancy", "load",
+)  # fmt: skip
 
 __all__ = ["__version__", *API]
 

@@ -1,6 +1,6 @@
 """The reference pages of the documentation, generated from the code.
 
-Three pages, each a pure function of the package:
+Four pages, each a pure function of the package:
 
 * ``config``: every config key with its type, default, unit, check and meaning, read
   from the pydantic schema (:class:`fibersweep.config.schema.Config` and the models
@@ -9,7 +9,10 @@ Three pages, each a pure function of the package:
 * ``commands``: every command of the ``fibersweep`` command line and its arguments
   and options, read from the typer app's registered commands and their signatures;
 * ``columns``: every column of the runs and trajectories tables with its type, unit
-  and meaning, read from the run record and the store's column docs.
+  and meaning, read from the run record and the store's column docs;
+* ``api``: every function of the public Python API (:mod:`fibersweep.api`, the names
+  of ``fibersweep.API``) with its signature, parameters and what it returns, and the
+  result objects, read from their signatures and numpydoc docstrings.
 
 A unit is written in a description as a bracketed group (``"lattice spacing
 [µm]"``); the last such group without a comma (or with the word "for") is the unit.
@@ -574,6 +577,133 @@ def _measured_section() -> list[str]:
     return lines + _table(["column", "kind", "required", "unit", "meaning"], rows)
 
 
+# --------------------------------------------------------------------------- api
+
+_SECTION = re.compile(r"^(\w[\w ]*)\n-{3,}$", re.M)
+
+
+def _doc_sections(doc: str | None) -> tuple[str, dict[str, list[tuple[str, str, str]]]]:
+    """A numpydoc docstring: its description, and each section's entries as
+    (name, type, text); a section without entries (a paragraph) is one entry of text."""
+    text = inspect.cleandoc(doc or "")
+    parts = _SECTION.split(text)
+    description, sections = parts[0].strip(), {}
+    for title, body in zip(parts[1::2], parts[2::2], strict=True):
+        entries: list[tuple[str, str, str]] = []
+        for line in body.strip("\n").splitlines():
+            if line and not line.startswith(" "):
+                name, _, typ = line.partition(" : ")
+                entries.append((name.strip(), typ.strip(), ""))
+            elif entries:
+                name, typ, prev = entries[-1]
+                entries[-1] = (name, typ, f"{prev} {line.strip()}".strip())
+        sections[title.strip()] = entries
+    return description, sections
+
+
+def _signature(name: str, fn: Callable) -> str:
+    """``name(params) -> return`` as written in the source (annotations as text)."""
+    parts, star = [], False
+    for p in inspect.signature(fn).parameters.values():
+        if p.kind is p.KEYWORD_ONLY and not star:
+            parts.append("*")
+        star = star or p.kind in (p.VAR_POSITIONAL, p.KEYWORD_ONLY)
+        text = ("*" if p.kind is p.VAR_POSITIONAL else "") + p.name
+        if p.annotation is not p.empty:
+            text += f": {p.annotation}"
+        if p.default is not p.empty:
+            text += f" = {p.default!r}" if p.annotation is not p.empty else f"={p.default!r}"
+        parts.append(text)
+    ret = inspect.signature(fn).return_annotation
+    tail = "" if ret is inspect.Signature.empty else f" -> {ret}"
+    one = f"{name}({', '.join(parts)}){tail}"
+    if len(one) <= 88:
+        return one
+    return f"{name}(\n" + "".join(f"    {t},\n" for t in parts) + f"){tail}"
+
+
+def _entries_table(head: str, entries: list[tuple[str, str, str]]) -> list[str]:
+    rows = [[f"`{n}`", _md(t), _md(d)] for n, t, d in entries]
+    return _table([head, "type", "meaning"], rows)
+
+
+def _members(cls: type) -> list[tuple[str, str]]:
+    """Public methods and properties a class defines, with their summary."""
+    out = []
+    for name, member in vars(cls).items():
+        if name.startswith("_"):
+            continue
+        if isinstance(member, property):
+            out.append((f"`.{name}`", _summary(member.__doc__)))
+        elif inspect.isfunction(member):  # an override says what the base class's does
+            args = [a for a in inspect.signature(member).parameters if a != "self"]
+            doc = inspect.getdoc(getattr(cls, name))
+            out.append((f"`.{name}({', '.join(args)})`", _summary(doc)))
+    return out
+
+
+def _api_functions() -> list[str]:
+    """The functions of the public API, in the order of ``api.__all__`` (which a test holds
+    equal to ``fibersweep.API``, the names offered at the top level)."""
+    from fibersweep import api
+
+    return [n for n in api.__all__ if inspect.isfunction(getattr(api, n))]
+
+
+def _api_page() -> str:
+    from fibersweep import api
+
+    src = "the docstrings of the public API (`fibersweep/api.py`)"
+    description, _ = _doc_sections(api.__doc__)
+    intro = description.split("\n\n")
+    lines = [
+        _HEADER.format(cmd=REGENERATE, src=src),
+        "",
+        "# Python API reference",
+        "",
+        _md(" ".join(intro[0].split())),
+        "",
+        "Each function is reachable from the top package (`fibersweep.run(...)`, imported on",
+        "first use) and from `fibersweep.api`; a guide that runs them step by step:",
+        "[the Python API](../python-api.md).",
+        "",
+        *[_md(" ".join(par.split())) + "\n" for par in intro[1:] if not par.startswith(">>>")],
+        "| function | does |",
+        "|---|---|",
+    ]
+    functions = _api_functions()
+    for name in functions:
+        fn = getattr(api, name)
+        does = _cell(_summary(fn.__doc__))
+        lines.append(f"| [`fibersweep.{name}`](#fibersweep{name}) | {does} |")
+    lines.append("")
+    for name in functions:
+        fn = getattr(api, name)
+        desc, sections = _doc_sections(fn.__doc__)
+        lines += [f"## fibersweep.{name}", "", "```text", _signature(f"fibersweep.{name}", fn),
+                  "```", "", _md(desc), ""]  # fmt: skip
+        if sections.get("Parameters"):
+            lines += _entries_table("parameter", sections["Parameters"]) + [""]
+        for title in ("Returns", "Raises"):
+            for n, t, d in sections.get(title, []):
+                what = f"`{n}`" + (f" ({_md(t)})" if t else "")
+                lines += [f"**{title}** {what}" + (f": {_md(d)}" if d else ""), ""]
+    classes = [n for n in api.__all__ if n not in functions]
+    lines += ["## Result objects", "",
+              "Frozen dataclasses (their fields as listed), and the hooks of a sweep's progress.",
+              ""]  # fmt: skip
+    for name in classes:
+        cls = getattr(api, name)
+        desc, sections = _doc_sections(cls.__doc__)
+        lines += [f"### {name}", "", _md(desc), ""]
+        if sections.get("Attributes"):
+            lines += _entries_table("attribute", sections["Attributes"]) + [""]
+        members = _members(cls)
+        if members:
+            lines += _table(["member", "does"], [list(m) for m in members]) + [""]
+    return "\n".join(lines).rstrip("\n") + "\n"
+
+
 # --------------------------------------------------------------------------- pages
 
 #: Page name -> renderer; each page is written to ``<out>/<name>.md``.
@@ -581,6 +711,7 @@ PAGES: dict[str, Callable[[], str]] = {
     "config": _config_page,
     "commands": _commands_page,
     "columns": _columns_page,
+    "api": _api_page,
 }
 
 

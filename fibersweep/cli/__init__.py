@@ -3,6 +3,10 @@
 Library errors map to exit codes here: bad input (:class:`InputError`, including
 config errors) exits 2, a failed computation (:class:`FibersweepError`) exits 1.
 
+A command that has a function in :mod:`fibersweep.api` (run, simulate, flow,
+classify, sort-report, discrepancy, config) is one call into it: the command parses
+its options, calls the function, prints what it returns and sets the exit code.
+
 Layout: :mod:`._app` holds the ``app`` and the shared helpers; one module per
 concept adds its commands to it: :mod:`.flow` (flow), :mod:`.fiber` (simulate),
 :mod:`.sweep` (run, classify, plot-phase), :mod:`.view` (plot-fractions,

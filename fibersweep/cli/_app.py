@@ -211,59 +211,11 @@ def _setup_logging(verbose: bool) -> None:
     root.setLevel(logging.INFO if verbose else logging.WARNING)
 
 
-@contextmanager
-def flow_progress() -> Iterator[None]:
-    """Show a bar over the LBM steps, with the residual, for any flow solve in the block.
-
-    One bar per solve (the nested solve does the coarser grids first), closed on
-    the grid's last report, so whatever the command prints next starts on a line
-    of its own. Nothing is shown when the field comes from the cache. The bar's
-    form follows the output (:func:`fibersweep.progressbar.progress_bar`).
-    """
-    from fibersweep.flow.progress import SolveProgress, on_progress
-    from fibersweep.progressbar import progress_bar
-
-    open_: list = []  # the bar of the grid being solved, if any
-
-    def close() -> None:
-        while open_:
-            open_.pop().close()
-
-    def show(p: SolveProgress) -> None:
-        if p.steps == 0 or not open_:  # every solve reports step 0 first
-            close()
-            open_.append(
-                progress_bar(
-                    desc=f"flow field, dx = {p.dx:g} µm ({p.cells / 1e6:.2g} M cells)",
-                    unit=" steps",
-                    postfix="starting (the first solve also compiles the kernels)",
-                )
-            )
-        bar = open_[0]
-        if p.steps == 0:
-            return
-        bar.set_postfix_str(
-            f"residual {p.residual:.1e} (stops at {p.tolerance:.0e})", refresh=False
-        )
-        bar.update(p.steps - bar.n)
-        if p.finished:
-            close()
-
-    try:
-        with on_progress(show):
-            yield
-    finally:
-        close()
-
-
 def _load(path: Path, overrides: list[str] | None = None, max_points: int | None = None):
-    from fibersweep.config import load_config
-    from fibersweep.sweep.executors import EXECUTORS
-    from fibersweep.sweep.starts import PHYSICS
+    """The config as every command sees it (:func:`fibersweep.api.load_config`)."""
+    from fibersweep.api import load_config
 
-    return load_config(
-        path, overrides or (), max_points=max_points, executors=EXECUTORS, physics=PHYSICS
-    )
+    return load_config(path, *(overrides or ()), max_points=max_points)
 
 
 def _version(value: bool) -> None:

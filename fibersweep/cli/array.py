@@ -18,7 +18,6 @@ from fibersweep.cli._app import (
     _setup_logging,
     app,
 )
-from fibersweep.config.fiber import ARRAY_ROWS
 from fibersweep.errors import InputError
 
 
@@ -88,95 +87,51 @@ def sort_report(
     gives it and the runs to add to be sure. Tables go to RESULTS/*.csv, figures
     to RESULTS/figures/.
     """
+    from fibersweep import api
+
     _setup_logging(verbose)
     with _errors():
-        from fibersweep.analysis.modes import ModeSettings
-        from fibersweep.results import load_array_results
-        from fibersweep.sorting import report as sr
-
-        try:
-            edges = [float(e) for e in outlets.split(",") if e.strip()]
-        except ValueError:
-            raise InputError(f"--outlets: not a list of numbers: {outlets!r}") from None
-        edges = sr.check_edges(edges)
-        target = _target(target_length, separate)
-        runs, settings, cfg = load_array_results(results)
-        modes = ModeSettings(zigzag_max=zigzag_max, displacement_min=displacement_min)
-        runs = sr.relabel(runs, settings, modes, cfg["fiber"]["classify"]["trap_speed"])
-        key = _design_key(settings, setting, target)
-        n_rows = rows or cfg["fiber"].get("array_rows", ARRAY_ROWS)
-        table = sr.migration_table(runs, settings)
-        crit = sr.critical_table(table)
-        bead = 2.0 * cfg["fiber"]["bead_radius"]
-        _echo_migration(runs, table, crit, settings, bead)
-        _warn_short(settings, int(cfg["fiber"].get("array_rows", ARRAY_ROWS)))
-        out = sr.outlet_table(runs, settings, n_rows, edges)
-        _echo_outlets(out, settings, n_rows)
-        written = [results / "migration.csv", results / "outlets.csv"]
-        table.to_csv(written[0], index=False)
-        out.to_csv(written[1], index=False)
-        curve = ans = None
-        if key is not None:
-            curve, ans = _design(crit, table, settings, key, target, bead, separate)
-            curve.to_csv(results / "critical.csv", index=False)
-            written.append(results / "critical.csv")
-        typer.echo("tables: " + ", ".join(str(w) for w in written))
-        if figures:
-            _figures(results, runs, table, crit, out, settings, cfg, key, curve, ans, target)
-
-
-def _target(target_length: float | None, separate: str | None) -> float | None:
-    """The critical length asked for (--target-length, or halfway between --separate's)."""
-    if target_length is not None and separate is not None:
-        raise InputError("--target-length and --separate: give one of them")
-    if separate is not None:
-        try:
-            pair = [float(v) for v in separate.split(",")]
-        except ValueError:
-            pair = []
-        if (
-            len(pair) != 2
-            or not all(math.isfinite(v) and v > 0 for v in pair)
-            or pair[0] == pair[1]
-        ):
-            raise InputError(f"--separate {separate!r}: expected two different lengths L1,L2 [µm]")
-        return 0.5 * (pair[0] + pair[1])
-    if target_length is not None and not (math.isfinite(target_length) and target_length > 0):
-        raise InputError(f"--target-length {target_length}: expected a length > 0 [µm]")
-    return target_length
-
-
-def _design_key(settings: list[dict], setting: str | None, target: float | None) -> str | None:
-    from fibersweep.sorting.design import design_key
-
-    key = design_key(settings, setting)
-    if key is None and target is not None:
-        raise InputError(
-            "--target-length/--separate: these results sweep no array setting, so there is "
-            "nothing to choose; sweep one, e.g. 'sweep.flow.array.shift=[0.05, 0.1, 0.15, 0.2]' "
-            "(docs/arrays.md, 'Design: a target critical length')"
+        rep = api.sort_report(
+            results, rows=rows, outlets=outlets, target_length=target_length,
+            separate=separate, setting=setting, figures=figures, zigzag_max=zigzag_max,
+            displacement_min=displacement_min,
+        )  # fmt: skip
+    _echo_migration(rep)
+    for short in rep.short:
+        typer.secho(
+            f"note: {short.name}: {short.rows} rows are {short.periods:.1f} zigzag periods "
+            f"(1/ε = {1 / short.shift:.0f} rows), too few for f to tell zigzag from "
+            f"displacement; run at least {short.needed} rows (fiber.array_rows)",
+            fg=typer.colors.YELLOW,
         )
-    return key
+    _echo_outlets(rep.outlets, rep.settings, rep.rows)
+    if rep.curve is not None:
+        _echo_design(rep)
+    typer.echo("tables: " + ", ".join(str(w) for w in rep.tables))
+    for w in rep.figures:
+        typer.echo(f"figure: {w}")
+    for n in rep.notes:
+        typer.secho(f"note: {n}", fg=typer.colors.YELLOW)
 
 
 _ABBREV = {"zigzag": "Z", "displacement": "D", "wrap-and-jump": "WJ", "trapped": "T", "mixed": "M"}
 
 
-def _echo_migration(runs, table, crit, settings: list[dict], bead: float) -> None:
+def _echo_migration(rep) -> None:
     """Per setting: the f summary per length, its critical lengths and lengths to add."""
     import pandas as pd
 
-    from fibersweep.sorting.report import refine_lengths
+    from fibersweep.sorting.report import located
 
+    runs, table, crit, bead = rep.runs, rep.migration, rep.critical, rep.bead
     pd.set_option("display.width", 160)
     typer.echo(
         "f: displacement per row / ε λy (1 follows the tilt, 0 the flow), mean ± standard "
         "error over the runs that were not trapped; trapped: their share (not in f or the "
         "angle); modes: Z zigzag, D displacement, WJ wrap-and-jump, M mixed, T trapped"
     )
-    add = refine_lengths(table)
     for s, g in table.groupby("setting"):
-        meta = settings[int(s)]
+        meta = rep.settings[int(s)]
         tilt = math.degrees(math.atan(meta["array"]["shift"]))
         typer.echo(f"\n{_name(meta)} (tilt {tilt:.2f}°):")
         rows = []
@@ -203,13 +158,13 @@ def _echo_migration(runs, table, crit, settings: list[dict], bead: float) -> Non
                 f"µm (mean f {side} 1/2 at every length)"
             )
         for r in c.itertuples():
-            located = " (located to one bead)" if r.hi - r.lo <= bead * (1 + 1e-9) else ""
+            one_bead = " (located to one bead)" if located(r.lo, r.hi, bead) else ""
             typer.echo(
                 f"critical length ({'f rises' if r.rising else 'f falls'} through 1/2): "
                 f"{_pm(r.critical, r.se, 1)} µm, between the simulated {r.lo:g} and {r.hi:g} "
-                f"µm{located}"
+                f"µm{one_bead}"
             )
-        new = [L for L in add.get(int(s), []) if _bisects(L, c, bead)]
+        new = rep.narrowing.get(int(s), [])
         if new:
             typer.echo(
                 f"to narrow it: add {', '.join(f'{L:g}' for L in new)} to sweep.length and run "
@@ -219,37 +174,10 @@ def _echo_migration(runs, table, crit, settings: list[dict], bead: float) -> Non
             )
 
 
-#: Zigzag periods (1/ε rows each) a run should cross for its f to tell the modes apart.
-MIN_PERIODS = 2.0
-
-
-def _warn_short(settings: list[dict], rows: int) -> None:
-    """Say where the runs crossed too few rows for f to separate zigzag from displacement.
-
-    A zigzagging fiber follows the tilt for 1/ε rows, then jumps back one column: its f
-    averages to 0 only over whole periods of 1/ε rows; over one period it can read
-    anything between 0 and 1.
-    """
-    for meta in settings:
-        eps = meta["array"]["shift"]
-        if eps > 0 and rows * eps < MIN_PERIODS:
-            typer.secho(
-                f"note: {_name(meta)}: {rows} rows are {rows * eps:.1f} zigzag periods (1/ε = "
-                f"{1 / eps:.0f} rows), too few for f to tell zigzag from displacement; run at "
-                f"least {math.ceil(MIN_PERIODS / eps)} rows (fiber.array_rows)",
-                fg=typer.colors.YELLOW,
-            )
-
-
 def _name(meta: dict) -> str:
     from fibersweep.sorting.report import setting_name
 
     return setting_name(meta)
-
-
-def _bisects(L: float, crit, bead: float) -> bool:
-    """Whether the midpoint L halves a bracket wider than one bead."""
-    return any(r.lo < L < r.hi and r.hi - r.lo > bead * (1 + 1e-9) for r in crit.itertuples())
 
 
 def _pm(v: float, e: float, digits: int) -> str:
@@ -296,11 +224,9 @@ def _echo_outlets(out, settings: list[dict], n_rows: int) -> None:
             typer.echo(f"  outlet {k}: no fiber leaves there (purity -)")
 
 
-def _design(crit, table, settings, key: str, target, bead: float, separate):
-    """Critical length against the swept setting; the answer for a target. Printed."""
-    from fibersweep.sorting import design as sd
-
-    curve = sd.critical_curve(crit, table, settings, key)
+def _echo_design(rep) -> None:
+    """The critical length against the swept setting, and the answer for a target."""
+    curve, key = rep.curve, rep.key
     name = key.rsplit(".", 1)[-1]
     typer.echo(
         f"\ncritical length against {name} (first length where f rises through 1/2; "
@@ -319,146 +245,26 @@ def _design(crit, table, settings, key: str, target, bead: float, separate):
                 txt = f"below {r.hi:g} µm (f > 1/2 at every length)"
             val = f"{r.value:g}" if isinstance(r.value, int | float) else r.value
             typer.echo(f"    {name} = {val}: {txt}")
-    ans = None
-    if target is not None:
-        what = (
-            f"to separate {separate.replace(',', ' and ')} µm, a critical length halfway: "
-            f"{target:g} µm"
-            if separate
-            else f"target critical length {target:g} µm"
-        )
-        typer.echo(f"\n{what}:")
-        for grp, g in curve.groupby("group", sort=False):
-            ans = sd.answer(g, key, target, settings[int(g["setting"].iloc[0])]["flow"], bead)
-            typer.echo(("  " + grp + ": " if grp else "  ") + ans.text)
-            if ans.add:
-                typer.echo("  to be sure, run:")
-                for line in ans.add:
-                    typer.echo(f"    {line}")
-            if (
-                isinstance(ans.value, float)
-                and not np.isclose(curve["value"].to_numpy(float), _lattice_pick(ans)).any()
-            ):
-                values = sorted({*curve["value"], _lattice_pick(ans)})
-                typer.echo(
-                    f"  the check: add {_lattice_pick(ans):g} to the swept values, e.g. "
-                    f"'sweep.{key}=[{', '.join(f'{v:g}' for v in values)}]', and run the same "
-                    "sweep into this folder (only the new runs run); sort-report then reads "
-                    "its critical length"
-                )
-    return curve, ans
-
-
-def _lattice_pick(ans) -> float:
-    lo, hi = ans.lattice
-    cands = [v for v in (lo, hi) if math.isfinite(v)]
-    return min(cands, key=lambda v: abs(v - ans.value)) if cands else ans.value
-
-
-def _slug(values: dict) -> str:
-    """File-name part of a setting combination: 'shift=0.1_young_modulus=1e+04'."""
-    import re
-
-    parts = [
-        f"{k.rsplit('.', 1)[-1]}={v:g}"
-        if isinstance(v, int | float)
-        else f"{k.rsplit('.', 1)[-1]}={v}"
-        for k, v in values.items()
-    ]
-    return re.sub(r"[^A-Za-z0-9_.=+-]", "_", "_".join(parts))
-
-
-#: Most settings drawn in one chronophotograph (one panel each).
-MAX_PANELS = 6
-
-
-def _pick(sub, mode: str) -> dict | None:
-    """A run that shows ``mode``: at the length where it is most common, f nearest its median."""
-    m = sub[sub["mode"] == mode]
-    if m.empty:
-        return None
-    L = m["length"].value_counts().sort_index().idxmax()
-    g = m[m["length"] == L]
-    if mode == "wrap-and-jump" and "wraps" in g:
-        return g.sort_values("wraps", ascending=False).iloc[0].to_dict()
-    f = g["fraction"].to_numpy(float)
-    return (
-        g.iloc[int(np.nanargmin(np.abs(f - np.nanmedian(f))))].to_dict()
-        if np.isfinite(f).any()
-        else g.iloc[0].to_dict()
-    )
-
-
-def _figures(
-    results: Path, runs, table, crit, out, settings: list[dict], cfg: dict, key, curve, ans, target
-) -> None:
-    from fibersweep.analysis.modes import MODES
-    from fibersweep.config.flow import FlowSettings
-    from fibersweep.flow.cache import get_flow_field
-    from fibersweep.plots import array as pa
-    from fibersweep.plots import array_design as pd_
-    from fibersweep.plots.shapes import ShapeNotStored
-    from fibersweep.plots.style import paper_style, save_figure
-
-    fig_dir = results / "figures"
-    written, notes = [], []
-    with paper_style():
-        arrays, shifts, periods, drawn = {}, {}, {}, set()
-        for i, s in enumerate(settings):
-            # the sweep's cell field, from the cache (solved again if it was removed)
-            flow = FlowSettings.model_validate(s["flow"])
-            field, _ = get_flow_field(flow, cfg["run"]["cache_dir"])
-            arrays[i] = field.array
-            shifts[i] = field.array.lateral_shift
-            periods[i] = field.array.period_x
-            if s["flow_key"] in drawn:  # settings that share a flow share its figure
-                continue
-            drawn.add(s["flow_key"])
-            flow_values = {k: v for k, v in s["values"].items() if k.startswith("flow.")}
-            name = f"cell-flow-{_slug(flow_values)}.png" if flow_values else "cell-flow.png"
-            written.append(save_figure(pa.cell_flow_figure(field), fig_dir / name, dpi=110))
-        tilts = {i: math.degrees(math.atan(s["array"]["shift"])) for i, s in enumerate(settings)}
-        labels = {i: s["label"] for i, s in enumerate(settings)}
-        written.append(
-            save_figure(pd_.migration_figure(table, tilts, labels, crit), fig_dir / "migration.png")
-        )
-        written.append(save_figure(pd_.outlets_figure(out, labels), fig_dir / "outlets.png"))
-        written.append(
-            save_figure(
-                pa.overlay_figure(runs, periods, shifts=shifts),
-                fig_dir / "sort-tracks.png",
-                dpi=130,
+    if rep.target is None:
+        return
+    if rep.separate is not None:
+        pair = " and ".join(f"{v:g}" for v in rep.separate)
+        what = f"to separate {pair} µm, a critical length halfway: {rep.target:g} µm"
+    else:
+        what = f"target critical length {rep.target:g} µm"
+    typer.echo(f"\n{what}:")
+    for ga in rep.answers:
+        ans = ga.answer
+        typer.echo(("  " + ga.group + ": " if ga.group else "  ") + ans.text)
+        if ans.add:
+            typer.echo("  to be sure, run:")
+            for line in ans.add:
+                typer.echo(f"    {line}")
+        if ga.check is not None:
+            values = sorted({*curve["value"], ga.check})
+            typer.echo(
+                f"  the check: add {ga.check:g} to the swept values, e.g. "
+                f"'sweep.{key}=[{', '.join(f'{v:g}' for v in values)}]', and run the same "
+                "sweep into this folder (only the new runs run); sort-report then reads "
+                "its critical length"
             )
-        )
-        shown = list(range(len(settings)))
-        if len(shown) > MAX_PANELS:
-            shown = [
-                shown[round(k * (len(shown) - 1) / (MAX_PANELS - 1))] for k in range(MAX_PANELS)
-            ]
-            notes.append(f"chronophotographs show {MAX_PANELS} of the {len(settings)} settings")
-        for mode in MODES:
-            picks = [(i, _pick(runs[runs["setting"] == i], mode)) for i in shown]
-            picks = [(i, p) for i, p in picks if p is not None]
-            if not picks:
-                continue
-            try:
-                fig = pa.chrono_figure(
-                    None,
-                    [p for _, p in picks],
-                    cfg["fiber"]["bead_radius"],
-                    arrays=[arrays[i] for i, _ in picks],
-                )
-            except ShapeNotStored as exc:
-                notes.append(f"no chronophotograph of the {mode} runs: {exc}")
-                continue
-            written.append(save_figure(fig, fig_dir / f"chrono-{mode}.png", dpi=130))
-        if curve is not None:
-            from fibersweep.config import setting_column
-
-            unit = setting_column(key)[1]
-            fig = pd_.critical_figure(curve, key, unit, ans, target)
-            written.append(save_figure(fig, fig_dir / f"critical-{key.rsplit('.', 1)[-1]}.png"))
-    for w in written:
-        typer.echo(f"figure: {w}")
-    for n in notes:
-        typer.secho(f"note: {n}", fg=typer.colors.YELLOW)

@@ -28,26 +28,16 @@ from fibersweep.cli._app import (
 
 
 def _channel_only(cfg, command: str) -> None:
-    """The discrepancy workflow is the channel's: refuse a pillar array, naming what to use."""
-    from fibersweep.errors import InputError
+    """The discrepancy workflow is the channel's (:func:`fibersweep.api.refuse_array`)."""
+    from fibersweep.api import refuse_array
 
-    if cfg.flow.array is not None:
-        raise InputError(
-            f"{command}: the discrepancy workflow compares fibers measured past one pillar in "
-            "a channel (class, δ, contact, exit position); a pillar array (flow.array) has "
-            "none of these observables. For an array: fibersweep run CONFIG, then fibersweep "
-            "sort-report RESULTS (migration, critical lengths, outlets)"
-        )
+    refuse_array(cfg, command)
 
 
 def _sweep_box(cfg) -> dict[str, tuple[float, float]]:
-    from fibersweep.config import axis_values
+    from fibersweep.api import sweep_box
 
-    box = {}
-    for name in ("theta0", "y0", "length"):
-        v = axis_values(getattr(cfg.sweep, name))
-        box[name] = (float(v.min()), float(v.max()))
-    return box
+    return sweep_box(cfg)
 
 
 @app.command(rich_help_panel=MEASURED)
@@ -151,13 +141,9 @@ CandidateOpt = Annotated[
 
 def _declared(cfg, candidate: list[str] | None) -> tuple:
     """Declared candidates: the config's ``discrepancy.candidates``, then ``--candidate``."""
-    from fibersweep.discrepancy.declared import parse_candidates
+    from fibersweep.api import declared_candidates
 
-    texts = list(cfg.discrepancy.candidates)
-    where = [f"discrepancy.candidates[{i}]:" for i in range(len(texts))]
-    texts += list(candidate or [])
-    where += ["--candidate"] * len(candidate or [])
-    return tuple(parse_candidates(texts, cfg.fiber, cfg.flow, where))
+    return declared_candidates(cfg, candidate)
 
 
 def _plan_lines(n: int, settings) -> list[str]:
@@ -180,6 +166,18 @@ def _plan_lines(n: int, settings) -> list[str]:
             f"  time about {(total + extra) / total:.2f}x that of the same plan on rigid runs"
         )
     return lines
+
+
+def _print_discrepancy_plan(plan) -> None:
+    """The plan before it runs (:class:`fibersweep.api.DiscrepancyPlan`)."""
+    for line in _plan_lines(plan.fibers, plan.settings):
+        typer.echo(line)
+    if plan.followup is not None:
+        typer.echo(
+            f"  then {2 * plan.settings.settle_copies * plan.followup} more (beyond any "
+            f"--budget) for the {plan.followup} follow-up fibers, if the verdict leaves two "
+            "hypotheses"
+        )
 
 
 @app.command(rich_help_panel=MEASURED)
@@ -243,43 +241,19 @@ def discrepancy(
     follow-up fibers; an ambiguous verdict between them becomes named when those
     fibers reject one and fit the other.
     """
+    from fibersweep import api
+
     _setup_logging(verbose)
     with _errors():
-        cfg = _load(config, overrides)
-        _channel_only(cfg, "discrepancy")
-        from fibersweep.discrepancy.measured import load_measured
-        from fibersweep.discrepancy.report import write_report
-        from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
-        from fibersweep.flow.cache import get_flow_field
-
-        names = _effect_names(effect)
-        data = load_measured(
-            measured, trajectories, ignore_extra=ignore_extra_columns,
-            geometry=cfg.flow.geometry.to_geometry(),
+        rep = api.discrepancy(
+            measured, config, *(overrides or []), output=output, budget=budget, seed=seed,
+            copies=copies, effects=_effect_names(effect), candidates=candidate or (),
+            alpha=alpha, pairs=pairs, power=power, propose_next=next_,
+            trajectories=trajectories, followup=followup,
+            ignore_extra_columns=ignore_extra_columns, workers=workers, progress=True,
+            on_plan=_print_discrepancy_plan,
         )  # fmt: skip
-        more = (
-            load_measured(followup, ignore_extra=ignore_extra_columns)
-            if followup is not None
-            else None
-        )
-        settings = DiscrepancySettings(
-            copies=copies, budget=budget, seed=seed, alpha=alpha, pairs=pairs,
-            power_fibers=40 if power else 0, next_copies=2 if next_ else 0,
-            workers=workers or cfg.run.workers,
-            executor=cfg.run.executor, scheduler=cfg.run.scheduler,
-            effects=names, declared=_declared(cfg, candidate),
-        )  # fmt: skip
-        for line in _plan_lines(len(data), settings):
-            typer.echo(line)
-        if more is not None:
-            typer.echo(
-                f"  then {2 * settings.settle_copies * len(more)} more (beyond any --budget) for "
-                f"the {len(more)} follow-up fibers, if the verdict leaves two hypotheses"
-            )
-        field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
-        res = run_discrepancy(data, field, cfg.fiber, settings, flow=cfg.flow,
-                              cache_dir=cfg.run.cache_dir, followup=more)  # fmt: skip
-        s = write_report(res, output, cfg.model_dump(mode="json"))
+    s = rep.summary
     if s.get("settle"):
         first = s["settle"]["verdict_first"]
         typer.echo(f"verdict on MEASURED alone: {first['kind']}: {first['text']}")
@@ -351,9 +325,10 @@ def power_cmd(
         from fibersweep.atomic import atomic_write
         from fibersweep.discrepancy.candidates import get_candidates
         from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
+        from fibersweep.discrepancy.detection import limit_in_unit
         from fibersweep.discrepancy.measured import load_measured
         from fibersweep.discrepancy.observables import scored
-        from fibersweep.discrepancy.power import analyse_power, limit_in_unit
+        from fibersweep.discrepancy.power import analyse_power
         from fibersweep.discrepancy.simulate import Simulator
         from fibersweep.errors import InputError
         from fibersweep.flow.cache import get_flow_field

@@ -15,14 +15,11 @@ from fibersweep.cli._app import (
     RunOverrides,
     Verbose,
     _errors,
-    _load,
     _setup_logging,
     app,
     choices,
-    flow_progress,
 )
 from fibersweep.config.fiber import LEGACY_MODELS, FiberSettings
-from fibersweep.errors import InputError
 
 # the models FiberSettings accepts (the model registry matches them, tested), and former names
 Model = choices(
@@ -76,76 +73,42 @@ def simulate(
     The fiber kernels are compiled on first use (then loaded from the disk cache); the
     time that takes is said, apart from the run's.
     """
+    from fibersweep import api
+
     _setup_logging(verbose)
     with _errors():
-        from fibersweep.fiber.result import FiberStart
-        from fibersweep.fiber.run import simulate as run_one
-        from fibersweep.fiber.run import simulate_reversible
-        from fibersweep.flow.cache import get_flow_field
-        from fibersweep.plots.shapes import is_flexible
-
-        # --model is the override fiber.model=..., validated with the others (its integrator)
-        extra = [f"fiber.model={model.value}"] if model is not None else []
-        cfg = _load(config, [*(overrides or []), *extra])
-        fiber = cfg.fiber
-        if plot is not None:  # the drawing needs the trajectory, and a bent fiber its beads
-            rec = fiber.record.model_copy(
-                update={
-                    "trajectories": True,
-                    "samples": max(fiber.record.samples, 2000),
-                    "all_beads": fiber.record.all_beads or is_flexible(fiber.model),
-                }
-            )
-            fiber = fiber.model_copy(update={"record": rec})
-        with flow_progress():
-            field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
-        array = getattr(field, "array", None)
-        start = FiberStart(theta0=theta0, y0=y0, length=length)
-        if array is not None and reversible:
-            raise InputError("--reversible: not available in a pillar array (flow.array)")
-        ready_s = _ready(field, fiber)
-        if ready_s > COMPILED_S:
-            typer.echo(
-                f"first use: compiled the {fiber.model} kernels in {ready_s:.1f} s (cached on "
-                "disk: the next runs load them)"
-            )
-        back = math.nan
-        if reversible:
-            res, back = simulate_reversible(field, fiber, start, rng_seed=seed)
-        else:
-            res = run_one(field, fiber, start, rng_seed=seed)
-        if array is not None:
-            _echo_array(res, array, fiber)
-        else:
-            _echo_channel(res, fiber, reversible, back)
-        if math.isfinite(res.min_end_to_end):
-            typer.echo(
-                f"deformation: max curvature {res.max_curvature:.4f} 1/µm, min end-to-end "
-                f"{res.min_end_to_end:.3f} of the contour, max tension "
-                f"{res.max_tension:.3g} pN, max wrap {res.max_wrap:.1f}°"
-            )
-        typer.echo(f"steps: {res.n_steps} in {res.wall_time:.2f} s (the run alone)")
-        if reversible:
-            typer.echo(f"reversed flow: returns within {_f(back, '.3g')} µm of the start")
-        if plot is not None:
-            typer.echo(f"wrote {_plot(res, field, fiber, plot)}")
+        one = api.simulate(
+            config, *(overrides or []), theta0=theta0, y0=y0, length=length,
+            model=model.value if model is not None else None, reversible=reversible,
+            seed=seed, plot=plot, progress=True,
+        )  # fmt: skip
+    res, fiber = one.result, one.fiber
+    if one.ready_s > COMPILED_S:
+        typer.echo(
+            f"first use: compiled the {fiber.model} kernels in {one.ready_s:.1f} s (cached on "
+            "disk: the next runs load them)"
+        )
+    if one.array is not None:
+        _echo_array(res, one.array, fiber)
+    else:
+        _echo_channel(res, fiber, reversible, one.returned)
+    if math.isfinite(res.min_end_to_end):
+        typer.echo(
+            f"deformation: max curvature {res.max_curvature:.4f} 1/µm, min end-to-end "
+            f"{res.min_end_to_end:.3f} of the contour, max tension "
+            f"{res.max_tension:.3g} pN, max wrap {res.max_wrap:.1f}°"
+        )
+    typer.echo(f"steps: {res.n_steps} in {res.wall_time:.2f} s (the run alone)")
+    if reversible:
+        typer.echo(f"reversed flow: returns within {_f(one.returned, '.3g')} µm of the start")
+    if one.figure is not None:
+        typer.echo(f"wrote {one.figure}")
     if res.status != "ok":
         raise typer.Exit(1)
 
 
 def _f(v: float, fmt: str) -> str:
     return "-" if not math.isfinite(v) else format(v, fmt)
-
-
-def _ready(field, fiber) -> float:
-    """Seconds to make the fiber kernels ready (a short run): compiled on first use."""
-    import time
-
-    from fibersweep.sweep.worker import _warm
-
-    t0 = time.perf_counter()
-    _warm(field, fiber)
-    return time.perf_counter() - t0
 
 
 def _effects(fiber) -> str:
@@ -215,18 +178,3 @@ def _echo_array(res, array, fiber) -> None:
         f"two pillars, {_f(res.time_on_pillars, '.2f')} s on pillars; min clearance "
         f"{_f(res.min_clearance, '.3f')} µm; ended at t = {_f(res.t_end, '.2f')} s"
     )
-
-
-def _plot(res, field, fiber, plot: Path) -> Path:
-    """The chronophotograph: past one pillar, or through the rows of an array."""
-    array = getattr(field, "array", None)
-    if array is None:
-        from fibersweep.plots.chrono import chronophotograph
-
-        return chronophotograph(res, field.geometry, plot)
-    from fibersweep.plots.array_chrono import run_dict, run_figure
-    from fibersweep.plots.style import paper_style, save_figure
-
-    with paper_style():
-        fig = run_figure(array, run_dict(res, fiber.bead_radius), fiber.bead_radius)
-        return save_figure(fig, plot)

@@ -13,10 +13,8 @@ from fibersweep.cli._app import (
     Overrides,
     Verbose,
     _errors,
-    _load,
     _setup_logging,
     app,
-    flow_progress,
 )
 
 
@@ -43,43 +41,20 @@ def flow(
     A sweep over flow settings (``sweep: {flow.dx: [4, 2]}``) has one field per
     distinct flow setting: each is computed (or found) once and reported.
     """
+    from fibersweep import api
+
     _setup_logging(verbose)
-    with _errors(), flow_progress():
-        cfg = _load(config, overrides)
-        fields = _distinct_fields(cfg)
-        for k, (key, (flow_settings, label)) in enumerate(fields.items()):
-            if len(fields) > 1:
-                typer.echo(f"field {k + 1} of {len(fields)} ({label}):")
-            where = plot
-            if plot is not None and len(fields) > 1:
-                where = plot.with_name(f"{plot.stem}-{key}{plot.suffix}")
-            _report(flow_settings, cfg.run.cache_dir, force, where, "  " if len(fields) > 1 else "")
+    with _errors():
+        fields = api.flow_field(config, *(overrides or []), force=force, plot=plot, progress=True)
+    for k, rep in enumerate(fields):
+        if len(fields) > 1:
+            typer.echo(f"field {k + 1} of {len(fields)} ({rep.label}):")
+        _report(rep, "  " if len(fields) > 1 else "")
 
 
-def _distinct_fields(cfg) -> dict[str, tuple]:
-    """Flow key -> (FlowSettings, the swept flow values that make it), in sweep order."""
-    from fibersweep.flow.cache import cache_key
-    from fibersweep.sweep.starts import PHYSICS
-
-    out: dict[str, tuple] = {}
-    for combo in cfg.combinations(PHYSICS):
-        key = cache_key(combo.config.flow)
-        if key not in out:
-            values = {k: v for k, v in combo.values.items() if k.startswith("flow.")}
-            label = ", ".join(f"{k}={v}" for k, v in values.items()) or "base flow settings"
-            out[key] = (combo.config.flow, label)
-    return out
-
-
-def _report(settings, cache_dir: str, force: bool, plot: Path | None, pad: str) -> None:
-    """Compute or load one field and print what it is."""
-    import time
-
-    from fibersweep.flow.cache import get_flow_field
-
-    t0 = time.perf_counter()
-    field, info = get_flow_field(settings, cache_dir, force=force)
-    took = time.perf_counter() - t0
+def _report(rep, pad: str) -> None:
+    """What one field is (:class:`fibersweep.api.FieldReport`)."""
+    settings, info, field = rep.settings, rep.info, rep.field
     nx, ny, nz, nz_full = info.grid
     depth = f"half depth, {nz} of {nz_full} nodes + symmetry plane" if nz < nz_full else "full"
     typer.echo(f"{pad}cache: {'hit' if info.hit else 'miss (computed)'}  {info.path}")
@@ -100,6 +75,7 @@ def _report(settings, cache_dir: str, force: bool, plot: Path | None, pad: str) 
         f"{pad}solver: {settings.collision.upper()}, {info.steps} steps{coarse}, {conv}, "
         f"relative change per check {info.residual:.2e} (tolerance {settings.tolerance:g})"
     )
+    took = rep.seconds
     typer.echo(
         f"{pad}time: solve {info.seconds:.1f} s"
         + (f" (when cached); load {took:.2f} s" if info.hit else f"; total {took:.1f} s")
@@ -109,37 +85,23 @@ def _report(settings, cache_dir: str, force: bool, plot: Path | None, pad: str) 
         f"(target {settings.fluid.u_center:g} µm/s)"
     )
     if settings.array is not None:  # a pillar array's unit cell: no far upstream
-        _report_cell(field, plot, pad)
-        return
-    from fibersweep.flow.uncertainty import other_level, separatrix_estimate
-
-    try:
-        level = other_level(settings, cache_dir)
-        est = separatrix_estimate(field, None if level is None else level[1])
-    except ValueError as exc:  # no streamline bracket (e.g. a toy channel)
-        typer.echo(f"{pad}separatrix far upstream: not located ({exc})")
+        _report_cell(field, pad)
+    elif rep.separatrix is None:  # no streamline bracket (e.g. a toy channel)
+        typer.echo(f"{pad}separatrix far upstream: not located ({rep.separatrix_error})")
     else:
-        _echo_separatrix(est, settings.pillar_boundary, pad)
-    if plot is not None:
-        from fibersweep.plots.flow import plot_flow
-
-        typer.echo(f"{pad}wrote {plot_flow(field, plot)}")
+        _echo_separatrix(rep.separatrix, settings.pillar_boundary, pad)
+    if rep.figure is not None:
+        typer.echo(f"{pad}wrote {rep.figure}")
 
 
-def _report_cell(field, plot: Path | None, pad: str) -> None:
-    """What a unit-cell field adds: its array and mean flow direction; its figure."""
+def _report_cell(field, pad: str) -> None:
+    """What a unit-cell field adds: its array and mean flow direction."""
     d = field.array.describe()
     typer.echo(
         f"{pad}array: gap {d['gap']:.3g} µm, row shift {field.array.lateral_shift:.3g} µm "
         f"(tilt {field.array.tilt_deg:.2f} deg); mean flow at "
         f"{field.meta['mean_flow_angle_deg']:.3f} deg to x"
     )
-    if plot is not None:
-        from fibersweep.plots.array import cell_flow_figure
-        from fibersweep.plots.style import paper_style, save_figure
-
-        with paper_style():
-            typer.echo(f"{pad}wrote {save_figure(cell_flow_figure(field), plot, dpi=110)}")
 
 
 def _echo_separatrix(est, boundary: str, pad: str = "") -> None:

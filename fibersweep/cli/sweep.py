@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from fibersweep.analysis.classify import RULES
+from fibersweep.api import SweepBar
 from fibersweep.cli._app import (
     FIGURES,
     SWEEP,
@@ -17,16 +18,13 @@ from fibersweep.cli._app import (
     Workers,
     _errors,
     _interruptible,
-    _load,
     _setup_logging,
     app,
     choices,
-    flow_progress,
 )
 from fibersweep.errors import InputError, Terminated
 from fibersweep.plots import FORMATS
 from fibersweep.sweep.executors import EXECUTORS
-from fibersweep.sweep.starts import PHYSICS
 
 #: Seconds above which making kernels ready means they were compiled, not loaded.
 COMPILED_S = 5.0
@@ -46,18 +44,6 @@ def _fmt_s(s: float | None) -> str:
     if s < 120:
         return f"{s:.0f} s"
     return f"{s / 60:.1f} min" if s < 7200 else f"{s / 3600:.1f} h"
-
-
-def _with_run_overrides(cfg, **kw):
-    """Config with ``run`` options from the command line, validated like the file."""
-    from fibersweep.config import parse_config
-
-    over = {k: v for k, v in kw.items() if v is not None}
-    if not over:
-        return cfg
-    data = cfg.model_dump(mode="json")
-    data["run"].update(over)
-    return parse_config(data, source="command line", physics=PHYSICS)
 
 
 @app.command(rich_help_panel=SWEEP)
@@ -94,28 +80,92 @@ def run(
     verbose: Verbose = False,
 ) -> None:
     """Run a sweep: flow field (cached), fiber runs across workers, Parquet results."""
+    from fibersweep import api
+
     _setup_logging(verbose)
     with _interruptible(), _errors():
-        cfg = _load(config, overrides, max_points=max_points)
-        if scheduler and executor is None:
-            executor = Executor("dask")
-        cfg = _with_run_overrides(
-            cfg,
-            workers=workers,
+        how = dict(
+            output=output, workers=workers, scheduler=scheduler, resume=resume,
+            retry_failed=retry_failed, max_points=max_points,
             executor=executor.value if executor is not None else None,
-            scheduler=scheduler,
-            output=None if output is None else str(output),
-        )
+        )  # fmt: skip
         if dry_run:
-            _dry_run(cfg, resume, retry_failed)
+            _print_estimate(api.estimate(config, *(overrides or []), **how))
             return
-        with flow_progress():  # a bar over the solver's steps if a field is computed
-            failed = _run(cfg, resume, retry_failed, overrides or [])
-    if failed:
+        shown = _Shown()
+        try:
+            res = api.run(config, *(overrides or []), progress=shown, **how)
+        except KeyboardInterrupt as exc:
+            if shown.config is None:  # stopped before the sweep started
+                raise
+            why = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+            typer.secho(
+                f"{why}: {shown.saved} runs of this call are saved in "
+                f"{shown.config.run.output}; run the same command again to resume",
+                err=True,
+                fg=typer.colors.YELLOW,
+            )
+            raise typer.Exit(143 if isinstance(exc, Terminated) else 130) from None
+        _print_run(res)
+    if res.failed:
         raise typer.Exit(1)
 
 
-def _print_plan(plan, workers: int) -> None:
+class _Shown(SweepBar):
+    """The sweep's bar, with the lines the command prints before and between its rounds."""
+
+    def start(self, config, fields) -> None:
+        super().start(config, fields)
+        line, cached = _fields_line(fields)
+        typer.echo(line if cached else f"{line}; computing into {config.run.cache_dir} ...")
+
+    def plan(self, plan) -> None:
+        _print_plan(plan)
+        refine = self.config.sweep.refine
+        if refine is not None and plan.todo:
+            typer.echo(
+                f"  the bar counts these {len(plan.todo)} runs; the refinement then adds up to "
+                f"{refine.max_runs} more in up to {refine.rounds} rounds, each with its own bar"
+            )
+        super().plan(plan)
+
+    def round(self, number: int, plan) -> None:
+        self.close()
+        typer.echo(
+            f"refinement round {number}: {len(plan.todo)} runs to do "
+            f"({len(plan.tasks)} points in the sweep so far)"
+        )
+        super().round(number, plan)
+
+
+def _print_run(res) -> None:
+    """What a sweep did (:class:`fibersweep.api.SweepRun`)."""
+    if res.ran:
+        typer.echo(
+            f"ran {res.ran} runs in {_fmt_s(res.wall_s)} ({res.rate:.2f} runs/s) -> {res.path}"
+        )
+    else:
+        typer.echo(f"nothing to run: every run of the sweep is in {res.path}")
+    typer.echo(
+        "table: "
+        + ", ".join(f"{k} {v}" for k, v in res.counts.items())
+        + f", failed {res.failed}"
+    )
+    if res.refinement is not None:
+        typer.echo(_refinement_line(res.refinement, res.config.sweep.refine))
+    for message in res.warnings:
+        typer.secho(f"warning: {message}", err=True, fg=typer.colors.YELLOW)
+    for line in res.failures[:10]:
+        typer.secho(f"  failed {line}", err=True, fg=typer.colors.RED)
+    if res.failed:
+        typer.secho(
+            f"{res.failed} runs failed; re-run them with --retry-failed",
+            err=True,
+            fg=typer.colors.RED,
+        )
+
+
+def _print_plan(plan) -> None:
     typer.echo(
         f"{plan.out}: {len(plan.tasks)} runs in the sweep; done {plan.done_ok} ok, "
         f"{plan.done_failed} failed; to do now {len(plan.todo)}"
@@ -139,11 +189,9 @@ def _print_plan(plan, workers: int) -> None:
         typer.secho(f"  note: {note}", fg=typer.colors.YELLOW)
 
 
-def _fields_line(cfg) -> tuple[str, bool]:
-    """One line on the sweep's flow fields, and whether all are cached."""
-    from fibersweep.sweep.fields import flow_keys_for
-
-    fields = flow_keys_for(cfg)
+def _fields_line(fields) -> tuple[str, bool]:
+    """One line on the sweep's flow fields (key -> (settings, cached)), and whether all
+    are cached."""
     missing = [k for k, (_, cached) in fields.items() if not cached]
     if len(fields) == 1:
         key, (flow, cached) = next(iter(fields.items()))
@@ -157,74 +205,40 @@ def _fields_line(cfg) -> tuple[str, bool]:
     ), not missing
 
 
-def _dry_run(cfg, resume: bool, retry_failed: bool) -> None:
-    from dataclasses import replace
-
-    from fibersweep.sweep.estimate import busy_cores, estimate_run_s, free_workers
-    from fibersweep.sweep.fields import flow_keys_for
-    from fibersweep.sweep.plan import plan_sweep
-
-    load, cpus = busy_cores()  # before the probes below add to it
-    plan = plan_sweep(cfg, None, resume=resume, retry_failed=retry_failed)
-    extra, rnd, info = [], 0, None
-    if cfg.sweep.refine is not None and not plan.fresh:
-        from fibersweep.sweep.refine import stored_rounds
-        from fibersweep.sweep.store import read_runs
-
-        stored = read_runs(plan.out)
-        extra, rnd, info = stored_rounds(cfg.sweep.refine, plan.settings, plan.tasks, stored)
-        if extra:
-            plan = plan_sweep(cfg, None, retry_failed=retry_failed, extra=extra)
-    _print_plan(plan, cfg.run.workers)
-    per_run = plan.mean_run_s
-    how = "mean of the finished runs"
-    line, _ = _fields_line(cfg)
-    fields = flow_keys_for(cfg)
-    flow_s = 0.0
-    if plan.todo:
-        task = plan.todo[len(plan.todo) // 2]
-        cached = fields[task.flow_key][1]
-        missing = [flow for flow, is_cached in fields.values() if not is_cached]
-        if per_run is None and cached:
-            per_run = estimate_run_s(cfg, plan.todo)
-            how = _timed_on(cfg, plan.todo) + " of this sweep"
-        if missing:
-            flow_s, per_run_timed, note = _estimate_fields(cfg, plan.todo, missing)
-            typer.echo(f"  {note}")
-            if per_run is None:
-                per_run, how = per_run_timed, _timed_on(cfg, plan.todo) + " on a probe field"
-    # same rule as SweepPlan.estimate_s: no more workers busy than runs to do; on a busy
-    # machine only as many as the free cores hold
-    remote = cfg.run.scheduler is not None  # a cluster's workers: this machine's load is not theirs
-    free = cfg.run.workers if remote else free_workers(cfg.run.workers, load, cpus)
-    est = None if per_run is None else replace(plan, mean_run_s=per_run).estimate_s(free)
-    if est is not None and flow_s:
-        est += flow_s
-        how += f"; flow fields {_fmt_s(flow_s)} included"
-    if free < cfg.run.workers and est is not None:
-        how += (f"; load average {load:.1f} on {cpus} cores: the workers share them, "
-                f"counted as {free}")  # fmt: skip
+def _print_estimate(est) -> None:
+    """What a sweep would do and how long (:class:`fibersweep.api.SweepEstimate`)."""
+    cfg, plan = est.config, est.plan
+    _print_plan(plan)
+    how = {
+        "finished": "mean of the finished runs",
+        "timed": _timed_on(est) + " of this sweep",
+        "probe": _timed_on(est) + " on a probe field",
+    }.get(est.timing, "")
+    line, _ = _fields_line(est.fields)
+    if est.probes:
+        typer.echo(f"  {_probe_note(est)}")
+    if est.seconds is not None and est.flow_s:
+        how += f"; flow fields {_fmt_s(est.flow_s)} included"
+    if est.free_workers < est.workers and est.seconds is not None:
+        how += (f"; load average {est.load:.1f} on {est.cpus} cores: the workers share them, "
+                f"counted as {est.free_workers}")  # fmt: skip
     typer.echo(
-        f"  {line}; estimate {_fmt_s(est)} on {cfg.run.workers} "
-        + ("worker" if cfg.run.workers == 1 else "workers")
-        + (f" ({per_run:.2f} s per run, {how})" if per_run is not None else "")
+        f"  {line}; estimate {_fmt_s(est.seconds)} on {est.workers} "
+        + ("worker" if est.workers == 1 else "workers")
+        + (f" ({est.per_run_s:.2f} s per run, {how})" if est.per_run_s is not None else "")
         + (" for the runs known so far" if cfg.sweep.refine is not None else "")
     )
     if cfg.sweep.refine is not None:
-        _dry_run_refinement(cfg, plan, extra, rnd, info)
+        _dry_run_refinement(cfg, plan, est.round, est.refinement)
 
 
-def _timed_on(cfg, todo) -> str:
+def _timed_on(est) -> str:
     """How many runs the estimate timed (in a pillar array, spread over the lengths)."""
-    from fibersweep.sweep.estimate import sample_tasks
-
-    if cfg.flow.array is None:
-        return "timed on one run"
-    n = len(sample_tasks(todo))
+    n = est.timed_runs
     return "timed on one run" if n == 1 else f"mean of {n} runs timed across the lengths"
 
 
-def _dry_run_refinement(cfg, plan, extra, rnd: int, info) -> None:
+def _dry_run_refinement(cfg, plan, rnd: int, info) -> None:
     """What is known of the refinement rounds: those the stored runs determine."""
     refine = cfg.sweep.refine
     head = (
@@ -272,157 +286,30 @@ def _refinement_line(info: dict, refine) -> str:
     return f"{line} ({why})"
 
 
-def _estimate_fields(cfg, todo, missing) -> tuple[float, float, str]:
-    """Seconds for the fields not cached, seconds per run, and a line on how.
+def _probe_note(est) -> str:
+    """A line on the fields not cached: the estimate of each solve, and the kernels that
+    this dry run compiled."""
+    from fibersweep.sweep.estimate import PROBE_STEPS
 
-    The runs are timed on the probe field of the first field not cached: its middle
-    run, or in a pillar array runs spread across the lengths (their cost depends on it).
-    """
-    from fibersweep.fiber.result import FiberStart
-    from fibersweep.sweep.estimate import PROBE_STEPS, estimate_uncached, sample_tasks
-    from fibersweep.sweep.plan import sweep_settings
-
-    task = todo[len(todo) // 2]
-    sub = next((s.config for s in sweep_settings(cfg) if s.id == task.settings), cfg)
-    picks = sample_tasks(todo) if cfg.flow.array is not None else [task]
-    start = [FiberStart(theta0=t.theta0, y0=t.y0, length=t.length) for t in picks]
-    total = 0.0
-    per_run = None
     notes = []
-    compile_s = warmup_s = 0.0
-    for flow in missing:
-        e = estimate_uncached(flow, sub.fiber, start)
-        total += e.flow_s
-        per_run = e.run_s if per_run is None else per_run
-        compile_s = max(compile_s, e.compile_s)
-        warmup_s = max(warmup_s, e.warmup_s)
+    for flow, e in est.probes:
         grids = " then ".join(f"{dx:g} µm ({cells / 1e6:.2g} M cells)" for dx, cells in e.grids)
         what = "unit cell" if flow.array is not None else "flow field"
         notes.append(
             f"{what} on {grids}: about {_fmt_s(e.flow_s)} "
             f"({e.mlups:.2g} MLUPS timed over {PROBE_STEPS} steps; typical step counts)"
         )
-        start = start[:1]  # the runs are timed once, on the first probe field
     note = notes[0] if len(notes) == 1 else f"{len(notes)} flow fields: {'; '.join(notes)}"
     # This dry run made every kernel the run needs ready: a first use compiled them (and
     # cached them on disk, so the run only loads them); say what that cost.
-    ready = compile_s + warmup_s
+    ready = est.compile_s + est.warmup_s
     if ready > COMPILED_S:
         note += (
             f"; first use: this dry run compiled the kernels in {_fmt_s(ready)} (flow "
-            f"{_fmt_s(compile_s)}, fiber {_fmt_s(warmup_s)}); cached now, the run loads them"
+            f"{_fmt_s(est.compile_s)}, fiber {_fmt_s(est.warmup_s)}); cached now, the run "
+            "loads them"
         )
-    return total, per_run, note
-
-
-def _run(cfg, resume: bool, retry_failed: bool, overrides: list[str] | None = None) -> bool:
-    """Run the sweep with a progress bar; True if any run of the table failed."""
-    from collections import Counter
-
-    from fibersweep.progressbar import WarmingBar
-    from fibersweep.sweep.runner import run_sweep
-
-    bar = None
-    counts: Counter = Counter()
-    short = {"Below": "B", "Above": "A", "Pole-vaulting": "PV", "Trapping": "T", "failed": "fail",
-             "zigzag": "Z", "displacement": "D", "wrap-and-jump": "WJ", "trapped": "T",
-             "mixed": "M"}  # fmt: skip
-
-    def new_bar(n: int):
-        # On a terminal: a live bar; into a log file: a line every 10 s, not thousands. The
-        # first run of each worker includes its start-up (kernels compiled on first use):
-        # the rate and the estimate start after them.
-        return WarmingBar(
-            n,
-            warm=min(cfg.run.workers, n),
-            note="workers starting (the first runs also compile the kernels)",
-            unit="run",
-            smoothing=0.1,
-        )
-
-    def on_plan(plan) -> None:
-        nonlocal bar
-        _print_plan(plan, cfg.run.workers)
-        if cfg.sweep.refine is not None and plan.todo:
-            typer.echo(
-                f"  the bar counts these {len(plan.todo)} runs; the refinement then adds up to "
-                f"{cfg.sweep.refine.max_runs} more in up to {cfg.sweep.refine.rounds} rounds, "
-                "each with its own bar"
-            )
-        if not plan.todo:
-            return
-        bar = new_bar(len(plan.todo))
-
-    def progress(row) -> None:
-        label = row.get("mode") or row["class"]  # a pillar array's runs: the mode
-        counts[label if row["status"] == "ok" else "failed"] += 1
-        if bar is not None:
-            shown = [k for k in short if counts[k]] + [k for k in counts if k not in short]
-            bar.set_postfix_str(
-                " ".join(f"{short.get(k, k or '?')}={counts[k]}" for k in shown), refresh=False
-            )
-            bar.update(1)
-
-    def on_round(rnd: int, plan) -> None:
-        nonlocal bar
-        if bar is not None:
-            bar.close()
-            bar = None
-        typer.echo(
-            f"refinement round {rnd}: {len(plan.todo)} runs to do "
-            f"({len(plan.tasks)} points in the sweep so far)"
-        )
-        if plan.todo:
-            bar = new_bar(len(plan.todo))
-
-    line, cached = _fields_line(cfg)
-    typer.echo(line if cached else f"{line}; computing into {cfg.run.cache_dir} ...")
-    try:
-        summary = run_sweep(
-            cfg, resume=resume, retry_failed=retry_failed, progress=progress, on_plan=on_plan,
-            overrides=overrides, on_round=on_round,
-        )  # fmt: skip
-    except KeyboardInterrupt as exc:
-        if bar is not None:
-            bar.close()
-        why = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
-        typer.secho(
-            f"{why}: {sum(counts.values())} runs of this call are saved in "
-            f"{cfg.run.output}; run the same command again to resume",
-            err=True,
-            fg=typer.colors.YELLOW,
-        )
-        raise typer.Exit(143 if isinstance(exc, Terminated) else 130) from None
-    if bar is not None:
-        bar.close()
-    if summary.ran:
-        rate = summary.ran / summary.wall_s if summary.wall_s > 0 else 0.0
-        typer.echo(
-            f"ran {summary.ran} runs in {_fmt_s(summary.wall_s)} ({rate:.2f} runs/s) "
-            f"-> {summary.out}"
-        )
-    else:
-        typer.echo(f"nothing to run: every run of the sweep is in {summary.out}")
-    typer.echo(
-        "table: "
-        + ", ".join(f"{k} {v}" for k, v in summary.table_counts.items())
-        + f", failed {summary.failed}"
-    )
-    if summary.refinement is not None:
-        typer.echo(_refinement_line(summary.refinement, cfg.sweep.refine))
-    if summary.ran:  # rows added under this config's rule to a folder labelled by another
-        from fibersweep.sweep.store import read_runs
-
-        _warn_mixed_rules(read_runs(summary.out), summary.out)
-    for line in summary.failures[:10]:
-        typer.secho(f"  failed {line}", err=True, fg=typer.colors.RED)
-    if summary.failed:
-        typer.secho(
-            f"{summary.failed} runs failed; re-run them with --retry-failed",
-            err=True,
-            fg=typer.colors.RED,
-        )
-    return summary.failed > 0
+    return note
 
 
 @app.command(rich_help_panel=SWEEP)
@@ -472,51 +359,29 @@ def classify(
     class_switch); 'class' is the chosen rule's. A pillar array's runs get their
     modes re-derived with the trap rule (--trap-time, --trap-speed).
     """
+    from fibersweep import api
+
     _setup_logging(verbose)
     with _errors():
-        from fibersweep.sweep.manifest import read_manifest
-        from fibersweep.sweep.reclassify import reclassify, thresholds_for
-
-        base = _load(config).fiber.classify if config is not None else None
-        man = read_manifest(results) or {}
-        run_cfg = man.get("config") or {}
-        array = (run_cfg.get("flow") or {}).get("array") is not None
-        channel_only = {"--rule": rule, "--pivot-fraction": pivot_fraction,
-                        "--head-blocked-speed": head_blocked_speed}  # fmt: skip
-        given = [k for k, v in channel_only.items() if v is not None]
-        if array and given:
-            raise InputError(
-                f"{', '.join(given)}: pillar-array runs have modes, not a channel's classes; "
-                "classify re-derives their trap rule (--trap-time, --trap-speed), and "
-                "sort-report's --zigzag-max and --displacement-min set the other modes"
-            )
-        th = thresholds_for(
-            results,
-            base,
-            head_blocked_speed=head_blocked_speed,
-            trap_time=trap_time,
-            trap_speed=trap_speed,
-            rule=rule.value if rule is not None else None,
+        res = api.classify(
+            results, config, head_blocked_speed=head_blocked_speed, trap_time=trap_time,
+            trap_speed=trap_speed, rule=rule.value if rule is not None else None,
             pivot_fraction=pivot_fraction,
-        )
-        res = reclassify(results, th)
-    if "mode" in res.counts.columns:  # a pillar array: modes, of which only the trap rule is here
+        )  # fmt: skip
+    th = res.thresholds
+    if res.array:  # a pillar array: modes, of which only the trap rule is here
         typer.echo(
             f"re-derived the modes of {res.n_runs} pillar-array runs ({res.n_changed} changed) "
             f"with the trap rule trap_time = {th.trap_time:g} s, trap_speed = "
             f"{th.trap_speed:g} U_center (the other mode thresholds are sort-report's "
             "--zigzag-max and --displacement-min)"
         )
-        # the thresholds the runs were simulated with (a re-labelling rewrites the config's)
-        simulated = man.get("simulated_classify") or (run_cfg.get("fiber") or {}).get("classify")
-        ran = (simulated or {}).get("trap_time")
-        counts = res.counts
-        trapped = int(counts.loc[counts["mode"] == "trapped", "runs"].sum())
-        if ran is not None and th.trap_time > float(ran) and trapped:
+        if res.beyond_simulated:
             typer.echo(
-                f"note: runs stopped by their own trap rule (trap_time = {float(ran):g} s) "
-                f"end there, so a trap_time longer than that cannot tell whether they would "
-                "have moved on; run them again with fiber.classify.trap_time to know"
+                f"note: runs stopped by their own trap rule (trap_time = "
+                f"{res.simulated_trap_time:g} s) end there, so a trap_time longer than that "
+                "cannot tell whether they would have moved on; run them again with "
+                "fiber.classify.trap_time to know"
             )
     else:
         typer.echo(f"re-classified {res.n_runs} runs ({res.n_changed} changed) with {th}")

@@ -24,6 +24,7 @@ the tables; nothing is simulated here.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -32,11 +33,16 @@ import pandas as pd
 __all__ = [
     "ARRAY_KEYS",
     "DesignAnswer",
+    "GroupAnswer",
     "answer",
+    "answers",
     "critical_curve",
     "design_key",
     "lattice_neighbours",
+    "lattice_pick",
+    "report_key",
     "swept_keys",
+    "target_length",
 ]
 
 #: Array settings a designer sweeps; any other swept numeric setting is taken too.
@@ -83,6 +89,61 @@ def design_key(settings: list[dict], key: str | None = None) -> str | None:
         return key
     array = [k for k in keys if k in ARRAY_KEYS]
     return (array or keys or [None])[0]
+
+
+def report_key(settings: list[dict], key: str | None, target: float | None) -> str | None:
+    """:func:`design_key`, and an error when a target is asked of results that sweep no setting.
+
+    Raises
+    ------
+    InputError
+        ``key`` is not a swept setting, or ``target`` is given and no setting is swept.
+    """
+    from fibersweep.errors import InputError
+
+    found = design_key(settings, key)
+    if found is None and target is not None:
+        raise InputError(
+            "--target-length/--separate: these results sweep no array setting, so there is "
+            "nothing to choose; sweep one, e.g. 'sweep.flow.array.shift=[0.05, 0.1, 0.15, 0.2]' "
+            "(docs/arrays.md, 'Design: a target critical length')"
+        )
+    return found
+
+
+def target_length(
+    target: float | None, separate: str | Sequence[float] | None
+) -> float | None:
+    """The critical length asked for [µm]: ``target``, or halfway between the two lengths
+    of ``separate`` (``"L1,L2"`` or a pair of numbers [µm]); at most one of them given.
+
+    Raises
+    ------
+    InputError
+        Both given, a target that is not a length > 0, or ``separate`` not two different
+        lengths > 0 (named as the options ``--target-length`` and ``--separate``).
+    """
+    from fibersweep.errors import InputError
+
+    if target is not None and separate is not None:
+        raise InputError("--target-length and --separate: give one of them")
+    if separate is not None:
+        try:
+            parts = separate.split(",") if isinstance(separate, str) else list(separate)
+            pair = [float(v) for v in parts]
+        except (TypeError, ValueError):
+            pair = []
+        if (
+            len(pair) != 2
+            or not all(math.isfinite(v) and v > 0 for v in pair)
+            or pair[0] == pair[1]
+        ):
+            shown = separate if isinstance(separate, str) else ",".join(map(str, separate))
+            raise InputError(f"--separate {shown!r}: expected two different lengths L1,L2 [µm]")
+        return 0.5 * (pair[0] + pair[1])
+    if target is not None and not (math.isfinite(target) and target > 0):
+        raise InputError(f"--target-length {target}: expected a length > 0 [µm]")
+    return target
 
 
 def critical_curve(
@@ -392,3 +453,64 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
             "critical length moves towards the target"
         )
     return DesignAnswer(key, target, None, between=(v[k_near],), text=text, add=add)
+
+
+def lattice_pick(ans: DesignAnswer) -> float:
+    """The value the lattice allows nearest the answer (the answer itself when it allows any)."""
+    lo, hi = ans.lattice
+    cands = [v for v in (lo, hi) if math.isfinite(v)]
+    return min(cands, key=lambda v: abs(v - ans.value)) if cands else ans.value
+
+
+@dataclass(frozen=True)
+class GroupAnswer:
+    """The answer for one group of a design curve (the other swept values fixed).
+
+    Attributes
+    ----------
+    group : str
+        The other swept values ('' when only the design key varies).
+    answer : DesignAnswer
+    check : float or None
+        The value to add to the swept values to check the answer: the one the lattice
+        allows nearest it, when it is not simulated yet (None otherwise).
+    """
+
+    group: str
+    answer: DesignAnswer
+    check: float | None = None
+
+
+def answers(
+    curve: pd.DataFrame, settings: list[dict], key: str, target: float, bead: float
+) -> list[GroupAnswer]:
+    """:func:`answer` for each group of ``curve``, with the value to run to check it.
+
+    Parameters
+    ----------
+    curve : DataFrame
+        :func:`critical_curve`.
+    settings : list of dict
+        The settings of :func:`fibersweep.results.load_array_results` (each group's
+        flow settings give the lattice).
+    key : str
+    target : float
+        Target critical length [µm].
+    bead : float
+        Length of one bead, 2a [µm].
+    """
+    out = []
+    simulated = curve["value"].to_numpy(float) if _numeric(curve) else None
+    for grp, g in curve.groupby("group", sort=False):
+        ans = answer(g, key, target, settings[int(g["setting"].iloc[0])]["flow"], bead)
+        check = None
+        if isinstance(ans.value, float) and simulated is not None:
+            pick = lattice_pick(ans)
+            if not np.isclose(simulated, pick).any():
+                check = float(pick)
+        out.append(GroupAnswer(str(grp), ans, check))
+    return out
+
+
+def _numeric(curve: pd.DataFrame) -> bool:
+    return pd.api.types.is_numeric_dtype(curve["value"])

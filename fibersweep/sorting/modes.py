@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 
+import numpy as np
 import pandas as pd
 
 from fibersweep.analysis.modes import MODES, summarise_trajectory
@@ -18,7 +19,7 @@ from fibersweep.analysis.tables import per_combination, trajectory_from_frame
 from fibersweep.config.array import ArraySettings
 from fibersweep.config.fiber import ClassifySettings
 
-__all__ = ["is_array_table", "mode_counts", "relabel_modes"]
+__all__ = ["is_array_table", "mode_counts", "pick_run", "relabel_modes"]
 
 log = logging.getLogger(__name__)
 
@@ -42,6 +43,27 @@ def mode_counts(runs: pd.DataFrame, by: list[str] | None = None) -> pd.DataFrame
     df = pd.DataFrame(rows, columns=["mode", "runs"])
     df["fraction"] = (df["runs"] / max(1, int(df["runs"].sum()))).round(4)
     return df
+
+
+def pick_run(runs: pd.DataFrame, mode: str) -> dict | None:
+    """A run that shows ``mode`` (for a chronophotograph), or None when no run is in it.
+
+    At the length where the mode is most common: a wrap-and-jump run with the most wraps,
+    any other the run whose ``fraction`` is nearest the median of that length's.
+    """
+    m = runs[runs["mode"] == mode]
+    if m.empty:
+        return None
+    L = m["length"].value_counts().sort_index().idxmax()
+    g = m[m["length"] == L]
+    if mode == "wrap-and-jump" and "wraps" in g:
+        return g.sort_values("wraps", ascending=False).iloc[0].to_dict()
+    f = g["fraction"].to_numpy(float)
+    return (
+        g.iloc[int(np.nanargmin(np.abs(f - np.nanmedian(f))))].to_dict()
+        if np.isfinite(f).any()
+        else g.iloc[0].to_dict()
+    )
 
 
 def relabel_modes(

@@ -20,6 +20,8 @@ up to 1 for each length.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -31,14 +33,20 @@ __all__ = [
     "LEVEL",
     "MIGRATION_DOCS",
     "with_settings",
+    "MIN_PERIODS",
+    "ShortRows",
     "check_edges",
     "critical_lengths",
     "critical_table",
     "with_tracks",
+    "located",
     "migration_table",
+    "narrowing_lengths",
     "outlet_table",
+    "parse_edges",
     "refine_lengths",
     "relabel",
+    "short_rows",
 ]
 
 #: Mean displacement fraction that defines a critical length.
@@ -297,6 +305,105 @@ def refine_lengths(table: pd.DataFrame, level: float = LEVEL) -> dict[int, list[
             if np.isfinite(d[k] * d[k + 1]) and d[k] * d[k + 1] < 0
         ]
     return out
+
+
+def located(lo: float, hi: float, bead: float) -> bool:
+    """Whether a bracket of simulated lengths [µm] is one bead (2a) wide or less: the
+    critical length is located as closely as lengths go (a fiber has round(L / 2a) beads)."""
+    return hi - lo <= bead * (1 + 1e-9)
+
+
+def narrowing_lengths(
+    table: pd.DataFrame, crit: pd.DataFrame, bead: float, level: float = LEVEL
+) -> dict[int, list[float]]:
+    """Per setting, the lengths [µm] to add that halve a critical length's bracket wider
+    than one bead: the midpoints of :func:`refine_lengths` that lie inside such a bracket.
+
+    Parameters
+    ----------
+    table : DataFrame
+        :func:`migration_table`.
+    crit : DataFrame
+        :func:`critical_table` of ``table``.
+    bead : float
+        Length of one bead, 2a [µm].
+    """
+    out: dict[int, list[float]] = {}
+    for s, lengths in refine_lengths(table, level).items():
+        c = crit[crit["setting"] == s]
+        out[s] = [
+            L for L in lengths
+            if any(r.lo < L < r.hi and not located(r.lo, r.hi, bead) for r in c.itertuples())
+        ]  # fmt: skip
+    return out
+
+
+#: Zigzag periods (1/ε rows each) a run should cross for its f to tell the modes apart.
+MIN_PERIODS = 2.0
+
+
+@dataclass(frozen=True)
+class ShortRows:
+    """A setting whose runs crossed too few rows for f to separate zigzag from displacement.
+
+    A zigzagging fiber follows the tilt for 1/ε rows, then jumps back one column: its
+    f averages to 0 only over whole periods of 1/ε rows; over one period it can read
+    anything between 0 and 1.
+
+    Attributes
+    ----------
+    setting : int
+        Index into the settings.
+    name : str
+        The setting's name (:func:`setting_name`).
+    rows : int
+        Rows the runs crossed.
+    shift : float
+        The row shift ε.
+    periods : float
+        Zigzag periods in those rows, rows × ε.
+    needed : int
+        Rows that make :data:`MIN_PERIODS` periods.
+    """
+
+    setting: int
+    name: str
+    rows: int
+    shift: float
+    periods: float
+    needed: int
+
+
+def short_rows(settings: list[dict], rows: int) -> list[ShortRows]:
+    """The settings whose ``rows`` rows are fewer than :data:`MIN_PERIODS` zigzag periods."""
+    out = []
+    for i, meta in enumerate(settings):
+        eps = meta["array"]["shift"]
+        if eps > 0 and rows * eps < MIN_PERIODS:
+            out.append(ShortRows(i, setting_name(meta), rows, eps, rows * eps,
+                                 math.ceil(MIN_PERIODS / eps)))  # fmt: skip
+    return out
+
+
+def parse_edges(outlets: str | float | Sequence[float]) -> list[float]:
+    """Outlet edges from ``--outlets`` text (``"0.3,0.7"``) or numbers, checked and sorted
+    (:func:`check_edges`).
+
+    Raises
+    ------
+    InputError
+        Naming ``--outlets``: not numbers, or an edge out of range or repeated.
+    """
+    if isinstance(outlets, str):
+        try:
+            edges = [float(e) for e in outlets.split(",") if e.strip()]
+        except ValueError:
+            raise InputError(f"--outlets: not a list of numbers: {outlets!r}") from None
+    elif isinstance(outlets, int | float):
+        edges = [float(outlets)]
+    else:
+        edges = [float(e) for e in outlets]
+    return check_edges(edges)
 
 
 def check_edges(edges: list[float]) -> list[float]:

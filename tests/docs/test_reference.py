@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -73,6 +74,31 @@ def test_every_column_is_in_the_columns_page() -> None:
     page = docgen.render("columns")
     for name in [*RUN_COLUMNS, *RUN_EXTRA_DOCS, *TRAJ_COLUMN_DOCS]:
         assert f"`{name}`" in page, name
+
+
+def test_every_api_function_and_parameter_is_in_the_api_page() -> None:
+    """Each function of ``fibersweep.API`` with each of its parameters, and each result
+    object of ``fibersweep.api`` with its fields."""
+    import dataclasses
+    import inspect
+
+    import fibersweep
+    from fibersweep import api
+
+    page = docgen.render("api")
+    for name in fibersweep.API:
+        assert f"## fibersweep.{name}\n" in page, name
+        section = page.split(f"## fibersweep.{name}\n", 1)[1].split("\n## ", 1)[0]
+        for param in inspect.signature(getattr(api, name)).parameters.values():
+            star = "*" if param.kind is param.VAR_POSITIONAL else ""
+            assert f"`{star}{param.name}`" in section, f"{name}: {param.name}"
+    for name in api.__all__:
+        cls = getattr(api, name)
+        if not dataclasses.is_dataclass(cls):
+            continue
+        section = page.split(f"### {name}\n", 1)[1].split("\n### ", 1)[0]
+        for f in dataclasses.fields(cls):
+            assert re.search(rf"`([\w, ]*\b)?{f.name}\b", section), f"{name}.{f.name}"
 
 
 @pytest.mark.parametrize(
