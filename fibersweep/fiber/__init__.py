@@ -1,26 +1,31 @@
-"""fibersweep.fiber: one fiber run past the pillar.
+"""fibersweep.fiber: one fiber run past the pillar in its channel, or through a pillar array.
 
 Public entry points: :func:`fibersweep.fiber.run.simulate`,
 :func:`~fibersweep.fiber.run.simulate_reversible`, :func:`~fibersweep.fiber.run.simulate_for`.
 
-Modules, by concept:
+Sub-packages, one concept each:
 
-- physics: ``mobility`` (RPY, rigid body mobility, cached per length),
-  ``pairlaw`` (the soft-core pair law, written once), ``contact`` and ``bezier``
-  (rough / smooth pillar forces), ``exclusion`` (a fiber's self-exclusion),
-  ``elastic`` (spring energy, forces, Jacobian), ``beadspring`` (the bead-spring
-  model: bead velocities and force Jacobians), ``wallhydro`` (pillar wall-drag law);
-- integrators: ``rigid`` (the rigid model and its midpoint stepping), ``bdf2``
-  (bead-spring, fixed step), ``rosenbrock`` with ``rosw`` and ``lu`` (bead-spring,
-  adaptive Rosenbrock-W: ROS2 or ROS34PW2), ``models`` (the registry of models and
-  their integrators), ``record`` (record layout, the pose of a bead chain, stop
-  codes, the stop rule every integrator shares);
-- a run: ``setup`` (input checks), ``bundles`` (the typed kernel inputs, built
-  once per run by ``build_kernel``), ``frame`` (one pillar or an array),
-  ``hooks`` (the kernel stages effects implement, dispatched at compile time),
-  ``effects`` (registry of optional effects; each dynamic one owns its kernel
-  stages), ``run`` / ``array_run`` / ``rows`` (channel and array runs),
-  ``deformation`` (bead-spring observables), ``settings`` / ``result`` (contracts).
+- ``models``: the fiber's body, the rigid model (with its adaptive midpoint stepping) and
+  the bead-spring model with the elastic rod it stands for (``rod``: EA, EI), its
+  forces, spacing and self-exclusion, the registry of models and integrators, and the
+  deformation observables and elasto-viscous number of a run.
+- ``integrators``: the bead-spring model's time steppers, fixed-step BDF2 and the
+  adaptive Rosenbrock-W methods (ROS2, ROS34PW2) with their LU solve.
+- ``contact``: the fiber-pillar repulsion, the soft-core pair law and the rough and
+  smooth (Bézier) pillar outlines.
+- ``hydro``: the beads' hydrodynamics, RPY and rigid-body mobility, and the sphere-wall
+  resistances and first-reflection drag near the pillar.
+- ``kernel``: what every Numba integrator shares, the typed input bundles built once per
+  run, the compile-time stages the effects implement, and the record and stop rule.
+- ``effects``: the registry of optional effects, each a small frozen parameter object
+  that owns its kernel stages or its field, start or report hook.
+
+Top-level modules, one run: ``run`` (the one run path: :func:`~.run.simulate` and its
+fixed-duration and reversibility variants), ``case`` (what a case hands that path: its
+placed run and its measurement), ``channel`` (the single-pillar case), ``array_run``
+(the pillar-array case) and ``rows`` (the array's kernel assembly), ``setup`` (a channel
+start's checks), ``frame`` (velocity and contact through one pillar or a lattice of
+them), ``result`` (the run record, the one schema of the per-run columns).
 """
 
 from fibersweep.numba_cache import sync_kernel_cache

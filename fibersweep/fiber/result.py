@@ -10,7 +10,7 @@ Arrow type as dataclass field metadata (:func:`column`), and the results
 table's column types and docs (:data:`fibersweep.sweep.store.RUN_COLUMNS`,
 :data:`~fibersweep.sweep.store.COLUMN_DOCS`) are generated from them
 (:func:`record_columns`). A new per-run quantity is a field here and the line
-of ``fiber/run.py`` that measures it.
+of the case that measures it (``fiber/channel.py``, ``fiber/array_run.py``).
 """
 
 from __future__ import annotations

@@ -88,6 +88,10 @@ def array_kernel(
     mu: float,
     u_center: float,
     x_end: float,
+    mode: int = 0,
+    t_stop: float = math.nan,
+    effects: EffectSet | None = None,
+    pillar: Pillar | None = None,
 ) -> Kernel:
     """The kernel of one fiber in a pillar array.
 
@@ -105,10 +109,19 @@ def array_kernel(
         Midplane speed of the field's flux [µm/s] (contact force scale, trap speed).
     x_end : float
         The run passes when its rear end crosses this x [µm].
+    mode, t_stop : int, float
+        0: stop after ``x_end``; 1: stop at ``t_stop`` [s]
+        (:func:`~fibersweep.fiber.kernel.bundles.make_params`).
+    effects, pillar : EffectSet, Pillar, optional
+        :func:`check_array_effects` and :func:`array_pillar` of these settings, when the
+        caller has them already (the array case checked the start with them).
     """
     array = field.array
-    effects = check_array_effects(settings)
-    pillar = array_pillar(array, settings, mu, u_center).arrays()
+    if effects is None:
+        effects = check_array_effects(settings)
+    if pillar is None:
+        pillar = array_pillar(array, settings, mu, u_center)
+    arrays = pillar.arrays()
     frame = F.lattice(array, PAD, float(field.dx), n_beads)
     ctx = DynamicsContext(
         bead_radius=settings.bead_radius,
@@ -116,7 +129,7 @@ def array_kernel(
         depth=float(array.depth),
         viscosity=mu,
         n_beads=n_beads,
-        pillar=pillar,
+        pillar=arrays,
         frame=frame,
     )
     params = make_params(
@@ -127,10 +140,12 @@ def array_kernel(
         y_lo=-math.inf,
         y_hi=math.inf,
         random=effects.random,
+        mode=mode,
+        t_stop=t_stop,
     )
     ux, uy = field.extended(PAD)
     flow = FlowArrays(ux, uy, float(field.dx))
-    return assemble(settings, n_beads, flow, pillar, params, effects.kernel(ctx), frame)
+    return assemble(settings, n_beads, flow, arrays, params, effects.kernel(ctx), frame)
 
 
 def run_array_fiber(

@@ -1,126 +1,68 @@
-"""One fiber run: validate the start, integrate (the settings' model and integrator), classify,
-report.
+"""One fiber run: the one path of both cases (the channel's pillar, a pillar array).
 
 :func:`simulate` is the public entry point the sweep calls thousands of times:
 a module-level function (picklable), Numba kernels compiled once per process
 (``cache=True``), per-length body mobilities cached (``body_mobility``).
+
+The path is the same for every field: resolve the integrator, ask the run's
+*case* (:mod:`fibersweep.fiber.case`) to check the start and place the fiber in
+its frame with its stop rule, seed the effects' randomness, integrate, ask the
+case to measure. The cases are :data:`CASES`, asked in turn: a pillar array's unit
+cell (:data:`fibersweep.fiber.array_run.ARRAY`), else the single pillar in its
+channel (:data:`fibersweep.fiber.channel.CHANNEL`). :func:`simulate_for` (a fixed
+duration) takes the same path with the time stop rule; :func:`simulate_reversible`
+is the channel's.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 import time
 
 import numpy as np
 
-from fibersweep.analysis.classify import classify
-from fibersweep.analysis.observables import (
-    fiber_angle,
-    first_contact_index,
-    pass_time,
-    take,
-    thin_indices,
-)
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.errors import InputError
+from fibersweep.fiber.array_run import ARRAY
+from fibersweep.fiber.case import Case, Outcome, Placed
+from fibersweep.fiber.channel import CHANNEL
 from fibersweep.fiber.kernel import record as R
-from fibersweep.fiber.kernel.bundles import Kernel, build_kernel
-from fibersweep.fiber.models.deformation import deformation
 from fibersweep.fiber.models.registry import integrator_of
 from fibersweep.fiber.models.rigid import seed_numba
 from fibersweep.fiber.models.spacing import offsets
 from fibersweep.fiber.result import FiberStart, RunResult, Trajectory
-from fibersweep.fiber.setup import Setup, prepare
 from fibersweep.flow.field import FlowField
 
-__all__ = ["simulate", "simulate_for", "simulate_reversible"]
+__all__ = ["CASES", "case_of", "simulate", "simulate_for", "simulate_reversible"]
 
 log = logging.getLogger(__name__)
 
-
-def _integrate(
-    setup: Setup,
-    k: Kernel,
-    x0: float,
-    y0: float,
-    th0: float,
-    beads0: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray | None, int]:
-    """Run the selected integrator; returns (record rows, bead positions or None, stop code)."""
-    return integrator_of(setup.settings).integrate(k, x0, y0, th0, beads0)
+#: The run's cases, asked in this order whether they take a field (the channel takes any).
+CASES: tuple[Case, ...] = (ARRAY, CHANNEL)
 
 
-def _seed(rng: np.random.Generator, setup: Setup) -> None:
-    if setup.effects.random:
+def case_of(field) -> Case:
+    """The case of the first of :data:`CASES` that accepts ``field``."""
+    return next(c for c in CASES if c.accepts(field))
+
+
+def _place(
+    field,
+    settings: FiberSettings,
+    start: FiberStart,
+    rng: np.random.Generator,
+    *,
+    mode: int = 0,
+    t_stop: float = math.nan,
+) -> tuple[Case, Placed]:
+    """The field's case and its placed run; Numba's generator seeded from ``rng`` when an
+    effect draws from it (after the case's start draws, so each seed gives one run)."""
+    case = case_of(field)
+    placed = case.place(field, settings, start, rng, mode=mode, t_stop=t_stop)
+    if placed.random:
         seed_numba(int(rng.integers(0, 2**31 - 1)))
-
-
-def _result(
-    setup: Setup, k: Kernel, rec: np.ndarray, beads: np.ndarray | None, code: int, wall: float
-) -> RunResult:
-    st = setup.settings
-    geo = setup.field.geometry
-    traj = R.trajectory_from_record(rec, beads)
-    common = dict(
-        start=setup.start,
-        n_steps=integrator_of(st).steps(k, rec),
-        wall_time=wall,
-        model=st.model,
-        integrator=st.resolved_integrator,
-        n_beads=setup.n,
-        min_clearance=float(np.min(rec[:, R.MIN_DIST]) - st.bead_radius),
-        x_f=float(traj.x[-1]),
-        y_f=float(traj.y[-1]),
-        theta_f=float(traj.theta[-1]),
-        t_end=float(traj.t[-1]),
-    )
-    if beads is not None and len(beads):
-        common.update(
-            deformation(
-                beads,
-                rec[:, R.CONTACT],
-                setup.pillar.vertices,
-                setup.pillar.circle,
-                setup.pillar.r_cut,
-                st.bead_radius,
-                st.young_modulus,
-                st.bead_spacing,
-            )
-        )
-    k = first_contact_index(traj)
-    if k is not None:
-        common.update(
-            contact=True,
-            theta_c=fiber_angle(float(traj.theta[k])),
-            y_c=float(geo.y_over_h(rec[k, R.CY])),
-            t_contact=float(traj.t[k]),
-        )
-    common["t_pass"] = pass_time(traj, setup.pillar.x_max, setup.u_center)
-    if st.record.trajectories:
-        idx = thin_indices(traj, st.record.samples, setup.u_center, st.classify)
-        kept = take(traj, idx)
-        if st.record.all_beads and kept.beads is None:
-            s = offsets(setup.n, st.bead_radius, st.bead_spacing)
-            th = rec[idx, R.TH]
-            bx = rec[idx, R.XC][:, None] + np.cos(th)[:, None] * s[None, :]
-            by = rec[idx, R.YC][:, None] + np.sin(th)[:, None] * s[None, :]
-            kept = dataclasses.replace(kept, beads=np.stack([bx, by], -1))
-        elif not st.record.all_beads and kept.beads is not None:
-            kept = dataclasses.replace(kept, beads=None)
-        common["trajectory"] = kept
-    if code < 0:
-        return RunResult(status="failed", reason=R.STOP_REASONS[code], **common)
-    cls = classify(traj, geo, setup.u_center, st.classify)
-    if code == R.TRAPPED and cls != "Trapping":  # pragma: no cover - same rule both sides
-        log.warning("kernel trap rule and classify() disagree (%s)", cls)
-    if not cls:
-        return RunResult(status="failed", reason="unclassified", **common)
-    delta = math.nan
-    if cls != "Trapping":
-        delta = (float(traj.y[-1]) - setup.y0_abs) / geo.pillar_height
-    return RunResult(status="ok", cls=cls, delta=delta, **common)
+    return case, placed
 
 
 def simulate(
@@ -132,7 +74,7 @@ def simulate(
     ----------
     field : FlowField or CellField
         Steady midplane flow [µm/s]: the channel's, or a pillar array's unit cell
-        (then :func:`fibersweep.fiber.array_run.simulate_array` runs it, with its
+        (then the run is the array case, :mod:`fibersweep.fiber.array_run`, with its
         start in the array's units).
     settings : FiberSettings
         Model and integrator, contact, stepping, classification, recording, effects.
@@ -154,20 +96,13 @@ def simulate(
         cannot resolve, a start overlapping the pillar or outside the channel,
         an unknown effect, a model and integrator that are no pair.
     """
-    from fibersweep.flow.cell import CellField
-
-    if isinstance(field, CellField):  # a pillar array's unit cell (flow.array)
-        from fibersweep.fiber.array_run import simulate_array
-
-        return simulate_array(field, settings, start, rng_seed=rng_seed)
     t_wall = time.perf_counter()
-    integrator_of(settings)  # an unknown model or integrator: InputError before any work
-    rng = np.random.default_rng(rng_seed)
-    setup = prepare(field, settings, start, rng)
-    _seed(rng, setup)
-    k = build_kernel(setup)
+    integrator = integrator_of(settings)  # an unknown model or integrator: InputError first
+    case, placed = _place(field, settings, start, np.random.default_rng(rng_seed))
     try:
-        rec, beads, code = _integrate(setup, k, setup.x0, setup.y0_abs, setup.th0)
+        rec, beads, code = integrator.integrate(
+            placed.kernel, placed.x0, placed.y0, placed.th0, None
+        )
     except (FloatingPointError, np.linalg.LinAlgError, ZeroDivisionError) as exc:
         log.warning("run %s failed: %s", start, exc)
         return RunResult(
@@ -175,16 +110,16 @@ def simulate(
             status="failed",
             reason=f"numerical error: {exc}",
             model=settings.model,
-            integrator=settings.resolved_integrator,
+            integrator=integrator.name,
         )
-    result = _result(setup, k, rec, beads, code, time.perf_counter() - t_wall)
-    return setup.effects.result(result, start, field.geometry)
+    out = Outcome(integrator, rec, beads, int(code), time.perf_counter() - t_wall)
+    return case.measure(placed, field, settings, start, out)
 
 
 def simulate_reversible(
     field: FlowField, settings: FiberSettings, start: FiberStart, *, rng_seed: int | None = None
 ) -> tuple[RunResult, float]:
-    """Run past the pillar, reverse the flow, run back for the same time.
+    """Run past the pillar, reverse the flow, run back for the same time (channel case).
 
     Returns
     -------
@@ -199,20 +134,17 @@ def simulate_reversible(
     if fwd.status != "ok" or fwd.cls == "Trapping":
         return fwd, math.nan
     rng = np.random.default_rng(rng_seed)
-    setup = prepare(field.reversed(), settings, start, rng)
-    _seed(rng, setup)
-    t_total = fwd.t_end
-    k = build_kernel(setup, mode=1, t_stop=t_total)
+    _, back = _place(field.reversed(), settings, start, rng, mode=1, t_stop=fwd.t_end)
     th_f = math.radians(fwd.theta_f)
     beads_f = fwd_beads[-1] if fwd_beads is not None else None
-    rec, beads, code = _integrate(setup, k, fwd.x_f, fwd.y_f, th_f, beads_f)
+    rec, beads, code = integrator_of(settings).integrate(
+        back.kernel, fwd.x_f, fwd.y_f, th_f, beads_f
+    )
     if code < 0:
         return fwd, math.nan
-    s = offsets(setup.n, settings.bead_radius, settings.bead_spacing)
+    s = offsets(back.n, settings.bead_radius, settings.bead_spacing)
     end = rec[-1]
-    p0 = np.column_stack(
-        [setup.x0 + s * math.cos(setup.th0), setup.y0_abs + s * math.sin(setup.th0)]
-    )
+    p0 = np.column_stack([back.x0 + s * math.cos(back.th0), back.y0 + s * math.sin(back.th0)])
     if beads is not None:
         p1 = beads[-1]
     else:
@@ -232,6 +164,9 @@ def simulate_for(
 ) -> tuple[Trajectory, str]:
     """Integrate for a fixed ``duration`` [s] (no pass test), for idealised flows and tests.
 
+    The path of :func:`simulate` with the time stop rule (either case; the start in
+    the case's units).
+
     Returns
     -------
     (Trajectory, reason)
@@ -240,9 +175,9 @@ def simulate_for(
     """
     if not (math.isfinite(duration) and duration > 0):
         raise InputError(f"duration: must be a positive number of seconds, got {duration!r}")
-    rng = np.random.default_rng(rng_seed)
-    setup = prepare(field, settings, start, rng)
-    _seed(rng, setup)
-    k = build_kernel(setup, mode=1, t_stop=duration)
-    rec, beads, code = _integrate(setup, k, setup.x0, setup.y0_abs, setup.th0)
+    integrator = integrator_of(settings)
+    _, placed = _place(
+        field, settings, start, np.random.default_rng(rng_seed), mode=1, t_stop=duration
+    )
+    rec, beads, code = integrator.integrate(placed.kernel, placed.x0, placed.y0, placed.th0, None)
     return R.trajectory_from_record(rec, beads), R.STOP_REASONS.get(code, "")

@@ -93,3 +93,15 @@ def test_elastic_forces_are_minus_the_energy_gradient():
     fx0, fy0 = np.zeros(n), np.zeros(n)
     elastic_forces(s.astype(float), np.zeros(n), a, S, B, fx0, fy0)
     assert np.abs(fx0).max() < 1e-6 and np.abs(fy0).max() < 1e-6
+
+
+def test_the_run_path_dispatches_on_the_field(hele_shaw):
+    """One path, two cases: a unit cell is the array's, any other field the channel's."""
+    from fibersweep.fiber.array_run import ARRAY
+    from fibersweep.fiber.channel import CHANNEL
+    from fibersweep.fiber.run import CASES, case_of
+    from fibersweep.flow.cell import CellField
+
+    assert CASES[-1] is CHANNEL  # the channel takes any field: asked last
+    assert case_of(hele_shaw) is CHANNEL
+    assert case_of(object.__new__(CellField)) is ARRAY

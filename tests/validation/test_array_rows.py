@@ -177,6 +177,25 @@ def test_simulate_on_a_cell_field_is_the_array_run(small):
     assert res.contacts >= 0 and res.time_on_pillars >= 0.0
 
 
+def test_simulate_for_on_a_cell_field_is_the_array_run_stopped_in_time(small):
+    """``simulate_for`` takes the same path with the time stop rule: on a unit cell, the
+    array's start and frame; its steps are those of the array run from the same start
+    (exact: the same arithmetic) up to the last, which ends at the duration."""
+    from fibersweep.fiber.array_run import start_x
+    from fibersweep.fiber.run import simulate_for
+
+    fiber, field = small
+    arr = field.array
+    traj, reason = simulate_for(field, fiber, FiberStart(theta0=3.0, y0=0.7, length=40.0), 0.05)
+    assert reason == "" and traj.t[-1] == pytest.approx(0.05, abs=1e-12)
+    k = prepare_run(fiber, field, 40.0)
+    rec, code = run_array_fiber(k, "rigid", start_x(arr), 0.7 * arr.period_y, math.radians(3.0))
+    m = traj.t.size - 1
+    assert code == R.PASSED and rec[m, R.T] > 0.05
+    assert np.array_equal(rec[:m, R.T], traj.t[:m]) and np.array_equal(rec[:m, R.XC], traj.x[:m])
+    assert np.array_equal(rec[:m, R.YC], traj.y[:m])
+
+
 def test_a_start_on_a_pillar_or_outside_the_cell_is_bad_input(small):
     """Bad starts raise InputError naming y0 (a sweep records them as failed runs)."""
     from fibersweep.errors import InputError

@@ -1,1 +1,2 @@
-"""Hydrodynamics of the beads: RPY mobility, and the sphere-wall resistances near the pillar."""
+"""Hydrodynamics of the beads: RPY mobility, and the sphere-wall resistances and drag near the
+pillar."""

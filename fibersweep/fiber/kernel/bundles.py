@@ -40,6 +40,7 @@ from fibersweep.fiber.frame import CHANNEL
 from fibersweep.fiber.hydro.rpy import body_mobility
 from fibersweep.fiber.integrators.rosw import METHODS
 from fibersweep.fiber.kernel.hooks import BASELINE
+from fibersweep.fiber.models.rod import rod
 from fibersweep.fiber.models.spacing import exclusion_force_scale, exclusion_gap, spacing_um
 from fibersweep.fiber.setup import Setup
 
@@ -106,7 +107,8 @@ class Params(NamedTuple):
     trap_speed, trap_time : a fiber in contact slower than trap_speed for trap_time is trapped
     stopped_implicit : rigid: linearly implicit steps while stopped in contact
     y_lo, y_hi : bead centres must stay between these
-    stretch, bend : bead-spring S [pN] and B [pN µm²]
+    stretch, bend : bead-spring S = EA [pN] and B = EI [pN µm²] of the rod
+        (:func:`~fibersweep.fiber.models.rod.rod`)
     tol : ros2, ros34pw2: local error allowed per step [µm] (step.tolerance)
     rosw : the Rosenbrock-W method, 0 ROS2, 1 ROS34PW2
         (:data:`~fibersweep.fiber.integrators.rosw.METHODS`)
@@ -258,6 +260,7 @@ def make_params(
     ros2 = integrator in ROSENBROCK
     excl = st.self_exclusion and st.model == "bead-spring"
     frac = st.bead_spacing
+    elastic = rod(st.young_modulus, a)
     return Params(
         a=a,
         mu=mu,
@@ -277,8 +280,8 @@ def make_params(
         stopped_implicit=bool(st.step.stopped_implicit and not random),
         y_lo=y_lo,
         y_hi=y_hi,
-        stretch=st.young_modulus * math.pi * a**2,  # Pa == pN/µm²
-        bend=st.young_modulus * math.pi * a**4 / 4.0,
+        stretch=elastic.stretch,  # EA [pN]: E [Pa == pN/µm²], a [µm]
+        bend=elastic.bend,  # EI [pN µm²]
         tol=float(st.step.tolerance),
         rosw=METHODS.get(integrator, 0),
         w_reuse=int(st.step.jacobian_reuse),

@@ -1,1 +1,2 @@
-"""The fiber's body: rigid and bead-spring models, their forces, spacing and deformation."""
+"""The fiber's body: the rigid and bead-spring models, the elastic rod, forces, spacing, registry
+and deformation."""

@@ -7,7 +7,7 @@ length Λ = Σ|t_i|, per recorded configuration:
   angle between t_i and t_{i+1} (the discrete turning angle);
 - end-to-end ratio |r_n − r_1| / Λ (1 for a straight fiber);
 - tension of a segment: the stretching spring's force along it,
-  T_i = (S / b)(|t_i| − b) [pN] (positive when stretched, S = E π a², b the bead
+  T_i = (S / b)(|t_i| − b) [pN] (positive when stretched, S = E π a² (:mod:`.rod`), b the bead
   spacing: 2a for touching beads);
 - wrap angle: the turning of the tangent, Σ φ_i with signs, over the beads
   between the first and last bead within ``r_cut + a/2`` of the pillar's outline
@@ -26,6 +26,7 @@ import numba as nb
 import numpy as np
 
 from fibersweep.fiber.contact.pillar import shape_distance
+from fibersweep.fiber.models.rod import rod
 from fibersweep.fiber.models.spacing import spacing_um
 
 __all__ = ["DEFORMATION_FIELDS", "deformation"]
@@ -137,7 +138,7 @@ def deformation(
         np.ascontiguousarray(circle, dtype=np.float64),
         float(r_cut + 0.5 * a),
         0.5 * spacing_um(a, spacing),
-        float(young_modulus * math.pi * a * a),
+        float(rod(young_modulus, a).stretch),
     )
     return {
         "max_curvature": float(kmax),

@@ -2,7 +2,7 @@
 
 μ̄ = 8π μ γ̇ L⁴ / (B c) compares the viscous forces on a fiber of length L with its
 bending forces: B = E π a⁴ / 4 is the bending stiffness of a rod of radius a (the
-bead-spring model's, :mod:`fibersweep.fiber.models.beadspring`), c = −ln(ε² e) with
+bead-spring model's, :mod:`fibersweep.fiber.models.rod`), c = −ln(ε² e) with
 ε = a / L the logarithm of the slender-body drag 8πμ / c, and γ̇ a shear rate of
 the flow. A filament in simple shear buckles above μ̄ = 306.4 (Becker & Shelley
 2001); in a planar compressional flow along it, above 153.2 (Young & Shelley 2007;
@@ -19,14 +19,14 @@ from __future__ import annotations
 import math
 
 from fibersweep.config.flow import FlowSettings
+from fibersweep.fiber.models.rod import rod
 
 __all__ = ["bending_stiffness", "elastoviscous_number", "pillar_shear_rate"]
 
 
 def bending_stiffness(young_modulus: float, bead_radius_um: float) -> float:
     """B = E π a⁴ / 4 [N m²] of a fiber of Young's modulus E [Pa] and radius a [µm]."""
-    a = bead_radius_um * 1e-6
-    return young_modulus * math.pi * a**4 / 4.0
+    return rod(young_modulus, bead_radius_um * 1e-6).bend
 
 
 def elastoviscous_number(
