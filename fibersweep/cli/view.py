@@ -131,7 +131,7 @@ def plot_fractions(
     with binomial (Wilson) intervals."""
     _setup_logging(verbose)
     with _errors():
-        from fibersweep.plots.fractions import class_fractions, fractions_figure
+        from fibersweep.plots.fractions import class_fractions, fractions_figure, pooled_keys
         from fibersweep.plots.style import paper_style
 
         if not 0.0 < level < 1.0:
@@ -142,9 +142,18 @@ def plot_fractions(
                 fractions_figure(runs, by, level),
                 out or results / "figures" / f"fractions-{_safe(by)}.png",
             )
-        table = class_fractions(runs, by, level)
-    for r in table.itertuples(index=False):
-        typer.echo(f"{by} = {r[0]}: {r[1]} {r.k}/{r.n} = {r.fraction:.2f} [{r.lo:.2f}, {r.hi:.2f}]")
+        facets = pooled_keys(runs, by)  # an array's other settings: one panel each
+        groups = list(runs.groupby(facets, sort=True)) if facets else [((), runs)]
+        tables = [(k, class_fractions(g, by, level)) for k, g in groups]
+    for k, table in tables:
+        if facets:
+            k = k if isinstance(k, tuple) else (k,)
+            typer.echo(", ".join(f"{f} = {v}" for f, v in zip(facets, k, strict=True)) + ":")
+        for r in table.itertuples(index=False):
+            typer.echo(
+                f"{'  ' if facets else ''}{by} = {r[0]}: {r[1]} {r.k}/{r.n} = {r.fraction:.2f} "
+                f"[{r.lo:.2f}, {r.hi:.2f}]"
+            )
     typer.echo(f"wrote {path}")
 
 
@@ -218,13 +227,15 @@ def plot_tracks(
         runs = _runs(results, where)
         if is_array(runs):
             from fibersweep.plots.array import overlay_figure as rows_figure
+            from fibersweep.plots.labels import describe
 
             aruns, settings, _ = _array_runs(results, where)
             arrays = _arrays(settings)
             periods = {i: a.period_x for i, a in enumerate(arrays)}
             shifts = {i: a.lateral_shift for i, a in enumerate(arrays)}
             with paper_style():
-                fig = rows_figure(aruns, periods, shifts=shifts)
+                fig = rows_figure(aruns, periods, shifts=shifts, labels=describe(settings),
+                                  title=where or "")  # fmt: skip
                 path = _save(fig, out or results / "figures" / "tracks.png")
             typer.echo(f"wrote {path} ({len(aruns)} runs)")
             return
@@ -283,6 +294,7 @@ def animate(
         run = hit.iloc[0]
         if is_array(runs):
             from fibersweep.plots.array_chrono import animate_array_run
+            from fibersweep.plots.labels import describe
 
             aruns, settings, cfg = _array_runs(results, None)
             arun = aruns[aruns["id"] == run["id"]].iloc[0]
@@ -291,6 +303,7 @@ def animate(
                 path = animate_array_run(
                     arun.to_dict(), array, cfg["fiber"]["bead_radius"],
                     out or results / "figures" / f"run-{run['id']}.gif", frames=frames, fps=fps,
+                    label=describe(settings)[int(arun["setting"])],
                 )  # fmt: skip
             typer.echo(f"wrote {path}")
             return

@@ -36,6 +36,7 @@ __all__ = [
     "animate_array_run",
     "chrono_figure",
     "event_window",
+    "fraction_text",
     "run_dict",
     "run_figure",
     "snapshots",
@@ -249,12 +250,16 @@ def animate_array_run(
     *,
     frames: int = 120,
     fps: int = 20,
-    dpi: int = 100,
+    dpi: int = 130,
+    label: str = "",
 ) -> Path:
     """Write one array run as an animation: the fiber crossing the rows, the view following it.
 
     ``.gif`` (Pillow) or ``.mp4`` (ffmpeg), written atomically; the fiber is drawn
     through every bead of a flexible fiber (:func:`fibersweep.plots.shapes.fiber_points`).
+    Frames are 8 in wide at ``dpi`` (1040 px at the default); the clock and the row
+    are written above the axes, where no pillar is. ``label``: the run's setting in
+    words (e.g. "E = 10 kPa"), in the title.
 
     Raises
     ------
@@ -270,7 +275,7 @@ def animate_array_run(
 
     from fibersweep.atomic import atomic_path
     from fibersweep.errors import InputError
-    from fibersweep.plots.tracks import ANIMATION_FORMATS
+    from fibersweep.plots.tracks import ANIMATION_FORMATS, movie_writer
 
     out = Path(path)
     writer_name = ANIMATION_FORMATS.get(out.suffix.lower())
@@ -288,7 +293,8 @@ def animate_array_run(
     half_h = max(
         0.5 * (ymax - ymin) / max(1.0, (xc[-1] - xc[0]) / (2 * half_w)), 0.6 * array.period_y
     )
-    fig, ax = subplots(figsize=(6.4, 6.4 * half_h / half_w + 0.8), layout="constrained")
+    width = 8.0
+    fig, ax = subplots(figsize=(width, width * half_h / half_w + 1.0), layout="constrained")
     _pillars(
         ax,
         array,
@@ -309,14 +315,15 @@ def animate_array_run(
         marker="o" if len(pts[0]) == 1 else None,
         ms=2 * bead_radius,
     )
-    clock = ax.text(0.01, 0.97, "", transform=ax.transAxes, va="top", fontsize=8)
+    clock = ax.set_title(" ", loc="left", fontsize=9, family="monospace")  # above the axes
     ax.set_aspect("equal")
     ax.set_xlabel("x [µm] (flow →)")
     ax.set_ylabel("y [µm]")
-    ax.set_title(
-        f"{run['mode']}: L = {run['length']:g} µm, y0 = {run['y0']:.2f} λy, "
-        f"θ0 = {run['theta0']:.1f}°, f = {_get(run, 'fraction', math.nan):.2f}",
-        fontsize="small",
+    fig.suptitle(
+        f"{run['mode']}: L = {run['length']:g} µm"
+        + (f", {label}" if label else "")
+        + f"; start y0 = {run['y0']:.2f} λy, θ0 = {run['theta0']:.1f}°; {fraction_text(run)}",
+        fontsize=9,
     )
     picks = np.searchsorted(t, times).clip(0, t.size - 1)
 
@@ -332,14 +339,29 @@ def animate_array_run(
         return fiber, trail, clock
 
     anim = animation.FuncAnimation(fig, draw, frames=len(pts), blit=False)
-    writer = (animation.PillowWriter if writer_name == "pillow" else animation.FFMpegWriter)(
-        fps=fps
-    )
+    writer = movie_writer(writer_name, fps)
     with tempfile.TemporaryDirectory() as scratch, atomic_path(out) as tmp:
         draft = Path(scratch) / f"animation{out.suffix.lower()}"
         anim.save(str(draft), writer=writer, dpi=dpi)
         shutil.copyfile(draft, tmp)
     return out
+
+
+def fraction_text(run) -> str:
+    """What the run's displacement fraction is: "f = 0.93"; a run that crossed no row has
+    none ("trapped before row 1", or "f = —")."""
+    f = _get(run, "fraction", math.nan)
+    try:
+        f = float(f)
+    except (TypeError, ValueError):
+        f = math.nan
+    if math.isfinite(f):
+        return f"f = {f:.2f}"
+    if str(_get(run, "mode", "")) == "trapped":
+        rows = _get(run, "rows", 0)
+        rows = int(rows) if isinstance(rows, int | float) and math.isfinite(rows) else 0
+        return f"trapped before row {rows + 1} (no f)"
+    return "f = —"
 
 
 def run_dict(result, bead_radius: float) -> dict:

@@ -57,10 +57,13 @@ def migration_figure(
         lab = labels.get(int(s)) or "array"
         mine = crit[crit["setting"] == s] if crit is not None else crit
         if mine is not None and len(mine):
+            both = mine["rising"].nunique() > 1  # a band: say which edge is which
             lab += (
                 ": critical "
                 + ", ".join(
-                    f"{r.critical:.1f}" + (f" ± {r.se:.1f}" if math.isfinite(r.se) else "")
+                    (("rising " if r.rising else "falling ") if both else "")
+                    + f"{r.critical:.1f}"
+                    + (f" ± {r.se:.1f}" if math.isfinite(r.se) else "")
                     for r in mine.itertuples()
                 )
                 + " µm"
@@ -114,38 +117,49 @@ def migration_figure(
 
 
 def outlets_figure(outlets: pd.DataFrame, labels: dict[int, str]):
-    """Recovery (solid) and purity (dashed) against length, one panel per outlet, and the
-    trapped share (which leaves through no outlet) in a last panel.
+    """Recovery (top row) and purity (bottom row) against length, one column per outlet;
+    the trapped share (which leaves through no outlet) beside the recoveries.
+
+    Recovery and purity are in panels of their own, so they never hide each other where
+    they coincide (an outlet that takes one length only); within a panel the settings
+    differ by colour and marker, with one line style.
 
     Parameters
     ----------
     outlets : DataFrame
         :func:`fibersweep.sorting.report.outlet_table`.
     labels : dict
-        Label per setting.
+        Label per setting (in words with units: :func:`fibersweep.plots.labels.describe`).
     """
+    from matplotlib.lines import Line2D
+
     outs = sorted(outlets["outlet"].unique())
     settings = sorted(outlets["setting"].unique())
     n = len(outs) + 1
     fig, axes = subplots(
-        1, n, figsize=(2.6 * n, 2.8), sharey=True, squeeze=False, layout="constrained"
-    )
-    axes = axes[0]
+        2, n, figsize=(2.3 * n + 0.4, 4.6), sharex=True, sharey=True, squeeze=False,
+        layout="constrained",
+    )  # fmt: skip
     cols = _colours(len(settings))
-    for ax, k in zip(axes, outs, strict=False):
+    markers = ["o", "s", "^", "D", "v", "P", "X", "h"]
+    style = {
+        s: {"color": c, "marker": markers[k % len(markers)], "ms": 4, "lw": 1.1}
+        for k, (s, c) in enumerate(zip(settings, cols, strict=True))
+    }
+    for c, k in enumerate(outs):
         sub = outlets[outlets["outlet"] == k]
         lo, hi = sub["from"].iloc[0], sub["to"].iloc[0]
-        for s, col in zip(settings, cols, strict=True):
+        empty = []
+        for s in settings:
             g = sub[sub["setting"] == s].sort_values("length")
-            ax.plot(
-                g["length"],
-                g["recovery"],
-                "-o",
-                ms=3,
-                color=col,
-                label=labels.get(int(s)) or "array",
-            )
-            ax.plot(g["length"], g["purity"], "--s", ms=3, color=col, mfc="none")
+            axes[0, c].plot(g["length"], g["recovery"], **style[s])
+            axes[1, c].plot(g["length"], g["purity"], **style[s])
+            if not np.isfinite(g["purity"].to_numpy(float)).any():
+                empty.append(labels.get(int(s)) or "array")
+        if empty:  # purity is undefined where no fiber leaves: say so, draw nothing
+            axes[1, c].text(0.03, 0.97, "no fiber leaves here:\n" + "\n".join(empty),
+                            transform=axes[1, c].transAxes, va="top", fontsize=7,
+                            color="0.35")  # fmt: skip
         rng = (
             f"f < {hi:g}"
             if not math.isfinite(lo)
@@ -153,115 +167,203 @@ def outlets_figure(outlets: pd.DataFrame, labels: dict[int, str]):
             if not math.isfinite(hi)
             else f"{lo:g} ≤ f < {hi:g}"
         )
-        ax.set_title(f"outlet {k}: {rng}", fontsize=8)
-        ax.set_xlabel("L [µm]")
-    for s, col in zip(settings, cols, strict=True):
+        axes[0, c].set_title(f"outlet {k} ({rng}): recovery", fontsize=8)
+        axes[1, c].set_title(f"outlet {k}: purity", fontsize=8)
+    for s in settings:
         g = outlets[(outlets["setting"] == s) & (outlets["outlet"] == outs[0])].sort_values(
             "length"
         )
-        axes[-1].plot(g["length"], g["trapped"], "-D", ms=3, color=col)
-    axes[-1].set_title("trapped (no outlet)", fontsize=8)
-    axes[-1].set_xlabel("L [µm]")
-    axes[0].set_ylabel("share")
-    axes[0].set_ylim(-0.03, 1.03)
-    from matplotlib.lines import Line2D
-
-    handles = [
-        Line2D([], [], color="k", marker="o", ms=3, label="recovery"),
-        Line2D([], [], color="k", ls="--", marker="s", ms=3, mfc="none", label="purity"),
-    ]
-    if len(settings) > 1:
-        handles += [
-            Line2D([], [], color=c, label=labels.get(int(s)) or "array")
-            for s, c in zip(settings, cols, strict=True)
-        ]
-    fig.legend(
-        handles=handles,
-        loc="outside upper center",
-        ncol=min(len(handles), 6),
-        fontsize=7,
-        frameon=False,
-    )
+        axes[0, -1].plot(g["length"], g["trapped"], **style[s])
+    axes[0, -1].set_title("trapped (no outlet)", fontsize=8)
+    axes[0, 0].set_ylabel("recovery\n(share of a length)")
+    axes[1, 0].set_ylabel("purity\n(share of an outlet)")
+    axes[0, 0].set_ylim(-0.04, 1.04)
+    for ax in axes.ravel():
+        ax.grid(True)
+    for ax in axes[1, :-1]:
+        ax.set_xlabel("fiber length L [µm]")
+    axes[0, -1].set_xlabel("fiber length L [µm]")
+    axes[0, -1].xaxis.set_tick_params(labelbottom=True)
+    key = axes[1, -1]  # the free corner holds the key
+    key.axis("off")
+    handles = [Line2D([], [], **style[s], label=labels.get(int(s)) or "array") for s in settings]
+    key.legend(handles=handles, loc="center", fontsize=7, frameon=False,
+               title="recovery + trapped = 1\nper length", title_fontsize=7)  # fmt: skip
     return fig
 
 
+def _value_axis(ax, key: str, values: np.ndarray) -> None:
+    """A setting's axis: log over decades (a stiffness), ticks at the simulated values."""
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
+
+    from fibersweep.plots.labels import display_values, is_decades
+
+    if is_decades(key, values):
+        ax.set_xscale("log")
+    xs = np.unique(display_values(key, values, array=True))
+    if xs.size <= 8:
+        ax.xaxis.set_major_locator(FixedLocator(xs))
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(NullFormatter())
+
+
 def critical_figure(
-    curve: pd.DataFrame, key: str, unit: str = "", answer=None, target: float | None = None
+    curve: pd.DataFrame,
+    key: str,
+    unit: str = "",
+    answer=None,
+    target: float | None = None,
+    crossings: pd.DataFrame | None = None,
 ):
-    """Critical length against a swept setting: ± its statistical error (bars) and the
-    bracket of simulated lengths it lies in (grey); the target and the answer, if given.
+    """Critical lengths against a swept setting: where f rises through 1/2 (filled
+    circles, solid line) and where it falls through it (open triangles, dashed line),
+    each ± its statistical error (bars) in the bracket of simulated lengths it lies in
+    (grey), with its 95 % interval where the table has one (``ci_lo``, ``ci_hi``: a pale
+    bar); a combination without a crossing as an arrow from the simulated length that
+    bounds it; the target and the answer, if given.
 
     Parameters
     ----------
     curve : DataFrame
-        :func:`fibersweep.sorting.design.critical_curve`.
+        :func:`fibersweep.sorting.design.critical_curve` (one crossing per combination,
+        and the bounds of those without one).
     key : str
-        The setting.
+        The setting (words and unit from :mod:`fibersweep.plots.labels`).
     unit : str
-        Its unit ('' if none).
+        Unused (the unit comes with the label); kept for callers that pass it.
     answer : DesignAnswer, optional
     target : float, optional
         Target critical length [µm].
+    crossings : DataFrame, optional
+        :func:`fibersweep.sorting.report.critical_table`: every crossing of every
+        combination (a band-pass has a rising and a falling one); without it only the
+        curve's crossing of each combination is drawn.
     """
-    name = key.rsplit(".", 1)[-1]
-    fig, ax = subplots(figsize=(5.0, 3.6), layout="constrained")
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    from fibersweep.plots.labels import axis_label, display_values, is_decades, short_name
+
+    del unit
+    fig, ax = subplots(figsize=(5.6, 3.8), layout="constrained")
     numeric = pd.api.types.is_numeric_dtype(curve["value"])
+    value_of = dict(zip(curve["setting"], curve["value"], strict=True))
+    group_of = dict(zip(curve["setting"], curve["group"], strict=True))
     groups = list(dict.fromkeys(curve["group"]))
-    for grp, col in zip(groups, _colours(len(groups)), strict=True):
-        g = curve[curve["group"] == grp]
-        g = g.sort_values("value") if numeric else g
-        x = g["value"].to_numpy(float) if numeric else np.arange(len(g), dtype=float)
-        ok = np.isfinite(g["critical"].to_numpy(float))
-        ax.vlines(x[ok], g["lo"][ok], g["hi"][ok], color="0.75", lw=6, zorder=1)
-        falls = ok & g["rising"].eq(False).fillna(False).to_numpy(bool)  # None: no crossing
-        for sel, marker, face in ((ok & ~falls, "o", col), (falls, "v", "none")):
-            if sel.any():
-                ax.errorbar(
-                    x[sel],
-                    g["critical"][sel],
-                    yerr=g["se"][sel].fillna(0.0),
-                    marker=marker,
-                    mfc=face,
-                    capsize=3,
-                    color=col,
-                    zorder=3,
-                    label=(grp or None) if marker == "o" or not (ok & ~falls).any() else None,
-                )
-        for xi, r in zip(x[~ok], g[~ok].itertuples(), strict=True):  # no crossing: a bound
-            for bound, tip in ((r.lo, r.lo * 1.12), (r.hi, r.hi * 0.88)):
-                if math.isfinite(bound):
-                    ax.annotate("", (xi, tip), (xi, bound), arrowprops={"arrowstyle": "->"})
-                    ax.plot([xi], [bound], "_", color=col, ms=10)
-                    ax.update_datalim([(xi, tip)])  # the arrow inside the axes
-                    break
-        if not numeric:
-            ax.set_xticks(x, g["value"].astype(str))
-    values = curve["value"].to_numpy(float) if numeric else np.array([])
-    if values.size and values.min() > 0 and values.max() >= 10 * values.min():
-        ax.set_xscale("log")  # a setting over decades (a stiffness)
+    order = list(dict.fromkeys(curve["value"])) if not numeric else []
+
+    def pos(values) -> np.ndarray:
+        if numeric:
+            return display_values(key, list(values), array=True)
+        return np.array([order.index(v) for v in values], dtype=float)
+
+    log_x = numeric and is_decades(key, curve["value"].to_numpy(float))
+    # every crossing: the table's when given, else the curve's (one per combination)
+    if crossings is not None and len(crossings):
+        cr = crossings[crossings["setting"].isin(value_of)].copy()
+    else:
+        cr = curve[np.isfinite(curve["critical"].to_numpy(float))].copy()
+    cr["value"] = cr["setting"].map(value_of)
+    cr["group"] = cr["setting"].map(group_of)
+    cr["rising"] = cr["rising"].astype(object).eq(True)
+    kinds = (
+        (True, "o", "-", "f rises through 1/2 (lower edge)"),
+        (False, "v", "--", "f falls through 1/2 (upper edge)"),
+    )
+    handles, drawn_kinds, has_ci = [], set(), False
+    cols = _colours(len(groups))
+    for grp, col in zip(groups, cols, strict=True):
+        g = cr[cr["group"] == grp]
+        for rising, marker, ls, _ in kinds:
+            k = g[g["rising"] == rising]
+            if not len(k):
+                continue
+            drawn_kinds.add(rising)
+            x = pos(k["value"])
+            if not rising:  # a little to the right, so the two kinds' bars stay apart
+                x = x * 1.06 if log_x else x + 0.012 * (np.ptp(pos(curve["value"])) or 1.0)
+            ax.vlines(x, k["lo"], k["hi"], color="0.8", lw=7, zorder=1)
+            if {"ci_lo", "ci_hi"} <= set(k.columns):  # the interval, scatter included
+                ci = np.isfinite(k["ci_lo"].to_numpy(float))
+                if ci.any():
+                    has_ci = True
+                    ax.vlines(x[ci], k["ci_lo"][ci], k["ci_hi"][ci], color=col, lw=2.6,
+                              alpha=0.35, zorder=2)  # fmt: skip
+            ax.errorbar(x, k["critical"], yerr=k["se"].fillna(0.0).to_numpy(float),
+                        ls="none", marker=marker, ms=7, mfc=col if rising else "white",
+                        mec=col, mew=1.3, capsize=3, color=col, zorder=4)  # fmt: skip
+            # the line joins the first crossing of this kind of neighbouring setting
+            # values, broken where a value has none (no line across a gap)
+            first = k.sort_values("critical").drop_duplicates("setting")
+            at = dict(zip(pos(first["value"]), first["critical"], strict=True))
+            xs = np.unique(pos(curve.loc[curve["group"] == grp, "value"]))
+            ys = np.array([at.get(xv, np.nan) for xv in xs], dtype=float)
+            if np.isfinite(ys).sum() > 1:
+                ax.plot(xs, ys, ls=ls, color=col, lw=1.1, zorder=3)
+        if len(groups) > 1 and grp:
+            handles.append(Patch(color=col, label=grp))
+    # combinations without a crossing: f above 1/2 at every length (critical below the
+    # shortest), or below it at every length (critical above the longest)
+    none = curve[~np.isfinite(curve["critical"].to_numpy(float))]
+    none = none[~none["setting"].isin(cr["setting"])]
+    lengths = np.concatenate([cr[["lo", "hi"]].to_numpy(float).ravel(),
+                              none[["lo", "hi"]].to_numpy(float).ravel()])  # fmt: skip
+    lengths = lengths[np.isfinite(lengths)]
+    span = float(np.ptp(lengths)) if lengths.size > 1 else 10.0
+    bounds = False
+    for r in none.itertuples():
+        col = cols[groups.index(r.group)]
+        xi = float(pos([r.value])[0])
+        above = math.isfinite(r.hi)  # f > 1/2 at every length: critical < shortest
+        bound = r.hi if above else r.lo
+        if not math.isfinite(bound):
+            continue
+        bounds = True
+        tip = bound - 0.25 * span if above else bound + 0.25 * span
+        ax.annotate("", (xi, tip), (xi, bound), zorder=4,
+                    arrowprops={"arrowstyle": "-|>", "color": col, "lw": 1.4,
+                                "mutation_scale": 12})  # fmt: skip
+        ax.plot([xi], [bound], marker="_", ms=14, mew=2.0, color=col, zorder=4)
+        ax.annotate("f > 1/2 at every L" if above else "f < 1/2 at every L", (xi, bound),
+                    xytext=(6, 4 if not above else -10), textcoords="offset points",
+                    fontsize=7, color=col)  # fmt: skip
+        ax.update_datalim([(xi, tip)])
+    if numeric:
+        _value_axis(ax, key, curve["value"].to_numpy(float))
+    else:
+        ax.set_xticks(range(len(order)), [str(v) for v in order])
+        ax.set_xlim(-0.5, len(order) - 0.5)
+    ax.margins(x=0.08)
     ax.autoscale_view()
     if target is not None:
-        ax.axhline(target, color="#D55E00", ls="--", lw=0.9, label=f"target {target:g} µm")
+        ax.axhline(target, color="#D55E00", ls="--", lw=1.0)
+        handles.append(Line2D([], [], color="#D55E00", ls="--", label=f"target {target:g} µm"))
     if answer is not None and isinstance(answer.value, float):
-        ax.axvline(answer.value, color="#D55E00", lw=0.9)
+        xa = float(pos([answer.value])[0]) if numeric else answer.value
+        from fibersweep.plots.labels import value_text
+
+        ax.axvline(xa, color="#D55E00", lw=0.9)
+        what = f"answer {value_text(key, answer.value, array=True)}"
         if all(math.isfinite(v) for v in answer.span):
-            ax.axvspan(*answer.span, color="#D55E00", alpha=0.1, lw=0)
-        ax.annotate(
-            f"{name} = {answer.value:.3g}",
-            (answer.value, target or 0.0),
-            xytext=(4, 6),
-            textcoords="offset points",
-            fontsize=7,
-            color="#D55E00",
-        )
-    ax.set_xlabel(f"{name}" + (f" [{unit}]" if unit else ""))
+            ax.axvspan(*pos(list(answer.span)), color="#D55E00", alpha=0.1, lw=0)
+            what += " (shaded: whatever the interpolation)"
+        handles.append(Line2D([], [], color="#D55E00", lw=0.9, label=what))
+    for rising, marker, ls, text in kinds:
+        if rising in drawn_kinds:
+            handles.insert(len([h for h in handles if isinstance(h, Line2D)
+                                and h.get_marker() in ("o", "v")]),
+                           Line2D([], [], color="k", marker=marker, ls=ls, ms=6,
+                                  mfc="k" if rising else "white", label=text))  # fmt: skip
+    if has_ci:
+        handles.append(Line2D([], [], color="k", lw=2.6, alpha=0.35,
+                              label="95 % interval (scatter and interpolation)"))  # fmt: skip
+    handles.append(Patch(color="0.8", label="between the simulated lengths"))
+    if bounds:
+        text = "no crossing: the simulated length that bounds it"
+        handles.append(Line2D([], [], color="k", marker="_", ms=10, mew=2, ls="none", label=text))
+    ax.set_xlabel(axis_label(key, array=True))
     ax.set_ylabel("critical length [µm]")
-    ax.set_title(
-        "critical length: mean f = 1/2 (open triangles: f falls through it); bars:\n"
-        "statistical error; grey: between the simulated lengths; arrows: none (f above\n"
-        "or below 1/2 at every length)",
-        fontsize=7,
-    )
-    if len(groups) > 1 or target is not None:
-        ax.legend(fontsize=7)
+    ax.set_title(f"critical length (mean f = 1/2) against {short_name(key, array=True)}, "
+                 "± statistical error", fontsize=8)  # fmt: skip
+    fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize=7, frameon=False)
     return fig

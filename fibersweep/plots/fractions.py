@@ -12,12 +12,14 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import NullFormatter
 from scipy.stats import norm
 
 from fibersweep.analysis.modes import MODES
 from fibersweep.analysis.trajectory import CLASSES
 from fibersweep.errors import InputError
-from fibersweep.plots.phase import _fixed_title, _label, swept_keys
+from fibersweep.plots.labels import axis_label, display_values, is_decades, value_text
+from fibersweep.plots.phase import swept_keys
 from fibersweep.plots.style import CLASS_STYLE, MODE_STYLE, subplots
 
 __all__ = [
@@ -26,6 +28,7 @@ __all__ = [
     "delta_spread",
     "fraction_keys",
     "fractions_figure",
+    "pooled_keys",
     "wilson_interval",
 ]
 
@@ -130,39 +133,53 @@ def class_fractions(runs: pd.DataFrame, key: str, level: float = 0.95) -> pd.Dat
 
 
 def _axis_label(key: str, array: bool = False) -> str:
-    """Axis label of ``key``: the start coordinates as the phase diagrams write them
-    (in a pillar array: L in µm, y0 a fraction of the period across the flow)."""
-    if array:
-        fixed = {"length": "L [µm]", "y0": r"$y_0/\lambda_y$", "theta0": r"$\theta_0$ [deg]"}
-        return fixed.get(key) or _label(key)
-    return {"theta0": r"$\theta_0$ [deg]", "y0": r"$y_0/h_{obs}$"}.get(key) or _label(key)
+    """Axis label of ``key`` in words with units (:func:`fibersweep.plots.labels.axis_label`;
+    in a pillar array L in µm and y0 a fraction of the period across the flow)."""
+    return axis_label(key, array)
 
 
-def _positions(values: pd.Series) -> tuple[np.ndarray, list[str] | None]:
-    """Horizontal positions of ``values``: themselves if numeric, else 0, 1, 2... with labels."""
+def _positions(values: pd.Series, key: str = "") -> tuple[np.ndarray, list[str] | None]:
+    """Horizontal positions of ``values``: themselves if numeric (in the unit of the axis),
+    else 0, 1, 2... with labels."""
     if pd.api.types.is_numeric_dtype(values) and not pd.api.types.is_bool_dtype(values):
-        return values.to_numpy(dtype=float), None
+        return display_values(key, values.to_numpy(dtype=float)), None
     order = list(dict.fromkeys(values.astype(str)))
     return np.array([order.index(v) for v in values.astype(str)], float), order
 
 
-def fractions_figure(runs: pd.DataFrame, key: str, level: float = 0.95) -> Figure:
-    """Class fractions against ``key``, each with its Wilson interval (:func:`class_fractions`).
+def pooled_keys(runs: pd.DataFrame, key: str) -> list[str]:
+    """Settings besides ``key`` that take several values in a pillar array's runs: the
+    swept settings, then the length. Their values are not pooled into one point: each
+    combination gets a panel of :func:`fractions_figure` (a channel's runs: none, its
+    classes are counted over the starts)."""
+    if outcome_of(runs)[0] != "mode":
+        return []
+    keys = [k for k in (*swept_keys(runs), "length") if k in runs and k != key]
+    return [k for k in keys if runs[k].nunique(dropna=False) > 1]
 
-    Points of different classes at one value are set slightly apart, so their
-    intervals do not hide each other.
-    """
-    fr = class_fractions(runs, key, level)
-    col, _, styles = outcome_of(runs)
-    fig, ax = subplots(figsize=(5.2, 3.4), layout="constrained")
-    classes = list(dict.fromkeys(fr[col]))
-    x_all, labels = _positions(fr[key])
-    values = np.unique(x_all)
-    step = float(np.diff(values).min()) if values.size > 1 else 1.0
+
+def _fixed_text(runs: pd.DataFrame, key: str, facets: list[str], array: bool) -> str:
+    """Settings that take one value over the figure (and are not drawn): "L = 80 µm"."""
+    keys = [k for k in ("length", *swept_keys(runs)) if k in runs and k != key]
+    parts = []
+    for k in keys:
+        v = runs[k].dropna().unique()
+        if k not in facets and len(v) == 1:
+            parts.append(value_text(k, v[0].item() if hasattr(v[0], "item") else v[0], array))
+    return ", ".join(parts)
+
+
+def _draw_fractions(ax, fr: pd.DataFrame, col: str, styles: dict, classes: list,
+                    x_all: np.ndarray, step: float, log: bool) -> None:  # fmt: skip
+    """One panel's points; those of different classes at one value set a little apart
+    (by a fraction of the closest values' distance, in log space on a log axis)."""
     for j, cls in enumerate(classes):
         sel = (fr[col] == cls).to_numpy()
+        if not sel.any():
+            continue
         q = fr[sel]
-        x = x_all[sel] + (j - (len(classes) - 1) / 2) * 0.06 * step
+        shift = (j - (len(classes) - 1) / 2) * 0.06 * step
+        x = x_all[sel] * np.exp(shift) if log else x_all[sel] + shift
         st = styles[cls]
         # rounding can put an end a hair inside a fraction of 0 or 1
         err = np.clip([q["fraction"] - q["lo"], q["hi"] - q["fraction"]], 0.0, None)
@@ -171,34 +188,134 @@ def fractions_figure(runs: pd.DataFrame, key: str, level: float = 0.95) -> Figur
             marker=st["marker"], color=st["color"], mec="k", mew=0.4, ms=5, lw=1.0,
             capsize=2.5, label=cls,
         )  # fmt: skip
-    if labels is not None:
-        ax.set_xticks(range(len(labels)), labels)
-    elif values.size <= 9:
-        ax.set_xticks(values)
-    ax.set_ylim(-0.03, 1.03)
-    ax.set_xlabel(_axis_label(key, array=col == "mode"))
-    ax.set_ylabel("fraction of runs" + (" in each mode" if col == "mode" else ""))
-    n = fr.drop_duplicates(key)
-    counts = f"{int(n['n'].min())}" if n["n"].nunique() == 1 else (
-        f"{int(n['n'].min())}–{int(n['n'].max())}")  # fmt: skip
-    what = "runs" if col == "mode" else "classified runs"
-    title = f"{counts} {what} per value, {int(level * 100)} % Wilson intervals"
-    if int(n["failed"].sum()):
-        title += f"; {int(n['failed'].sum())} failed left out"
-    fixed = _fixed_title(runs, key, None)
-    if col == "mode":  # an array sweep: say which other settings each point pools
-        pooled = [k for k in ("length", *swept_keys(runs)) if k != key and runs[k].nunique() > 1]
-        if pooled:
-            fixed = (
-                ", ".join(
-                    [fixed] * bool(fixed)
-                    + [f"pooled over {'L' if k == 'length' else _label(k)}" for k in pooled]
-                )
-                + " (--where selects one)"
-            )
-    ax.set_title(title + (f"\n{fixed}" if fixed else ""), fontsize="small")
-    fig.legend(loc="outside upper center", ncol=len(classes), frameon=False)
+
+
+def fractions_figure(runs: pd.DataFrame, key: str, level: float = 0.95) -> Figure:
+    """Class fractions against ``key``, each with its Wilson interval (:func:`class_fractions`).
+
+    Points of different classes at one value are set slightly apart, so their
+    intervals do not hide each other. A pillar array's runs are never pooled over
+    another setting: each value of the settings that vary besides ``key``
+    (:func:`pooled_keys`, at most two) has its panel, one row per value of a swept
+    setting and one column per length. A setting over decades is on a log axis.
+
+    Raises
+    ------
+    InputError
+        More than two other settings vary (select with ``--where``).
+    """
+    col, names, styles = outcome_of(runs)
+    array = col == "mode"
+    facets = pooled_keys(runs, key)
+    if len(facets) > 2:
+        raise InputError(
+            f"--by {key}: the runs vary in {', '.join(facets)} besides; one figure draws two of "
+            "them as rows and columns of panels: select the others with --where, e.g. "
+            f"--where '{facets[0]} == {runs[facets[0]].dropna().iloc[0]!r}'"
+        )
+    fr_all = class_fractions(runs, key, level)
+    classes = list(dict.fromkeys(fr_all[col]))
+    x_ref, labels = _positions(fr_all[key], key)
+    values = np.unique(x_ref)
+    log = labels is None and is_decades(key, fr_all[key].to_numpy(float))
+    spread = np.log(values) if log else values
+    step = float(np.diff(spread).min()) if values.size > 1 else 1.0
+    rows_v = _facet_values(runs, facets[0]) if len(facets) == 2 else [None]
+    cols_v = _facet_values(runs, facets[-1]) if facets else [None]
+    if len(facets) == 1 and len(cols_v) > 5:  # one setting: rows of up to 4 panels
+        n = len(cols_v)
+        ncols = 4
+        cells = [(None, v) for v in cols_v]
+        nrows = -(-n // ncols)
+    else:
+        nrows, ncols = len(rows_v), len(cols_v)
+        cells = [(r, c) for r in rows_v for c in cols_v]
+    single = len(cells) == 1
+    w = 5.2 if single else min(2.3 * ncols + 0.6, 11.0)
+    fig, axes = subplots(nrows, ncols, figsize=(w, 3.4 if single else 2.2 * nrows + 1.0),
+                         sharex=True, sharey=True, squeeze=False, layout="constrained")  # fmt: skip
+    counts_n, failed = [], 0
+    for k, (rv, cv) in enumerate(cells):
+        ax = axes.flat[k]
+        sub = runs
+        parts = []
+        for fk, fv in ((facets[0] if len(facets) == 2 else None, rv),
+                       (facets[-1] if facets else None, cv)):  # fmt: skip
+            if fk is not None:
+                sub = sub[_matches(sub[fk], fv)]
+                parts.append(value_text(fk, fv, array))
+        if sub.empty:
+            ax.text(0.5, 0.5, "no runs", transform=ax.transAxes, ha="center", va="center",
+                    color="0.5")  # fmt: skip
+        else:
+            fr = class_fractions(sub, key, level)
+            x_all, _ = _positions(fr[key], key)
+            if labels is not None:
+                x_all = np.array([labels.index(str(v)) for v in fr[key]], float)
+            _draw_fractions(ax, fr, col, styles, classes, x_all, step, log)
+            per = fr.drop_duplicates(key)
+            counts_n += list(per["n"])
+            failed += int(per["failed"].sum())
+        if parts:
+            ax.set_title(", ".join(parts), fontsize=8)
+    for ax in axes.flat[len(cells) :]:
+        ax.set_visible(False)
+    for ax in axes.flat[: len(cells)]:
+        if log:
+            ax.set_xscale("log")
+        if labels is not None:
+            ax.set_xticks(range(len(labels)), labels)
+        elif values.size <= 9:
+            ax.set_xticks(values, [f"{v:g}" for v in values])
+            ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_ylim(-0.03, 1.03)
+        ax.grid(True, axis="y")
+    if labels is None and values.size > 1 and not log:
+        pad = 0.06 * (values.max() - values.min())
+        axes.flat[0].set_xlim(values.min() - pad, values.max() + pad)
+    for k in range(len(cells)):
+        r, c = divmod(k, ncols)
+        if r == nrows - 1 or k + ncols >= len(cells):
+            axes[r, c].set_xlabel(_axis_label(key, array))
+            axes[r, c].xaxis.set_tick_params(labelbottom=True)
+        if c == 0:
+            axes[r, c].set_ylabel("fraction of runs" + (" in each mode" if array else ""))
+    lo, hi = (min(counts_n), max(counts_n)) if counts_n else (0, 0)
+    counts = f"{lo}" if lo == hi else f"{lo}–{hi}"
+    what = "runs" if array else "classified runs"
+    title = f"{counts} {what} per point, {int(level * 100)} % Wilson intervals"
+    if failed:
+        title += f"; {failed} failed left out"
+    fixed = _fixed_text(runs, key, facets, array)
+    text = title + (f"\n{fixed}" if fixed else "")
+    if single:
+        axes[0, 0].set_title(text, fontsize="small")
+    else:
+        fig.suptitle(text, fontsize="small")
+    # one row where it fits; below the panels when the title is the figure's (no overlap)
+    ncol = len(classes) if w >= 6.5 or len(classes) <= 4 else 3
+    seen: dict = {}
+    for ax in axes.flat[: len(cells)]:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            seen.setdefault(lab, h)
+    order = [c for c in classes if c in seen]
+    fig.legend([seen[c] for c in order], order, ncol=ncol, frameon=False,
+               loc="outside upper center" if single else "outside lower center")  # fmt: skip
     return fig
+
+
+def _facet_values(runs: pd.DataFrame, key: str) -> list:
+    v = runs[key].dropna().unique()
+    try:
+        return sorted(v.tolist())
+    except TypeError:
+        return list(dict.fromkeys(map(str, v)))
+
+
+def _matches(col: pd.Series, value) -> pd.Series:
+    if isinstance(value, float):
+        return pd.Series(np.isclose(col.astype(float), value, rtol=1e-9), index=col.index)
+    return col == value
 
 
 def delta_spread(runs: pd.DataFrame, key: str = "length") -> pd.DataFrame:
@@ -239,7 +356,7 @@ def delta_by_figure(runs: pd.DataFrame, key: str = "length", seed: int = 0) -> F
     d = runs[runs["status"].eq("ok")]
     d = d[np.isfinite(d["delta"].to_numpy(dtype=float))]
     fig, ax = subplots(figsize=(5.2, 3.4), layout="constrained")
-    x_sp, labels = _positions(sp[key])
+    x_sp, labels = _positions(sp[key], key)
     mapping = dict(zip(sp[key].astype(str), x_sp, strict=True))
     x_runs = d[key].astype(str).map(mapping).to_numpy(dtype=float)
     step = float(np.diff(np.unique(x_sp)).min()) if x_sp.size > 1 else 1.0
@@ -271,7 +388,7 @@ def delta_by_figure(runs: pd.DataFrame, key: str = "length", seed: int = 0) -> F
     ax.set_ylabel(r"$\delta = (y_f - y_0)/h_{obs}$")
     n_trap = int((runs["status"].eq("ok") & runs["class"].eq("Trapping")).sum())
     notes = [f"{len(d)} runs with δ"] + ([f"{n_trap} trapped (no δ)"] if n_trap else [])
-    fixed = _fixed_title(runs, key, None)
+    fixed = _fixed_text(runs, key, [], False)
     ax.set_title(", ".join(notes) + (f"\n{fixed}" if fixed else ""), fontsize="small")
     fig.legend(handles=handles, loc="outside upper center", ncol=4, frameon=False)
     return fig

@@ -127,16 +127,19 @@ def _values(runs: pd.DataFrame, key: str | None) -> list:
 
 
 def _label(key: str) -> str:
-    """Short panel label of a facet key: the setting's last part, with its unit."""
+    """Label of a facet key in words with units (:mod:`fibersweep.plots.labels`)."""
     if key == "length":
         return r"$L/l_{obs}$"
-    if "." in key:
-        from fibersweep.config import setting_column
+    from fibersweep.plots.labels import axis_label
 
-        unit = setting_column(key)[1]
-        short = key.rsplit(".", 1)[1]
-        return f"{short} [{unit}]" if unit else short
-    return key
+    return axis_label(key)
+
+
+def _value(key: str, value: object) -> str:
+    """A facet's value in words with its unit: "friction coefficient = 0.3"."""
+    from fibersweep.plots.labels import value_text
+
+    return value_text(key, value.item() if hasattr(value, "item") else value)
 
 
 def _fmt(v: object) -> str:
@@ -357,7 +360,7 @@ def phase_figure(
         bad = p[p["status"] != "ok"]
         if len(bad):
             ax.scatter(bad["theta0"], bad["y0"], s=max(s, 9.0), lw=1.0, zorder=5, **FAILED_STYLE)
-        title = [f"{_label(k)} = {_fmt(v)}" for k, v in ((col, cv), (row, rv)) if k is not None]
+        title = [_value(k, v) for k, v in ((col, cv), (row, rv)) if k is not None]
         if title and (len(cols) > 1 or len(rows) > 1):
             ax.set_title(", ".join(title), fontsize=7 if len(title) > 1 else None)
         elif n_panels == 1:
@@ -418,7 +421,7 @@ def _fixed_title(runs: pd.DataFrame, col: str | None, row: str | None) -> str:
     for k in keys:
         v = runs[k].dropna().unique()
         if len(v) == 1:
-            parts.append(f"{_label(k)} = {_fmt(v[0].item() if hasattr(v[0], 'item') else v[0])}")
+            parts.append(_value(k, v[0]))
     return ", ".join(parts)
 
 

@@ -32,10 +32,39 @@ from fibersweep.errors import InputError
 from fibersweep.plots.style import CLASS_STYLE, UNCLASSIFIED_STYLE, subplots
 from fibersweep.units import Geometry
 
-__all__ = ["ANIMATION_FORMATS", "animate_run", "normalised", "overlay_figure"]
+__all__ = ["ANIMATION_FORMATS", "animate_run", "movie_writer", "normalised", "overlay_figure"]
 
 #: Animation formats and the matplotlib writer each needs.
 ANIMATION_FORMATS = {".gif": "pillow", ".mp4": "ffmpeg"}
+
+
+def movie_writer(name: str, fps: int):
+    """The matplotlib writer of an animation: for a GIF, Pillow with every frame quantised
+    to one shared palette (without dithering), so a pixel that does not change keeps its
+    colour index and each frame stores only what moved: a GIF of a few hundred kB at
+    1000 px wide, where a palette per frame changes scattered pixels everywhere."""
+    from matplotlib import animation
+
+    if name != "pillow":
+        return animation.FFMpegWriter(fps=fps)
+
+    class SharedPaletteGif(animation.PillowWriter):
+        def finish(self) -> None:
+            from PIL import Image
+
+            frames = [f.convert("RGB") for f in self._frames]
+            picks = frames[:: max(1, len(frames) // 8)] + [frames[-1]]
+            w, h = frames[0].size
+            sheet = Image.new("RGB", (w, h * len(picks)))
+            for k, f in enumerate(picks):
+                sheet.paste(f, (0, k * h))
+            pal = sheet.quantize(colors=256, method=Image.Quantize.MEDIANCUT,
+                                 dither=Image.Dither.NONE)  # fmt: skip
+            q = [f.quantize(palette=pal, dither=Image.Dither.NONE) for f in frames]
+            q[0].save(self.outfile, save_all=True, append_images=q[1:],
+                      duration=int(1000 / self.fps), loop=0)  # fmt: skip
+
+    return SharedPaletteGif(fps=fps)
 
 
 def _geometry_of(geometries: Geometry | Mapping[str, Geometry], run: pd.Series) -> Geometry:
@@ -185,9 +214,12 @@ def animate_run(
     *,
     frames: int = 120,
     fps: int = 20,
-    dpi: int = 100,
+    dpi: int = 130,
 ) -> Path:
     """Write one run as an animation: the fiber moving past the pillar, its path behind it.
+
+    Frames are 8 in wide at ``dpi`` (1040 px at the default); the clock is written above
+    the axes, clear of the pillar and the fiber.
 
     Parameters
     ----------
@@ -234,24 +266,27 @@ def animate_run(
     t0, t1 = (t[near[0]], t[near[-1]]) if near.size > 1 else (t[0], t[-1])
     picks = np.unique(np.searchsorted(t, np.linspace(t0, t1, frames)).clip(0, len(t) - 1))
     shapes = _shapes(run, s, geometry, picks)
-    fig, ax = subplots(figsize=(6.4, 3.2), layout="constrained")
+    fig, ax = subplots(figsize=(8.0, 4.0), layout="constrained")
     ax.add_patch(Polygon(pil, closed=True, fc="0.85", ec="0.3", lw=1.0))
     color = _style(run["class"])["color"]
     ax.plot(p["x"], p["y"], color="0.8", lw=0.8, ls="--")
     trail, = ax.plot([], [], color=color, lw=1.0)  # fmt: skip
     fiber, = ax.plot([], [], color="k", lw=2.5, solid_capstyle="round")  # fmt: skip
     head, = ax.plot([], [], "o", color=color, ms=4, mec="k", mew=0.5)  # fmt: skip
-    clock = ax.text(0.01, 0.97, "", transform=ax.transAxes, va="top", fontsize=8)
+    clock = ax.set_title(" ", loc="left", fontsize=9, family="monospace")  # above the axes
     xs = np.concatenate([*(q[:, 0] for q in shapes), pil[:, 0]])
     ys = np.concatenate([*(q[:, 1] for q in shapes), pil[:, 1]])
     ax.set_xlim(xs.min() - 0.1, xs.max() + 0.1)
     ax.set_ylim(ys.min() - 0.1, ys.max() + 0.1)
     ax.set_aspect("equal")
+    # as tall as the equal-aspect axes need, plus the titles and labels
+    span = (ys.max() - ys.min() + 0.2) / (xs.max() - xs.min() + 0.2)
+    fig.set_size_inches(8.0, float(np.clip(7.3 * span + 1.3, 2.4, 8.0)))
     ax.set_xlabel(r"$x/h_{obs}$")
     ax.set_ylabel(r"$y/h_{obs}$")
     cls = run["class"] if run.get("status", "ok") == "ok" else f"failed ({run.get('reason')})"
-    ax.set_title(rf"$\theta_0$ = {run['theta0']:g}°, $y_0/h_{{obs}}$ = {run['y0']:g}, "
-                 rf"$L/l_{{obs}}$ = {run['length']:g}  →  {cls}", fontsize="small")  # fmt: skip
+    fig.suptitle(rf"$\theta_0$ = {run['theta0']:g}°, $y_0/h_{{obs}}$ = {run['y0']:g}, "
+                 rf"$L/l_{{obs}}$ = {run['length']:g}  →  {cls}", fontsize=9)  # fmt: skip
 
     def draw(k: int) -> tuple:
         i = picks[k]
@@ -262,9 +297,7 @@ def animate_run(
         return fiber, head, trail, clock
 
     anim = animation.FuncAnimation(fig, draw, frames=len(picks), blit=False)
-    writer = (animation.PillowWriter if writer_name == "pillow" else animation.FFMpegWriter)(
-        fps=fps
-    )
+    writer = movie_writer(writer_name, fps)
     # the writers take the format from the file name's suffix: draw into a scratch file of
     # the right name, then put it in place atomically
     with tempfile.TemporaryDirectory() as scratch, atomic_path(out) as tmp:

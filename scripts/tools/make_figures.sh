@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerate docs/figures/ (every figure of README.md and docs/) with the commands the docs show.
 # Runs in a scratch folder with a copy of configs/; flow fields come from (and go to) the
-# repository's cache, .fibersweep-cache/. About three minutes on two free cores with cached fields.
+# repository's cache, .fibersweep-cache/. About six minutes on two free cores with cached fields
+# (the array sweeps: about three).
 #   bash scripts/tools/make_figures.sh
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -30,12 +31,21 @@ fs plot-delta results/lengths --by length -o "$out/delta_length.png"
 fs run configs/friction_axis.yaml
 fs plot-phase results/friction_axis -o "$work/friction"
 cp "$work/friction/phase.png" "$out/phase_friction.png"
+fs run configs/shapes.yaml
+fs plot-phase results/shapes -o "$work/shapes"
+cp "$work/shapes/phase.png" "$out/shapes_phase.png"
 fs run configs/refine.yaml
 fs plot-phase results/refine -o "$work/refine"
 cp "$work/refine/phase.png" "$out/phase_refine.png"
 fs run configs/array.yaml
 fs sort-report results/array
 cp results/array/figures/migration.png "$out/array-migration.png"
+cp results/array/figures/sort-tracks.png "$out/array-overlay.png"
+# the row-shift design of docs/arrays.md, after the check (384 runs, three more cell fields)
+fs run configs/array.yaml 'sweep.flow.array.shift=[0.1, 0.125, 0.15, 0.2]' \
+  'sweep.length=[4, 8, 12, 16, 20, 24, 32, 40]' run.output=results/array-shift
+fs sort-report results/array-shift --target-length 22
+cp results/array-shift/figures/critical-shift.png "$out/array-critical-shift.png"
 fs explore results/quick
 # a screenshot of the explorer after a click (needs chromium, chromium-driver and selenium)
 PYTHONPATH="$repo" python3 "$repo/scripts/tools/explore_screenshot.py" results/quick/explore.html \
