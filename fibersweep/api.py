@@ -371,7 +371,9 @@ class SweepRun:
         With ``sweep.refine``: rounds, runs, boundary brackets located / open / stuck
         and why it stopped (``stopped``).
     warnings : tuple of str
-        What a reader should know (e.g. a class column that mixes pole-vaulting rules).
+        What a reader should know: a class column that mixes pole-vaulting rules, and
+        where the settings leave the validated range, each naming the setting to change
+        and its source page (:mod:`fibersweep.sweep.validity`).
     """
 
     path: Path
@@ -453,9 +455,11 @@ def run(
         it is saved.
     """
     from fibersweep.sweep.fields import flow_keys_for
+    from fibersweep.sweep.plan import sweep_settings
     from fibersweep.sweep.rules import mixed_rules_message
     from fibersweep.sweep.runner import run_sweep
     from fibersweep.sweep.store import read_runs
+    from fibersweep.sweep.validity import combination_facts, warnings_for
 
     cfg = _sweep_config(config, overrides, max_points, output, workers, executor, scheduler)
     hooks = _progress(progress)
@@ -469,11 +473,16 @@ def run(
     finally:
         hooks.close()
     warnings = []
+    table = read_runs(summary.out)
     if summary.ran:  # rows added under this config's rule to a folder labelled by another
-        message = mixed_rules_message(read_runs(summary.out), summary.out)
+        message = mixed_rules_message(table, summary.out)
         if message:
             warnings.append(message)
             log.info("%s", message)
+    # where the settings leave the validated range: once per run, naming what to change
+    for message in warnings_for(combination_facts(sweep_settings(cfg), table)):
+        warnings.append(message)
+        log.info("outside the validated range: %s", message)
     log.info("ran %d runs in %.1f s -> %s; failed in the table: %d",
              summary.ran, summary.wall_s, summary.out, summary.failed)  # fmt: skip
     return SweepRun(
@@ -694,6 +703,9 @@ class FiberRun:
         use (then loaded from the disk cache).
     figure : Path or None
         The chronophotograph written (``plot``).
+    warnings : tuple of str
+        Where the settings leave the validated range, each naming the setting to
+        change and its source page (:mod:`fibersweep.sweep.validity`).
     """
 
     result: RunResult
@@ -703,6 +715,7 @@ class FiberRun:
     returned: float = math.nan
     ready_s: float = 0.0
     figure: Path | None = None
+    warnings: tuple[str, ...] = ()
 
     @property
     def array(self) -> Any:
@@ -755,6 +768,13 @@ def simulate(
     FiberRun
         ``.result`` is the run's :class:`~fibersweep.fiber.result.RunResult`; a run that
         failed has ``result.status != "ok"`` and its ``reason``.
+
+    Raises
+    ------
+    InputError
+        A bad start, before any flow field is solved or kernel compiled when it is a
+        start that touches a pillar: the message names the free ranges of y0 at that
+        angle and length (:func:`fibersweep.sweep.draws.free_text`).
     """
     import time
 
@@ -764,10 +784,16 @@ def simulate(
     from fibersweep.fiber.run import simulate_reversible
     from fibersweep.flow.cache import get_flow_field
     from fibersweep.plots.shapes import is_flexible
+    from fibersweep.sweep.draws import check_start_of, free_text
+    from fibersweep.sweep.validity import facts, warnings_for
     from fibersweep.sweep.worker import _warm
 
     extra = [f"fiber.model={model}"] if model is not None else []
     cfg = load_config(config, *overrides, *extra)
+    check_start_of(cfg, theta0, y0, length)  # before the field and the kernels: seconds saved
+    warned = warnings_for([facts(cfg.fiber, cfg.flow.array)])
+    for w in warned:
+        log.info("outside the validated range: %s", w)
     fiber = cfg.fiber
     if plot is not None:  # the drawing needs the trajectory, and a bent fiber its beads
         rec = fiber.record.model_copy(
@@ -788,14 +814,20 @@ def simulate(
     _warm(flow, fiber)  # a short run: the kernels compiled on first use, else loaded
     ready_s = time.perf_counter() - t0
     back = math.nan
-    if reversible:
-        res, back = simulate_reversible(flow, fiber, start, rng_seed=seed)
-    else:
-        res = run_one(flow, fiber, start, rng_seed=seed)
+    try:
+        if reversible:
+            res, back = simulate_reversible(flow, fiber, start, rng_seed=seed)
+        else:
+            res = run_one(flow, fiber, start, rng_seed=seed)
+    except InputError as exc:  # a start the check above could not see (an effect moved it)
+        text = str(exc)
+        if text.startswith("y0") and ("touches a pillar" in text or "overlaps" in text):
+            raise InputError(f"{text}; {free_text(cfg, theta0, length)}") from None
+        raise
     outcome = getattr(res, "mode", None) or res.cls or res.status
     log.info("%s: %s in %.2f s", start, outcome, res.wall_time)
     figure = None if plot is None else _chronophotograph(res, flow, fiber, Path(plot))
-    return FiberRun(res, cfg, fiber, flow, float(back), ready_s, figure)
+    return FiberRun(res, cfg, fiber, flow, float(back), ready_s, figure, warned)
 
 
 def _chronophotograph(res: RunResult, flow: Any, fiber: FiberSettings, plot: Path) -> Path:
@@ -1127,7 +1159,9 @@ class SortReport:
         trapped, the trapped share, the modes (``migration.csv``;
         :data:`fibersweep.sorting.report.MIGRATION_DOCS`).
     critical : DataFrame
-        Every length where the mean f crosses 1/2, with its error and bracket [µm].
+        Every length where the mean f crosses 1/2, with its statistical error, its
+        interval (scatter and interpolation, ``ci_lo``, ``ci_hi``) and its bracket [µm]
+        (:func:`fibersweep.sorting.report.critical_table`).
     outlets : DataFrame
         Recovery and purity per outlet and length of a ``rows``-row device
         (``outlets.csv``).
@@ -1158,6 +1192,12 @@ class SortReport:
         The figures written.
     notes : tuple of str
         What the figures left out.
+    warnings : tuple of str
+        Where the sweep's settings (or ``rows``) leave the validated range, each naming
+        the setting to change and its source page (:mod:`fibersweep.sweep.validity`).
+    caveats : dict
+        Setting -> the lengths that decide its critical lengths on few moving runs,
+        named with their counts (:func:`fibersweep.sorting.report.thin_crossings`).
     """
 
     path: Path
@@ -1180,6 +1220,8 @@ class SortReport:
     tables: tuple[Path, ...] = ()
     figures: tuple[Path, ...] = ()
     notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
+    caveats: dict[int, list[str]] = attr(default_factory=dict)
 
 
 def sort_report(
@@ -1200,10 +1242,13 @@ def sort_report(
 
     Per setting and fiber length: the displacement fraction f and migration angle
     over the runs that were not trapped, the trapped share and the modes; the
-    critical lengths (mean f = 1/2) with their error; recovery and purity per
+    critical lengths (mean f = 1/2) with their interval (the runs' scatter and the
+    interpolation between simulated lengths, :mod:`fibersweep.sorting.interval`),
+    and the lengths that decide them on few moving runs; recovery and purity per
     outlet of a device of ``rows`` rows. With a swept array setting: the critical
     length against it, and with ``target_length`` or ``separate``, the value that
-    gives it and the runs to add to be sure.
+    gives it, its interval and the runs to add to be sure. Where the settings leave
+    the validated range, ``warnings`` say so.
 
     Parameters
     ----------
@@ -1239,6 +1284,7 @@ def sort_report(
     from fibersweep.results import load_array_results
     from fibersweep.sorting import design as sd
     from fibersweep.sorting import report as sr
+    from fibersweep.sweep.validity import facts_from_dict, warnings_for
 
     results = Path(results)
     edges = sr.parse_edges(outlets)
@@ -1259,10 +1305,11 @@ def sort_report(
         table.to_csv(written[0], index=False)
         out.to_csv(written[1], index=False)
     curve, found = None, []
+    thin = sr.thin_crossings(table, crit, settings)
     if key is not None:
         curve = sd.critical_curve(crit, table, settings, key)
         if target is not None:
-            found = sd.answers(curve, settings, key, target, bead)
+            found = sd.answers(curve, settings, key, target, bead, table=table, caveats=thin)
         if write:
             curve.to_csv(results / "critical.csv", index=False)
             written.append(results / "critical.csv")
@@ -1270,12 +1317,22 @@ def sort_report(
     if separate is not None:
         parts = separate.split(",") if isinstance(separate, str) else separate
         pair = (float(parts[0]), float(parts[1]))
+    combos = [
+        facts_from_dict(cfg["fiber"], s["array"], s["values"], s["label"],
+                        device_rows=rows, trapped=int((g["mode"] == "trapped").sum()),
+                        runs=len(g))
+        for i, s in enumerate(settings) for g in [runs[runs["setting"] == i]]
+    ]  # fmt: skip
+    warned = warnings_for(combos)
+    for w in warned:
+        log.info("outside the validated range: %s", w)
     report = SortReport(
         path=results, runs=runs, settings=settings, config=cfg, migration=table,
         critical=crit, outlets=out, rows=n_rows, array_rows=array_rows, bead=bead,
         narrowing=sr.narrowing_lengths(table, crit, bead),
         short=tuple(sr.short_rows(settings, array_rows)), key=key, curve=curve,
         target=target, separate=pair, answers=tuple(found), tables=tuple(written),
+        warnings=warned, caveats=thin,
     )  # fmt: skip
     if figures:
         drawn, notes = _sort_figures(report)
@@ -1309,6 +1366,7 @@ def _sort_figures(rep: SortReport) -> tuple[list[Path], list[str]]:
     from fibersweep.flow.cache import get_flow_field
     from fibersweep.plots import array as pa
     from fibersweep.plots import array_design as pd_
+    from fibersweep.plots.labels import describe
     from fibersweep.plots.shapes import ShapeNotStored
     from fibersweep.plots.style import paper_style, save_figure
     from fibersweep.sorting.modes import pick_run
@@ -1332,7 +1390,7 @@ def _sort_figures(rep: SortReport) -> tuple[list[Path], list[str]]:
             name = f"cell-flow-{_slug(flow_values)}.png" if flow_values else "cell-flow.png"
             written.append(save_figure(pa.cell_flow_figure(field_), fig_dir / name, dpi=110))
         tilts = {i: math.degrees(math.atan(s["array"]["shift"])) for i, s in enumerate(settings)}
-        labels = {i: s["label"] for i, s in enumerate(settings)}
+        labels = describe(settings)  # in words with units: "E = 10 kPa"
         written.append(
             save_figure(pd_.migration_figure(rep.migration, tilts, labels, rep.critical),
                         fig_dir / "migration.png")  # fmt: skip
@@ -1341,7 +1399,7 @@ def _sort_figures(rep: SortReport) -> tuple[list[Path], list[str]]:
                                    fig_dir / "outlets.png"))  # fmt: skip
         written.append(
             save_figure(
-                pa.overlay_figure(runs, periods, shifts=shifts),
+                pa.overlay_figure(runs, periods, shifts=shifts, labels=labels),
                 fig_dir / "sort-tracks.png",
                 dpi=130,
             )
@@ -1354,7 +1412,7 @@ def _sort_figures(rep: SortReport) -> tuple[list[Path], list[str]]:
             notes.append(f"chronophotographs show {MAX_PANELS} of the {len(settings)} settings")
         for mode in MODES:
             picks = [(i, pick_run(runs[runs["setting"] == i], mode)) for i in shown]
-            picks = [(i, p) for i, p in picks if p is not None]
+            picks = [(i, {**p, "setting_label": labels[i]}) for i, p in picks if p is not None]
             if not picks:
                 continue
             try:
@@ -1374,7 +1432,7 @@ def _sort_figures(rep: SortReport) -> tuple[list[Path], list[str]]:
             key = rep.key
             ans = rep.answers[-1].answer if rep.answers else None
             unit = setting_column(key)[1]
-            fig = pd_.critical_figure(rep.curve, key, unit, ans, rep.target)
+            fig = pd_.critical_figure(rep.curve, key, unit, ans, rep.target, rep.critical)
             written.append(save_figure(fig, fig_dir / f"critical-{key.rsplit('.', 1)[-1]}.png"))
     for n in notes:
         log.info("sort report: %s", n)

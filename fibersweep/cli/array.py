@@ -80,12 +80,14 @@ def sort_report(
 
     Per setting and fiber length: the displacement fraction f and migration angle
     over the runs that were not trapped, the trapped share and the modes; the
-    critical lengths (mean f = 1/2) with their error; recovery and purity per
-    outlet of a device of ROWS rows, with the trapped share beside them. With a
-    swept array setting (shift, a period, the pillar size or shape): the critical
-    length against it, and with --target-length or --separate, the value that
-    gives it and the runs to add to be sure. Tables go to RESULTS/*.csv, figures
-    to RESULTS/figures/.
+    critical lengths (mean f = 1/2) with their 95 % interval (the runs' scatter and
+    the interpolation between simulated lengths) and the lengths that decide them on
+    few moving runs; recovery and purity per outlet of a device of ROWS rows, with
+    the trapped share beside them. With a swept array setting (shift, a period, the
+    pillar size or shape): the critical length against it, and with --target-length
+    or --separate, the value that gives it, its interval and the runs to add to be
+    sure. Settings outside the validated range are warned about first. Tables go to
+    RESULTS/*.csv, figures to RESULTS/figures/.
     """
     from fibersweep import api
 
@@ -96,14 +98,9 @@ def sort_report(
             separate=separate, setting=setting, figures=figures, zigzag_max=zigzag_max,
             displacement_min=displacement_min,
         )  # fmt: skip
+    for message in rep.warnings:  # outside the validated range: before the numbers
+        typer.secho(f"warning: {message}", fg=typer.colors.YELLOW)
     _echo_migration(rep)
-    for short in rep.short:
-        typer.secho(
-            f"note: {short.name}: {short.rows} rows are {short.periods:.1f} zigzag periods "
-            f"(1/ε = {1 / short.shift:.0f} rows), too few for f to tell zigzag from "
-            f"displacement; run at least {short.needed} rows (fiber.array_rows)",
-            fg=typer.colors.YELLOW,
-        )
     _echo_outlets(rep.outlets, rep.settings, rep.rows)
     if rep.curve is not None:
         _echo_design(rep)
@@ -161,9 +158,10 @@ def _echo_migration(rep) -> None:
             one_bead = " (located to one bead)" if located(r.lo, r.hi, bead) else ""
             typer.echo(
                 f"critical length ({'f rises' if r.rising else 'f falls'} through 1/2): "
-                f"{_pm(r.critical, r.se, 1)} µm, between the simulated {r.lo:g} and {r.hi:g} "
-                f"µm{one_bead}"
+                f"{_interval(r)}, between the simulated {r.lo:g} and {r.hi:g} µm{one_bead}"
             )
+        for line in rep.caveats.get(int(s), []):
+            typer.secho(f"  caveat: {line}", fg=typer.colors.YELLOW)
         new = rep.narrowing.get(int(s), [])
         if new:
             typer.echo(
@@ -178,6 +176,17 @@ def _name(meta: dict) -> str:
     from fibersweep.sorting.report import setting_name
 
     return setting_name(meta)
+
+
+def _interval(r) -> str:
+    """'15.0 µm (95 %: 12.2 to 15.9 µm; statistical alone ± 0.3)': a critical length, its
+    interval and, apart, its statistical error (a row of the critical table or curve)."""
+    from fibersweep.sorting.report import critical_text
+
+    text = critical_text(r.critical, r.ci_lo, r.ci_hi)
+    if math.isfinite(r.se) and text.endswith(")"):
+        text = text[:-1] + f"; statistical alone ± {r.se:.1f})"
+    return text
 
 
 def _pm(v: float, e: float, digits: int) -> str:
@@ -230,14 +239,15 @@ def _echo_design(rep) -> None:
     name = key.rsplit(".", 1)[-1]
     typer.echo(
         f"\ncritical length against {name} (first length where f rises through 1/2; "
-        "where it never rises, where it falls):"
+        "where it never rises, where it falls), with its interval (the runs' scatter and "
+        "the interpolation between simulated lengths):"
     )
     for grp, g in curve.groupby("group", sort=False):
         if grp:
             typer.echo(f"  {grp}:")
         for r in g.itertuples():
             if math.isfinite(r.critical):
-                txt = f"{_pm(r.critical, r.se, 1)} µm (between {r.lo:g} and {r.hi:g})"
+                txt = f"{_interval(r)}, between {r.lo:g} and {r.hi:g}"
                 txt += "" if r.rising else ", f falls through 1/2"
             elif math.isfinite(r.lo):
                 txt = f"above {r.lo:g} µm (f < 1/2 at every length)"
@@ -256,6 +266,8 @@ def _echo_design(rep) -> None:
     for ga in rep.answers:
         ans = ga.answer
         typer.echo(("  " + ga.group + ": " if ga.group else "  ") + ans.text)
+        for line in ans.caveats:  # the runs it rests on, where they are few
+            typer.secho(f"  caveat: {line}", fg=typer.colors.YELLOW)
         if ans.add:
             typer.echo("  to be sure, run:")
             for line in ans.add:

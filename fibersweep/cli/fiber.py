@@ -71,7 +71,9 @@ def simulate(
     a pillar array its mode, rows, shift per row, f and migration angle.
 
     The fiber kernels are compiled on first use (then loaded from the disk cache); the
-    time that takes is said, apart from the run's.
+    time that takes is said, apart from the run's. A start that touches a pillar is
+    refused before the flow field and the kernels, naming the free ranges of y0 at
+    that angle and length. Settings outside the validated range are warned about.
     """
     from fibersweep import api
 
@@ -83,6 +85,8 @@ def simulate(
             seed=seed, plot=plot, progress=True,
         )  # fmt: skip
     res, fiber = one.result, one.fiber
+    for message in one.warnings:  # outside the validated range, naming what to change
+        typer.secho(f"warning: {message}", err=True, fg=typer.colors.YELLOW)
     if one.ready_s > COMPILED_S:
         typer.echo(
             f"first use: compiled the {fiber.model} kernels in {one.ready_s:.1f} s (cached on "

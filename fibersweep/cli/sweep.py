@@ -147,9 +147,7 @@ def _print_run(res) -> None:
     else:
         typer.echo(f"nothing to run: every run of the sweep is in {res.path}")
     typer.echo(
-        "table: "
-        + ", ".join(f"{k} {v}" for k, v in res.counts.items())
-        + f", failed {res.failed}"
+        "table: " + ", ".join(f"{k} {v}" for k, v in res.counts.items()) + f", failed {res.failed}"
     )
     if res.refinement is not None:
         typer.echo(_refinement_line(res.refinement, res.config.sweep.refine))

@@ -7,7 +7,15 @@ shape) gives a critical length per value (:func:`fibersweep.sorting.report.criti
 of the setting that gives it, by linear interpolation between the two simulated
 values whose critical lengths bracket the target, with
 
-* its statistical error (the critical lengths' standard errors, propagated);
+* its interval at :data:`~fibersweep.sorting.interval.INTERVAL_LEVEL`: the runs'
+  scatter, the interpolation between simulated lengths and the interpolation
+  between simulated values (:mod:`fibersweep.sorting.interval`, where the choice is
+  argued; its coverage is measured in ``tests/unit/test_design_coverage.py``), and
+  apart, the statistical error alone (the critical lengths' standard errors,
+  propagated), which leaves the interpolation out;
+* the lengths that decide it on few moving runs (fewer than
+  :data:`~fibersweep.sorting.interval.FEW_MOVING`), named
+  (:func:`fibersweep.sorting.report.thin_crossings`);
 * whether the simulated lengths decide it whatever the interpolation: each
   critical length lies between two simulated lengths, so when neither bracket
   holds the target the answer lies between the two values;
@@ -30,6 +38,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from fibersweep.sorting.interval import INTERVAL_LEVEL
+
 __all__ = [
     "ARRAY_KEYS",
     "DesignAnswer",
@@ -37,6 +47,7 @@ __all__ = [
     "answer",
     "answers",
     "critical_curve",
+    "curve_draws",
     "design_key",
     "lattice_neighbours",
     "lattice_pick",
@@ -111,9 +122,7 @@ def report_key(settings: list[dict], key: str | None, target: float | None) -> s
     return found
 
 
-def target_length(
-    target: float | None, separate: str | Sequence[float] | None
-) -> float | None:
+def target_length(target: float | None, separate: str | Sequence[float] | None) -> float | None:
     """The critical length asked for [µm]: ``target``, or halfway between the two lengths
     of ``separate`` (``"L1,L2"`` or a pair of numbers [µm]); at most one of them given.
 
@@ -172,7 +181,8 @@ def critical_curve(
     DataFrame
         One row per combination: ``setting``, ``value`` (of ``key``), ``group`` (the
         other swept values, '' when only ``key`` varies), ``critical``, ``se``, ``lo``,
-        ``hi`` [µm], ``rising`` (f rises through 1/2 there; None without a crossing).
+        ``hi`` [µm], ``rising`` (f rises through 1/2 there; None without a crossing),
+        ``ci_lo``, ``ci_hi`` [µm] (the interval of :func:`critical_table`).
         Without a crossing ``critical`` is NaN, and ``lo`` is the longest length when
         f < 1/2 at every length, ``hi`` the shortest when f > 1/2 at every length.
     """
@@ -192,7 +202,8 @@ def critical_curve(
         if len(c):
             r = c.iloc[0]
             row.update(critical=r["critical"], se=r["se"], lo=r["lo"], hi=r["hi"],
-                       rising=bool(r["rising"]))  # fmt: skip
+                       rising=bool(r["rising"]), ci_lo=r.get("ci_lo", math.nan),
+                       ci_hi=r.get("ci_hi", math.nan))  # fmt: skip
         else:
             g = table[table["setting"] == i].sort_values("length")
             f = g["fraction_mean"].to_numpy(float)
@@ -202,9 +213,12 @@ def critical_curve(
                 se=math.nan,
                 lo=float(g["length"].max()) if below else math.nan,
                 hi=math.nan if below else float(g["length"].min()),
+                ci_lo=math.nan,
+                ci_hi=math.nan,
             )
         rows.append(row)
-    columns = ["setting", "value", "group", "critical", "se", "lo", "hi", "rising"]
+    columns = ["setting", "value", "group", "critical", "se", "lo", "hi", "rising", "ci_lo",
+               "ci_hi"]  # fmt: skip
     return pd.DataFrame(rows, columns=columns)
 
 
@@ -269,7 +283,10 @@ class DesignAnswer:
         The answer (interpolated; for a categorical setting the nearest simulated one);
         None when the target is outside the simulated critical lengths.
     se : float
-        Statistical error of ``value`` (NaN when not interpolated).
+        Statistical error of ``value`` alone: the critical lengths' standard errors
+        propagated through the two linear interpolations (NaN when not interpolated).
+        It leaves out the interpolation between simulated lengths and values; ``ci``
+        holds it.
     span : tuple of float
         The two simulated values the answer lies between whatever the interpolation:
         the brackets of their critical lengths lie on either side of the target (NaN
@@ -279,9 +296,19 @@ class DesignAnswer:
     lattice : tuple of float
         Nearest values the lattice allows, at or below and at or above ``value``.
     text : str
-        The answer in one sentence.
+        The answer in one sentence, with its interval and its level.
     add : list of str
         What to run to be sure.
+    ci : tuple of float
+        The interval of ``value`` at ``level``: the runs' scatter, the interpolation
+        between simulated lengths and between simulated values
+        (:func:`fibersweep.sorting.interval.inverse_draws`); an end ±inf lies beyond
+        the simulated values. NaN when not interpolated.
+    level : float
+        The probability ``ci`` holds (:data:`~fibersweep.sorting.interval.INTERVAL_LEVEL`).
+    caveats : tuple of str
+        Lengths that decide the answer's critical lengths on few moving runs, each
+        with its setting and count (:func:`fibersweep.sorting.report.thin_crossings`).
     """
 
     key: str
@@ -293,13 +320,68 @@ class DesignAnswer:
     lattice: tuple[float, float] = (math.nan, math.nan)
     text: str = ""
     add: list[str] = field(default_factory=list)
+    ci: tuple[float, float] = (math.nan, math.nan)
+    level: float = INTERVAL_LEVEL
+    caveats: tuple[str, ...] = ()
 
 
 def _interp(v0: float, v1: float, c0: float, c1: float, target: float) -> float:
     return v0 + (target - c0) / (c1 - c0) * (v1 - v0)
 
 
-def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float) -> DesignAnswer:
+def curve_draws(curve: pd.DataFrame, table: pd.DataFrame | None = None) -> dict[int, np.ndarray]:
+    """Draws of each setting's critical length [µm] (the curve's crossing), by setting.
+
+    With the migration table: from the posterior of
+    :func:`fibersweep.sorting.interval.critical_draws`;
+    without it (a curve read back from ``critical.csv``): uniform over the bracket
+    plus the statistical error (:func:`~fibersweep.sorting.interval.bracket_draws`).
+    Combinations without a crossing have none.
+    """
+    from fibersweep.sorting.interval import bracket_draws, critical_draws
+
+    runs = table is not None and {"moving", "fraction_std"} <= set(table.columns)
+    out: dict[int, np.ndarray] = {}
+    for r in curve.itertuples():
+        if not math.isfinite(r.critical):
+            continue
+        rising = True if getattr(r, "rising", None) is None else bool(r.rising)
+        if runs:
+            out[int(r.setting)] = critical_draws(table, int(r.setting), r.lo, r.hi, rising)
+        else:
+            out[int(r.setting)] = bracket_draws(r.lo, r.hi, r.se, (int(r.setting),))
+    return out
+
+
+def _num(v: float) -> str:
+    return f"{v:.4g}"
+
+
+def _value_interval(name: str, ci: tuple[float, float], values: np.ndarray, level: float) -> str:
+    """'95 % interval: shift = 0.1187 to 0.1352' (an infinite end: beyond the simulated)."""
+    from fibersweep.sorting.interval import level_text
+
+    lo, hi = ci
+    left = f"below {values.min():g}, the smallest simulated" if lo == -math.inf else _num(lo)
+    right = f"beyond {values.max():g}, the largest simulated" if hi == math.inf else _num(hi)
+    return f"{level_text(level)} interval: {name} = {left} to {right}"
+
+
+def _crit(lc: float, lo: float, hi: float, level: float) -> str:
+    from fibersweep.sorting.report import critical_text
+
+    return critical_text(lc, lo, hi, level)
+
+
+def answer(
+    curve: pd.DataFrame,
+    key: str,
+    target: float,
+    flow: dict,
+    bead: float,
+    draws: dict[int, np.ndarray] | None = None,
+    caveats: dict[int, list[str]] | None = None,
+) -> DesignAnswer:
     """The value of ``key`` whose critical length is ``target`` [µm] (module docstring).
 
     Parameters
@@ -314,9 +396,21 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
     bead : float
         Length of one bead, 2a [µm]: brackets this narrow are located (a fiber has
         round(L / 2a) beads, so lengths closer than that are the same fiber).
+    draws : dict, optional
+        Setting -> draws of its critical length [µm] (:func:`curve_draws`; default:
+        from the curve alone, the bracket and the statistical error).
+    caveats : dict, optional
+        Setting -> its lengths that decide a crossing on few moving runs
+        (:func:`fibersweep.sorting.report.thin_crossings`); those of the settings the
+        answer rests on are kept in :attr:`DesignAnswer.caveats`.
     """
+    from fibersweep.sorting.interval import interval, inverse_draws
+
     name = key.rsplit(".", 1)[-1]
+    caveats = caveats or {}
     c = curve.dropna(subset=["critical"])
+    if "ci_lo" not in c:
+        c = c.assign(ci_lo=math.nan, ci_hi=math.nan)
     if not pd.api.types.is_numeric_dtype(curve["value"]):
         if c.empty:
             return DesignAnswer(
@@ -332,14 +426,17 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
             best["value"],
             between=(best["value"],),
             text=f"{name} = {best['value']} gives the critical length nearest {target:g} µm: "
-            f"{best['critical']:.1f} ± {best['se']:.1f} µm (not interpolated: {name} is "
-            "not a number)",
+            f"{_crit(best['critical'], best['ci_lo'], best['ci_hi'], INTERVAL_LEVEL)} (not "
+            f"interpolated: {name} is not a number)",
+            caveats=tuple(caveats.get(int(best["setting"]), ())),
         )
     c = c.sort_values("value")
     v = c["value"].to_numpy(float)
     lc = c["critical"].to_numpy(float)
     se = np.nan_to_num(c["se"].to_numpy(float))
     lo, hi = c["lo"].to_numpy(float), c["hi"].to_numpy(float)
+    ci_lo, ci_hi = c["ci_lo"].to_numpy(float), c["ci_hi"].to_numpy(float)
+    sids = c["setting"].to_numpy(int)
     add: list[str] = []
     # a curve without the column (made by hand, or read from an older critical.csv): rising
     rising = (
@@ -361,6 +458,24 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
             / abs(lc[k + 1] - lc[k])
             * math.hypot((1 - w) * se[k], w * se[k + 1])
         )
+        # the interval: every setting's critical length drawn, the whole interpolation
+        # done again per draw (lengths, then values, with the curvature of a third value)
+        if draws is None:
+            draws = curve_draws(c)
+        C = np.stack([draws[int(s)] for s in sids], axis=1)
+        ci = interval(inverse_draws(v, C, target, rising))
+        ci_text = (
+            _value_interval(name, ci, v, INTERVAL_LEVEL)
+            + (
+                ", which holds the runs' scatter and the interpolation between simulated "
+                f"lengths and between simulated values of {name}"
+                if len(v) >= 3
+                else ", which holds the runs' scatter and the interpolation between simulated "
+                f"lengths, not the curvature between the two simulated values of {name} "
+                "(simulate a third to estimate it)"
+            )
+            + f" (the statistical error alone: ± {sig:.2g})"
+        )
         # model-free: the crossing lies in each bracket [lo, hi] whatever the interpolation;
         # when neither bracket holds the target, the answer lies between the two values
         decided = not (lo[k] <= target <= hi[k] or lo[k + 1] <= target <= hi[k + 1])
@@ -374,14 +489,21 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
                 )
         near = grid[0] if abs(grid[0] - val) <= abs(grid[1] - val) else grid[1]
         done = np.flatnonzero(np.isclose(v, near, rtol=0, atol=1e-9))
+        rests = [int(sids[k]), int(sids[k + 1])]
+        head = (
+            f"{name} = {val:.4g} gives a critical length of {target:g} µm (interpolated "
+            f"between {name} = {v[k]:g}: {lc[k]:.1f} µm and {name} = {v[k + 1]:g}: "
+            f"{lc[k + 1]:.1f} µm); {ci_text}"
+        )
         if done.size:  # the check has run: what it says
             j = int(done[0])
+            rests.append(int(sids[j]))
             holds = lo[j] <= target <= hi[j]
             one_bead = hi[j] - lo[j] <= bead * (1 + 1e-9)
             checked = (
                 f"; {name} = {near:g}, the value the lattice allows nearest, is simulated: "
-                f"its critical length {lc[j]:.1f} ± {se[j]:.1f} µm, between the simulated "
-                f"{lo[j]:g} and {hi[j]:g} µm"
+                f"its critical length {_crit(lc[j], ci_lo[j], ci_hi[j], INTERVAL_LEVEL)}, "
+                f"between the simulated {lo[j]:g} and {hi[j]:g} µm"
                 + (
                     f", which hold {target:g} µm"
                     + (
@@ -393,13 +515,9 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
                     else f", which do not hold {target:g} µm"
                 )
             )  # fmt: skip
-            text = (
-                f"{name} = {val:.4g} ± {sig:.2g} gives a critical length of {target:g} µm "
-                f"(interpolated between {name} = {v[k]:g}: {lc[k]:.1f} µm and {name} = "
-                f"{v[k + 1]:g}: {lc[k + 1]:.1f} µm){checked}"
-            )
             return DesignAnswer(key, target, float(val), float(sig), span, (v[k], v[k + 1]),
-                                grid, text, add)  # fmt: skip
+                                grid, head + checked, add, ci, INTERVAL_LEVEL,
+                                _caveats(caveats, rests))  # fmt: skip
         if grid[0] != grid[1] and math.isfinite(near):
             add.insert(
                 0,
@@ -409,11 +527,7 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
             )
         else:
             add.insert(0, f"{name} = {val:.4g} with lengths around {target:g} µm: the check")
-        text = (
-            f"{name} = {val:.4g} ± {sig:.2g} gives a critical length of {target:g} µm "
-            f"(interpolated between {name} = {v[k]:g}: {lc[k]:.1f} µm and {name} = "
-            f"{v[k + 1]:g}: {lc[k + 1]:.1f} µm)"
-        )
+        text = head
         if decided:
             text += (
                 f"; whatever the interpolation, between {span[0]:g} and {span[1]:g} (the "
@@ -424,9 +538,8 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
                 f"; not yet decided: a critical length's bracket of simulated lengths holds "
                 f"{target:g} µm, narrow it first (below)"
             )
-        return DesignAnswer(
-            key, target, float(val), float(sig), span, (v[k], v[k + 1]), grid, text, add
-        )
+        return DesignAnswer(key, target, float(val), float(sig), span, (v[k], v[k + 1]), grid,
+                            text, add, ci, INTERVAL_LEVEL, _caveats(caveats, rests))  # fmt: skip
     if c.empty:
         text = f"no value of {name} has a critical length in the swept lengths: widen sweep.length"
         return DesignAnswer(key, target, None, text=text)
@@ -443,7 +556,9 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
     side = "above" if target > lc.max() else "below" if target < lc.min() else "inside"
     text = (
         f"{target:g} µm is {side} the critical lengths simulated ({rng}); nothing to "
-        f"interpolate: the nearest is {lc[k_near]:.1f} µm at {name} = {v[k_near]:g}"
+        f"interpolate: the nearest is "
+        f"{_crit(lc[k_near], ci_lo[k_near], ci_hi[k_near], INTERVAL_LEVEL)} at {name} = "
+        f"{v[k_near]:g}"
     )
     if side != "inside":
         grow = (lc[-1] - lc[0]) * (1 if side == "above" else -1) > 0
@@ -452,7 +567,18 @@ def answer(curve: pd.DataFrame, key: str, target: float, flow: dict, bead: float
             f"values of {name} {'beyond' if grow else 'below'} {edge:g}, where the "
             "critical length moves towards the target"
         )
-    return DesignAnswer(key, target, None, between=(v[k_near],), text=text, add=add)
+    return DesignAnswer(key, target, None, between=(v[k_near],), text=text, add=add,
+                        caveats=_caveats(caveats, [int(sids[k_near])]))  # fmt: skip
+
+
+def _caveats(caveats: dict[int, list[str]], settings: list[int]) -> tuple[str, ...]:
+    """The caveats of ``settings``, each once, in order."""
+    out: list[str] = []
+    for s in settings:
+        for line in caveats.get(s, ()):
+            if line not in out:
+                out.append(line)
+    return tuple(out)
 
 
 def lattice_pick(ans: DesignAnswer) -> float:
@@ -482,7 +608,13 @@ class GroupAnswer:
 
 
 def answers(
-    curve: pd.DataFrame, settings: list[dict], key: str, target: float, bead: float
+    curve: pd.DataFrame,
+    settings: list[dict],
+    key: str,
+    target: float,
+    bead: float,
+    table: pd.DataFrame | None = None,
+    caveats: dict[int, list[str]] | None = None,
 ) -> list[GroupAnswer]:
     """:func:`answer` for each group of ``curve``, with the value to run to check it.
 
@@ -498,11 +630,19 @@ def answers(
         Target critical length [µm].
     bead : float
         Length of one bead, 2a [µm].
+    table : DataFrame, optional
+        :func:`fibersweep.sorting.report.migration_table`: the runs behind the curve,
+        for the interval (:func:`curve_draws`; without it, from the brackets alone).
+    caveats : dict, optional
+        Setting -> lengths that decide its crossings on few moving runs
+        (:func:`fibersweep.sorting.report.thin_crossings`).
     """
     out = []
     simulated = curve["value"].to_numpy(float) if _numeric(curve) else None
+    draws = curve_draws(curve, table) if _numeric(curve) else None
     for grp, g in curve.groupby("group", sort=False):
-        ans = answer(g, key, target, settings[int(g["setting"].iloc[0])]["flow"], bead)
+        ans = answer(g, key, target, settings[int(g["setting"].iloc[0])]["flow"], bead,
+                     draws=draws, caveats=caveats)  # fmt: skip
         check = None
         if isinstance(ans.value, float) and simulated is not None:
             pick = lattice_pick(ans)

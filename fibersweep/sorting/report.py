@@ -36,8 +36,10 @@ __all__ = [
     "MIN_PERIODS",
     "ShortRows",
     "check_edges",
+    "CRITICAL_COLUMNS",
     "critical_lengths",
     "critical_table",
+    "critical_text",
     "with_tracks",
     "located",
     "migration_table",
@@ -47,6 +49,7 @@ __all__ = [
     "refine_lengths",
     "relabel",
     "short_rows",
+    "thin_crossings",
 ]
 
 #: Mean displacement fraction that defines a critical length.
@@ -233,8 +236,13 @@ def critical_table(table: pd.DataFrame, level: float = LEVEL) -> pd.DataFrame:
     ``level``, the crossing is interpolated linearly: L_c = L_k + w (L_k+1 − L_k),
     w = (level − f_k) / (f_k+1 − f_k). Its statistical error propagates the
     standard errors of the two means: σ = (L_k+1 − L_k) / |f_k+1 − f_k| ×
-    sqrt((1 − w)² se_k² + w² se_k+1²). Whatever the interpolation, the crossing lies
-    between the two simulated lengths (``lo``, ``hi``): the bracket a refinement halves.
+    sqrt((1 − w)² se_k² + w² se_k+1²). That error leaves out the interpolation
+    between the simulated lengths, which near a sorter's step is most of it; the
+    interval ``ci_lo``–``ci_hi`` holds both (:mod:`fibersweep.sorting.interval`:
+    the posterior of a sigmoid through the runs around the crossing, at
+    :data:`~fibersweep.sorting.interval.INTERVAL_LEVEL`). Whatever the
+    interpolation, the crossing lies between the two simulated lengths (``lo``,
+    ``hi``): the bracket a refinement halves.
 
     Parameters
     ----------
@@ -246,9 +254,14 @@ def critical_table(table: pd.DataFrame, level: float = LEVEL) -> pd.DataFrame:
     Returns
     -------
     DataFrame
-        ``setting``, ``critical`` [µm], ``se`` [µm] (NaN when a mean has one run),
-        ``lo``, ``hi`` [µm] (the bracket), ``rising`` (f grows with L there).
+        ``setting``, ``critical`` [µm], ``se`` [µm] (the statistical error alone; NaN
+        when a mean has one run), ``lo``, ``hi`` [µm] (the bracket), ``rising`` (f
+        grows with L there), ``ci_lo``, ``ci_hi`` [µm] (the interval: scatter and
+        interpolation; from the bracket and ``se`` alone when ``table`` has no
+        ``moving`` and ``fraction_std`` columns).
     """
+    from fibersweep.sorting.interval import bracket_draws, critical_draws, interval
+
     rows = []
     for s, g in table.groupby("setting"):
         g = g.sort_values("length")
@@ -274,7 +287,92 @@ def critical_table(table: pd.DataFrame, level: float = LEVEL) -> pd.DataFrame:
                     "rising": bool(d1 > 0),
                 }
             )
-    return pd.DataFrame(rows, columns=["setting", "critical", "se", "lo", "hi", "rising"])
+    for r in rows:
+        if {"moving", "fraction_std"} <= set(table.columns):
+            x = critical_draws(table, r["setting"], r["lo"], r["hi"], r["rising"], at=level)
+        else:
+            x = bracket_draws(r["lo"], r["hi"], r["se"], (r["setting"],))
+        r["ci_lo"], r["ci_hi"] = interval(x)
+    return pd.DataFrame(rows, columns=CRITICAL_COLUMNS)
+
+
+#: Columns of :func:`critical_table`.
+CRITICAL_COLUMNS = ["setting", "critical", "se", "lo", "hi", "rising", "ci_lo", "ci_hi"]
+
+
+def critical_text(critical: float, ci_lo: float, ci_hi: float, level: float | None = None) -> str:
+    """'22.3 µm (95 %: 20.2 to 23.9 µm)': a critical length and its interval
+    (:func:`critical_table`); the value alone where the interval is NaN."""
+    from fibersweep.sorting.interval import INTERVAL_LEVEL, level_text
+
+    if not math.isfinite(critical):
+        return "-"
+    if not (math.isfinite(ci_lo) and math.isfinite(ci_hi)):
+        return f"{critical:.1f} µm"
+    lev = level_text(INTERVAL_LEVEL if level is None else level)
+    return f"{critical:.1f} µm ({lev}: {ci_lo:.1f} to {ci_hi:.1f} µm)"
+
+
+def thin_crossings(
+    table: pd.DataFrame,
+    crit: pd.DataFrame,
+    settings: list[dict] | None = None,
+    few: int | None = None,
+) -> dict[int, list[str]]:
+    """Per setting, the lengths that decide a crossing on fewer than ``few`` moving runs.
+
+    A crossing is decided by the mean f at the two lengths of its bracket; one that
+    rests on a few runs (most trapped) can move the crossing by a bracket, and the
+    interval holds that only as far as those runs go. Each is named with its setting,
+    its length and its count; a length inside a bracket whose runs were all trapped
+    (no f, so the bracket spans it) is named too.
+
+    Parameters
+    ----------
+    table : DataFrame
+        :func:`migration_table`.
+    crit : DataFrame
+        :func:`critical_table` of ``table``.
+    settings : list of dict, optional
+        The settings, to name them (:func:`setting_name`).
+    few : int, optional
+        Fewest moving runs not named [default:
+        :data:`~fibersweep.sorting.interval.FEW_MOVING`].
+
+    Returns
+    -------
+    dict
+        Setting -> lines, each once.
+    """
+    from fibersweep.sorting.interval import FEW_MOVING
+
+    few = FEW_MOVING if few is None else few
+    out: dict[int, list[str]] = {}
+    for r in crit.itertuples():
+        s = int(r.setting)
+        name = setting_name(settings[s]) if settings else f"setting {s}"
+        g = table[table["setting"] == s]
+        lines = out.setdefault(s, [])
+        for row in g.itertuples():
+            L = float(row.length)
+            trapped = int(round(row.trapped * row.runs))
+            if L in (r.lo, r.hi) and row.moving < few:
+                line = (
+                    f"{name}: f at {L:g} µm rests on {row.moving} moving run"
+                    f"{'' if row.moving == 1 else 's'} ({trapped} of {row.runs} trapped), and "
+                    f"decides the crossing between {r.lo:g} and {r.hi:g} µm; more starts "
+                    "there (sweep.random.count) would firm it up"
+                )
+            elif r.lo < L < r.hi and row.moving == 0:
+                line = (
+                    f"{name}: no f at {L:g} µm (all {row.runs} runs trapped), inside the "
+                    f"bracket {r.lo:g} to {r.hi:g} µm, which spans it"
+                )
+            else:
+                continue
+            if line not in lines:
+                lines.append(line)
+    return {s: lines for s, lines in out.items() if lines}
 
 
 def critical_lengths(table: pd.DataFrame, level: float = LEVEL) -> dict[int, list[float]]:

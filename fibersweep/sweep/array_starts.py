@@ -4,7 +4,8 @@ The flow section checks the array and its lattice on its own
 (:mod:`fibersweep.config.array`); here: the fiber model and effects an
 array run takes, the gap against the fiber's diameter, and the start points
 (y0 a fraction of ``period_y`` in [0, 1], lengths of at least one bead, grid
-starts clear of the pillars). Each problem is a ``FieldError`` at its field.
+starts clear of the pillars: one that is not names the free ranges of y0 at its
+angle and length). Each problem is a ``FieldError`` at its field.
 """
 
 from __future__ import annotations
@@ -85,8 +86,11 @@ def check_array_config(cfg: Any) -> None:
                 if not start_clear(
                     array, pillar, n, fiber.bead_radius, float(yi), float(ti), fiber.bead_spacing
                 ):
+                    from fibersweep.sweep.draws import free_text
+
                     raise FieldError(
                         "sweep.y0",
                         f"the fiber of L = {L:g} µm at y0 = {yi:g} (fraction of period_y), "
-                        f"theta0 = {ti:g} deg touches a pillar at the start",
+                        f"theta0 = {ti:g} deg touches a pillar at the start; "
+                        f"{free_text(cfg, float(ti), float(L))}",
                     )

@@ -212,8 +212,55 @@ def test_sort_report_gives_the_tables_the_command_writes(arrays):
     assert rep.target == 20 and len(rep.answers) == 1 and rep.figures == ()
     assert rep.answers[0].answer.text in " ".join(res.output.split("\n  "))
     assert f"tables: {root / 'cli' / 'migration.csv'}" in res.output
-    for short in rep.short:  # 3 rows are too few zigzag periods: said by both
-        assert f"note: {short.name}: 3 rows are {short.periods:.1f} zigzag periods" in res.output
+    # 3 rows are too few zigzag periods: a warning of both, naming the setting to change
+    assert rep.short and any("3 rows are 0.3 zigzag periods" in w for w in rep.warnings)
+    for w in rep.warnings:
+        assert f"warning: {w}" in res.output and "[docs/" in w
+    # the intervals: every critical length has one, and the printed ± says its level
+    assert {"ci_lo", "ci_hi"} <= set(rep.critical.columns)
+    assert {"ci_lo", "ci_hi"} <= set(pd.read_csv(root / "cli" / "critical.csv").columns)
+
+
+def test_run_warns_outside_the_validated_range(arrays):
+    done, _ = arrays
+    (rows,) = [w for w in done.warnings if "zigzag periods" in w]
+    assert "fiber.array_rows" in rows and "docs/arrays.md" in rows
+
+
+def test_sort_report_warns_of_a_device_shorter_than_one_zigzag_period(arrays):
+    _, root = arrays
+    rep = api.sort_report(root / "api", rows=5, figures=False, write=False)
+    (dev,) = [w for w in rep.warnings if "a device of 5 rows" in w]
+    assert "--rows 10 or more" in dev  # 1/ε = 10 rows at ε = 0.1
+    res = _cli(["sort-report", root / "cli", "--rows", "5", "--no-figures"])
+    assert res.exit_code == 0 and f"warning: {dev}" in res.output
+
+
+def test_simulate_refuses_a_start_on_a_pillar_before_the_field_naming_the_free_starts(
+    tmp_path,
+):
+    """y0 = 0.2 at θ0 = 0 puts a 40 µm fiber on a pillar of configs/array.yaml: refused
+    at once (no field solved into the empty cache, no kernel compiled), with the ranges
+    of y0 that are free at that angle and length."""
+    cache = tmp_path / "cache"
+    with pytest.raises(fibersweep.errors.InputError, match="touches a pillar") as exc:
+        api.simulate("configs/array.yaml", f"run.cache_dir={cache}", theta0=0, y0=0.2,
+                     length=40)  # fmt: skip
+    message = str(exc.value)
+    assert "free starts at θ0 = 0°, L = 40 µm: y0 in [0.0000, " in message and " ∪ " in message
+    assert not cache.exists() or not any(cache.iterdir())
+    from fibersweep.sweep.draws import free_starts
+
+    cfg = api.load_config("configs/array.yaml")
+    spans = free_starts(cfg, 0.0, 40.0)
+    assert all(not (a <= 0.2 <= b) for a, b in spans)
+    mid = 0.5 * (spans[-1][0] + spans[-1][1])  # a free start is free by the run's own check
+    from fibersweep.sweep.draws import check_start_of
+
+    check_start_of(cfg, 0.0, mid, 40.0)
+    res = _cli(["simulate", "configs/array.yaml", "--theta0", "0", "--y0", "0.2", "--length",
+                "40", f"run.cache_dir={cache}"])  # fmt: skip
+    assert res.exit_code == 2 and "free starts at θ0 = 0°" in res.output
 
 
 def test_sort_report_refuses_the_same_input_as_the_command(arrays):
@@ -226,3 +273,16 @@ def test_sort_report_refuses_the_same_input_as_the_command(arrays):
                           write=False)  # fmt: skip
     assert rep.target == 20 and rep.separate == (10.0, 30.0) and rep.tables == ()
     assert sorted(rep.outlets["outlet"].unique()) == [0, 1, 2]
+
+
+def test_simulate_in_the_channel_names_the_free_starts_too(tmp_path):
+    """Past one pillar the same: a vertical fiber whose beads leave the channel is refused
+    before the field, with the y0 (in h_obs) where it fits."""
+    cache = tmp_path / "cache"
+    with pytest.raises(fibersweep.errors.InputError, match="outside the channel") as exc:
+        api.simulate("configs/quick.yaml", f"run.cache_dir={cache}", theta0=90, y0=5.2,
+                     length=1)  # fmt: skip
+    assert "free starts at θ0 = 90°, L/l_obs = 1: y0 in [-4.4133, 5.0800] (y0/h_obs)" in str(
+        exc.value
+    )
+    assert not cache.exists() or not any(cache.iterdir())

@@ -44,6 +44,8 @@ def flexible(tmp_path_factory, flow_cache_dir):
                 "sweep.length=[20, 40]", "sweep.random={count: 2, seed: 0}",
                 f"run.cache_dir={flow_cache_dir}", f"run.output={out}"])  # fmt: skip
     assert res.exit_code == 0, res.output
+    # touching beads at 10 kPa are not converged: the run says so, once
+    assert res.output.count("touching beads are not converged") == 1
     return out
 
 
@@ -133,6 +135,10 @@ def test_sort_report_is_a_designer_page(rigid):
     out = res.output
     assert "trapped" in out and "critical length against shift" in out
     assert "target critical length 20 µm" in out
+    # each critical length with its interval and its level, the statistical error apart
+    assert re.search(r"µm \(95 %: [-\d.]+ to [-\d.]+ µm; statistical alone ± [\d.]+\)", out)
+    # 3 rows at ε = 0.1 and 0.2: warned once, before the tables, naming what to change
+    assert out.count("zigzag periods") == 1 and "fiber.array_rows" in out
     mig = pd.read_csv(rigid / "migration.csv")
     assert {"trapped", "moving", "fraction_se"} <= set(mig.columns)
     outlets = pd.read_csv(rigid / "outlets.csv")
@@ -162,6 +168,9 @@ def test_sort_report_of_flexible_fibers(flexible):
     res = _run(["sort-report", str(flexible)])
     assert res.exit_code == 0, res.output
     assert "critical length" in res.output and "trapped" in res.output
+    # 10 kPa with touching beads: outside the validated range, said with what to set
+    assert "warning: bead-spring fibers of E = 10 kPa with touching beads" in res.output
+    assert "set fiber.bead_spacing to 0.5 (b = a)" in res.output
     assert "note: no chronophotograph" not in res.output  # the shapes were stored
     assert list((flexible / "figures").glob("chrono-*.png"))
 
@@ -274,3 +283,16 @@ def test_discrepancy_refuses_an_array_config(tmp_path):
     res = _run(["discrepancy", str(measured), "configs/array.yaml", "-o", str(tmp_path / "r")])
     assert res.exit_code == 2, res.output
     assert "flow.array" in res.output and "sort-report" in res.output, res.output
+
+
+def test_a_grid_start_on_a_pillar_is_refused_naming_the_free_starts(tmp_path):
+    """A grid start that touches a pillar exits 2 before anything runs, with the ranges of
+    y0 free at its angle and length (the run's own check)."""
+    out_dir = f"run.output={tmp_path / 'o'}"
+    res = _run(["run", "configs/array.yaml", "sweep.random=null", "sweep.y0=[0.2]",
+                "sweep.theta0=[0]", "sweep.length=[40]", out_dir])  # fmt: skip
+    assert res.exit_code == 2, res.output
+    out = " ".join(res.output.split())
+    assert "y0 = 0.2 (fraction of period_y), theta0 = 0 deg touches a pillar" in out
+    assert "free starts at θ0 = 0°, L = 40 µm: y0 in [0.0000, 0.1142] ∪ [0.3452, 1.0000]" in out
+    assert not (tmp_path / "o").exists()
