@@ -65,18 +65,83 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
+#: Contact settings left out of a dump at these values (see ``ContactSettings``), so the
+#: run ids of configs that do not set them stay as before they existed.
+_CONTACT_DEFAULTS_NOT_WRITTEN: dict[str, Any] = {"law": "chi", "gap_um": 0.26, "curvature": "plane"}
+
+
 class ContactSettings(_Strict):
     """Fiber-pillar repulsion (docs/model.md)."""
 
     pillar: Literal["rough", "smooth"] = Field("rough", description="pillar surface model")
     obstacle_bead_radius: float = Field(0.6, gt=0, description="a_obs of the rough pillar [µm]")
-    chi: float = Field(1.1, gt=1.0, description="cutoff R_ref = chi (a + a_obs) (smooth: chi a)")
+    chi: float = Field(
+        1.1,
+        gt=1.0,
+        description="law chi: cutoff R_ref = chi (a + a_obs) (smooth: chi a); the source's law, "
+        "whose range grows with the bead",
+    )
+    law: Literal["chi", "gap"] = Field(
+        "chi",
+        description="range of the repulsion: chi (the source's, R_ref = chi r_eq, a range "
+        "(chi - 1) r_eq that grows with the bead radius) or gap (R_ref = r_eq + gap_um: the "
+        "surfaces' roughness, the same gap for every bead size; docs/validation/near-contact.md). "
+        "r_eq is a + a_obs (rough), a (smooth), 2a (a fiber's self-exclusion)",
+    )
+    gap_um: float = Field(
+        0.26,
+        gt=0.0,
+        le=5.0,
+        description="law gap: the surface gap delta_r [µm] at which the repulsion starts, for "
+        "every bead size (0.26: the chi law's range for a = 2 µm, a_obs = 0.6 µm)",
+    )
     f_ref: float | None = Field(
         None, gt=0, description="force scale [pN]; None means 6 pi mu a U_center"
     )
     corner_radius: float = Field(
-        2.0, ge=0, description="rounding of the smooth pillar's corners (Bezier) [µm]"
+        2.0,
+        ge=0,
+        description="corner radius r_c of the pillar [µm]: the smooth pillar's rounded "
+        "(Bezier) outline; with curvature: local also the near-wall hydrodynamics' radius at "
+        "every polygon corner (rough pillar: its contact beads stay on the sharp outline)",
     )
+    curvature: Literal["plane", "local"] = Field(
+        "plane",
+        description="near_wall effect: the bead sees the pillar's surface as its tangent plane "
+        "(plane) or with its local curvature (local: the normal lubrication resistance times "
+        "2 q^1.5/(1 + q), q = R/(a + R), R a circle's radius, corner_radius at a polygon's "
+        "corners, a plane on its faces; docs/validation/near-contact.md)",
+    )
+
+    @model_validator(mode="after")
+    def _gap_needs_the_gap_law(self) -> ContactSettings:
+        """``gap_um`` means something only with ``law: gap``: refuse it set beside ``chi``."""
+        if self.law == "chi" and "gap_um" in self.model_fields_set:
+            raise ValueError(
+                f"fiber.contact.gap_um: {self.gap_um!r} is read only with fiber.contact.law: gap "
+                "(law chi sets the range by fiber.contact.chi)"
+            )
+        return self
+
+    def cutoff(self, r_eq: float) -> float:
+        """R_ref [µm] of a pair whose force is F_ref at ``r_eq`` [µm]: chi r_eq or r_eq + gap."""
+        if self.law == "gap":
+            return float(r_eq) + float(self.gap_um)
+        return float(self.chi) * float(r_eq)
+
+    @model_serializer(mode="wrap")
+    def _law_when_set(self, handler: Any) -> dict[str, Any]:
+        """``law``, ``gap_um`` and ``curvature`` are written only away from their defaults
+        (chi, an unused gap, plane), so the dump and run ids of every config that does not set
+        them stay as before."""
+        data = handler(self)
+        if isinstance(data, dict):
+            if data.get("law") == "chi":
+                data.pop("law", None)
+                data.pop("gap_um", None)
+            if data.get("curvature") == "plane":
+                data.pop("curvature", None)
+        return data
 
 
 class StepSettings(_Strict):

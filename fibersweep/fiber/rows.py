@@ -123,6 +123,8 @@ def array_kernel(
         pillar = array_pillar(array, settings, mu, u_center)
     arrays = pillar.arrays()
     frame = F.lattice(array, PAD, float(field.dx), n_beads)
+    ux, uy = field.extended(PAD)
+    flow = FlowArrays(ux, uy, float(field.dx))
     ctx = DynamicsContext(
         bead_radius=settings.bead_radius,
         dx=float(field.dx),
@@ -131,6 +133,9 @@ def array_kernel(
         n_beads=n_beads,
         pillar=arrays,
         frame=frame,
+        flow=flow,
+        curvature=settings.contact.curvature == "local",
+        corner_radius=float(settings.contact.corner_radius),
     )
     params = make_params(
         settings,
@@ -143,8 +148,6 @@ def array_kernel(
         mode=mode,
         t_stop=t_stop,
     )
-    ux, uy = field.extended(PAD)
-    flow = FlowArrays(ux, uy, float(field.dx))
     return assemble(settings, n_beads, flow, arrays, params, effects.kernel(ctx), frame)
 
 

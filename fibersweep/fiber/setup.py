@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -62,6 +63,15 @@ class Setup:
 def _finite(name: str, value: float) -> None:
     if not math.isfinite(value):
         raise InputError(f"{name}: must be finite, got {value!r}")
+
+
+class _FieldArrays(NamedTuple):
+    """The channel's field as an effect's kernel may read it: ``ux, uy`` (nx, ny) [µm/s],
+    node spacing ``dx`` [µm] (:attr:`DynamicsContext.flow`)."""
+
+    ux: np.ndarray
+    uy: np.ndarray
+    dx: float
 
 
 @dataclass(frozen=True)
@@ -179,6 +189,9 @@ def prepare(
         viscosity=field.fluid.viscosity,
         n_beads=place.n,
         pillar=pillar.arrays(),
+        flow=_FieldArrays(field.ux, field.uy, float(field.dx)),
+        curvature=settings.contact.curvature == "local",
+        corner_radius=float(settings.contact.corner_radius),
     )
     kernel_effects = effects.kernel(ctx)
     return Setup(

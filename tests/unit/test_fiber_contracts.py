@@ -103,7 +103,7 @@ def test_stage_implementations_must_match_the_stage_signature():
 
     with pytest.raises(ValueError, match="unknown kernel stage"):
         hooks.implements("nonsense", Rec)
-    with pytest.raises(TypeError, match="takes \\(e, u\\)"):
+    with pytest.raises(TypeError, match="takes \\(e, w, u\\)"):
 
         @hooks.implements("background", Rec)
         def wrong(e, velocities):  # pragma: no cover - never called
@@ -122,7 +122,7 @@ def test_kernel_records_live_in_the_effects_package():
     with pytest.raises(TypeError, match="fibersweep.fiber.effects"):
 
         @hooks.implements("background", Outside)
-        def background(e, u):  # pragma: no cover - never called
+        def background(e, w, u):  # pragma: no cover - never called
             return None
 
     for cls in EFFECTS.values():

@@ -3,6 +3,10 @@
 Both use the soft-core pair law of :mod:`fibersweep.fiber.contact.pairlaw`
 (|F| = F_ref at r_eq, zero from the cutoff R_ref = χ r_eq on):
 
+The cutoff is ``fiber.contact.law``'s: chi (the source's, R_ref = χ r_eq) or gap
+(R_ref = r_eq + δ_r, a surface gap the same for every bead size;
+:meth:`~fibersweep.config.fiber.ContactSettings.cutoff`).
+
 - rough (docs/model.md): pillar beads of radius a_obs centred on the outline,
   2 a_obs apart (a bead on each vertex of a polygon); a fiber bead at centre
   distance r < R_ref from a pillar bead is pushed away from it, r_eq = a + a_obs;
@@ -351,10 +355,10 @@ def make_pillar(
         a_obs = contact.obstacle_bead_radius
         r_eq = bead_radius + a_obs
         beads = rough_circle_beads(shape, a_obs) if circ[2] > 0 else rough_beads(v, a_obs)
-        return Pillar(ROUGH, v, beads, no_curves, contact.chi * r_eq, r_eq, f_ref, circ)
+        return Pillar(ROUGH, v, beads, no_curves, contact.cutoff(r_eq), r_eq, f_ref, circ)
     r_eq = bead_radius
     curves = no_curves if circ[2] > 0 else smooth_curves(v, contact.corner_radius)
-    return Pillar(SMOOTH, v, np.zeros((0, 2)), curves, contact.chi * r_eq, r_eq, f_ref, circ)
+    return Pillar(SMOOTH, v, np.zeros((0, 2)), curves, contact.cutoff(r_eq), r_eq, f_ref, circ)
 
 
 def contact_forces(pillar: Pillar, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -40,6 +40,16 @@ class DynamicsContext:
     frame : NamedTuple or None
         The run's frame (:mod:`fibersweep.fiber.frame`): a ``Lattice`` in an array;
         None or ``Channel`` for the single pillar.
+    flow : NamedTuple or None
+        The background field as the kernels read it (``ux, uy`` (nx, ny) [µm/s] on
+        nodes ``dx`` [µm] apart, :class:`~fibersweep.fiber.kernel.bundles.FlowArrays`;
+        in an array the padded cell); None where none is known.
+    curvature : bool
+        ``fiber.contact.curvature`` is ``local``: the near-wall normal resistance
+        follows the surface's curvature (a circle's radius, ``corner_radius`` at a
+        polygon's corners).
+    corner_radius : float
+        The pillar's corner radius r_c [µm] (``fiber.contact.corner_radius``).
     """
 
     bead_radius: float
@@ -49,6 +59,9 @@ class DynamicsContext:
     n_beads: int = 1
     pillar: Any = None
     frame: Any = None
+    flow: Any = None
+    curvature: bool = False
+    corner_radius: float = 0.0
 
 
 @dataclass(frozen=True)

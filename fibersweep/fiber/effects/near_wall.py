@@ -58,7 +58,9 @@ class NearWallKernel(NamedTuple):
     origin); scratch: ``roots`` (3,), ``b`` (NROWS, n) where each bead's terms
     were computed, its extra resistance, push map and force
     (:func:`~fibersweep.fiber.hydro.nearwall.wall_terms`), ``nm`` (3, 3) the changed
-    body mobility, ``m3`` (3, 3, 3) the rigid form's scratch.
+    body mobility, ``m3`` (3, 3, 3) the rigid form's scratch; ``curved`` the normal
+    resistance scaled by the local curvature (``fiber.contact.curvature: local``), ``rc``
+    the polygon's corner radius then [µm].
     """
 
     z0: float
@@ -80,6 +82,8 @@ class NearWallKernel(NamedTuple):
     b: np.ndarray
     nm: np.ndarray
     m3: np.ndarray
+    curved: bool = False
+    rc: float = 0.0
 
 
 @register
@@ -125,6 +129,8 @@ class NearWall(Effect):
             new_scratch(n),
             np.zeros((3, 3)),
             np.zeros((3, 3, 3)),
+            bool(ctx.curvature),
+            float(ctx.corner_radius),
         )
 
 
@@ -132,7 +138,7 @@ class NearWall(Effect):
 def _terms(e, w, tol):
     return wall_terms(
         w.x, w.y, w.u, w.dist, e.a, e.z0, e.ell, e.free, e.kind, e.verts, e.circle, e.curves,
-        e.roots, e.sides, e.lattice, e.px, e.py, e.sy, e.bounds, tol, e.b,
+        e.roots, e.sides, e.lattice, e.px, e.py, e.sy, e.bounds, tol, e.b, e.curved, e.rc,
     )  # fmt: skip
 
 

@@ -54,7 +54,7 @@ class OffMidplane(Effect):
 
 
 @implements("background", OffMidplaneKernel)
-def background(e, u):
+def background(e, w, u):
     """Both models: scale the interpolated midplane velocities to the fiber's layer."""
     for i in range(u.shape[0]):
         u[i, 0] *= e.scale

@@ -63,6 +63,9 @@ __all__ = [
     "NROWS",
     "REACH",
     "convex_point",
+    "corner_radius_at",
+    "curvature_factor",
+    "squeeze_factor",
     "new_scratch",
     "polygon_sides",
     "sides_of",
@@ -246,19 +249,104 @@ def _circle_point(cx, cy, r, px, py):
     return 1.0, 0.0, -r  # at the centre: any direction
 
 
+def squeeze_factor(a: float, r1: float, r2: float) -> float:
+    """Squeeze-film force of a gap h + x²/(2R₁) + z²/(2R₂) over the sphere–plane one.
+
+    The leading lubrication force on a surface approaching another at speed U across
+    a gap with those principal radii (the Reynolds equation's exact solution
+    p = 3μU/((α + β) h²), α = 1/2R₁, β = 1/2R₂) is 12πμU (R₁R₂)^{3/2}/((R₁ + R₂) h);
+    divided by the sphere–plane 6πμU a²/h (R₁ = R₂ = a).
+
+    Parameters
+    ----------
+    a, r1, r2 : float
+        Bead radius and the gap's two principal radii [µm].
+
+    Returns
+    -------
+    float
+        2 (R₁R₂)^{3/2} / ((R₁ + R₂) a²).
+    """
+    return 2.0 * (r1 * r2) ** 1.5 / ((r1 + r2) * a * a)
+
+
 @nb.njit(cache=True, inline="always")
-def _wall(nx, ny, d, a, z0, ell, free):
-    """One wall's ΔR and push map P (E = P u) on a bead: (Rxx, Rxy, Ryy, Pxx, Pxy, Pyy)."""
+def curvature_factor(a, radius):
+    """Normal lubrication resistance beside a convex cylinder of ``radius`` over the plane's.
+
+    A sphere of radius a at gap h from a surface whose radius of curvature is R in
+    the plane of motion and infinite along the pillar's axis (a full-depth pillar)
+    sees the gap h + x²/(2R₁) + z²/(2R₂), R₁ = aR/(a + R), R₂ = a. The Reynolds
+    equation of the squeeze film then has the exact solution p = 3μU/((α+β) h(x, z)²)
+    (α = 1/2R₁, β = 1/2R₂), whose force is 12πμU (R₁R₂)^{3/2}/((R₁ + R₂) h)
+    (:func:`squeeze_factor`): with q = R/(a + R) the plane's 6πμU a²/h times
+    2 q^{3/2}/(1 + q). A sphere beside a sphere of radius R (R₂ = R₁ too) gives q²,
+    Jeffrey & Onishi's leading X₁₁ᴬ term. It scales λ⊥ − 1 whole: the lubrication
+    term exactly, the O(ln) and O(1) terms (the plane's) approximately.
+
+    Parameters
+    ----------
+    a, radius : float
+        Bead radius and the surface's radius of curvature [µm] (inf: a plane, factor 1).
+
+    Returns
+    -------
+    float
+        2 q^{3/2}/(1 + q), q = R/(a + R), in (0, 1].
+    """
+    if not radius < 1e300:
+        return 1.0
+    q = radius / (a + radius)
+    return 2.0 * q * math.sqrt(q) / (1.0 + q)
+
+
+@nb.njit(cache=True, inline="always")
+def _wall(nx, ny, d, a, z0, ell, free, fn=1.0):
+    """One wall's ΔR and push map P (E = P u) on a bead: (Rxx, Rxy, Ryy, Pxx, Pxy, Pyy).
+
+    ``fn`` scales the normal resistance λ⊥ − 1 (:func:`curvature_factor`; 1: the plane).
+    """
     delta = max(d - a, 0.0)
     w = z0 * math.exp(-((delta / ell) ** 2))
     gap = max((d - a) / a, MIN_GAP)
     lam_t, lam_n, c_t, c_n = bead_coefficients(gap, free)
     dt = w * (lam_t - 1.0)
+    if fn != 1.0:
+        lam_n = 1.0 + fn * (lam_n - 1.0)
     dd = w * (lam_n - 1.0) - dt
     pt = w * (c_t - 1.0)
     pd = w * (c_n - 1.0) - pt
     return (dt + dd * nx * nx, dd * nx * ny, dt + dd * ny * ny,
             pt + pd * nx * nx, pd * nx * ny, pt + pd * ny * ny)  # fmt: skip
+
+
+@nb.njit(cache=True)
+def corner_radius_at(kind, verts, curves, px, py, rc):
+    """Radius of curvature [µm] of a polygon pillar's surface nearest to p (outside it).
+
+    ``rc`` is the corners' radius; inf on a face. The rough pillar: p is in vertex
+    j's wedge when it projects beyond side j − 1's end and before side j's start;
+    the smooth pillar: when it lies between the normals at corner j's tangent
+    points (its curve's ends).
+    """
+    nv = verts.shape[0]
+    smooth = kind == SMOOTH and curves.shape[0] > 0
+    for j in range(nv):
+        if smooth:
+            c = curves[2 * j]
+            t0x, t0y, t1x, t1y = c[0, 0], c[0, 1], c[2, 0], c[2, 1]
+            ex0, ey0 = c[1, 0] - c[0, 0], c[1, 1] - c[0, 1]
+            ex1, ey1 = c[2, 0] - c[1, 0], c[2, 1] - c[1, 1]
+        else:
+            i = j - 1 if j > 0 else nv - 1
+            k = (j + 1) % nv
+            t0x, t0y = verts[j, 0], verts[j, 1]
+            t1x, t1y = t0x, t0y
+            ex0, ey0 = verts[j, 0] - verts[i, 0], verts[j, 1] - verts[i, 1]
+            ex1, ey1 = verts[k, 0] - verts[j, 0], verts[k, 1] - verts[j, 1]
+        if (px - t0x) * ex0 + (py - t0y) * ey0 > 0.0 and (px - t1x) * ex1 + (py - t1y) * ey1 < 0.0:
+            return rc
+    return math.inf
 
 
 def sides_of(pillar) -> np.ndarray:
@@ -279,7 +367,7 @@ def new_scratch(n: int) -> np.ndarray:
 @nb.njit(cache=True, inline="always")
 def wall_terms(
     x, y, u, dist, a, z0, ell, free, kind, verts, circle, curves, roots, sides,
-    lattice, px, py, sy, bounds, tol, b,
+    lattice, px, py, sy, bounds, tol, b, curved=False, rc=0.0,
 ):  # fmt: skip
     """Extra resistance ΔR_i and force E_i of every bead near a pillar (lab frame).
 
@@ -321,6 +409,12 @@ def wall_terms(
     b : ndarray, shape (NROWS, n)
         Per-bead scratch (:data:`NROWS`; :func:`new_scratch`): positions, ΔR_i and
         P_i kept between calls and updated; E_i written.
+    curved : bool
+        Scale the normal resistance by the local curvature (:func:`curvature_factor`):
+        a circle's radius, ``rc`` at a polygon's corners, a plane on its faces
+        (False: the plane everywhere, as before).
+    rc : float
+        The polygon's corner radius [µm] when ``curved``.
 
     Returns
     -------
@@ -355,7 +449,15 @@ def wall_terms(
                     else:
                         nx, ny, d = surface_point(kind, verts, circle, curves, roots, bx, by)
                     if d - a < reach:
-                        t = _wall(nx, ny, d, a, z0, ell, free)
+                        fn = 1.0
+                        if curved:
+                            if is_circle:
+                                fn = curvature_factor(a, cr)
+                            else:
+                                fn = curvature_factor(
+                                    a, corner_radius_at(kind, verts, curves, bx, by, rc)
+                                )
+                        t = _wall(nx, ny, d, a, z0, ell, free, fn)
                         rxx += t[0]
                         rxy += t[1]
                         ryy += t[2]
@@ -384,7 +486,15 @@ def wall_terms(
                                     kind, verts, circle, curves, roots, qx, qy
                                 )
                             if d - a < reach:
-                                t = _wall(nx, ny, d, a, z0, ell, free)
+                                fn = 1.0
+                                if curved:
+                                    if is_circle:
+                                        fn = curvature_factor(a, cr)
+                                    else:
+                                        fn = curvature_factor(
+                                            a, corner_radius_at(kind, verts, curves, qx, qy, rc)
+                                        )
+                                t = _wall(nx, ny, d, a, z0, ell, free, fn)
                                 rxx += t[0]
                                 rxy += t[1]
                                 ryy += t[2]
@@ -574,11 +684,14 @@ def wall_terms_at(
     depth: float,
     strength: float = 1.0,
     free_rotation: bool = False,
+    curved: bool = False,
+    corner_radius: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """ΔR_i (n, 2, 2) [pN s/µm] and E_i (n, 2) [pN] of beads beside one pillar (no images).
 
     ``positions`` (n, 2) [µm], ``velocities`` (n, 2) background velocities [µm/s];
-    ``depth`` the channel depth H [µm] (screening ℓ = H/2; ``math.inf``: none).
+    ``depth`` the channel depth H [µm] (screening ℓ = H/2; ``math.inf``: none);
+    ``curved``, ``corner_radius`` [µm]: the local curvature of :func:`wall_terms`.
     """
     p = np.ascontiguousarray(positions, dtype=np.float64)
     u = np.ascontiguousarray(velocities, dtype=np.float64)
@@ -592,7 +705,8 @@ def wall_terms_at(
         np.ascontiguousarray(p[:, 0]), np.ascontiguousarray(p[:, 1]), u, np.zeros(n), a,
         float(strength) * 6.0 * math.pi * float(viscosity) * a, 0.5 * float(depth),
         bool(free_rotation), arr.kind, arr.verts, arr.circle, arr.curves, np.zeros(3),
-        sides_of(arr), False, 1.0, 1.0, 0.0, np.zeros(4), 0.0, b,
+        sides_of(arr), False, 1.0, 1.0, 0.0, np.zeros(4), 0.0, b, bool(curved),
+        float(corner_radius),
     )  # fmt: skip
     r = np.stack([np.stack([b[RXX], b[RXY]], -1), np.stack([b[RXY], b[RYY]], -1)], -2)
     return r, np.column_stack([b[EX], b[EY]])

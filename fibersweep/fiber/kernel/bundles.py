@@ -287,7 +287,7 @@ def make_params(
         w_reuse=int(st.step.jacobian_reuse),
         pi_control=st.step.controller == "pi",
         excl_gap=exclusion_gap(frac) if excl else 0,
-        excl_cut=st.contact.chi * 2.0 * a,
+        excl_cut=st.contact.cutoff(2.0 * a),
         excl_eq=2.0 * a,
         excl_fref=contact_force_scale(st.contact, mu, a, u_center) * exclusion_force_scale(frac),
         half_b=0.5 * spacing_um(a, frac),

@@ -5,7 +5,7 @@ An effect that acts inside the Numba integrators hands them a small record
 *kernel record*) and implements one or
 more of the stages below for that record type with :func:`implements`. The
 integrators receive the run's records as a tuple (``Kernel.effects``) and, at
-each stage, call its ``each_`` form (``each_background(effects, u)``, ...): at
+each stage, call its ``each_`` form (``each_background(effects, w, u)``, ...): at
 compile time it becomes one call per record, in the tuple's order, each
 resolving (through ``numba.extending.overload``) to the record's implementation
 or, when it has none, to nothing. So the integrators are
@@ -18,9 +18,10 @@ Stages (arguments are the run's bundles, :mod:`fibersweep.fiber.kernel.bundles`:
 background velocities ``w.u``, forces, distances ``w.dist``, scratch), ``bw``
 BeadWork (bead-spring buffers)):
 
-``background(e, u)``
-    Both models, after interpolation: change the beads' background velocities
-    ``u`` (n, 2) [µm/s] in place.
+``background(e, w, u)``
+    Both models, after interpolation and contact: change the beads' background
+    velocities ``u`` (n, 2) [µm/s] in place (``w.x, w.y`` hold the bead positions,
+    e.g. for a second field read where ``u`` was read).
 ``rigid_mobility(e, body, w, c, sn, vbx, vby, om, nm_eff)`` -> ``(vbx, vby, om, nm_eff)``
     Rigid model: change the body velocity (body frame) by a change of mobility
     (c, sn: cos and sin of the fiber angle, from the lab frame to the body's);
@@ -143,7 +144,7 @@ def _impl(stage: str, e, noop: Callable) -> Callable:
 # Stubs: callable only inside Numba kernels, where they resolve per record type.
 
 
-def background(e, u):
+def background(e, w, u):
     """Both models: change the background velocities ``u`` (n, 2) in place."""
     raise NotImplementedError("kernel stage: call from a Numba kernel")
 
@@ -185,7 +186,7 @@ def _keep_pose(e, body, dt, c, sn, xc, yc, th):
     return xc, yc, th
 
 
-def _keep_background(e, u):
+def _keep_background(e, w, u):
     return None
 
 
@@ -198,7 +199,7 @@ def _keep_forces(e, body, w, bw, any_c):
 
 
 @overload(background, inline="always")
-def _ov_background(e, u):
+def _ov_background(e, w, u):
     return _impl("background", e, _keep_background)
 
 
@@ -262,7 +263,7 @@ def _chain(stage: str, n: int) -> Callable:
     return _CHAINS[key]
 
 
-def each_background(effects, u):
+def each_background(effects, w, u):
     """:func:`background` of every record of ``effects``, in order."""
     raise NotImplementedError("kernel stage: call from a Numba kernel")
 
@@ -293,7 +294,7 @@ def each_bead_mobility(effects, w, bw):
 
 
 @overload(each_background, inline="always")
-def _ov_each_background(effects, u):
+def _ov_each_background(effects, w, u):
     return _chain("background", len(effects))
 
 

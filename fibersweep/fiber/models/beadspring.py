@@ -72,7 +72,7 @@ def bead_velocity(frame, flow, pillar, body, p, w, bw, effects):
     for i in range(n):
         fx[i] += cfx[i]
         fy[i] += cfy[i]
-    H.each_background(effects, u)
+    H.each_background(effects, w, u)
     for i in range(n):
         f[2 * i] = u[i, 0]
         f[2 * i + 1] = u[i, 1]

@@ -97,7 +97,7 @@ def rigid_velocity(frame, flow, pillar, body, w, effects, xc, yc, th):
     F.velocity(frame, flow, x, y, u)
     n_c, cx, cy = F.contact(frame, pillar, x, y, fx, fy, st, dist)
     any_c = n_c > 0
-    H.each_background(effects, u)
+    H.each_background(effects, w, u)
     min_d = 1e300
     stiff = 0.0
     for i in range(n):

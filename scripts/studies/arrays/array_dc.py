@@ -9,11 +9,16 @@ D_c = 2 β of a point particle that follows the streamlines until it touches
 (β the first-streamline width of the simulated gap profile).
 
     python3 scripts/studies/arrays/array_dc.py [--shifts 0.1 0.2] [--starts 8] [--rows 20]
-        [--effect near_wall=1] [--radii 5 6 7 8 9 10] [--steric]
+        [--effect near_wall=1] [--radii 5 6 7 8 9 10] [--steric] [--gap 0.3] [--depth 80]
+        [--curvature local]
 
 ``--effect NAME=VALUE`` (repeatable) adds a fiber effect to every run, e.g. the
 near-wall hydrodynamics of the pillar (``near_wall=1``: the sphere-wall theory).
-``--radii`` restricts the sphere radii a [µm] (default 1 to 13 µm in steps of 1).
+``--gap DELTA`` uses the gap contact law (``fiber.contact.law: gap``, range DELTA µm of
+surface gap for every sphere size) instead of the source's chi law; ``--depth H`` sets
+the array's depth [µm] (default 40 = G); ``--curvature local`` makes the near-wall
+resistance follow the pillar's curvature (``fiber.contact.curvature``). ``--radii``
+restricts the sphere radii a [µm] (default 1 to 13 µm in steps of 1).
 ``--steric`` also solves each cell once more for its 3D velocity and prints the
 steric bound 2β of the simulated gap profile (the first streamline's width,
 :func:`fibersweep.flow.cell.first_streamline_width`) and of a parabolic profile,
@@ -44,21 +49,34 @@ def main() -> None:
     ap.add_argument("--radii", type=float, nargs="+", default=[float(r) for r in range(1, 14)])
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--steric", action="store_true", help="print the steric bound 2β too")
+    ap.add_argument("--gap", type=float, default=None, help="gap contact law, range [µm]")
+    ap.add_argument("--depth", type=float, default=40.0, help="array depth H [µm]")
+    ap.add_argument(
+        "--curvature",
+        choices=("plane", "local"),
+        default="plane",
+        help="near_wall: the pillar as its tangent plane or with its curvature",
+    )
     args = ap.parse_args()
     effects = {}
     for item in args.effect:
         name, _, value = item.partition("=")
         effects[name] = float(value)
     radii = sorted(args.radii)
-    print(f"{args.shape} pillars 40 µm, periods 80 µm (G = 40 µm), depth 40 µm, dx = 2 µm; "
-          f"effects {effects or 'none'}")  # fmt: skip
+    contact = {} if args.gap is None else {"law": "gap", "gap_um": args.gap}
+    if args.curvature != "plane":
+        contact["curvature"] = args.curvature
+    print(f"{args.shape} pillars 40 µm, periods 80 µm (G = 40 µm), depth {args.depth:g} µm, "
+          f"dx = 2 µm; effects {effects or 'none'}; contact {contact or 'chi 1.1'}")  # fmt: skip
     for eps in args.shifts:
         fr = []
         with tempfile.TemporaryDirectory() as tmp:
             for a in radii:
                 cfg = parse_config({
-                    "flow": {"dx": 2.0, "array": {"pillar_shape": args.shape, "shift": eps}},
-                    "fiber": {"bead_radius": a, "array_rows": args.rows, "effects": effects},
+                    "flow": {"dx": 2.0, "array": {"pillar_shape": args.shape, "shift": eps,
+                                                  "depth": args.depth}},
+                    "fiber": {"bead_radius": a, "array_rows": args.rows, "effects": effects,
+                              "contact": contact},
                     "sweep": {"length": [2 * a], "theta0": [-10.0, 10.0], "y0": [0.0, 1.0],
                               "random": {"count": args.starts, "seed": 0}},
                     "run": {"output": f"{tmp}/a{a:g}", "cache_dir": ".fibersweep-cache",
