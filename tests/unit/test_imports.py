@@ -52,6 +52,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("fibersweep.config",),
     ("fibersweep.flow",),
     ("fibersweep.fiber",),
+    ("fibersweep.resolved",),
     ("fibersweep.sorting",),
     ("fibersweep.plots",),
     ("fibersweep.sweep",),
