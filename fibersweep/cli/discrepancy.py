@@ -368,7 +368,7 @@ def power_cmd(
                     "read_at": e.read_at,
                     "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
                     "dispersion_limit": e.dispersion_limit,
-                    "realistic": real, "fibers_for_realistic": pw.fibers_needed(e.name, real),
+                    "realistic": real, "fibers_for_realistic": pw.fibers_to_detect(e.name, real),
                     **limit_in_unit(by_name[e.name], e),
                 }
             )  # fmt: skip

@@ -3,10 +3,11 @@
 Modules, by concept:
 
 - candidates: :mod:`.candidates` (what may be named: the library effects with
-  their search ranges);
+  their search ranges), :mod:`.declared` (candidates from any setting);
 - observables: :mod:`.observables` (what an observable is, and the registry
-  that every other module iterates), :mod:`.tracks` (the track observables of
-  a measured or simulated track);
+  that every other module iterates; the track observables' values come from
+  :mod:`fibersweep.analysis.observables`), :mod:`.components` (observables as
+  components on their scoring scale);
 - measured data: :mod:`.schema` (the fibers table: schema, validation,
   writer), :mod:`.measured` (loading it with its trajectories);
 - simulation of copies: :mod:`.simulate` (batches of runs on the sweep's
@@ -24,13 +25,21 @@ Modules, by concept:
   effect: halves and pooled refit), :mod:`.pairs` (two effects: joint fit and
   forward selection);
 - decision: :mod:`.decide` (out of sample: named, ambiguous, unexplained, none);
-- follow-up: :mod:`.power` (detection limits, look-alikes), :mod:`.followup`
-  (what to measure next, and when both run), :mod:`.settle` (fibers measured
-  next test the verdict's two hypotheses), :mod:`.advice` (what to try);
-- the workflow: :mod:`.workflow` (:func:`~.workflow.run_discrepancy`, every
-  stage within a budget);
-- report: :mod:`.report` (JSON summary, updated configs, all files),
-  :mod:`.report_text` (Markdown), :mod:`.report_figures` (figures).
+- what it cannot see: :mod:`.detection` (detection from expected z-vectors:
+  limits, fibers to detect), :mod:`.power` (the power analysis by simulation,
+  look-alikes);
+- follow-up: :mod:`.followup` (the question a verdict leaves, and the
+  follow-ups that run), :mod:`.next_measure` (what to measure next),
+  :mod:`.discriminant` (the follow-up test of A against B: statistic, null,
+  fibers to settle), :mod:`.settle` (follow-up fibers put to that test),
+  :mod:`.advice` (what to try);
+- the workflow: :mod:`.stages` (the stages over a frozen state),
+  :mod:`.workflow` (:func:`~.workflow.run_discrepancy`, every stage within a
+  budget), :mod:`.result` (what a run found: everything the report receives);
+- report (formats and writes, computes nothing): :mod:`.report` (JSON summary,
+  updated configs, all files), :mod:`.report_text` (Markdown of the analysis),
+  :mod:`.report_followup` (Markdown of the follow-ups), :mod:`.report_format`
+  (numbers in the Markdown), :mod:`.report_figures` (figures).
 
 No module imports another that imports it, directly or not
 (``tests/unit/test_discrepancy_imports.py``).

@@ -10,7 +10,7 @@ out of sample is there. Two numbers answer *how many more fibers* and one table
 *which starts* (:func:`next_measurement`):
 
 - at the starts where its prediction and the model's part most (what to measure
-  next, :mod:`.followup`), the fibers that would confirm or rule it out;
+  next, :mod:`.next_measure`), the fibers that would confirm or rule it out;
 - at starts like the measured ones, from the power curve (:mod:`.power`), the
   fibers that would detect a gap of its size, with the 95 % interval over the
   simulated starts, and the fibers that would make its held-out improvement

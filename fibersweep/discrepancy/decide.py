@@ -31,7 +31,7 @@ best single is partial the gap may hold two effects it looks like. No set that
 explains leaves the verdict "unexplained".
 
 Adequacy ("no significant gap left") is checked with the effect at the value
-fitted on all fibers (:func:`workflow.run_discrepancy` refits the significant
+fitted on all fibers (:func:`.stages.refit` refits the significant
 candidates), so that a poor fit on one half does not hide a right effect; the
 out-of-sample improvement above is what guards against over-fitting.
 

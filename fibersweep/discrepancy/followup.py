@@ -1,48 +1,17 @@
-"""After the verdict: the power analysis and what to measure next, when they apply.
+"""After the verdict: the question it leaves, and the follow-ups that run when they apply.
 
 - verdict "no significant gap" or "unexplained": :func:`.power.analyse_power` on
-  the measured starts (which effects could be present below which magnitudes,
-  how many fibers would name the leading candidate);
+  the measured starts (which effects could be present below which magnitudes),
+  and the fibers it says would do (:class:`PowerFibers`: to detect each effect
+  at a realistic magnitude, to detect and to name the leading candidate);
 - verdict ambiguous, two significant candidates left unexplained, or a fit
   whose halves disagree by more than a factor 2 (:func:`next_hypotheses`):
-  :func:`discriminate` between the two hypotheses.
+  :func:`.next_measure.discriminate` between the two hypotheses (what to
+  measure next).
 
 Both run within what the budget leaves (:func:`followup`); otherwise the
-report says why not.
-
-What to measure next
---------------------
-Two hypotheses (e.g. the two effects of an ambiguous verdict at their fitted
-values, or one effect at its two fold values when the halves disagree) are
-simulated at a grid of candidate starts (θ0, y0, L spanning the measured
-range) with the same copies (common random numbers, measurement noise
-included). Per start and observable component the *discrimination* is
-
-    D = |mean_k (x_A,k - x_B,k)| / s
-
-(its square debiased by the variance of that mean over the k copies, averaged
-before it is clipped at 0), with s the component's spread among the copies of
-both hypotheses (noise of one measured fiber); a start's D is the root sum of
-squares over its components. Two copies per start are enough to rank the grid,
-not to size the measurement: the best of many noisy estimates overstates itself
-(the winner's curse; on the flow-grid case 2.5 per fiber at the best start
-against 0.2-0.3 from 16 new copies there).
-
-So the ``CONFIRM_STARTS`` best starts are measured again: at ``CONFIRM_POINTS``
-points each, uniform within ``WINDOW`` start-noise sd of the start (where a
-fiber measured "at" it lands), with as many new copies per point as the
-follow-up test uses, scored by that test's own statistic (the log-likelihood
-ratio λ of :mod:`.settle`). A start's separation per fiber is
-(g_A - g_B) / sd, λ's mean under each hypothesis over its sd, and the fibers
-needed, shared over these starts, are those for which each of the follow-up
-test's one-sided tests rejects the false hypothesis with the target power
-(:func:`.settle.fibers_needed`). The count at the measured starts
-(``fibers_needed_measured``) is of another kind, for comparison only: the
-grid's two-copy D averaged over the measured starts, for a two-sided test with
-known predictions, ``ceil(((z_{1 - alpha/2} + z_power) / D)²)``.
-
-The follow-up fibers (``--followup``) then test the hypotheses
-(:func:`settle_followup`, :mod:`.settle`).
+report says why not. The follow-up fibers (``--followup``) then test the
+hypotheses (:func:`settle_followup`, :mod:`.settle`).
 """
 
 from __future__ import annotations
@@ -55,295 +24,135 @@ from typing import Any
 import numpy as np
 from scipy.stats import norm
 
-from fibersweep.discrepancy.candidates import Candidate
-from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
+from fibersweep.discrepancy.candidates import LIBRARY, Candidate
+from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.decide import HeldOut, Verdict
-from fibersweep.discrepancy.observables import OBSERVABLES
+from fibersweep.discrepancy.detection import PowerResult
+from fibersweep.discrepancy.next_measure import (
+    CONFIRM_POINTS,
+    CONFIRM_STARTS,
+    discriminate,
+    hypothesis_label,
+    start_grid,
+)
 from fibersweep.discrepancy.power import analyse_power
 from fibersweep.discrepancy.schema import MeasuredData
 from fibersweep.discrepancy.settings import DiscrepancySettings, Plan
-from fibersweep.discrepancy.settle import (
-    fibers_needed,
-    hypothesis_copies,
-    noise_spread,
-    settle,
-    settled_verdict,
-    window_separation,
-)
+from fibersweep.discrepancy.settle import settle, settled_verdict
 from fibersweep.discrepancy.simulate import Simulator
 
 __all__ = [
     "POWER_BOOT",
-    "Discrimination",
-    "Suggestion",
-    "component_names",
-    "discriminate",
+    "LeadingFibers",
+    "PowerFibers",
+    "fibers_to_name",
     "followup",
     "next_hypotheses",
+    "power_fibers",
     "settle_followup",
-    "start_grid",
-    "window_points",
 ]
-
-
-#: Half-width of the window around a proposed start, in start-noise sd: the fibers
-#: measured "at" a start are those whose measured start falls within it.
-WINDOW = 3.0
-#: Points per best start, and best starts, where what-to-measure-next measures the
-#: separation again with the follow-up test's statistic.
-CONFIRM_POINTS = 8
-CONFIRM_STARTS = 5
-
-
-def component_names(observables: Sequence[str]) -> list[str]:
-    """Names of the columns of :func:`power.standardised_values` (e.g. 'class=Above')."""
-    out = []
-    for name in (o for o in OBSERVABLES if o in observables and OBSERVABLES[o].scored):
-        o = OBSERVABLES[name]
-        out += [f"{name}={c}" for c in o.categories] if o.categorical else [name]
-    return out
-
-
-@dataclass(frozen=True)
-class Suggestion:
-    """One start worth measuring.
-
-    Attributes
-    ----------
-    theta0, y0, length : float
-        Start [deg], [/h_obs], [/l_obs].
-    d : float
-        Discrimination (standardised prediction difference) of one fiber there.
-    observable : str
-        The component that discriminates most there.
-    a, b : float
-        The two hypotheses' mean predictions of that component (its scoring scale).
-    """
-
-    theta0: float
-    y0: float
-    length: float
-    d: float
-    observable: str
-    a: float
-    b: float
-
-
-@dataclass(frozen=True)
-class Discrimination:
-    """Where two hypotheses differ most.
-
-    Attributes
-    ----------
-    labels : (str, str)
-        The hypotheses, e.g. ('inlet_speed = -0.06', 'off_midplane = 0.1').
-    grid : ndarray, shape (g, 3)
-        Candidate starts.
-    d : ndarray, shape (g,)
-        Discrimination of one fiber at each start (``copies`` copies).
-    best : list of Suggestion
-        The best starts, most discriminating first (by the window's estimate).
-    fibers_needed : int or None
-        Fibers within the window of the best starts that settle it (None when
-        nothing discriminates).
-    fibers_needed_measured : int or None
-        The same at the measured starts (their mean D²).
-    simulations : int
-    window : ndarray, shape (3,), or None
-        Half-width (θ0 [deg], y0 [/h_obs], L [/l_obs]) of the window around each
-        best start within which its ``d`` and ``fibers_needed`` hold; None: at the
-        start itself, from the grid's copies.
-    """
-
-    labels: tuple[str, str]
-    grid: np.ndarray
-    d: np.ndarray
-    best: list[Suggestion]
-    fibers_needed: int | None
-    fibers_needed_measured: int | None
-    simulations: int
-    window: np.ndarray | None = None
-
-
-def start_grid(starts: np.ndarray, n_theta: int = 5, n_y: int = 8, n_len: int = 3) -> np.ndarray:
-    """A regular grid spanning the measured starts; an axis that does not vary keeps its value.
-
-    Returns
-    -------
-    ndarray, shape (g, 3)
-        theta0 [deg], y0 [/h_obs], length [/l_obs].
-    """
-    s = np.asarray(starts, dtype=np.float64)
-    axes = []
-    for j, k in enumerate((n_theta, n_y, n_len)):
-        lo, hi = float(np.nanmin(s[:, j])), float(np.nanmax(s[:, j]))
-        axes.append(np.linspace(lo, hi, k) if hi - lo > 1e-9 else np.array([lo]))
-    g = np.meshgrid(*axes, indexing="ij")
-    return np.column_stack([a.ravel() for a in g])
-
-
-def _needed(d: float, alpha: float, power: float) -> int | None:
-    if not np.isfinite(d) or d <= 1e-9:
-        return None
-    z = norm.ppf(1 - alpha / 2) + norm.ppf(power)
-    return int(math.ceil((z / d) ** 2))
-
-
-def _label(effects: Mapping[str, float]) -> str:
-    return " + ".join(f"{k} = {v:.3g}" for k, v in effects.items()) or "baseline"
-
-
-def _shift2(xa: np.ndarray, xb: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """Unbiased squared standardised shift per point and component, shape (points, c).
-
-    Paired (common random numbers) per-copy differences; their mean squared, less the
-    noise of that mean (its variance). Unclipped: negative where noise exceeds the
-    shift. Average before clipping at 0; clipping each point first biases the average
-    up (four-fold for a shift of 0.5 noise sd with two copies).
-    """
-    with np.errstate(invalid="ignore", divide="ignore"):
-        delta = (xa - xb) / s
-        cnt = np.isfinite(delta).sum(axis=0)
-        mean = np.where(cnt > 0, np.nansum(delta, axis=0) / np.maximum(cnt, 1), np.nan)
-        ss = np.nansum((delta - mean) ** 2, axis=0)
-        var = np.where(cnt > 1, ss / np.maximum(cnt - 1, 1) / np.maximum(cnt, 1), 0.0)
-    diff = np.where(np.isfinite(mean), mean, 0.0)
-    return diff**2 - np.where(np.isfinite(var), var, 0.0)
-
-
-def window_points(
-    centres: np.ndarray, noise: NoiseModel, m: int, rng: np.random.Generator, width: float = WINDOW
-) -> np.ndarray:
-    """``m`` starts uniform within ``width`` start-noise sd of each centre.
-
-    Returns
-    -------
-    ndarray, shape (len(centres) * m, 3)
-        Centre j's points are rows j*m .. j*m + m - 1.
-    """
-    c = np.repeat(np.asarray(centres, dtype=np.float64), m, axis=0)
-    half = width * np.array([noise.theta0, noise.y0, noise.length])
-    return c + rng.uniform(-1.0, 1.0, size=c.shape) * half
-
-
-def discriminate(
-    sim: Simulator,
-    noise: NoiseModel,
-    hypotheses: tuple[Mapping[str, float], Mapping[str, float]],
-    starts: np.ndarray,
-    observables: Sequence[str],
-    seed: int = 0,
-    copies: int = 2,
-    grid: np.ndarray | None = None,
-    top: int = 8,
-    alpha: float = 0.05,
-    power: float = 0.8,
-    show: Callable[[Mapping[str, float]], str] | None = None,
-    confirm: int = CONFIRM_POINTS,
-    confirm_starts: int = CONFIRM_STARTS,
-    confirm_copies: int = 24,
-) -> Discrimination:
-    """Rank candidate starts by how well one fiber there separates the hypotheses.
-
-    Parameters
-    ----------
-    sim : Simulator
-    noise : NoiseModel
-        Measurement model (start and outcome noise) of the copies.
-    hypotheses : (mapping, mapping)
-        The two sets of effects to separate.
-    starts : ndarray, shape (n, 3)
-        Measured starts (the grid spans them; also scored for the comparison).
-    observables : sequence of str
-        Observables that would be measured.
-    copies : int
-        Copies per hypothesis and grid start (>= 2): enough to rank them.
-    show : callable, optional
-        ``{name: value} -> text`` for the two labels (each value in its
-        candidate's unit); default ``name = value``.
-    confirm, confirm_starts, confirm_copies : int
-        The ``confirm_starts`` best grid starts are measured again at ``confirm``
-        points each, uniform within ``WINDOW`` start-noise sd (where a fiber
-        measured "at" the start lands), with ``confirm_copies`` new copies per
-        point and hypothesis, scored by the follow-up test's own statistic
-        (:func:`.settle.window_separation`): their separation per fiber and the
-        fibers needed are those of :func:`.settle.settle_test` (``confirm`` 0:
-        the grid's estimates, optimistic by the winner's curse).
-    """
-    label = show or _label
-    if copies < 2:
-        raise ValueError(f"copies must be >= 2, got {copies}")
-    g = start_grid(starts) if grid is None else np.asarray(grid, dtype=np.float64)
-    pts = np.vstack([g, np.asarray(starts, dtype=np.float64)])
-    used0 = sim.used
-    xa, xb, _, _ = hypothesis_copies(CopyMaker(pts, noise, seed + 104729, sim), hypotheses,
-                                     copies, observables, "next")  # fmt: skip
-    raw = _shift2(xa, xb, noise_spread(xa, xb))  # (points, components), unclipped
-    ng = len(g)
-    d = np.sqrt(np.clip(raw[:ng], 0.0, None).sum(axis=1))  # ranks the grid
-    order = np.argsort(-d)[:top]
-    d_best = d[order]
-    need = _needed(float(np.sqrt(max(raw[order].sum(axis=1).mean(), 0.0))), alpha, power)
-    window = None
-    if confirm and len(order):
-        order = order[:confirm_starts]
-        k_ref = max(confirm_copies, 6) // 3
-        w = window_points(g[order], noise, confirm, np.random.default_rng([seed, 104743]))
-        wa, wb, oka, okb = hypothesis_copies(CopyMaker(w, noise, seed + 104759, sim), hypotheses,
-                                             max(confirm_copies, 6), observables,
-                                             "next: confirm")  # fmt: skip
-        sep = []  # per start: g_A, g_B, sd_A, sd_B
-        for j in range(len(order)):
-            sl = slice(j * confirm, (j + 1) * confirm)
-            ok = (oka[:k_ref, sl], okb[:k_ref, sl], oka[k_ref:, sl], okb[k_ref:, sl])
-            sep.append(window_separation(wa[:k_ref, sl], wb[:k_ref, sl], wa[k_ref:, sl],
-                                         wb[k_ref:, sl], ok=ok))  # fmt: skip
-        sep = np.nan_to_num(np.array(sep))  # a side without two valid copies: no separation
-        gap = sep[:, 0] - sep[:, 1]
-        sd = np.sqrt((sep[:, 2] ** 2 + sep[:, 3] ** 2) / 2)
-        d_best = np.where(sd > 0, np.clip(gap, 0.0, None) / np.where(sd > 0, sd, 1.0), 0.0)
-        resort = np.argsort(-d_best, kind="stable")
-        order, d_best = order[resort], d_best[resort]
-        # fibers shared equally over these starts: all their points at once, as the
-        # follow-up test scores them (its noise floor is over all its fibers)
-        ok = (oka[:k_ref], okb[:k_ref], oka[k_ref:], okb[k_ref:])
-        g_a, g_b, sd_a, sd_b = window_separation(wa[:k_ref], wb[:k_ref], wa[k_ref:],
-                                                 wb[k_ref:], ok=ok)  # fmt: skip
-        need = fibers_needed(g_a - g_b, sd_a, sd_b, alpha, power,
-                             k_null=max(confirm_copies, 6) - k_ref)  # fmt: skip
-        window = WINDOW * np.array([noise.theta0, noise.y0, noise.length])
-    names = component_names(observables)
-    best = []
-    for i, di in zip(order, d_best, strict=True):
-        j = int(np.argmax(raw[i]))  # the component that separates most there, on the grid
-        best.append(
-            Suggestion(
-                float(g[i, 0]),
-                float(g[i, 1]),
-                float(g[i, 2]),
-                float(di),
-                names[j],
-                float(np.nanmean(xa[:, i, j])),
-                float(np.nanmean(xb[:, i, j])),
-            )  # fmt: skip
-        )
-    meas2 = raw[ng:].sum(axis=1)
-    d_m = float(np.sqrt(max(np.mean(meas2), 0.0))) if len(meas2) else 0.0
-    return Discrimination(
-        labels=(label(hypotheses[0]) or "baseline", label(hypotheses[1]) or "baseline"),
-        grid=g,
-        d=d,
-        best=best,
-        fibers_needed=need,
-        fibers_needed_measured=_needed(d_m, alpha, power),
-        simulations=sim.used - used0,
-        window=window,
-    )
 
 
 #: Bootstrap resamples of the simulated starts behind each detection limit's interval
 #: (no new runs; about a minute of scoring with all seven effects on 40 starts).
 POWER_BOOT = 30
+
+
+def fibers_to_name(per_fiber: np.ndarray, k: int, alpha: float, power: float = 0.8) -> int | None:
+    """Fibers whose held-out improvement would be significant with the target power.
+
+    From the measured per-fiber improvement (mean mu, sd sigma): the one-sided test
+    at alpha / k (Holm's first step over k candidates) reaches the power when
+    ``sqrt(n) mu / sigma >= z_{1-alpha/k} + z_power``. None when mu <= 0.
+
+    Parameters
+    ----------
+    per_fiber : ndarray, shape (n,)
+        Held-out improvement of each fiber [copy-spread units]; NaN left out.
+    k : int
+        Candidates in the Holm family.
+    """
+    d = np.asarray(per_fiber, dtype=np.float64)
+    d = d[np.isfinite(d)]
+    if len(d) < 2 or d.mean() <= 0:
+        return None
+    z = norm.ppf(1 - alpha / max(k, 1)) + norm.ppf(power)
+    return int(math.ceil((z * d.std(ddof=1) / d.mean()) ** 2))
+
+
+@dataclass(frozen=True)
+class LeadingFibers:
+    """Fibers the leading candidate (the best held-out improvement) would need.
+
+    Attributes
+    ----------
+    name : str
+    value : float
+        Its value (nonzero).
+    fibers_to_detect : int or None
+        Fibers whose gap tests detect it at ``value`` with the target power
+        (:meth:`.detection.PowerResult.fibers_to_detect`; None: more than 100 000).
+    fibers_to_detect_ci : (int or None, int or None) or None
+        Their 95 % interval over the simulated starts
+        (:meth:`.detection.PowerResult.fibers_to_detect_ci`).
+    fibers_to_name : int or None
+        Fibers whose held-out improvement would be significant (:func:`fibers_to_name`).
+    """
+
+    name: str
+    value: float
+    fibers_to_detect: int | None
+    fibers_to_detect_ci: tuple[int | None, int | None] | None
+    fibers_to_name: int | None
+
+
+@dataclass(frozen=True)
+class PowerFibers:
+    """The fibers a power analysis says would do (the report's numbers, computed here).
+
+    Attributes
+    ----------
+    realistic : tuple of (float or None, int or None)
+        Per entry of ``PowerResult.effects``, in its order: a library effect's
+        realistic magnitude in the probe's direction (None for a declared
+        candidate) and the fibers that detect it with the target power (None:
+        more than 100 000, or no realistic magnitude).
+    leading : LeadingFibers or None
+        The candidate that helped most out of sample, at a nonzero value; None
+        when there is none.
+    """
+
+    realistic: tuple[tuple[float | None, int | None], ...]
+    leading: LeadingFibers | None
+
+
+def power_fibers(pw: PowerResult, heldout: Sequence[HeldOut], alpha: float) -> PowerFibers:
+    """The fibers to detect each effect at a realistic magnitude, and the leading candidate's.
+
+    Parameters
+    ----------
+    pw : PowerResult
+    heldout : sequence of HeldOut
+        The held-out evaluation of every fitted candidate (its Holm family).
+    alpha : float
+        Family-wise level of the held-out decision.
+    """
+    realistic = []
+    for e in pw.effects:
+        real = math.copysign(LIBRARY[e.name].realistic, e.probe) if e.name in LIBRARY else None
+        realistic.append((real, pw.fibers_to_detect(e.name, real) if real else None))
+    lead = None
+    if heldout:
+        h = max(heldout, key=lambda h: h.improvement[0])
+        if h.value != 0.0:
+            lead = LeadingFibers(
+                name=h.name,
+                value=h.value,
+                fibers_to_detect=pw.fibers_to_detect(h.name, h.value),
+                fibers_to_detect_ci=pw.fibers_to_detect_ci(h.name, h.value),
+                fibers_to_name=fibers_to_name(h.per_fiber, len(heldout), alpha, pw.power),
+            )
+    return PowerFibers(tuple(realistic), lead)
 
 
 def _weak(values: list[float]) -> bool:
@@ -374,7 +183,7 @@ def next_hypotheses(
     ``show``: ``{name: value} -> text`` for the reason (each value in its
     candidate's unit, :func:`.candidates.show_values`); default ``name = value``.
     """
-    show = show or _label
+    show = show or hypothesis_label
     if verdict.kind == "ambiguous" and len(verdict.alternatives) >= 2:
         a, b = verdict.alternatives[:2]
         return dict(a), dict(b), "the verdict is ambiguous"
@@ -447,8 +256,9 @@ def followup(
     Returns
     -------
     dict
-        ``power`` (PowerResult), ``next`` (Discrimination) and ``next_reason``,
-        or ``power_skipped`` / ``next_skipped`` with the reason.
+        ``power`` (:class:`.detection.PowerResult`) and ``power_fibers``
+        (:class:`PowerFibers`), ``next`` (:class:`.result.Discrimination`)
+        and ``next_reason``, or ``power_skipped`` / ``next_skipped`` with the reason.
     """
     out: dict[str, Any] = {}
     if s.power_fibers and verdict.kind in ("no significant gap", "unexplained"):
@@ -459,6 +269,7 @@ def followup(
                 maker, candidates, maker.n, obs, rng, n_sim=n_sim,
                 workflow_copies=plan.copies, alpha=s.alpha, n_boot=POWER_BOOT,
             )  # fmt: skip
+            out["power_fibers"] = power_fibers(out["power"], heldout, s.alpha)
         else:
             out["power_skipped"] = f"the budget leaves {sim.remaining} runs, it needs {cost}"
     hyp = next_hypotheses(verdict, heldout, fold_values, show) if s.next_copies else None
@@ -512,7 +323,7 @@ def settle_followup(
     extra : dict
         ``settle`` (Settlement), or ``settle_skipped`` with the reason.
     """
-    label = show or _label
+    label = show or hypothesis_label
     hyp = next_hypotheses(verdict, list(heldout), dict(fold_values), show)
     if hyp is None:
         why = f"the verdict ({verdict.kind}) leaves no two hypotheses to separate"

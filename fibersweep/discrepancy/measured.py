@@ -13,8 +13,8 @@ downstream), y across it, the pillar where the config's flow geometry puts it
 y = W_ch/2 - h_obs/3 = 375 µm, spanning x = 1156.7 .. 1243.3 µm); ``theta``
 is the fiber's angle from +x (directed or not). From them the track
 observables (``y_out``, ``theta_out``, ``t_transit``;
-:func:`fibersweep.discrepancy.tracks.track_values`) are derived and compared; each track
-must run from upstream of the pillar to one fiber length past it (a Trapping
+:func:`fibersweep.analysis.observables.track_values`) are derived and compared; each
+track must run from upstream of the pillar to one fiber length past it (a Trapping
 fiber's track may stop anywhere: its track observables are NaN).
 
 Without an ``angle_unit`` column in the fibers table, the tracks' theta is
@@ -31,9 +31,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from fibersweep.analysis.observables import station_positions, track_values
 from fibersweep.discrepancy.observables import OBSERVABLES, track_observables
 from fibersweep.discrepancy.schema import MeasuredData, read_table, rows_text, validate_measured
-from fibersweep.discrepancy.tracks import station_positions, track_values
 from fibersweep.errors import InputError
 from fibersweep.units import Geometry
 

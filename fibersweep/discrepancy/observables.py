@@ -22,7 +22,7 @@ use (category index for class kinds), the only place where a category is encoded
 Track observables (``track=True``: ``y_out``, ``theta_out``, ``t_transit``) are
 derived from the measured trajectories (``discrepancy --trajectories``) and
 from ``RunResult.trajectory`` by one function,
-:func:`fibersweep.discrepancy.tracks.track_values`; they are not columns of
+:func:`fibersweep.analysis.observables.track_values`; they are not columns of
 the fibers table and are compared only when tracks are given.
 
 Random streams
@@ -130,7 +130,7 @@ class Observable:
     extract : callable RunResult -> value, or None
         The value of a successful run (NaN or '' where undefined); None for a
         track observable (its value comes from
-        :func:`fibersweep.discrepancy.tracks.track_values`).
+        :func:`fibersweep.analysis.observables.track_values`).
     defined : tuple of {'not_trapped', 'contact'}
         Where the quantity exists: every condition holds (``()``: always). NaN is
         accepted only outside it (and anywhere for 'contact' when the table has
@@ -231,7 +231,7 @@ class Observable:
         result : RunResult or None
             None for a failed run.
         tracks : mapping name -> float, optional
-            The run's track values (:func:`fibersweep.discrepancy.tracks.track_values`);
+            The run's track values (:func:`fibersweep.analysis.observables.track_values`);
             a track observable is NaN without them.
         """
         if result is None:

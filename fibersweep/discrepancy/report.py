@@ -1,12 +1,16 @@
 """Write the discrepancy report: Markdown, figures, JSON summary and the updated config(s).
 
+The report formats and writes what the workflow computed (a
+:class:`~.result.DiscrepancyResult`: every test and count it shows, the
+dispersion tests and the power analysis's fibers included); it computes none.
+
 Files written into the output directory (each atomically):
 
 - ``summary.json``: verdict, gaps, ranking, fits (per half), held-out before/after,
   sets of effects tried, power analysis, what to measure next, the follow-up
   fibers' test; for scripts;
-- ``report.md``: the same for people, with the figures (:mod:`.report_text`)
-  and the advice (:mod:`.advice`);
+- ``report.md``: the same for people, with the figures (:mod:`.report_text`,
+  :mod:`.report_followup`) and the advice (:mod:`.advice`);
 - figures (:mod:`.report_figures`): ``phase_before_after.png``,
   ``residual_map.png``, ``gap_before_after.png``, ``next_measure.png``;
 - ``updated_config.yaml`` (named effect or set) or ``updated_config.<set>.yaml``
@@ -28,21 +32,19 @@ from typing import Any
 
 import numpy as np
 import yaml
-from scipy.stats import norm
 
 from fibersweep.atomic import atomic_write
 from fibersweep.config.loading import apply_overrides
 from fibersweep.discrepancy.advice import advice_lines
-from fibersweep.discrepancy.candidates import LIBRARY, Candidate
-from fibersweep.discrepancy.dispersion import dispersion_test
-from fibersweep.discrepancy.gap import GAP_UNIT, GapResult, value_matrices
+from fibersweep.discrepancy.candidates import Candidate
+from fibersweep.discrepancy.detection import limit_in_unit
+from fibersweep.discrepancy.gap import GAP_UNIT, GapResult
 from fibersweep.discrepancy.observables import scored
-from fibersweep.discrepancy.power import limit_in_unit
 from fibersweep.discrepancy.report_figures import figures
 from fibersweep.discrepancy.report_text import markdown
-from fibersweep.discrepancy.workflow import DiscrepancyResult
+from fibersweep.discrepancy.result import DiscrepancyResult
 
-__all__ = ["GAP_UNIT", "fibers_to_name", "summary", "write_report"]
+__all__ = ["GAP_UNIT", "summary", "write_report"]
 
 #: Stages whose failed runs are failures of the analysis itself (the baseline model);
 #: runs under a probed or fitted effect that fail are outcomes of that effect.
@@ -104,29 +106,16 @@ def _removed(before: dict[str, Any], after: dict[str, Any]) -> dict[str, float |
     return out
 
 
-def fibers_to_name(per_fiber: np.ndarray, k: int, alpha: float, power: float = 0.8) -> int | None:
-    """Fibers whose held-out improvement would be significant with the target power.
-
-    From the measured per-fiber improvement (mean mu, sd sigma): the one-sided test
-    at alpha / k (Holm's first step over k candidates) reaches the power when
-    ``sqrt(n) mu / sigma >= z_{1-alpha/k} + z_power``. None when mu <= 0.
-    """
-    d = np.asarray(per_fiber, dtype=np.float64)
-    d = d[np.isfinite(d)]
-    if len(d) < 2 or d.mean() <= 0:
-        return None
-    z = norm.ppf(1 - alpha / max(k, 1)) + norm.ppf(power)
-    return int(math.ceil((z * d.std(ddof=1) / d.mean()) ** 2))
-
-
 def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
+    """The power analysis the workflow ran, with the fibers it says would do
+    (:class:`.followup.PowerFibers`); None when it did not run."""
     pw = res.extra.get("power")
     if pw is None:
         return None
+    fibers = res.extra["power_fibers"]
     effects = []
     declared = {c.name: c for c in res.settings.declared}
-    for e in pw.effects:
-        real = math.copysign(LIBRARY[e.name].realistic, e.probe) if e.name in LIBRARY else None
+    for e, (real, need) in zip(pw.effects, fibers.realistic, strict=True):
         unit = limit_in_unit(declared[e.name], e) if e.name in declared else {}
         effects.append(
             {
@@ -139,24 +128,20 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
                 "limit_ci": list(e.limit_ci) if e.limit_ci is not None else None,
                 "dispersion_limit": e.dispersion_limit,
                 "realistic": real,
-                "fibers_for_realistic": pw.fibers_needed(e.name, real) if real else None,
+                "fibers_for_realistic": need,
                 **unit,
             }
         )
     lead = None
-    if res.heldout:
-        h = max(res.heldout, key=lambda h: h.improvement[0])
-        if h.value != 0.0:
-            lead = {
-                "effect": h.name,
-                "value": h.value,
-                **_in_unit(declared.get(h.name), h.value, None),
-                "fibers_to_detect": pw.fibers_needed(h.name, h.value),
-                "fibers_to_detect_ci": pw.fibers_needed_ci(h.name, h.value),
-                "fibers_to_name": fibers_to_name(
-                    h.per_fiber, len(res.heldout), res.settings.alpha, pw.power
-                ),
-            }
+    if (h := fibers.leading) is not None:
+        lead = {
+            "effect": h.name,
+            "value": h.value,
+            **_in_unit(declared.get(h.name), h.value, None),
+            "fibers_to_detect": h.fibers_to_detect,
+            "fibers_to_detect_ci": h.fibers_to_detect_ci,
+            "fibers_to_name": h.fibers_to_name,
+        }
     return {
         "n": pw.n,
         "n_simulated": pw.n_sim,
@@ -190,23 +175,16 @@ def _spread_dict(h: Any) -> dict[str, Any] | None:
 
 
 def _dispersion_dict(res: DiscrepancyResult) -> dict[str, Any]:
-    """The dispersion test of the data against the baseline copies, and against the
-    copies of each random effect the workflow simulated on every fiber (its final copies).
+    """The dispersion tests the workflow ran (:func:`.stages.dispersion`): of the data
+    against the baseline copies, and against each random effect's final copies.
 
     Outside the Holm family of the gap: it names nothing and does not change the
     verdict; it says whether the outcomes are spread more widely than the model's.
     """
-    rng = np.random.default_rng([res.settings.seed, 23])
-
-    def one(copies: list) -> dict[str, Any]:
-        t = dispersion_test(value_matrices(res.observed, copies, res.observables), rng, 1999)
-        return {"mean_score": t.statistic, "z": t.z, "p": t.p_value, "n": t.n}
-
-    out = {"baseline": one(res.baseline_copies)}
-    for name, cps in res.effect_copies.items():
-        if name in LIBRARY and LIBRARY[name].random and len(cps[0]) == len(res.observed):
-            out[name] = one(cps)
-    return out
+    return {
+        name: {"mean_score": t.statistic, "z": t.z, "p": t.p_value, "n": t.n}
+        for name, t in res.dispersion.items()
+    }
 
 
 def _next_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
@@ -217,8 +195,8 @@ def _next_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
         "reason": res.extra.get("next_reason", ""),
         "hypotheses": list(nx.labels),
         "best": [b.__dict__ for b in nx.best],
-        "fibers_needed": nx.fibers_needed,
-        "fibers_needed_at_measured_starts": nx.fibers_needed_measured,
+        "fibers_needed": nx.fibers_to_settle,
+        "fibers_needed_at_measured_starts": nx.fibers_to_separate_measured,
         "window": None if nx.window is None else [float(w) for w in nx.window],
         "simulations": nx.simulations,
     }
@@ -243,7 +221,7 @@ def _settle_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
         "settled": st.settled,
         "gap_left_by_winner": list(st.adequacy.flagged) if st.adequacy is not None else None,
         "failed_copies": t.failed,
-        "fibers_needed": t.fibers_needed,
+        "fibers_needed": t.fibers_to_settle,
         "per_fiber": [float(x) for x in t.per_fiber],
         "simulations": st.simulations,
         "text": st.text(),

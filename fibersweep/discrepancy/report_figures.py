@@ -19,11 +19,10 @@ from pathlib import Path
 import numpy as np
 
 from fibersweep.discrepancy.candidates import show_values
-from fibersweep.discrepancy.followup import Discrimination
-from fibersweep.discrepancy.gap import GAP_UNIT, GapResult, combined_excess
+from fibersweep.discrepancy.gap import GAP_UNIT, GapResult
 from fibersweep.discrepancy.localise import binned_map
 from fibersweep.discrepancy.observables import OBSERVABLES
-from fibersweep.discrepancy.workflow import DiscrepancyResult
+from fibersweep.discrepancy.result import DiscrepancyResult, Discrimination
 from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, paper_style, save_figure, subplots
 
 __all__ = ["figures", "fitted_label", "next_figure"]
@@ -114,7 +113,7 @@ def _residual_map(res: DiscrepancyResult, out: Path) -> str | None:
     import matplotlib
 
     obs = res.observed
-    exc = combined_excess(res.gap, res.weights)
+    exc = res.gap_per_fiber
     y0 = obs["y0"].to_numpy(dtype=np.float64)
     xs = [c for c in ("theta0", "length") if float(np.ptp(obs[c])) > 1e-9]
     if float(np.ptp(y0)) <= 1e-9 or not xs:

@@ -1,7 +1,9 @@
-"""The Markdown of the discrepancy report, from the JSON summary (:func:`report.summary`).
+"""The Markdown of the discrepancy report, from the JSON summary (:func:`.report.summary`).
 
-Numbers are rounded to what they can tell (3 significant digits for values, 2
-for p-values and gaps); the gap is in one unit everywhere (copy-spread units).
+The analysis sections are written here (verdict, gap, where it lives, ranking,
+fits and the held-out decision, sets, before / after); the follow-up sections
+in :mod:`.report_followup`. Numbers are rounded to what they can tell
+(:mod:`.report_format`); the gap is in one unit everywhere (copy-spread units).
 """
 
 from __future__ import annotations
@@ -10,19 +12,11 @@ import json
 from typing import Any
 
 from fibersweep.discrepancy.observables import OBSERVABLES, has_tracks, log_scale, scored
+from fibersweep.discrepancy.report_followup import next_lines, power_lines, settle_lines
+from fibersweep.discrepancy.report_format import ci_text, num
 from fibersweep.discrepancy.settings import TIE_COSINE
 
 __all__ = ["markdown"]
-
-
-def _f(x: Any, spec: str = ".3g") -> str:
-    return "–" if x is None else format(x, spec)
-
-
-def _ci(d: dict[str, Any] | None, spec: str = ".2g") -> str:
-    if not d:
-        return "–"
-    return f"{_f(d.get('mean'), spec)} [{_f(d.get('lo95'), spec)}, {_f(d.get('hi95'), spec)}]"
 
 
 def _score_text(observed: list[str] | tuple[str, ...] = ()) -> str:
@@ -86,15 +80,15 @@ def _gap_table(s: dict[str, Any]) -> list[str]:
         if g["systematic"]:
             sig = (sig + " **shift**").strip()
         lines.append(
-            f"| {name} | {g['n']} | {_ci(g['gap'])} | {_f(g['p_holm'], '.2g')} "
-            f"| {_f(g['signed_p_holm'], '.2g')} "
-            f"| {', '.join(_f(z, '.1f') for z in g['bias_z'])} | {sig or 'no'} |"
+            f"| {name} | {g['n']} | {ci_text(g['gap'])} | {num(g['p_holm'], '.2g')} "
+            f"| {num(g['signed_p_holm'], '.2g')} "
+            f"| {', '.join(num(z, '.1f') for z in g['bias_z'])} | {sig or 'no'} |"
         )
     disp = s.get("dispersion") or {}
     if disp.get("baseline", {}).get("n"):
         b = disp["baseline"]
         after = "; ".join(
-            f"with {k} at its value: {_f(x['mean_score'], '.2f')} (p {_f(x['p'], '.2g')})"
+            f"with {k} at its value: {num(x['mean_score'], '.2f')} (p {num(x['p'], '.2g')})"
             for k, x in disp.items()
             if k != "baseline" and x.get("n")
         )
@@ -102,7 +96,7 @@ def _gap_table(s: dict[str, Any]) -> list[str]:
             "",
             "Dispersion (where each observation falls among its copies, continuous "
             f"observables; 1 = as spread as a copy, larger = more widely spread): "
-            f"{_f(b['mean_score'], '.2f')}, p {_f(b['p'], '.2g')} (one-sided, outside the "
+            f"{num(b['mean_score'], '.2f')}, p {num(b['p'], '.2g')} (one-sided, outside the "
             "Holm family)" + (f"; {after}" if after else "") + ".",
         ]
     d = s["descriptive"]
@@ -135,7 +129,7 @@ def _gap_table(s: dict[str, Any]) -> list[str]:
         f"Shallow regression tree on the per-fiber gap over the start axes that vary "
         f"({', '.join(varying) or 'none'}) and the observed contact: largest mean gap in "
         f"**{s['region']['where']}** ({s['region']['n']} fibers, "
-        f"{_f(100 * (s['region']['share'] or 0), '.0f')} % of the positive gap).",
+        f"{num(100 * (s['region']['share'] or 0), '.0f')} % of the positive gap).",
     ]
     for obs, where in s["region_by_observable"].items():
         lines.append(f"- {obs}: {where}")
@@ -197,10 +191,10 @@ def _fits(s: dict[str, Any]) -> list[str]:
         spread = abs(a - b) if a is not None and b is not None else None
         ci = h.get("interval95")
         op = h.get("interval95_open") or [False, False]
-        final = _f(h["value"]) + _bracket(ci, op)
+        final = num(h["value"]) + _bracket(ci, op)
         lines.append(
-            f"| {h['effect']} | {_f(a)} | {_f(b)} | {_f(spread, '.2g')} | {final} "
-            f"| {_ci(h['improvement'])} | {_f(h['p'], '.2g')} | {_f(h['p_holm'], '.2g')} "
+            f"| {h['effect']} | {num(a)} | {num(b)} | {num(spread, '.2g')} | {final} "
+            f"| {ci_text(h['improvement'])} | {num(h['p'], '.2g')} | {num(h['p_holm'], '.2g')} "
             f"| {'yes' if h['explains'] else 'no'} |"
         )
     lines += _spread_lines(s["heldout"])
@@ -222,22 +216,16 @@ def _fits(s: dict[str, Any]) -> list[str]:
         ]
         for st in s["sets"]:
             vals = "; ".join(
-                f"{k} = {_f(v)}{_interval_text(st, k)} "
-                f"({_f(st['halves'][k][0])}, {_f(st['halves'][k][1])})"
+                f"{k} = {num(v)}{_interval_text(st, k)} "
+                f"({num(st['halves'][k][0])}, {num(st['halves'][k][1])})"
                 for k, v in st["values"].items()
             )
-            gains = "; ".join(f"{k} {_ci(g)}" for k, g in st["gains"].items())
-            ps = "; ".join(f"{k} {_f(p, '.2g')}" for k, p in st["p_holm"].items())
+            gains = "; ".join(f"{k} {ci_text(g)}" for k, g in st["gains"].items())
+            ps = "; ".join(f"{k} {num(p, '.2g')}" for k, p in st["p_holm"].items())
             lines.append(
                 f"| {st['set']} | {vals} | {gains} | {ps} | {'yes' if st['explains'] else 'no'} |"
             )
     return lines
-
-
-def _shown(h: dict[str, Any]) -> str:
-    """``effect = value`` of a held-out or leading entry; a declared candidate's value in
-    its setting's unit (its ``setting`` text)."""
-    return h.get("setting") or f"{h['effect']} = {h['value']:.3g}"
 
 
 def _declared_lines(s: dict[str, Any]) -> list[str]:
@@ -264,7 +252,7 @@ def _declared_lines(s: dict[str, Any]) -> list[str]:
             value = h["setting"]
             ci = h.get("interval95_setting")
             if ci:
-                value += f" [{_f(ci[0])}, {_f(ci[1])}]"
+                value += f" [{num(ci[0])}, {num(ci[1])}]"
         switch = ", ".join(f"{k} = {v}" for k, v in c["switch"].items())
         what = c["note"] + (f" (with {switch})" if switch else "")
         lines.append(f"| {c['name']} | {what} | {value} |")
@@ -276,7 +264,7 @@ def _bracket(ci: list[float] | None, op: list[bool] | None) -> str:
     if not ci:
         return ""
     op = op or [False, False]
-    return f" [{'≤ ' if op[0] else ''}{_f(ci[0])}, {'≥ ' if op[1] else ''}{_f(ci[1])}]"
+    return f" [{'≤ ' if op[0] else ''}{num(ci[0])}, {'≥ ' if op[1] else ''}{num(ci[1])}]"
 
 
 def _interval_text(st: dict[str, Any], name: str) -> str:
@@ -303,177 +291,9 @@ def _before_after(s: dict[str, Any]) -> list[str]:
             a = h["gap_after"].get(name, {}).get("gap")
             r = h["gap_removed"].get(name)
             lines.append(
-                f"| {name} | {_ci(b['gap'])} | {_ci(a)} | "
-                f"{_f(None if r is None else 100 * r, '.0f')}{' %' if r is not None else ''} |"
+                f"| {name} | {ci_text(b['gap'])} | {ci_text(a)} | "
+                f"{num(None if r is None else 100 * r, '.0f')}{' %' if r is not None else ''} |"
             )
-    return lines
-
-
-def _fibers_ci(ci: Any) -> str:
-    """' (95 % over the simulated starts: lo to hi)', or '' when not computed."""
-    if not ci:
-        return ""
-    lo, hi = (_f(x, "d") if x is not None else "more than 100000" for x in ci)
-    return f" (95 % over the simulated starts: {lo} to {hi})"
-
-
-def _power(s: dict[str, Any]) -> list[str]:
-    pw = s["power"]
-    if pw is None:
-        return (
-            ["", "## What it cannot see", "", f"Not run: {s['power_skipped']}."]
-            if s.get("power_skipped")
-            else []
-        )
-    lines = [
-        "",
-        "## What it cannot see (power analysis)",
-        "",
-        f"By simulation on {pw['n_simulated']} of the measured starts, scaled to "
-        f"{pw['n']} fibers: the smallest magnitude of each effect that the gap tests would "
-        f"detect with probability {pw['power']:g} (alpha = {pw['alpha']:g}); an effect "
-        "below it may be present without being seen. To *name* an effect takes more: "
-        "half of the fibers fit it, the other half must confirm it. Each limit comes from "
-        "one set of simulated starts; the interval beside it (95 %, a bootstrap over "
-        "those starts) is how far another set of starts could move it, and its upper end "
-        "is the size below which an effect may be present unseen.",
-        "",
-        "| effect | direction | detected from | 95 % over the starts "
-        "| realistic magnitude | fibers to detect it |",
-        "|---|---|---|---|---|---|",
-    ]
-    for e in pw["effects"]:
-        lim = _f(e["limit"]) if e["limit"] is not None else "not within its range"
-        ci = e.get("limit_ci")
-        ci_txt = (
-            "–"
-            if ci is None
-            else f"[{_f(ci[0]) if ci[0] is not None else 'out of range'}, "
-            f"{_f(ci[1]) if ci[1] is not None else 'out of range'}]"
-        )
-        if e.get("setting"):  # a declared candidate: its limit in the setting's unit
-            lim = e["setting"]
-            ci_txt = "–"
-        lines.append(
-            f"| {e['effect']} | {e['direction']} | {lim} | {ci_txt} | {_f(e['realistic'])} "
-            f"| {_f(e['fibers_for_realistic'], 'd') if e['fibers_for_realistic'] else '> 100000'} |"
-        )
-    again = [e for e in pw["effects"] if e.get("read_at") is not None]
-    disp = [e for e in pw["effects"] if e.get("dispersion_limit") is not None]
-    for lead, items in (
-        (
-            "Read again where they lie (the probes were far from them, and a power law "
-            "read there would misplace them; the effect was simulated again at the limit): ",
-            [f"{e['effect']} {e['direction']} at {_f(e['read_at'])}" for e in again],
-        ),
-        (
-            "The dispersion test alone (one-sided at alpha, outside the gap family) would "
-            "detect with the same probability: ",
-            [f"{e['effect']} from {_f(e['dispersion_limit'])}" for e in disp],
-        ),
-    ):
-        if items:
-            lines += ["", lead + ", ".join(items) + "."]
-    if pw["lookalikes"]:
-        lines += [
-            "",
-            "Look-alikes (per-fiber effects nearly parallel, |cosine| >= 0.9: these "
-            "observables cannot tell them apart): "
-            + ", ".join(f"{x['a']} ~ {x['b']} ({x['cosine']:.2f})" for x in pw["lookalikes"])
-            + ".",
-        ]
-    lead = pw.get("leading")
-    if lead:
-        lines += [
-            "",
-            f"Leading candidate {_shown(lead)}: about "
-            f"{_f(lead['fibers_to_detect'], 'd')} fibers would detect a gap of this size"
-            f"{_fibers_ci(lead.get('fibers_to_detect_ci'))}; "
-            f"about {_f(lead['fibers_to_name'], 'd')} would make its held-out improvement "
-            "significant (from the spread of the per-fiber improvement measured here).",
-        ]
-    return lines
-
-
-def _window(w: list[float] | None) -> str:
-    """Where the fibers should start: spread over the window around each start, or at it."""
-    if not w:
-        return "at these starts"
-    return (
-        f"with starts spread over θ0 ±{w[0]:.2g}°, y0 ±{w[1]:.2g} h_obs, L ±{w[2]:.2g} l_obs "
-        "around these starts"
-    )
-
-
-def _next(s: dict[str, Any]) -> list[str]:
-    nx = s["next"]
-    if nx is None:
-        return (
-            ["", "## What to measure next", "", f"Not run: {s['next_skipped']}."]
-            if s.get("next_skipped")
-            else []
-        )
-    a, b = nx["hypotheses"]
-    lines = [
-        "",
-        "## What to measure next",
-        "",
-        f"Why: {nx['reason']}. To separate **{a}** from **{b}**, measure fibers "
-        f"{_window(nx.get('window'))} (separation per fiber: the two predictions' "
-        "difference over the noise of one measured fiber, summed over the observables):",
-        "",
-        "| θ0 [deg] | y0 [h_obs] | L [l_obs] | separation per fiber | observable | "
-        "prediction A | prediction B |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for r in nx["best"]:
-        lines.append(
-            f"| {r['theta0']:.1f} | {r['y0']:.2f} | {r['length']:.2f} | {r['d']:.2g} "
-            f"| {r['observable']} | {r['a']:.3g} | {r['b']:.3g} |"
-        )
-    lines += [
-        "",
-        f"About {_f(nx['fibers_needed'], 'd')} fibers there, shared over these starts, "
-        "would settle it with power 0.8 (a rough figure at the measured starts: "
-        f"{_f(nx['fibers_needed_at_measured_starts'], 'd')})"
-        + (". The count and the follow-up test assume starts scattered over the window, "
-           "not aimed at one point" if nx.get("window") else "")
-        + ". Once measured, give them to the same command with `--followup`, once: they "
-        "are put to the two hypotheses directly (docs/discrepancy.md, *Settling it*).",
-    ]
-    return lines
-
-
-def _settle(s: dict[str, Any]) -> list[str]:
-    st = s.get("settle")
-    if st is None:
-        skipped = s.get("settle_skipped")
-        return ["", "## Follow-up fibers", "", f"Not tested: {skipped}."] if skipped else []
-    a, b = st["hypotheses"]
-    pa, pb = st["p_values"]
-    first = st.get("verdict_first") or {}
-    lines = [
-        "",
-        "## Follow-up fibers",
-        "",
-        f"Why: {st['reason']}. {st['fibers']} fibers measured after the first analysis test "
-        f"**{a}** (A) against **{b}** (B) on {', '.join(st['observables'])}: the sum of their "
-        "log-likelihood ratios of A over B, against its distribution under each hypothesis "
-        "from simulated copies (one-sided tests); the winner is then checked for a gap left "
-        "on these fibers.",
-        "",
-        "| | A | B |",
-        "|---|---|---|",
-        f"| expected sum (sd) | {st['expected'][0]:.3g} ({st['sd'][0]:.2g}) "
-        f"| {st['expected'][1]:.3g} ({st['sd'][1]:.2g}) |",
-        f"| p of this hypothesis | {_f(pa, '.2g')} | {_f(pb, '.2g')} |",
-        "",
-        f"Measured sum: {st['statistic']:.3g}. Outcome: {st['text']}.",
-    ]
-    if st.get("failed_copies"):
-        lines += ["", f"{st['failed_copies']} copies failed and were left out of the test."]
-    if first:
-        lines += ["", f"Verdict on the first fibers alone: {first['kind']}: {first['text']}"]
     return lines
 
 
@@ -482,7 +302,7 @@ def markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
     lines = _header(s) + _gap_table(s) + _fits(s) + _before_after(s)
     if s["advice"]:
         lines += ["", "## Advice", ""] + [f"- {a}" for a in s["advice"]]
-    lines += _power(s) + _next(s) + _settle(s)
+    lines += power_lines(s) + next_lines(s) + settle_lines(s)
     if figures:
         lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
     if configs:
@@ -501,10 +321,10 @@ def _spread_lines(heldout: list[dict[str, Any]]) -> list[str]:
         out.append(
             f"- {h['effect']}, held-out spread: mean dispersion score {sp['base_mean']:.2f} "
             f"against the baseline, {sp['effect_mean']:.2f} with the effect (1: as spread as a "
-            f"copy); p {_f(sp['p'], '.2g')} (Holm {_f(sp['p_holm'], '.2g')}), held-out "
-            f"dispersion p {_f(sp['heldout_dispersion_p'], '.2g')}, shift p "
-            f"{_f(sp['shift_p'], '.2g')}"
-            + (f", final dispersion p {_f(fd, '.2g')}" if fd is not None else "")
+            f"copy); p {num(sp['p'], '.2g')} (Holm {num(sp['p_holm'], '.2g')}), held-out "
+            f"dispersion p {num(sp['heldout_dispersion_p'], '.2g')}, shift p "
+            f"{num(sp['shift_p'], '.2g')}"
+            + (f", final dispersion p {num(fd, '.2g')}" if fd is not None else "")
             + f": {'significant' if sp['significant'] else 'not significant'}."
         )
     return [""] + out if out else []

@@ -29,7 +29,7 @@ __all__ = [
 INTERVAL_EVALS = 3
 
 #: Significant single effects, each leaving a gap, that forward selection adds
-#: partners to (:func:`.workflow.pairs`), best held-out improvement first. The
+#: partners to (:func:`.stages.pairs`), best held-out improvement first. The
 #: ``pairs`` of a plan are shared out among them in turn, so the cost is the same
 #: as with one. Two: the single effect that helps most out of sample may be a
 #: look-alike of the pair's true first member, barely ahead of it.
@@ -117,7 +117,7 @@ class DiscrepancySettings:
         gap" or "unexplained" (:mod:`.power`; 0: none).
     next_copies : int
         Copies per hypothesis and start of what-to-measure-next
-        (:mod:`.followup`; 0: none), run when the verdict is ambiguous or a
+        (:mod:`.next_measure`; 0: none), run when the verdict is ambiguous or a
         fit is weakly identified.
     settle_copies : int
         Copies per hypothesis and follow-up fiber when follow-up fibers test

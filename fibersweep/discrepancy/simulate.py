@@ -14,7 +14,7 @@ with the reason, never dropped. The number of runs is counted against a budget.
 With ``Simulator(tracks=True)`` (measured tracks are compared), every run
 records its trajectory (:data:`TRACK_SAMPLES` samples at least, whatever the
 config's ``record`` says: it changes no other outcome) so that the track
-observables (:mod:`fibersweep.discrepancy.tracks`) are in every outcome table;
+observables (:mod:`fibersweep.analysis.observables`) are in every outcome table;
 without, they are NaN and the runs skip that cost (~9 %).
 
 Declared candidates (:mod:`.declared`): a batch's ``effects`` may name them
@@ -39,11 +39,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from fibersweep.analysis.observables import track_values
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.candidates import Candidate
 from fibersweep.discrepancy.declared import apply_values
 from fibersweep.discrepancy.observables import OBSERVABLES
-from fibersweep.discrepancy.tracks import track_values
 from fibersweep.errors import FibersweepError, InputError
 from fibersweep.fiber.result import CLASSES
 from fibersweep.flow.field import FlowField
@@ -92,7 +92,7 @@ def outcome_row(result: Any, geometry: Geometry | None = None) -> dict[str, Any]
     geometry : Geometry, optional
         Channel and pillar of the run's (baseline) field; with it and
         ``result.trajectory`` the track observables are derived
-        (:func:`fibersweep.discrepancy.tracks.track_values`), else NaN. NaN as
+        (:func:`fibersweep.analysis.observables.track_values`), else NaN. NaN as
         well for Trapping (their NaN rule).
     """
     ok = result.status == "ok" and result.cls in CLASSES
@@ -167,7 +167,7 @@ class Simulator:
         :meth:`expect` sets it stage by stage.
     tracks : bool
         Keep every run's trajectory and derive the track observables
-        (:mod:`fibersweep.discrepancy.tracks`), for measured tracks. False (the
+        (:mod:`fibersweep.analysis.observables`), for measured tracks. False (the
         default) leaves them NaN and saves about 9 % of the run time.
     executor : str
         Executor name from :data:`fibersweep.sweep.executors.EXECUTORS`

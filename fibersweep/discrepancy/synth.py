@@ -178,7 +178,7 @@ def synthesize_near(
     within ``window`` sd of it are kept, until each centre has its share
     (``fibers`` shared equally, the first centres one more). Selecting on the
     reported start leaves the true start spread around it as the copies of the
-    follow-up test assume (:mod:`.settle`); selecting on the true start would not,
+    follow-up test assume (:mod:`.discriminant`); selecting on the true start would not,
     near the window's edges.
 
     Parameters

@@ -363,7 +363,8 @@ def critical_figure(
         handles.append(Line2D([], [], color="k", marker="_", ms=10, mew=2, ls="none", label=text))
     ax.set_xlabel(axis_label(key, array=True))
     ax.set_ylabel("critical length [µm]")
+    spread = "95 % interval, bars ± statistical error" if has_ci else "± statistical error"
     ax.set_title(f"critical length (mean f = 1/2) against {short_name(key, array=True)}, "
-                 "± statistical error", fontsize=8)  # fmt: skip
+                 f"{spread}", fontsize=8)  # fmt: skip
     fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize=7, frameon=False)
     return fig

@@ -26,7 +26,7 @@ import numpy as np
 from fibersweep.config import Config
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.copies import NoiseModel
-from fibersweep.discrepancy.followup import discriminate, start_grid
+from fibersweep.discrepancy.next_measure import discriminate, start_grid
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.report import write_report
 from fibersweep.discrepancy.report_figures import next_figure
@@ -70,8 +70,8 @@ def main() -> None:
             sim, NoiseModel(), ({"inlet_speed": -0.06}, {"off_midplane": 0.10}), meas,
             scored(), grid=start_grid(meas, 5, 6, 2),
         )  # fmt: skip
-    print(f"next measure: {nx.fibers_needed} fibers at the best starts, "
-          f"{nx.fibers_needed_measured} at the measured ones")  # fmt: skip
+    print(f"next measure: {nx.fibers_to_settle} fibers at the best starts, "
+          f"{nx.fibers_to_separate_measured} at the measured ones")  # fmt: skip
     with paper_style():
         next_figure(nx, meas[:, :2], out / "discrepancy_next_measure.png")
 

@@ -10,7 +10,7 @@ verdict they go to OUT (Parquet + JSON). ``scripts/tools/compare_runs.py --snaps
 B`` then compares two such folders exactly.
 
 To compare two versions whose module layout differs, run each tree's own copy of
-this script (``scripts/bench_discrepancy_ab.py`` does so, and times them).
+this script (``scripts/benchmarks/bench_discrepancy_ab.py`` does so, and times them).
 
 Usage:  python scripts/tools/snapshot_discrepancy.py OUT [--n 60] [--seed 3] [--workers 2]
                                                   [--cache DIR]

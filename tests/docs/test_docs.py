@@ -367,8 +367,9 @@ def test_guide_pages_stay_short_and_undated() -> None:
 
 
 def test_the_module_map_names_every_module() -> None:
-    """docs/architecture.md's module map lists every module of each package in its row
-    (the effects' row says "one module per effect"; the version file is generated)."""
+    """docs/architecture.md's module map lists every module of each package in its row,
+    and names no module that does not exist (the effects' row says "one module per
+    effect"; the version file is generated)."""
     rows: dict[str, set[str]] = {}
     for line in (REPO / "docs" / "architecture.md").read_text(encoding="utf-8").splitlines():
         m = re.match(r"\| `([a-z_/]+)` \| (.*?) \|", line)
@@ -376,11 +377,20 @@ def test_the_module_map_names_every_module() -> None:
             rows[m.group(1).rstrip("/")] = set(re.findall(r"`([a-z_0-9]+)`", m.group(2)))
     package = REPO / "fibersweep"
     missing = []
+    found: dict[str, set[str]] = {}
     for path in sorted(package.rglob("*.py")):
         rel = path.relative_to(package)
         where = "fibersweep" if rel.parent == Path(".") else rel.parent.as_posix()
         if path.stem in ("__init__", "__main__", "_version") or where == "fiber/effects":
             continue
+        found.setdefault(where, set()).add(path.stem)
         if path.stem not in rows.get(where, set()):
             missing.append(f"{where}/{path.stem}")
     assert not missing, f"docs/architecture.md's module map leaves out {missing}"
+    stale = [
+        f"{where}/{name}"
+        for where, names in rows.items()
+        if where != "fiber/effects" and (where in found or (package / where).is_dir())
+        for name in sorted(names - found.get(where, set()))
+    ]
+    assert not stale, f"docs/architecture.md's module map names modules that do not exist: {stale}"

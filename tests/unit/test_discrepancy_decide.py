@@ -8,8 +8,8 @@ import pytest
 from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
 from fibersweep.discrepancy.decide import decide, evaluate_heldout
 from fibersweep.discrepancy.gap import assess_gap
+from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
 from fibersweep.discrepancy.signatures import Signature, choose_candidates
-from fibersweep.discrepancy.workflow import DiscrepancySettings, plan_budget
 from fibersweep.errors import InputError
 
 

@@ -16,9 +16,9 @@ from fibersweep.discrepancy.advice import advice_lines
 from fibersweep.discrepancy.candidates import show_values
 from fibersweep.discrepancy.decide import Verdict, decide, evaluate_heldout
 from fibersweep.discrepancy.declared import parse_candidate
+from fibersweep.discrepancy.detection import EffectPower, limit_in_unit
 from fibersweep.discrepancy.followup import next_hypotheses
 from fibersweep.discrepancy.gap import assess_gap
-from fibersweep.discrepancy.power import EffectPower, limit_in_unit
 from fibersweep.discrepancy.report_figures import fitted_label
 
 STIFF = parse_candidate("fiber.young_modulus=1e4..3e7", FiberSettings(), FlowSettings(dx=4.0))

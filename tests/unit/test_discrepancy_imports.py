@@ -60,3 +60,20 @@ def test_no_import_circle_inside_the_package():
 def test_internal_imports_are_at_the_top_of_each_module():
     local = {m: sorted(loc) for m, (_, loc) in _graph().items() if loc}
     assert not local, f"function-local imports of discrepancy modules: {local}"
+
+
+#: The report's modules: they format and write what the workflow computed.
+REPORT = ("report", "report_text", "report_followup", "report_format", "report_figures", "advice")
+#: Modules that run the workflow, simulate, or compute tests and counts.
+COMPUTING = (
+    "workflow", "stages", "followup", "next_measure", "power", "settle", "discriminant",
+    "dispersion", "scores", "decide", "fit", "pairs", "signatures", "simulate", "copies",
+)  # fmt: skip
+
+
+def test_the_report_imports_nothing_that_computes():
+    """The report receives every test and count in the workflow's result (:mod:`.result`):
+    none of its modules imports the workflow or a module that computes a test."""
+    graph = _graph()
+    found = {m: sorted(d for d in graph[m][0] | graph[m][1] if d in COMPUTING) for m in REPORT}
+    assert {m: d for m, d in found.items() if d} == {}

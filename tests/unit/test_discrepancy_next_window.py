@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from fibersweep.discrepancy.copies import NoiseModel
-from fibersweep.discrepancy.followup import WINDOW, _shift2, window_points
+from fibersweep.discrepancy.next_measure import WINDOW, _shift2, window_points
 
 
 def test_the_squared_shift_is_unbiased_and_its_best_of_many_is_not():

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from fibersweep.discrepancy.followup import _needed, component_names, start_grid
-from fibersweep.discrepancy.power import EffectPower, detect_probability
+from fibersweep.discrepancy.components import component_names
+from fibersweep.discrepancy.detection import EffectPower, detect_probability
+from fibersweep.discrepancy.next_measure import fibers_to_separate, start_grid
 
 
 def test_detect_probability_of_one_test_is_the_normal_tail():
@@ -37,25 +38,25 @@ def test_one_sided_score_tests_use_their_own_threshold_and_sign():
         detect_probability(z, zc, [True])
 
 
-def test_fibers_needed_follows_the_square_root_law():
+def test_fibers_to_detect_follows_the_square_root_law():
     # one test, z = 2 at 50 fibers: N solves 2 sqrt(N/50) = zc + z_0.8 (analytic)
     zc = 2.8
     e = EffectPower("x", 0.1, (2.0,), 1.0, None)
     exact = 50 * ((zc + norm.ppf(0.8)) / 2.0) ** 2
-    assert e.fibers_needed(0.1, 50, zc, 0.8) == math.ceil(exact)
+    assert e.fibers_to_detect(0.1, 50, zc, 0.8) == math.ceil(exact)
     # half the magnitude with gamma = 1: four times the fibers (to rounding)
-    assert e.fibers_needed(0.05, 50, zc, 0.8) == pytest.approx(4 * exact, abs=4)
+    assert e.fibers_to_detect(0.05, 50, zc, 0.8) == pytest.approx(4 * exact, abs=4)
     # gamma = 2 (a spread): half the magnitude costs 16 times the fibers
     e2 = EffectPower("x", 0.1, (2.0,), 2.0, None)
-    assert e2.fibers_needed(0.05, 50, zc, 0.8) == pytest.approx(16 * exact, abs=16)
+    assert e2.fibers_to_detect(0.05, 50, zc, 0.8) == pytest.approx(16 * exact, abs=16)
     # the other direction of a signed effect is not described by this entry
     assert e.detect(-0.1, 1000, 50, zc) == 0.0
 
 
-def test_fibers_to_settle_two_hypotheses():
+def test_fibers_to_separate_two_hypotheses():
     # D = 0.5 per fiber, alpha 0.05 two-sided, power 0.8: ((1.96 + 0.84) / 0.5)^2 = 31.4
-    assert _needed(0.5, 0.05, 0.8) == 32
-    assert _needed(0.0, 0.05, 0.8) is None
+    assert fibers_to_separate(0.5, 0.05, 0.8) == 32
+    assert fibers_to_separate(0.0, 0.05, 0.8) is None
 
 
 def test_start_grid_does_not_vary_an_axis_the_data_do_not_vary():
@@ -95,8 +96,9 @@ def test_limit_interval_from_resampled_starts_holds_the_limit():
     import pandas as pd
 
     from fibersweep.discrepancy.candidates import Candidate
+    from fibersweep.discrepancy.detection import detection_limit, growth_exponent
     from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, value_matrices
-    from fibersweep.discrepancy.power import _gamma, _limit, _z_of, limit_intervals
+    from fibersweep.discrepancy.power import _z_of, limit_intervals
 
     cand = Candidate("pillar_scale", -0.2, 0.2, (0.1,), 0.08, "")
     rng = np.random.default_rng(1)
@@ -112,8 +114,9 @@ def test_limit_interval_from_resampled_starts_holds_the_limit():
         one = tuple(bool(v) for v in feature_one_sided(g0))
         zc = float(norm.ppf(1 - 0.05 / (2 * len(one))))
         zf, zh = _z_of(full, base, ["delta"], rng), _z_of(half, base, ["delta"], rng)
-        e = EffectPower("pillar_scale", 0.1, tuple(zf), _gamma(zf, zh), None, one)
-        e = EffectPower(e.name, e.probe, e.z, e.gamma, _limit(e, cand, 100, n_sim, zc, 0.8), one)
+        e = EffectPower("pillar_scale", 0.1, tuple(zf), growth_exponent(zf, zh), None, one)
+        lim = detection_limit(e, cand, 100, n_sim, zc, 0.8)
+        e = EffectPower(e.name, e.probe, e.z, e.gamma, lim, one)
         (eb,) = limit_intervals([e], [(full, half)], base, [cand], 100, ["delta"], zc, 0.8,
                                 rng, n_boot=40)  # fmt: skip
         lo, hi = eb.limit_ci
@@ -230,3 +233,40 @@ def test_the_power_bar_ends_at_the_runs_that_ran(probe):
     pw = analyse_power(maker, [cand], 100, ["delta"], np.random.default_rng(1), n_sim=60)
     assert maker.sim.planned == maker.sim.used == pw.simulations
     assert (pw.simulations > certain) == (pw.effects[0].read_at is not None)
+
+
+def test_fibers_to_name_from_the_per_fiber_improvement():
+    from fibersweep.discrepancy.followup import fibers_to_name
+
+    # mean 2, sd sqrt(2), one candidate: ceil(((z_0.95 + z_0.8) sqrt(2) / 2)^2) = 4
+    z = norm.ppf(0.95) + norm.ppf(0.8)
+    want = math.ceil((z / math.sqrt(2)) ** 2)
+    assert fibers_to_name(np.array([1.0, 3.0, np.nan]), 1, 0.05) == want == 4
+    assert fibers_to_name(np.array([1.0, -3.0]), 2, 0.05) is None  # no improvement
+
+
+def test_power_fibers_are_what_the_report_prints():
+    """The follow-up stage computes the counts the report shows (the report computes none)."""
+    from dataclasses import replace
+
+    from fibersweep.discrepancy.decide import HeldOut
+    from fibersweep.discrepancy.detection import PowerResult
+    from fibersweep.discrepancy.followup import fibers_to_name, power_fibers
+
+    effects = [EffectPower("friction", 0.5, (2.0,), 1.0, 0.3),
+               EffectPower("fiber.x", 1.0, (3.0,), 1.0, 0.5)]  # fmt: skip
+    pw = PowerResult(n=40, n_sim=50, alpha=0.05, power=0.8, z_crit=2.8, effects=effects,
+                     lookalikes=[], cosines={}, simulations=0)  # fmt: skip
+    d = np.random.default_rng(0).normal(0.3, 1.0, 40)
+    held = [HeldOut("friction", 0.4, (0.2, 0.0, 0.4), 0.1, 0.2, False, None, False, d),
+            HeldOut("fiber.x", 0.0, (0.5, 0.1, 0.9), 0.1, 0.2, False, None, False, d)]  # fmt: skip
+    out = power_fibers(pw, held, 0.05)
+    # a library effect at its realistic magnitude; a declared candidate has none
+    assert out.realistic == ((0.5, pw.fibers_to_detect("friction", 0.5)), (None, None))
+    assert out.leading is None  # the best improvement kept the baseline (value 0)
+    out = power_fibers(pw, [held[0], replace(held[1], value=0.7)], 0.05)
+    lead = out.leading
+    assert (lead.name, lead.value) == ("fiber.x", 0.7)
+    assert lead.fibers_to_detect == pw.fibers_to_detect("fiber.x", 0.7)
+    assert lead.fibers_to_detect_ci is None  # no bootstrap read-outs
+    assert lead.fibers_to_name == fibers_to_name(d, 2, 0.05, 0.8)

@@ -13,16 +13,15 @@ import pytest
 from scipy.stats import norm
 
 from fibersweep.discrepancy.candidates import Candidate
-from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, value_matrices
-from fibersweep.discrepancy.power import (
+from fibersweep.discrepancy.detection import (
     EffectPower,
     PowerResult,
-    _gamma,
-    _limit,
-    _z_of,
-    limit_intervals,
+    detection_limit,
+    growth_exponent,
     percentile_interval,
 )
+from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, value_matrices
+from fibersweep.discrepancy.power import _z_of, limit_intervals
 
 CAND = Candidate("pillar_scale", -0.2, 0.2, (0.1,), 0.08, "")
 
@@ -36,7 +35,7 @@ def test_percentile_interval_is_two_order_statistics_and_never_nan():
     assert percentile_interval([]) == (None, None)
 
 
-def test_fibers_needed_interval_follows_each_resamples_read_out():
+def test_fibers_to_detect_interval_follows_each_resamples_read_out():
     # one two-sided test, z = 2 on 50 simulated fibers: N = 50 ((zc + z_0.8) / z)^2.
     # Resamples with z from 1.5 to 2.5 give their own N, exactly (to the ceiling); the
     # 95 % interval of 40 resamples is their 1st and 39th order statistics.
@@ -44,19 +43,19 @@ def test_fibers_needed_interval_follows_each_resamples_read_out():
     zs = np.linspace(1.5, 2.5, 40)
     e = EffectPower("x", 0.1, (2.0,), 1.0, None, boot=tuple(((float(z),), 1.0) for z in zs))
     need = sorted(math.ceil(50 * ((zc + norm.ppf(0.8)) / z) ** 2) for z in zs)
-    lo, hi = e.fibers_needed_ci(0.1, 50, zc, 0.8)
+    lo, hi = e.fibers_to_detect_ci(0.1, 50, zc, 0.8)
     assert (lo, hi) == (need[0], need[38])
-    assert lo <= e.fibers_needed(0.1, 50, zc, 0.8) <= hi
+    assert lo <= e.fibers_to_detect(0.1, 50, zc, 0.8) <= hi
     # a resample that sees nothing needs more than any number of fibers: open upper end
     e0 = EffectPower(
         "x", 0.1, (2.0,), 1.0, None, boot=(((2.0,), 1.0),) * 30 + (((0.0,), 1.0),) * 10
     )
-    assert e0.fibers_needed_ci(0.1, 50, zc, 0.8)[1] is None
+    assert e0.fibers_to_detect_ci(0.1, 50, zc, 0.8)[1] is None
     # without resamples: no interval; PowerResult finds the entry by name and sign
-    assert EffectPower("x", 0.1, (2.0,), 1.0, None).fibers_needed_ci(0.1, 50, zc, 0.8) is None
+    assert EffectPower("x", 0.1, (2.0,), 1.0, None).fibers_to_detect_ci(0.1, 50, zc, 0.8) is None
     pw = PowerResult(100, 50, 0.05, 0.8, zc, [e], [], {}, 0)
-    assert pw.fibers_needed_ci("x", 0.1) == (lo, hi)
-    assert pw.fibers_needed_ci("x", -0.1) is None
+    assert pw.fibers_to_detect_ci("x", 0.1) == (lo, hi)
+    assert pw.fibers_to_detect_ci("x", -0.1) is None
 
 
 def _read_out(rng: np.random.Generator, n_sim: int, n_boot: int, sigma: float = 0.05):
@@ -75,8 +74,9 @@ def _read_out(rng: np.random.Generator, n_sim: int, n_boot: int, sigma: float = 
     one = tuple(bool(v) for v in feature_one_sided(g0))
     zc = float(norm.ppf(1 - 0.05 / (2 * len(one))))
     zf, zh = _z_of(full, base, ["delta"], rng), _z_of(half, base, ["delta"], rng)
-    e = EffectPower("pillar_scale", 0.1, tuple(zf), _gamma(zf, zh), None, one)
-    e = EffectPower(e.name, e.probe, e.z, e.gamma, _limit(e, CAND, 100, n_sim, zc, 0.8), one)
+    e = EffectPower("pillar_scale", 0.1, tuple(zf), growth_exponent(zf, zh), None, one)
+    lim = detection_limit(e, CAND, 100, n_sim, zc, 0.8)
+    e = EffectPower(e.name, e.probe, e.z, e.gamma, lim, one)
     if not n_boot:
         return e
     (eb,) = limit_intervals([e], [(full, half)], base, [CAND], 100, ["delta"], zc, 0.8, rng,
@@ -113,7 +113,8 @@ def test_each_resamples_read_out_reproduces_its_limit():
     zc = float(norm.ppf(1 - 0.05 / (2 * len(e.z))))
     lims = []
     for z, g in e.boot:
-        lim = _limit(EffectPower(e.name, e.probe, z, g, None, e.one_sided), CAND, 100, 40, zc, 0.8)
+        eb = EffectPower(e.name, e.probe, z, g, None, e.one_sided)
+        lim = detection_limit(eb, CAND, 100, 40, zc, 0.8)
         lims.append(math.inf if lim is None else lim)
     assert percentile_interval(lims) == pytest.approx(e.limit_ci)
 
@@ -123,7 +124,7 @@ def test_a_refined_read_out_passes_through_both_magnitudes_per_test():
     # own power law between them (exponents 1 and 2), exact at both ends to 1e-12,
     # and the exponents are clipped to [0.5, 3] (a test that reads nothing below
     # grows as fast as allowed).
-    from fibersweep.discrepancy.power import pair_exponents
+    from fibersweep.discrepancy.detection import pair_exponents
 
     za, zb = np.array([1.0, -0.2]), np.array([4.0, -3.2])
     assert np.allclose(pair_exponents(za, 0.01, zb, 0.04), [1.0, 2.0], rtol=0, atol=1e-12)
@@ -141,4 +142,5 @@ def test_a_refined_read_out_passes_through_both_magnitudes_per_test():
     )
     # a bootstrap read-out of a refined entry carries its second z-vector
     eb = replace(e, boot=((tuple(za), 1.0, tuple(zb)),) * 3)
-    assert eb.fibers_needed_ci(0.02, 10, 2.5, 0.8) == (eb.fibers_needed(0.02, 10, 2.5, 0.8),) * 2
+    need = eb.fibers_to_detect(0.02, 10, 2.5, 0.8)
+    assert eb.fibers_to_detect_ci(0.02, 10, 2.5, 0.8) == (need,) * 2

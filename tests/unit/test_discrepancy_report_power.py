@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from fibersweep.discrepancy.advice import advice_lines as _advice
-from fibersweep.discrepancy.report_text import _power
+from fibersweep.discrepancy.report_followup import power_lines
 
 
 def _summary(kind: str) -> dict:
@@ -24,7 +24,7 @@ def _summary(kind: str) -> dict:
 
 
 def test_power_table_shows_each_limit_with_its_interval():
-    text = "\n".join(_power(_summary("unexplained")))
+    text = "\n".join(power_lines(_summary("unexplained")))
     assert "| friction | + | 0.11 | [0.08, 0.2] |" in text
     # an upper end beyond the effect's range in more than 2.5 % of the resamples
     assert "| pillar_hydro | + | 0.3 | [0.1, out of range] |" in text
@@ -59,7 +59,7 @@ def test_unexplained_without_a_candidate_sends_the_fibers_where_the_gap_is_large
 
 def test_power_curve_numbers_for_the_leading_candidate_carry_their_interval():
     from fibersweep.discrepancy.advice import next_measurement
-    from fibersweep.discrepancy.report_text import _power
+    from fibersweep.discrepancy.report_followup import power_lines
 
     s = _summary("unexplained")
     s["n_fibers"] = 100
@@ -70,7 +70,7 @@ def test_power_curve_numbers_for_the_leading_candidate_carry_their_interval():
     assert "for friction = 0.21: about 140 fibers would detect a gap of its size" in adv
     assert "(95 % over the simulated starts: 90 to more than 100000)" in adv
     assert "about 260 would name it (held-out improvement significant, 160 more than the 100" in adv
-    text = "\n".join(_power(s))
+    text = "\n".join(power_lines(s))
     assert (
         "about 140 fibers would detect a gap of this size (95 % over the simulated "
         "starts: 90 to more than 100000)" in text
@@ -80,14 +80,14 @@ def test_power_curve_numbers_for_the_leading_candidate_carry_their_interval():
 def test_what_to_measure_next_asks_for_starts_spread_over_the_window():
     """The count and the follow-up test assume starts scattered over the window, and
     one test of the fibers: the report says both; without a window, the starts only."""
-    from fibersweep.discrepancy.report_text import _next
+    from fibersweep.discrepancy.report_followup import next_lines
 
     s = _summary("ambiguous")
     s["next"] |= {"hypotheses": ["a = 1", "b = 2"],
                   "best": [{"theta0": 4.0, "y0": 0.3, "length": 1.1, "d": 0.4,
                             "observable": "t_pass", "a": 0.5, "b": 0.6}]}  # fmt: skip
-    text = "\n".join(_next(s | {"next": s["next"] | {"window": [3.0, 0.03, 0.03]}}))
+    text = "\n".join(next_lines(s | {"next": s["next"] | {"window": [3.0, 0.03, 0.03]}}))
     assert "with starts spread over θ0 ±3°, y0 ±0.03 h_obs, L ±0.03 l_obs" in text
     assert "not aimed at one point" in text and "`--followup`, once" in text
     assert "About 23 fibers there" in text
-    assert "measure fibers at these starts" in "\n".join(_next(s))
+    assert "measure fibers at these starts" in "\n".join(next_lines(s))

@@ -12,15 +12,14 @@ import pytest
 from scipy.stats import norm
 
 from fibersweep.discrepancy.decide import Verdict
-from fibersweep.discrepancy.gap import GapResult, assess_gap
-from fibersweep.discrepancy.settle import (
-    Settlement,
+from fibersweep.discrepancy.discriminant import (
     SettleTest,
     discriminant,
-    fibers_needed,
+    fibers_to_settle,
     settle_test,
-    settled_verdict,
 )
+from fibersweep.discrepancy.gap import GapResult, assess_gap
+from fibersweep.discrepancy.settle import Settlement, settled_verdict
 
 
 def test_discriminant_is_the_gaussian_log_likelihood_ratio():
@@ -79,7 +78,7 @@ def test_power_matches_the_closed_form():
     assert abs(m_a - n * d**2 / 2) < 0.2 and abs(sd_a - np.sqrt(n) * d) < 0.2, (m_a, sd_a)
     # fibers for power 0.8 of each test at alpha, closed form: ((z_0.95 + z_0.8) / D)² =
     # 6.2 -> 7; the estimate from copies is within one fiber
-    need = [r.fibers_needed for r in res[:20]]
+    need = [r.fibers_to_settle for r in res[:20]]
     assert all(6 <= k <= 8 for k in need), need
 
 
@@ -164,19 +163,19 @@ def test_the_count_it_gives_has_the_power_it_states():
                            _gaussian(rng, mu["B"], 8), _gaussian(rng, mu["A"], 16),
                            _gaussian(rng, mu["B"], 16), rng, n_draws=999)  # fmt: skip
 
-    need = int(np.median([trial(10, "A").fibers_needed or 10**6 for _ in range(60)]))
+    need = int(np.median([trial(10, "A").fibers_to_settle or 10**6 for _ in range(60)]))
     assert 25 < need < 120, need
     for truth, wrong in (("A", 1), ("B", 0)):
         power = np.mean([trial(need, truth).p_values[wrong] <= 0.05 for _ in range(300)])
         assert abs(power - 0.8) < 0.08, (truth, need, power)
 
 
-def test_fibers_needed_is_none_without_a_separation():
-    assert fibers_needed(0.0, 1.0, 1.0, 0.05) is None
-    assert fibers_needed(1.0, np.nan, 1.0, 0.05) is None
+def test_fibers_to_settle_is_none_without_a_separation():
+    assert fibers_to_settle(0.0, 1.0, 1.0, 0.05) is None
+    assert fibers_to_settle(1.0, np.nan, 1.0, 0.05) is None
     # closed form ((z_0.95 + z_0.8) / 1)² = 6.18 -> 7; 16 null copies: × (17/16)² -> 7
-    assert fibers_needed(1.0, 1.0, 1.0, 0.05) == 7
-    assert fibers_needed(0.5, 1.0, 1.0, 0.05, k_null=16) == 28
+    assert fibers_to_settle(1.0, 1.0, 1.0, 0.05) == 7
+    assert fibers_to_settle(0.5, 1.0, 1.0, 0.05, k_null=16) == 28
 
 
 def test_outcomes():
@@ -193,7 +192,7 @@ def test_outcomes():
     # identical hypotheses: nothing separates them, and no number of fibers would
     same = _trial(rng, mu_a, mu_a, mu_a)
     assert same.outcome == "undecided"
-    assert same.fibers_needed is None or same.fibers_needed > 1000
+    assert same.fibers_to_settle is None or same.fibers_to_settle > 1000
 
 
 def test_shapes_are_checked():

@@ -19,7 +19,7 @@ from fibersweep.discrepancy.candidates import get_candidates
 from fibersweep.discrepancy.decide import decide
 from fibersweep.discrepancy.dispersion import shift_test, spread_test
 from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
-from fibersweep.discrepancy.workflow import Run, cross_fit, noise_floor, rank, refit
+from fibersweep.discrepancy.stages import Run, cross_fit, noise_floor, rank, refit
 
 SIGMA = 0.02  # sd of δ of a copy without start noise
 SHIFT = 0.2  # δ shift per unit of inlet_speed

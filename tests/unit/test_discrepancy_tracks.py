@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from fibersweep.analysis.observables import station_crossings, station_positions, track_values
 from fibersweep.analysis.trajectory import Trajectory
 from fibersweep.discrepancy.copies import NoiseModel
 from fibersweep.discrepancy.measured import (
@@ -19,7 +20,6 @@ from fibersweep.discrepancy.measured import (
 from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws, scored, track_observables
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import frames, outcome_row
-from fibersweep.discrepancy.tracks import station_crossings, station_positions, track_values
 from fibersweep.errors import InputError
 from fibersweep.fiber.effects.pillar_scale import scaled_track as nominal_track
 from fibersweep.fiber.result import FiberStart, RunResult

@@ -118,9 +118,10 @@ def test_a_finer_flow_grid_is_named_after_the_follow_up_fibers(
     assert {"flow.dx=2": 1.0} in [dict(a) for a in res.verdict.alternatives], res.verdict.text
     if res.verdict.kind == "ambiguous":
         nxt = res.extra["next"]
-        assert nxt.fibers_needed is not None and nxt.fibers_needed <= 300, nxt.fibers_needed
+        need = nxt.fibers_to_settle
+        assert need is not None and need <= 300, need
         centres = np.array([[b.theta0, b.y0, b.length] for b in nxt.best[:5]])
-        more = synthesize_near(fine, FIBER, centres, 2 * nxt.fibers_needed, seed=10522,
+        more = synthesize_near(fine, FIBER, centres, 2 * nxt.fibers_to_settle, seed=10522,
                                workers=2)  # fmt: skip
         res = settle_result(res, validate_measured(more), coarse_field, FIBER, progress=False,
                             flow=coarse_settings, cache_dir=flow_cache_dir)  # fmt: skip

@@ -8,7 +8,7 @@ import pytest
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.candidates import get_candidates
 from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
-from fibersweep.discrepancy.followup import discriminate
+from fibersweep.discrepancy.next_measure import discriminate
 from fibersweep.discrepancy.observables import scored
 from fibersweep.discrepancy.power import analyse_power
 from fibersweep.discrepancy.report_figures import next_figure
@@ -28,14 +28,14 @@ def test_identical_hypotheses_cannot_be_separated_and_a_speed_change_can(coarse_
     with Simulator(coarse_field, FiberSettings(), workers=1, progress=False) as sim:
         same = discriminate(sim, NoiseModel(), ({}, {}), measured, scored(), grid=grid)
         # common random numbers: the same hypothesis twice gives the same runs, D = 0
-        assert np.all(same.d == 0.0) and same.fibers_needed is None
+        assert np.all(same.d == 0.0) and same.fibers_to_settle is None
         fast = discriminate(
             sim, NoiseModel(), ({}, {"inlet_speed": 0.1}), measured, scored(), grid=grid
         )
     # a 10 % faster inlet shortens every time by ~9 % against 1 % timing noise: a time
     # observable separates them, and a handful of fibers (<= 5) settle it
     assert fast.best[0].observable in ("t_pass", "dwell")
-    assert fast.fibers_needed is not None and fast.fibers_needed <= 5
+    assert fast.fibers_to_settle is not None and fast.fibers_to_settle <= 5
     with paper_style():
         png = next_figure(fast, measured[:, :2], tmp_path / "next.png")
     assert png.stat().st_size > 0

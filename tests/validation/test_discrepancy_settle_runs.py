@@ -44,7 +44,7 @@ def test_follow_up_fibers_pick_the_truth_between_two_hypotheses(coarse_field):
     # and the winner leaves no significant gap on them
     assert outcomes["B"].settled and outcomes["A"].settled
     # the expected sums are well apart: the fibers needed for power 0.8 are few
-    assert outcomes["A"].test.fibers_needed <= 4
+    assert outcomes["A"].test.fibers_to_settle <= 4
 
 
 def test_follow_up_fibers_are_kept_by_their_measured_start(coarse_field):

@@ -45,15 +45,10 @@ from fibersweep.discrepancy.estimate import merged_profile as _merged
 from fibersweep.discrepancy.fit import fit_effect, fold_fits, per_fiber_loss, refit_bounds
 from fibersweep.discrepancy.gap import value_matrices
 from fibersweep.discrepancy.schema import validate_measured
+from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
 from fibersweep.discrepancy.simulate import Simulator
+from fibersweep.discrepancy.stages import Run, noise_floor, rank
 from fibersweep.discrepancy.synth import synthesize
-from fibersweep.discrepancy.workflow import (
-    DiscrepancySettings,
-    Run,
-    noise_floor,
-    plan_budget,
-    rank,
-)
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import BOX, DEFAULT_CACHE, study_field  # noqa: E402

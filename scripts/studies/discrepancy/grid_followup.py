@@ -98,12 +98,12 @@ def main(argv: list[str] | None = None) -> int:
     out = {"truth_dx": a.truth_dx, "n": a.n, "seed": a.seed, "first": reported(res, sec)}
     print(f"first ({len(table)} fibers): {res.verdict.text} [{res.simulations} runs, {sec:.0f} s]")
     nxt = res.extra.get("next")
-    if res.verdict.kind != "named" and nxt is not None and nxt.fibers_needed and a.max_more:
+    if res.verdict.kind != "named" and nxt is not None and nxt.fibers_to_settle and a.max_more:
         best = nxt.best[: a.starts]
-        more = min(int(math.ceil(a.factor * nxt.fibers_needed)), a.max_more)
+        more = min(int(math.ceil(a.factor * nxt.fibers_to_settle)), a.max_more)
         out["fibers_added"] = {"fibers": more, "starts": len(best)}
         print(f"what to measure next: {nxt.labels[0]} against {nxt.labels[1]}; "
-              f"{nxt.fibers_needed} fibers at the best starts; adding {more}")  # fmt: skip
+              f"{nxt.fibers_to_settle} fibers at the best starts; adding {more}")  # fmt: skip
         centres = np.array([[b.theta0, b.y0, b.length] for b in best])
         extra = synthesize_near(truth_field, FIBER, centres, more, seed=a.seed + 1000,
                                 workers=a.workers)  # fmt: skip
@@ -116,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
               f"[{res2.simulations - res.simulations} more runs, {sec2:.0f} s]")  # fmt: skip
     elif nxt is not None:
         print(f"what to measure next: {nxt.labels[0]} against {nxt.labels[1]}; "
-              f"{nxt.fibers_needed} fibers at the best starts; none added")  # fmt: skip
+              f"{nxt.fibers_to_settle} fibers at the best starts; none added")  # fmt: skip
     else:
         print("no follow-up:", res.extra.get("next_skipped", "nothing to separate"))
     (a.out / "summary.json").write_text(json.dumps(out, indent=2) + "\n", encoding="utf-8")

@@ -20,9 +20,10 @@ import numpy as np
 
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
+from fibersweep.discrepancy.detection import ensemble_factor
 from fibersweep.discrepancy.gap import assess_gap, feature_one_sided, value_matrices
 from fibersweep.discrepancy.observables import scored
-from fibersweep.discrepancy.power import _z_vector, ensemble_factor
+from fibersweep.discrepancy.power import _z_vector
 from fibersweep.discrepancy.simulate import Simulator
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))

@@ -6,14 +6,14 @@ detection limit at N = 100), measured-like fibers synthesised with it
 (:func:`synth.synthesize`), and ONLY the workflow's own stages for the true
 effect(s), with no candidate screening:
 
-- the noise floor (:func:`workflow.noise_floor`: baseline copies, the gap, the
+- the noise floor (:func:`stages.noise_floor`: baseline copies, the gap, the
   loss weights of the observables with a gap); a data set without a significant
   gap is recorded and left out of the coverage (the workflow names nothing);
-- the signature of the true effect alone (:func:`workflow.rank`; it gives a signed
+- the signature of the true effect alone (:func:`stages.rank`; it gives a signed
   effect's side and makes a random effect the lead, with its extra fit copies);
 - single and random: the halves' fits (:func:`fit.fold_fits`), the pooled refit
   (:func:`fit.pooled_refit`) and its interval (:func:`estimate.score_interval`), as
-  :func:`workflow.refit` runs them for a significant candidate;
+  :func:`stages.refit` runs them for a significant candidate;
 - pair: both members' halves, the first member's pooled refit and the gap it
   leaves (the pair's loss weights, :func:`pairs.pair_weights`), the joint fit on
   each fold (:func:`pairs.joint_fit`) and each member's refit with its interval
@@ -54,15 +54,10 @@ from fibersweep.discrepancy.fit import fold_fits, pooled_refit
 from fibersweep.discrepancy.gap import assess_gap, value_matrices
 from fibersweep.discrepancy.pairs import SelectionInput, joint_fit, pair_refits, pair_weights
 from fibersweep.discrepancy.schema import validate_measured
+from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
 from fibersweep.discrepancy.simulate import Simulator
+from fibersweep.discrepancy.stages import Run, noise_floor, rank
 from fibersweep.discrepancy.synth import synthesize
-from fibersweep.discrepancy.workflow import (
-    DiscrepancySettings,
-    Run,
-    noise_floor,
-    plan_budget,
-    rank,
-)
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from common import BOX, DEFAULT_CACHE, study_field, wilson  # noqa: E402

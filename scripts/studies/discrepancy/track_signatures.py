@@ -4,11 +4,12 @@ For N fibers with starts uniform in the quick config's sweep box, simulate
 ``--copies`` jittered baseline copies and ``--effect-copies`` jittered copies
 with each effect on, observe them as a measurement would (summary observables:
 their noise laws; tracks: resampled at ``--fps`` with per-frame noise
-1 µm / 1.5°, then derived by :func:`fibersweep.discrepancy.tracks.track_values`),
-and print per observable and effect the shift z-score: the mean over fibers of
-(effect copy - mean of the baseline copies) over its standard error (times on a
-log scale). It also prints the spread of (noisy-track value - exact value), the
-measurement error the noise laws of the track observables must describe.
+1 µm / 1.5°, then derived by
+:func:`fibersweep.analysis.observables.track_values`), and print per observable
+and effect the shift z-score: the mean over fibers of (effect copy - mean of the
+baseline copies) over its standard error (times on a log scale). It also prints
+the spread of (noisy-track value - exact value), the measurement error the noise
+laws of the track observables must describe.
 
 Usage::
 
@@ -25,12 +26,12 @@ import time
 import numpy as np
 import pandas as pd
 
+from fibersweep.analysis.observables import track_values
 from fibersweep.config import axis_values, load_config
 from fibersweep.discrepancy.copies import NoiseModel
 from fibersweep.discrepancy.observables import log_scale, noise_draws
 from fibersweep.discrepancy.simulate import outcome_row
 from fibersweep.discrepancy.synth import parse_effects
-from fibersweep.discrepancy.tracks import track_values
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
 from fibersweep.flow.cache import get_flow_field
