@@ -653,7 +653,7 @@ def _api_functions() -> list[str]:
 def _api_page() -> str:
     from fibersweep import api
 
-    src = "the docstrings of the public API (`fibersweep/api.py`)"
+    src = "the docstrings of the public API (`fibersweep/api/`)"
     description, _ = _doc_sections(api.__doc__)
     intro = description.split("\n\n")
     lines = [

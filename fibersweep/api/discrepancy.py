@@ -1,0 +1,225 @@
+"""Measured fibers against the model (``fibersweep discrepancy``)."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from dataclasses import field as attr
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # annotations only: the API imports what it runs when it runs it
+    from fibersweep.config import Config
+    from fibersweep.discrepancy.workflow import DiscrepancyResult, DiscrepancySettings
+
+from fibersweep.api.common import load_config
+
+log = logging.getLogger("fibersweep.api")
+
+
+def refuse_array(cfg: Config, command: str) -> None:
+    """The discrepancy workflow is the channel's: refuse a pillar array, naming what to use.
+
+    Raises
+    ------
+    InputError
+        ``cfg`` has ``flow.array``.
+    """
+    from fibersweep.errors import InputError
+
+    if cfg.flow.array is not None:
+        raise InputError(
+            f"{command}: the discrepancy workflow compares fibers measured past one pillar in "
+            "a channel (class, δ, contact, exit position); a pillar array (flow.array) has "
+            "none of these observables. For an array: fibersweep run CONFIG, then fibersweep "
+            "sort-report RESULTS (migration, critical lengths, outlets)"
+        )
+
+
+def sweep_box(cfg: Config) -> dict[str, tuple[float, float]]:
+    """The range of the config's start axes: theta0 [deg], y0 [h_obs], length [l_obs]."""
+    from fibersweep.config import axis_values
+
+    box = {}
+    for name in ("theta0", "y0", "length"):
+        v = axis_values(getattr(cfg.sweep, name))
+        box[name] = (float(v.min()), float(v.max()))
+    return box
+
+
+def declared_candidates(cfg: Config, candidates: Sequence[str] | None) -> tuple:
+    """Declared candidates: the config's ``discrepancy.candidates``, then ``candidates``
+    (``--candidate`` texts: ``KEY=LO..HI``, ``KEY=VALUE``, or a switch with its parameter)."""
+    from fibersweep.discrepancy.declared import parse_candidates
+
+    texts = list(cfg.discrepancy.candidates)
+    where = [f"discrepancy.candidates[{i}]:" for i in range(len(texts))]
+    texts += list(candidates or [])
+    where += ["--candidate"] * len(candidates or [])
+    return tuple(parse_candidates(texts, cfg.fiber, cfg.flow, where))
+
+
+@dataclass(frozen=True)
+class DiscrepancyPlan:
+    """What :func:`discrepancy` is about to run (handed to its ``on_plan``).
+
+    Attributes
+    ----------
+    fibers : int
+        Measured fibers.
+    settings : DiscrepancySettings
+        The workflow's settings (its budget plan:
+        :func:`fibersweep.discrepancy.settings.plan_budget`).
+    followup : int or None
+        Follow-up fibers, if given.
+    """
+
+    fibers: int
+    settings: DiscrepancySettings
+    followup: int | None = None
+
+
+@dataclass(frozen=True)
+class DiscrepancyReport:
+    """The discrepancy workflow's result and the report written (:func:`discrepancy`).
+
+    Attributes
+    ----------
+    result : DiscrepancyResult
+        Everything the report is made of: the verdict, the gap, the fits...
+    summary : dict
+        The report's JSON summary (``summary.json``): ``verdict`` (``kind``,
+        ``text``), ``simulations``, ``seconds`` [s], ``updated_configs``...
+    path : Path
+        The report folder (``report.md``, ``summary.json``, figures, updated configs).
+    """
+
+    result: DiscrepancyResult = attr(repr=False)
+    summary: dict[str, Any] = attr(repr=False)
+    path: Path = Path("report")
+
+    @property
+    def verdict(self) -> dict[str, Any]:
+        """``kind`` (named, ambiguous, no gap, unexplained...) and ``text``."""
+        return self.summary["verdict"]
+
+    @property
+    def files(self) -> tuple[Path, ...]:
+        """The report and summary, and the updated configs written."""
+        return (self.path / "report.md", self.path / "summary.json",
+                *(self.path / c for c in self.summary.get("updated_configs", [])))  # fmt: skip
+
+
+def discrepancy(
+    measured: str | Path,
+    config: str | Path | Config,
+    *overrides: str,
+    output: str | Path = "report",
+    budget: int | None = None,
+    seed: int = 0,
+    copies: int = 8,
+    effects: Sequence[str] | None = None,
+    candidates: Sequence[str] = (),
+    alpha: float = 0.05,
+    pairs: int = 3,
+    power: bool = True,
+    propose_next: bool = True,
+    trajectories: str | Path | None = None,
+    followup: str | Path | None = None,
+    ignore_extra_columns: bool = False,
+    workers: int | None = None,
+    progress: bool = False,
+    on_plan: Callable[[DiscrepancyPlan], None] | None = None,
+) -> DiscrepancyReport:
+    """Where the model disagrees with fibers measured past one pillar, which effects
+    explain it, and the gap left (``fibersweep discrepancy``); writes the report.
+
+    With ``followup``, ``measured`` is analysed as without it (same seed, same
+    verdict), then the two hypotheses the verdict leaves are tested on the
+    follow-up fibers.
+
+    Parameters
+    ----------
+    measured : str or Path
+        Measured fibers (.parquet or .csv; ``docs/reference/columns.md``).
+    config : str, Path or Config
+        The model's config (one pillar in a channel).
+    *overrides : str
+        ``KEY=VALUE`` settings.
+    output : str or Path
+        Report folder.
+    budget : int, optional
+        Most simulations in total.
+    seed : int
+        Random seed.
+    copies : int
+        Jittered baseline copies per fiber.
+    effects : sequence of str, optional
+        Library effects to consider [default: all].
+    candidates : sequence of str
+        Settings as candidate explanations: ``KEY=LO..HI`` (fitted), ``KEY=VALUE``, or a
+        switch with its parameter; the config's ``discrepancy.candidates`` too.
+    alpha : float
+        Family-wise error rate.
+    pairs : int
+        Pairs of effects tried (0: single effects only).
+    power : bool
+        Power analysis when the verdict is no gap or unexplained.
+    propose_next : bool
+        Propose starts that separate two candidates when undecided.
+    trajectories : str or Path, optional
+        Measured tracks of every fiber (``docs/trajectories.md``).
+    followup : str or Path, optional
+        Fibers measured after a first analysis (same schema).
+    ignore_extra_columns : bool
+        Ignore columns the schema does not know.
+    workers : int, optional
+        Worker processes [default: ``run.workers``].
+    progress : bool
+        Show a progress bar over the simulations.
+    on_plan : callable, optional
+        Called with the :class:`DiscrepancyPlan` before anything runs.
+
+    Returns
+    -------
+    DiscrepancyReport
+    """
+    from fibersweep.discrepancy.measured import load_measured
+    from fibersweep.discrepancy.report import write_report
+    from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
+    from fibersweep.flow.cache import get_flow_field
+
+    cfg = load_config(config, *overrides)
+    refuse_array(cfg, "discrepancy")
+    data = load_measured(
+        measured, trajectories, ignore_extra=ignore_extra_columns,
+        geometry=cfg.flow.geometry.to_geometry(),
+    )  # fmt: skip
+    more = (
+        load_measured(followup, ignore_extra=ignore_extra_columns)
+        if followup is not None
+        else None
+    )
+    settings = DiscrepancySettings(
+        copies=copies, budget=budget, seed=seed, alpha=alpha, pairs=pairs,
+        power_fibers=40 if power else 0, next_copies=2 if propose_next else 0,
+        workers=workers or cfg.run.workers,
+        executor=cfg.run.executor, scheduler=cfg.run.scheduler,
+        effects=tuple(effects) if effects else None,
+        declared=declared_candidates(cfg, candidates),
+    )  # fmt: skip
+    plan = DiscrepancyPlan(len(data), settings, None if more is None else len(more))
+    if on_plan is not None:
+        on_plan(plan)
+    field_, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
+    res = run_discrepancy(data, field_, cfg.fiber, settings, progress=progress, flow=cfg.flow,
+                          cache_dir=cfg.run.cache_dir, followup=more)  # fmt: skip
+    out = Path(output)
+    summary = write_report(res, out, cfg.model_dump(mode="json"))
+    log.info("discrepancy: %s (%d simulations) -> %s", summary["verdict"]["kind"],
+             summary["simulations"], out)  # fmt: skip
+    return DiscrepancyReport(res, summary, out)
+
+
+# --------------------------------------------------------------------------- load
