@@ -28,7 +28,7 @@ in a pillar array ``y0`` is a fraction of ``period_y`` and ``length`` is in µm
 from __future__ import annotations
 
 from fibersweep.api.common import load, load_config
-from fibersweep.api.discrepancy import DiscrepancyPlan, DiscrepancyReport, discrepancy
+from fibersweep.api.compare import DiscrepancyPlan, DiscrepancyReport, discrepancy
 from fibersweep.api.fiber import FiberRun, simulate
 from fibersweep.api.flow import FieldReport, FlowFields, flow_field
 from fibersweep.api.progress import SweepBar, SweepProgress

@@ -28,14 +28,14 @@ from fibersweep.cli._app import (
 
 
 def _channel_only(cfg, command: str) -> None:
-    """The discrepancy workflow is the channel's (:func:`fibersweep.api.refuse_array`)."""
-    from fibersweep.api import refuse_array
+    """The discrepancy workflow is the channel's (:func:`fibersweep.api.compare.refuse_array`)."""
+    from fibersweep.api.compare import refuse_array
 
     refuse_array(cfg, command)
 
 
 def _sweep_box(cfg) -> dict[str, tuple[float, float]]:
-    from fibersweep.api import sweep_box
+    from fibersweep.api.compare import sweep_box
 
     return sweep_box(cfg)
 
@@ -141,7 +141,7 @@ CandidateOpt = Annotated[
 
 def _declared(cfg, candidate: list[str] | None) -> tuple:
     """Declared candidates: the config's ``discrepancy.candidates``, then ``--candidate``."""
-    from fibersweep.api import declared_candidates
+    from fibersweep.api.compare import declared_candidates
 
     return declared_candidates(cfg, candidate)
 
