@@ -20,10 +20,12 @@ from typing import Any
 
 from fibersweep.version import __version__
 
-#: The functions of :mod:`fibersweep.api` offered at the top level.
+#: The functions of :mod:`fibersweep.api` offered at the top level. The discrepancy
+#: workflow is ``fibersweep.api.discrepancy``: at the top level that name is the
+#: subpackage :mod:`fibersweep.discrepancy` once anything has imported it.
 API = (
     "load_config", "run", "estimate", "simulate", "flow_field", "sort_report", "classify",
-    "discrepancy", "load",
+    "load",
 )  # fmt: skip
 
 __all__ = ["__version__", *API]
