@@ -32,9 +32,10 @@ def migration_figure(
 ):
     """Mean f (± standard error) and migration angle (± sd) against length, per setting.
 
-    The critical lengths (mean f crossing ``level``) are marked on both panels, with
-    their statistical error as a shaded band; the trapped share of each length (runs
-    not in the means) has its own panel below.
+    The critical lengths (mean f crossing ``level``) are marked on every panel, with
+    their 95 % interval (scatter and interpolation between the simulated lengths,
+    ``ci_lo``–``ci_hi`` of the critical table) as a shaded band; the trapped share of
+    each length (runs not in the means) has its own panel below.
 
     Parameters
     ----------
@@ -63,7 +64,11 @@ def migration_figure(
                 + ", ".join(
                     (("rising " if r.rising else "falling ") if both else "")
                     + f"{r.critical:.1f}"
-                    + (f" ± {r.se:.1f}" if math.isfinite(r.se) else "")
+                    + (
+                        f" (95 %: {r.ci_lo:.1f} to {r.ci_hi:.1f})"
+                        if math.isfinite(r.ci_lo) and math.isfinite(r.ci_hi)
+                        else ""
+                    )
                     for r in mine.itertuples()
                 )
                 + " µm"
@@ -93,16 +98,15 @@ def migration_figure(
             for r in mine.itertuples():
                 for ax in (ax_f, ax_a, ax_t):
                     ax.axvline(r.critical, color=col, ls="--", lw=0.9)
-                    if math.isfinite(r.se) and r.se > 0:
-                        ax.axvspan(
-                            r.critical - r.se, r.critical + r.se, color=col, alpha=0.12, lw=0
-                        )
+                    if math.isfinite(r.ci_lo) and math.isfinite(r.ci_hi) and r.ci_hi > r.ci_lo:
+                        ax.axvspan(r.ci_lo, r.ci_hi, color=col, alpha=0.12, lw=0)
     ax_f.axhline(level, color="0.5", lw=0.7, ls="-.")
     ax_f.axhline(0.0, color="0.8", lw=0.6)
     ax_f.axhline(1.0, color="0.8", lw=0.6)
     ax_f.set_ylabel("mean f of moving runs")
     ax_f.set_title(
-        f"f = displacement per row / ε λy; dashed: critical lengths (f = {level:g}) ± error",
+        f"f = displacement per row / ε λy; dashed: critical lengths (f = {level:g}), "
+        "shaded: their 95 % interval",
         fontsize=7,
     )
     ax_a.axhline(0.0, color="0.5", lw=0.6)

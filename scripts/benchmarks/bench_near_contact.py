@@ -18,14 +18,17 @@ chain, so it runs with the gap law only), against the 10 s target.
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
+import sys
+from pathlib import Path
 
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.config.flow import FlowSettings
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
 from fibersweep.flow.cache import get_flow_field
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_near_wall import best, cases, compare  # noqa: E402  (the same cases and timing)
 
 SMOKE = ["--rounds", "1", "--repeat", "1", "--cache", "{cache}"]
 
@@ -43,17 +46,6 @@ def _all_on(base: FiberSettings, gap: float, corner: float) -> FiberSettings:
     )
 
 
-def _best(field, settings, start, repeat):
-    best = float("inf")
-    steps = 0
-    for _ in range(repeat):
-        t0 = time.process_time()
-        res = simulate(field, settings, start)
-        best = min(best, time.process_time() - t0)
-        steps = res.n_steps
-    return best, steps
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default=".fibersweep-cache")
@@ -63,38 +55,12 @@ def main() -> None:
     ap.add_argument("--corner", type=float, default=1.0, help="corner radius r_c [µm]")
     ap.add_argument("--flexible", action="store_true", help="also the flexible 20-row run")
     args = ap.parse_args()
-    channel, _ = get_flow_field(FlowSettings(dx=4.0), args.cache)
-    cell, _ = get_flow_field(
-        FlowSettings.model_validate({"dx": 2.0, "array": {"pillar_shape": "circle", "shift": 0.1}}),
-        args.cache,
-    )
-    rigid = FiberSettings()
-    sphere = FiberSettings(bead_radius=6.0, array_rows=20)
-    cases = [
-        ("channel, no contact (y0/h 0.8)", channel, rigid, FiberStart(0.0, 0.8, 1.0)),
-        ("channel, contact at the apex (y0/h 0.45)", channel, rigid, FiberStart(0.0, 0.45, 1.0)),
-        ("array eps 0.1, sphere a = 6 µm, 20 rows", cell, sphere, FiberStart(0.0, 0.37, 12.0)),
-    ]
     print(f"all on (near_wall 1, faxen 1, gap {args.gap:g} µm, curvature local, r_c "
           f"{args.corner:g} µm) against off; {args.rounds} rounds alternating, each the minimum "
           f"of {args.repeat} runs; medians over rounds")  # fmt: skip
-    for label, field, off, start in cases:
-        on = _all_on(off, args.gap, args.corner)
-        simulate(field, off, start)  # compile both
-        simulate(field, on, start)
-        times: dict[str, list[float]] = {"off": [], "on": []}
-        steps: dict[str, int] = {}
-        for _ in range(args.rounds):
-            for name, st in (("off", off), ("on", on)):
-                t, n = _best(field, st, start, args.repeat)
-                times[name].append(t)
-                steps[name] = n
-        t_off = statistics.median(times["off"])
-        t_on = statistics.median(times["on"])
-        per = (t_on / steps["on"]) / (t_off / steps["off"])
-        print(f"{label}\n  off {t_off * 1e3:8.2f} ms {steps['off']:6d} steps   "
-              f"on {t_on * 1e3:8.2f} ms {steps['on']:6d} steps   "
-              f"ratio per run {t_on / t_off:.3f}, per step {per:.3f}", flush=True)  # fmt: skip
+    for label, field, off, start in cases(args.cache):
+        compare(label, field, off, _all_on(off, args.gap, args.corner), start, args.rounds,
+                args.repeat)  # fmt: skip
     if args.flexible:
         flow = FlowSettings.model_validate(
             {"dx": 2.0, "array": {"pillar_shape": "circle", "shift": 0.1}}
@@ -112,7 +78,7 @@ def main() -> None:
         )
         start = FiberStart(0.0, 0.37, 80.0)
         simulate(field, flex, start)  # compile
-        t, n = _best(field, flex, start, 1)
+        t, n = best(field, flex, start, 1)
         print(f"flexible, b = a/2, 20 rows (E 100 kPa, L 80 µm): {t:.2f} s CPU, {n} steps "
               f"(target < 10 s)", flush=True)  # fmt: skip
 

@@ -33,7 +33,7 @@ from fibersweep.flow.cache import get_flow_field
 SMOKE = ["--rounds", "1", "--repeat", "1", "--cache", "{cache}", "--sweep", "--sweep-points", "4"]
 
 
-def _cases(cache: str):
+def cases(cache: str):
     """(label, field, settings without the effect, start) of each case."""
     channel, _ = get_flow_field(FlowSettings(dx=4.0), cache)
     cell, _ = get_flow_field(
@@ -75,7 +75,7 @@ def _sweep_time(field, settings, starts):
     return total, steps
 
 
-def _best(field, settings, start, repeat):
+def best(field, settings, start, repeat):
     """Minimum CPU time [s] of ``repeat`` runs and the run's steps."""
     best = float("inf")
     steps = 0
@@ -85,6 +85,25 @@ def _best(field, settings, start, repeat):
         best = min(best, time.process_time() - t0)
         steps = res.n_steps
     return best, steps
+
+
+def compare(label, field, off, on, start, rounds, repeat) -> None:
+    """Print one case's medians of ``off`` and ``on`` settings, alternated ``rounds`` times."""
+    simulate(field, off, start)  # compile both
+    simulate(field, on, start)
+    times: dict[str, list[float]] = {"off": [], "on": []}
+    steps: dict[str, int] = {}
+    for _ in range(rounds):
+        for name, st in (("off", off), ("on", on)):
+            t, n = best(field, st, start, repeat)
+            times[name].append(t)
+            steps[name] = n
+    t_off = statistics.median(times["off"])
+    t_on = statistics.median(times["on"])
+    per = (t_on / steps["on"]) / (t_off / steps["off"])
+    print(f"{label}\n  off {t_off * 1e3:8.2f} ms {steps['off']:6d} steps   "
+          f"on {t_on * 1e3:8.2f} ms {steps['on']:6d} steps   "
+          f"ratio per run {t_on / t_off:.3f}, per step {per:.3f}", flush=True)  # fmt: skip
 
 
 def main() -> None:
@@ -98,23 +117,10 @@ def main() -> None:
     args = ap.parse_args()
     print(f"near_wall = {args.value:g} on against off; {args.rounds} rounds alternating, "
           f"each the minimum of {args.repeat} runs; medians over rounds")  # fmt: skip
-    for label, field, off, start in _cases(args.cache):
+    steps: dict[str, int] = {}
+    for label, field, off, start in cases(args.cache):
         on = off.model_copy(update={"effects": {"near_wall": args.value}})
-        simulate(field, off, start)  # compile both
-        simulate(field, on, start)
-        times: dict[str, list[float]] = {"off": [], "on": []}
-        steps: dict[str, int] = {}
-        for _ in range(args.rounds):
-            for name, st in (("off", off), ("on", on)):
-                t, n = _best(field, st, start, args.repeat)
-                times[name].append(t)
-                steps[name] = n
-        t_off = statistics.median(times["off"])
-        t_on = statistics.median(times["on"])
-        per = (t_on / steps["on"]) / (t_off / steps["off"])
-        print(f"{label}\n  off {t_off * 1e3:8.2f} ms {steps['off']:6d} steps   "
-              f"on {t_on * 1e3:8.2f} ms {steps['on']:6d} steps   "
-              f"ratio per run {t_on / t_off:.3f}, per step {per:.3f}", flush=True)  # fmt: skip
+        compare(label, field, off, on, start, args.rounds, args.repeat)
     if args.sweep:
         field, off, starts = _sweep_case(args.cache, args.sweep_points)
         on = off.model_copy(update={"effects": {**off.effects, "near_wall": args.value}})

@@ -176,15 +176,15 @@ def main() -> None:
 def paper_estimate(paper_path: str, cfg, spec, info, n_sample: int) -> None:
     """configs/paper.yaml: time a random sample of its own points with 2 workers."""
     paper = load_config(paper_path)
-    starts = paper.sweep.starts()
+    tasks = make_tasks(paper, info.key)
     rng = random.Random(0)
-    sample = rng.sample(make_tasks(paper, info.key), min(n_sample, len(starts)))
+    sample = rng.sample(tasks, min(n_sample, len(tasks)))
     pspec = replace(spec, fiber_json=paper.fiber.model_dump_json())
     p = measure("local", 2, sample, pspec)
-    est = len(starts) / p["steady_rps"]
-    ideal = len(starts) * p["mean_cpu_s"] / 2.0
+    est = len(tasks) / p["steady_rps"]
+    ideal = len(tasks) * p["mean_cpu_s"] / 2.0
     print(
-        f"{paper_path}: {len(starts)} runs; sample of {p['n']} at dx = {cfg.flow.dx} µm: "
+        f"{paper_path}: {len(tasks)} runs; sample of {p['n']} at dx = {cfg.flow.dx} µm: "
         f"{p['mean_run_s']:.3f} s wall, {p['mean_cpu_s']:.3f} s CPU per run, "
         f"{p['steady_rps']:.2f} runs/s on 2 workers -> estimate {est / 60:.1f} min here, "
         f"{ideal / 60:.1f} min on 2 free cores (+ {p['startup_s']:.0f} s start-up), field excluded"

@@ -207,3 +207,23 @@ def test_animation_frames_are_readable_and_the_clock_clear_of_the_pillars(tmp_pa
     assert ax.get_title(loc="left").startswith("t = ")
     texts = " ".join(_texts(fig))
     assert "nan" not in texts and "trapped before row 1" in texts
+
+
+def test_migration_figure_quotes_each_critical_length_with_its_95_percent_interval():
+    """The legend and the shaded band carry the critical table's 95 % interval (scatter
+    and interpolation), never the statistical error alone, which is far narrower."""
+    table = pd.DataFrame(
+        [{"setting": 0, "length": x, "fraction_mean": f, "fraction_se": 0.03,
+          "angle_mean": 5.0 * f, "angle_std": 0.5, "trapped": 0.0}
+         for x, f in ((4.0, 0.01), (20.0, 0.74), (40.0, 0.93))]
+    )  # fmt: skip
+    crit = critical_table(table)
+    r = crit.iloc[0]
+    assert r.ci_hi - r.ci_lo > 2 * r.se  # the case the figure must not hide
+    fig = pd_.migration_figure(table, {0: 5.7}, {0: ""}, crit)
+    legend = " ".join(t for t in _texts(fig) if "critical" in t)
+    assert f"{r.critical:.1f} (95 %: {r.ci_lo:.1f} to {r.ci_hi:.1f})" in legend, legend
+    assert "±" not in legend
+    spans = [p for p in fig.axes[0].patches if p.get_width() > 0]
+    assert any(abs(p.get_x() - r.ci_lo) < 1e-9 and abs(p.get_width() - (r.ci_hi - r.ci_lo))
+               < 1e-9 for p in spans)  # fmt: skip

@@ -349,6 +349,20 @@ def corner_radius_at(kind, verts, curves, px, py, rc):
     return math.inf
 
 
+@nb.njit(cache=True, inline="always")
+def _normal_factor(curved, is_circle, a, cr, kind, verts, curves, px, py, rc):
+    """:func:`curvature_factor` of the pillar surface nearest to p; 1 when not ``curved``.
+
+    A circle's radius is ``cr``; a polygon's is ``rc`` in a corner's wedge and inf on a
+    face (:func:`corner_radius_at`).
+    """
+    if not curved:
+        return 1.0
+    if is_circle:
+        return curvature_factor(a, cr)
+    return curvature_factor(a, corner_radius_at(kind, verts, curves, px, py, rc))
+
+
 def sides_of(pillar) -> np.ndarray:
     """:func:`polygon_sides` of a rough polygon pillar (``PillarArrays``); (0, 6) otherwise."""
     if pillar.kind == ROUGH and pillar.circle[2] == 0.0 and pillar.verts.shape[0] >= 3:
@@ -449,14 +463,9 @@ def wall_terms(
                     else:
                         nx, ny, d = surface_point(kind, verts, circle, curves, roots, bx, by)
                     if d - a < reach:
-                        fn = 1.0
-                        if curved:
-                            if is_circle:
-                                fn = curvature_factor(a, cr)
-                            else:
-                                fn = curvature_factor(
-                                    a, corner_radius_at(kind, verts, curves, bx, by, rc)
-                                )
+                        fn = _normal_factor(
+                            curved, is_circle, a, cr, kind, verts, curves, bx, by, rc
+                        )
                         t = _wall(nx, ny, d, a, z0, ell, free, fn)
                         rxx += t[0]
                         rxy += t[1]
@@ -486,14 +495,9 @@ def wall_terms(
                                     kind, verts, circle, curves, roots, qx, qy
                                 )
                             if d - a < reach:
-                                fn = 1.0
-                                if curved:
-                                    if is_circle:
-                                        fn = curvature_factor(a, cr)
-                                    else:
-                                        fn = curvature_factor(
-                                            a, corner_radius_at(kind, verts, curves, qx, qy, rc)
-                                        )
+                                fn = _normal_factor(
+                                    curved, is_circle, a, cr, kind, verts, curves, qx, qy, rc
+                                )
                                 t = _wall(nx, ny, d, a, z0, ell, free, fn)
                                 rxx += t[0]
                                 rxy += t[1]
