@@ -148,7 +148,8 @@ def array_kernel(
         mode=mode,
         t_stop=t_stop,
     )
-    return assemble(settings, n_beads, flow, arrays, params, effects.kernel(ctx), frame)
+    sampled = effects.sample_flow(flow, float(settings.bead_radius))
+    return assemble(settings, n_beads, sampled, arrays, params, effects.kernel(ctx), frame)
 
 
 def run_array_fiber(

@@ -12,6 +12,8 @@ Interface (see :class:`Effect`): override only the hooks you need.
 - ``transform_field(FlowField) -> FlowField``: the field one run sees.
 - ``transform_start(FiberStart, rng) -> FiberStart``: the initial condition;
   ``rng`` is a ``numpy.random.Generator`` seeded from ``simulate(rng_seed=...)``.
+- ``sample_flow(FlowArrays, bead_radius) -> FlowArrays``: the node velocities the
+  beads' velocity is read from, once per run (a correction linear in the field).
 - ``kernel(DynamicsContext) -> record``: for an effect acting inside the Numba
   integrators, its kernel record (a NamedTuple of floats); the module also
   implements the kernel stages for that record type

@@ -80,6 +80,11 @@ class Effect:
     ``transform_start(start, rng)``
         Change the initial condition (e.g. start noise), with a seeded
         ``numpy.random.Generator``.
+    ``sample_flow(flow, bead_radius)``
+        Change the node velocities the beads' velocity is interpolated from (the
+        kernels' ``FlowArrays``; in an array the padded cell), once per run: a
+        correction linear in the field (e.g. Faxén's a²/6 ∇²u) costs nothing per
+        step there. Other effects' records still see the field itself (``ctx.flow``).
     ``kernel(ctx)``
         An effect that acts inside the Numba integrators returns its *kernel
         record* (a ``typing.NamedTuple`` of floats and scratch arrays, defined in its module) and
@@ -123,6 +128,10 @@ class Effect:
 
     def transform_start(self, start: FiberStart, rng: np.random.Generator) -> FiberStart:
         return start
+
+    def sample_flow(self, flow: NamedTuple, bead_radius: float) -> NamedTuple:
+        """The ``FlowArrays`` (``ux, uy`` (nx, ny) [µm/s], ``dx`` [µm]) the beads sample."""
+        return flow
 
     def kernel(self, ctx: DynamicsContext) -> NamedTuple | None:
         return None

@@ -10,13 +10,17 @@ average's correction, in the plane of the motion: ∇² is the in-plane Laplacia
 1 − 4a²/(3H²), and moves no streamline; it is left out (``off_midplane`` and the
 field's z-average set the layer's speed).
 
-How it is read: the field's discrete Laplacian is precomputed once per run on
+How it is read: the field's discrete Laplacian is computed once per run on
 the field's own lattice (the 5-point stencil, x periodic and zero beyond the
 field's y edges, exactly as :func:`~fibersweep.flow.field.interpolate_ib` reads
-the field), and read at the beads with the same interpolation and frame as u.
-Because the interpolation is linear and shift-invariant on the lattice, this is
-exactly the 5-point Laplacian (step Δx) of the interpolated field at the bead,
-and exact for a quadratic flow. Cost: one more interpolation per bead and call.
+the field) and added to the node velocities the beads sample
+(:meth:`Faxen.sample_flow`): u + c ∇²u on every node, c = k a²/6. Because the
+interpolation is linear and shift-invariant on the lattice, reading that sum
+at a bead is exactly u plus c times the 5-point Laplacian (step Δx) of the
+interpolated field there, exact for a quadratic flow, in every frame (an
+array's cell is read folded, the sum with it). Cost: one Laplacian of the
+field per run (milliseconds), nothing per step. The other effects' records
+see the field itself (``ctx.flow``).
 
 The value k multiplies the term (1 = Faxén's law). With ``near_wall`` also on,
 Goren & O'Neill's push across the wall (c_n) already holds the Faxén term of a
@@ -28,39 +32,14 @@ being Faxén's): the two overlap on the normal component, by at most that term
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
-from fibersweep.fiber import frame as F
-from fibersweep.fiber.effects.base import DynamicsContext, Effect
+from fibersweep.fiber.effects.base import Effect
 from fibersweep.fiber.effects.registry import register
-from fibersweep.fiber.kernel.hooks import implements
 
-__all__ = ["Faxen", "FaxenKernel", "LaplacianField", "lattice_laplacian"]
-
-
-class LaplacianField(NamedTuple):
-    """The field's in-plane Laplacian, read like a field: ``ux, uy`` (nx, ny) [1/(µm s)]
-    on nodes ``dx`` [µm] apart (the frame's ``velocity`` stage reads it as it reads u)."""
-
-    ux: np.ndarray
-    uy: np.ndarray
-    dx: float
-
-
-class FaxenKernel(NamedTuple):
-    """Kernel record.
-
-    ``c`` k a²/6 [µm²]; ``frame`` the run's frame record (its own scratch); ``lap`` the
-    field's in-plane Laplacian on the field's lattice (:class:`LaplacianField`); ``lu``
-    (n, 2) scratch: the Laplacian read at the beads [1/(µm s)].
-    """
-
-    c: float
-    frame: Any
-    lap: LaplacianField
-    lu: np.ndarray
+__all__ = ["Faxen", "lattice_laplacian"]
 
 
 def lattice_laplacian(ux: np.ndarray, uy: np.ndarray, dx: float) -> tuple[np.ndarray, np.ndarray]:
@@ -104,31 +83,18 @@ class Faxen(Effect):
     def validate(self) -> None:
         self._require(0.0 <= self.value <= 2.0, "must be in [0, 2]")
 
-    def kernel(self, ctx: DynamicsContext) -> FaxenKernel:
-        a = float(ctx.bead_radius)
-        n = int(ctx.n_beads)
-        flow = ctx.flow
-        if flow is None:  # no field known: a flow with no curvature (the term vanishes)
-            lx = ly = np.zeros((4, 4))
-            dx = 1.0
-        else:
-            lx, ly = lattice_laplacian(flow.ux, flow.uy, float(flow.dx))
-            dx = float(flow.dx)
-        fr = ctx.frame
-        if fr is None or not hasattr(fr, "px"):
-            fr = F.CHANNEL
-        else:  # own scratch: the run's frame fills its own between the stages
-            fr = fr._replace(**{k: np.zeros(n) for k in ("xs", "ys", "fxs", "fys", "sts", "dists")})
-        lap = LaplacianField(lx, ly, dx)
-        return FaxenKernel(float(self.value) * a * a / 6.0, fr, lap, np.zeros((n, 2)))
+    def sample_flow(self, flow: NamedTuple, bead_radius: float) -> NamedTuple:
+        """``flow`` with ux, uy replaced by u + k (a²/6) ∇²u (:func:`lattice_laplacian`).
 
-
-@implements("background", FaxenKernel)
-def background(e, w, u):
-    """Both models: u += c ∇²u, the Laplacian read where u was read."""
-    m = u.shape[0]
-    lu = e.lu[:m]
-    F.velocity(e.frame, e.lap, w.x[:m], w.y[:m], lu)
-    for i in range(m):
-        u[i, 0] += e.c * lu[i, 0]
-        u[i, 1] += e.c * lu[i, 1]
+        Parameters
+        ----------
+        flow : FlowArrays
+            ``ux, uy`` (nx, ny) [µm/s] on nodes ``dx`` [µm] apart, as the kernels read them.
+        bead_radius : float
+            a [µm].
+        """
+        c = float(self.value) * bead_radius * bead_radius / 6.0
+        lx, ly = lattice_laplacian(flow.ux, flow.uy, float(flow.dx))
+        return flow._replace(
+            ux=np.ascontiguousarray(flow.ux + c * lx), uy=np.ascontiguousarray(flow.uy + c * ly)
+        )

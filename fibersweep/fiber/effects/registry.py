@@ -5,7 +5,7 @@ from __future__ import annotations
 import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -53,6 +53,12 @@ class EffectSet:
         for e in self.effects:
             field = e.transform_field(field)
         return field
+
+    def sample_flow(self, flow: Any, bead_radius: float) -> Any:
+        """The node velocities the beads sample (:meth:`Effect.sample_flow`, in order)."""
+        for e in self.effects:
+            flow = e.sample_flow(flow, bead_radius)
+        return flow
 
     def start(self, start: FiberStart, rng: np.random.Generator) -> FiberStart:
         for e in self.effects:

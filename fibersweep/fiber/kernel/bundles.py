@@ -351,4 +351,5 @@ def build_kernel(setup: Setup, mode: int = 0, t_stop: float = math.nan) -> Kerne
         np.ascontiguousarray(field.uy, dtype=np.float64),
         float(field.dx),
     )
+    flow = setup.effects.sample_flow(flow, a)
     return assemble(st, setup.n, flow, setup.pillar.arrays(), params, setup.kernel_effects)
