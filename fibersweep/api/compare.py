@@ -73,11 +73,15 @@ class DiscrepancyPlan:
         :func:`fibersweep.discrepancy.settings.plan_budget`).
     followup : int or None
         Follow-up fibers, if given.
+    starts : ndarray, shape (fibers, 3), optional
+        The measured starts (θ0 [deg], y0 [h_obs], L [l_obs]): what the follow-up
+        stages cost follows from them (:func:`fibersweep.discrepancy.followup.followup_costs`).
     """
 
     fibers: int
     settings: DiscrepancySettings
     followup: int | None = None
+    starts: Any = attr(default=None, repr=False, compare=False)
 
 
 @dataclass(frozen=True)
@@ -209,7 +213,7 @@ def discrepancy(
         effects=tuple(effects) if effects else None,
         declared=declared_candidates(cfg, candidates),
     )  # fmt: skip
-    plan = DiscrepancyPlan(len(data), settings, None if more is None else len(more))
+    plan = DiscrepancyPlan(len(data), settings, None if more is None else len(more), data.starts)
     if on_plan is not None:
         on_plan(plan)
     field_, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)

@@ -146,8 +146,9 @@ def _declared(cfg, candidate: list[str] | None) -> tuple:
     return declared_candidates(cfg, candidate)
 
 
-def _plan_lines(n: int, settings) -> list[str]:
-    """The plan before it runs: runs in all, and what a costly (flexible) candidate adds."""
+def _plan_lines(n: int, settings, starts=None) -> list[str]:
+    """The plan before it runs: runs in all, what a costly (flexible) candidate adds, and
+    (with the measured ``starts``) the follow-up stages and whether the budget holds them."""
     from fibersweep.discrepancy.settings import plan_budget, switch_cost
 
     plan = plan_budget(n, settings, settings.candidates_of())
@@ -165,12 +166,39 @@ def _plan_lines(n: int, settings) -> list[str]:
         lines.append(
             f"  time about {(total + extra) / total:.2f}x that of the same plan on rigid runs"
         )
+    if starts is not None:
+        lines += _followup_lines(starts, settings, plan, total)
+    return lines
+
+
+def _followup_lines(starts, settings, plan, total: int) -> list[str]:
+    """The stages after the verdict, their runs, and what the budget leaves them."""
+    from fibersweep.discrepancy.followup import followup_costs
+
+    c = followup_costs(starts, settings, plan, settings.candidates_of())
+    parts = []
+    if c.power:
+        parts.append(f"power analysis {c.power} (+ up to {c.power_more} re-reads while the "
+                     "budget lasts)")  # fmt: skip
+    if c.next:
+        parts.append(f"what to measure next up to {c.next}")
+    if not parts:
+        return []
+    lines = ["  after the verdict, if it calls for them: " + ", ".join(parts)]
+    if settings.budget is not None:
+        left = settings.budget - total
+        need = min(x for x in (c.power, c.next) if x)
+        fits = ("each fits" if max(c.power, c.next) <= left else
+                "one that does not fit in what the analysis leaves is skipped, and the report "
+                "says so")  # fmt: skip
+        lines.append(f"  budget {settings.budget}: {left} runs left after the analysis at its "
+                     f"most (the smallest follow-up needs {need}); {fits}")  # fmt: skip
     return lines
 
 
 def _print_discrepancy_plan(plan) -> None:
     """The plan before it runs (:class:`fibersweep.api.DiscrepancyPlan`)."""
-    for line in _plan_lines(plan.fibers, plan.settings):
+    for line in _plan_lines(plan.fibers, plan.settings, plan.starts):
         typer.echo(line)
     if plan.followup is not None:
         typer.echo(
@@ -261,7 +289,11 @@ def discrepancy(
     elif s.get("settle_skipped"):
         typer.echo(f"follow-up not tested: {s['settle_skipped']}")
     typer.echo(f"verdict: {s['verdict']['kind']}: {s['verdict']['text']}")
-    typer.echo(f"simulations: {s['simulations']} in {s['seconds']:.0f} s")
+    for stage, why in s.get("stages_skipped", {}).items():
+        if why.startswith("skipped: budget"):  # the others are said in the report
+            typer.echo(f"not run: {stage}, {why}")
+    typer.echo(f"simulations: {s['simulations']} in {s['seconds']:.0f} s"
+               + (f" (budget {budget})" if budget is not None else ""))  # fmt: skip
     typer.echo(f"wrote {output / 'report.md'} and {output / 'summary.json'}")
     for c in s["updated_configs"]:
         typer.echo(f"wrote {output / c}")

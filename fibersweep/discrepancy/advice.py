@@ -3,7 +3,9 @@
 Pure functions of the report's JSON summary (:func:`.report.summary`).
 :func:`advice_lines` says, for an unexplained gap, which candidates helped out of
 sample and by how much, what to try next, and, when the gap is unexplained or
-not seen, which effects may be present unseen (the power analysis).
+not seen, which effects cannot be excluded (:func:`cannot_exclude`: the power
+analysis would miss them at a realistic magnitude) and below which sizes the
+others may still be present.
 
 The doubt of an "unexplained" verdict is whether the candidate that helped most
 out of sample is there. Two numbers answer *how many more fibers* and one table
@@ -26,7 +28,7 @@ from typing import Any
 
 from fibersweep.discrepancy.gap import GAP_UNIT
 
-__all__ = ["advice_lines", "next_measurement"]
+__all__ = ["advice_lines", "cannot_exclude", "exclusion_lines", "next_measurement"]
 
 
 def _n(x: Any) -> str:
@@ -160,16 +162,108 @@ def advice_lines(s: dict[str, Any]) -> list[str]:
         )
         out += next_measurement(s)
     if v["kind"] in ("unexplained", "no significant gap") and s.get("power"):
-        hidden = [
-            e["unseen"]
-            if e.get("unseen")
-            else f"{e['effect']} ({e['direction']}) up to {e['limit_ci'][1]:.3g}"
-            for e in s["power"]["effects"]
-            if e.get("unseen") or (e.get("limit_ci") and e["limit_ci"][1] is not None)
-        ]
-        if hidden:
-            out.append(
-                "May be present unseen (the upper end of each detection limit's 95 % "
-                "interval over the simulated starts): " + ", ".join(hidden) + "."
-            )
+        out += exclusion_lines(s)
     return out
+
+
+def _far(e: dict[str, Any]) -> float | None:
+    """The upper end of a limit's 95 % interval (None: out of range), or the limit itself
+    when no interval was computed."""
+    ci = e.get("limit_ci")
+    return ci[1] if ci else e.get("limit")
+
+
+def cannot_exclude(s: dict[str, Any]) -> list[dict[str, Any]]:
+    """The effects the power analysis cannot rule out at a realistic magnitude.
+
+    An effect is listed when its detection limit, or the upper end of the limit's
+    95 % interval over the simulated starts, lies above its realistic magnitude
+    or out of its range (None): these fibers could carry it at that magnitude
+    and the tests would not see it. A declared candidate (no realistic
+    magnitude) is listed when its limit or that upper end is out of its range,
+    and an alternative when it was not detected.
+
+    Parameters
+    ----------
+    s : dict
+        The summary; uses ``power`` (its ``effects``, :func:`.report.summary`).
+
+    Returns
+    -------
+    list of dict
+        Per listed effect: ``effect``, ``direction``, ``limit`` and ``upper``
+        (None: out of range), ``realistic`` (None for a declared candidate),
+        ``fibers`` (the fibers that would detect it at the realistic magnitude
+        with the analysis's power; None: more than 100 000 or not known),
+        ``fibers_ci`` (their 95 % interval over the simulated starts, or None)
+        and ``text`` (one phrase for the report).
+    """
+    pw = s.get("power") or {}
+    out = []
+    for e in pw.get("effects", []):
+        lim, far, real = e.get("limit"), _far(e), e.get("realistic")
+        if real is None:  # a declared candidate: judged against its range
+            if lim is not None and far is not None:
+                continue
+        elif lim is not None and far is not None and max(abs(lim), abs(far)) <= abs(real):
+            continue  # would have been seen at the realistic magnitude
+        seen = (f"detected only from {lim:.3g}" if lim is not None
+                else "not detected within its range")  # fmt: skip
+        if lim is not None and e.get("limit_ci"):
+            seen += (f" (another set of starts could put that at {far:.3g})" if far is not None
+                     else " (another set of starts could put that beyond its range)")  # fmt: skip
+        if e.get("setting"):
+            seen = e["setting"]
+        need, need_ci = e.get("fibers_for_realistic"), e.get("fibers_for_realistic_ci")
+        if real is not None:
+            fibers = (f"about {int(need)} fibers would detect {real:.3g}" if need
+                      else f"more than 100000 fibers would be needed at {real:.3g}")  # fmt: skip
+            if need and need_ci:
+                fibers += _range(need_ci)
+        else:
+            fibers = "the fibers to detect it are not known from this analysis"
+        out.append({
+            "effect": e["effect"], "direction": e.get("direction", ""), "limit": lim,
+            "upper": far, "realistic": real, "fibers": need if real is not None else None,
+            "fibers_ci": e.get("fibers_for_realistic_ci") if real is not None else None,
+            "text": f"{e['effect']} ({e.get('direction', '')}): {seen}; {fibers}",
+        })  # fmt: skip
+    return out
+
+
+def exclusion_lines(s: dict[str, Any]) -> list[str]:
+    """What the power analysis cannot exclude, and what it excludes down to which size.
+
+    One line listing every effect of :func:`cannot_exclude` (with the fibers that
+    would settle it), one for the others (seen at a realistic magnitude; each may
+    still be present below the upper end of its interval). Nothing without a
+    power analysis.
+    """
+    pw = s.get("power")
+    if not pw:
+        return []
+    listed = cannot_exclude(s)
+    names = {(c["effect"], c["direction"]) for c in listed}
+    out = []
+    if listed:
+        n = pw.get("n", s.get("n_fibers"))
+        out.append(
+            f"Cannot be excluded with these {n} fibers (at a realistic magnitude the "
+            "tests would miss it; the detection limit or the upper end of its 95 % interval "
+            "lies above that magnitude or out of range): "
+            + "; ".join(c["text"] for c in listed) + "."
+        )
+    rest = []
+    for e in pw["effects"]:
+        if (e["effect"], e.get("direction", "")) in names:
+            continue
+        far = _far(e)
+        rest.append(e.get("unseen") or f"{e['effect']} ({e.get('direction', '')}) up to "
+                    f"{far:.3g}")  # fmt: skip
+    if rest:
+        out.append(
+            "Would have been seen at a realistic magnitude, yet may be present below the "
+            "upper end of its detection limit's 95 % interval: " + ", ".join(rest) + "."
+        )
+    return out
+

@@ -6,7 +6,10 @@ synth``) and the model's jittered copies; the gap tests are exact when it
 describes the real measurement. Why jittering the *measured* start is right:
 with a start distribution that is flat on the scale of the noise, the true
 start given the measured one is ``measured + N(0, σ²)``, so the model's copies
-``f(measured + ε')`` and the observation ``f(true)`` are exchangeable.
+``f(measured + ε')`` and the observation ``f(true)`` are exchangeable. A start
+column whose true values are all one value (fibers of one length) is not flat
+on that scale: there the true value given the measured one is that value, and
+the copies start at it (:func:`fixed_columns`).
 
 Copies (:class:`CopyMaker`): copy k of fiber i always uses the same jittered
 start, the same run seed and the same measurement-noise draws, whatever effect
@@ -34,7 +37,7 @@ from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
 
-__all__ = ["CopyMaker", "NoiseModel", "crossfit_copies"]
+__all__ = ["CopyMaker", "NoiseModel", "crossfit_copies", "fixed_columns"]
 
 
 def _default_outcome_sd(tracks: bool = True) -> dict[str, float]:
@@ -149,6 +152,57 @@ class NoiseModel:
         return out
 
 
+#: Fewest fibers from which a start column is checked for a single true value: with fewer,
+#: a sample variance is too rough to tell (chi-square with few degrees of freedom).
+FIXED_MIN_FIBERS = 20
+
+#: Level of that check: a column is one value unless its spread exceeds the measurement
+#: noise at this level (one-sided chi-square test of the sample variance).
+FIXED_LEVEL = 0.001
+
+
+def fixed_columns(starts: np.ndarray, noise: NoiseModel) -> dict[int, float]:
+    """Start columns that carry no spread beyond their measurement noise, with their value.
+
+    A copy's start is the measured start jittered by the start noise, which is the
+    true start's distribution given the measured one when the starts' own
+    distribution is flat on the scale of the noise (module docstring). When every
+    fiber has one true value of a column (fibers cut to one length; ``synth`` from
+    a config whose sweep has one length), the true value given the measured one is
+    that value, and jittered copies are wider than the data by a factor sqrt(2) in
+    that column and centred on the measured value instead. Such a column is
+    recognised by its sample variance: one value measured with noise sd s has
+    ``(n - 1) var / s^2 ~ chi2(n - 1)``; a column whose variance the test at
+    :data:`FIXED_LEVEL` does not find larger is taken as one value, its mean.
+
+    Parameters
+    ----------
+    starts : ndarray, shape (n, 3)
+        Measured starts: theta0 [deg], y0 [/h], length [/l_obs].
+    noise : NoiseModel
+        Its start noise sd per column.
+
+    Returns
+    -------
+    dict column index -> value
+        Empty below :data:`FIXED_MIN_FIBERS` fibers and for noise-free columns.
+    """
+    from scipy.stats import chi2
+
+    s = np.asarray(starts, dtype=np.float64)
+    n = len(s)
+    if n < FIXED_MIN_FIBERS:
+        return {}
+    out = {}
+    crit = chi2.ppf(1.0 - FIXED_LEVEL, n - 1) / (n - 1)
+    for c, name in enumerate(("theta0", "y0", "length")):
+        sd = noise.sd(name)
+        col = s[:, c][np.isfinite(s[:, c])]
+        if sd > 0 and len(col) >= FIXED_MIN_FIBERS and np.var(col, ddof=1) <= crit * sd**2:
+            out[c] = float(col.mean())
+    return out
+
+
 class CopyMaker:
     """Makes measured-like model outcomes at the measured starts.
 
@@ -164,6 +218,12 @@ class CopyMaker:
         observable from its own stream keyed by the name
         (:func:`~fibersweep.discrepancy.observables.noise_draws`).
     simulator : Simulator
+
+    Attributes
+    ----------
+    fixed : dict column index -> value
+        Start columns with one true value (:func:`fixed_columns` of ``starts``):
+        every copy starts at that value in them; the other columns are jittered.
     """
 
     def __init__(self, starts: np.ndarray, noise: NoiseModel, seed: int, simulator: Simulator):
@@ -171,6 +231,9 @@ class CopyMaker:
         self.noise = noise
         self.seed = int(seed)
         self.sim = simulator
+        # start columns whose true values are one value (:func:`fixed_columns`): copies
+        # start there, not at a jittered measured value
+        self.fixed = fixed_columns(self.starts, noise)
         self._draws: dict[int, tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]] = {}
         # (k, effects) -> observed-like outcomes of the fibers simulated so far (index: fiber)
         self._cache: dict[tuple, pd.DataFrame] = {}
@@ -188,6 +251,8 @@ class CopyMaker:
         if k not in self._draws:
             rng = np.random.default_rng([self.seed, 7919, k])
             starts = self.noise.jitter_starts(self.starts, rng)
+            for c, v in self.fixed.items():  # after the draw: the other columns keep theirs
+                starts[:, c] = v
             seeds = rng.integers(0, 2**31 - 1, size=self.n)
             z = noise_draws([self.seed, 7919, k], self.n)
             self._draws[k] = (starts, seeds, z)

@@ -146,7 +146,7 @@ class SetHeldOut:
     final : GapResult or None
         Gap on all fibers with the set at ``values`` (None when not checked).
     intervals : dict name -> (lo, hi, open_lo, open_hi)
-        95 % score-test interval of each member's refit (:func:`.estimate.score_interval`;
+        95 % interval of each member's refit (:func:`.estimate.score_interval`, a bootstrap;
         empty when the set was not refitted).
     """
 

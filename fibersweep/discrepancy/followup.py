@@ -9,9 +9,15 @@
   :func:`.next_measure.discriminate` between the two hypotheses (what to
   measure next).
 
-Both run within what the budget leaves (:func:`followup`); otherwise the
-report says why not. The follow-up fibers (``--followup``) then test the
-hypotheses (:func:`settle_followup`, :mod:`.settle`).
+Both are sized before the analysis starts (:func:`followup_costs`, the plan
+the command prints) and run within what the budget leaves (:func:`followup`);
+one that does not fit is skipped, and the report says so and why. A stage
+whose size depends on what it finds (the power analysis's re-reads) stops
+reading again where the budget ends; a batch refused by the budget inside a
+stage ends that stage only (:class:`.simulate.BudgetExhausted` is caught at
+the stage's boundary), so the verdict and the report are always written. The
+follow-up fibers (``--followup``) then test the hypotheses
+(:func:`settle_followup`, :mod:`.settle`).
 """
 
 from __future__ import annotations
@@ -35,18 +41,21 @@ from fibersweep.discrepancy.next_measure import (
     hypothesis_label,
     start_grid,
 )
-from fibersweep.discrepancy.power import analyse_power
+from fibersweep.discrepancy.power import analyse_power, planned_runs
 from fibersweep.discrepancy.schema import MeasuredData
 from fibersweep.discrepancy.settings import DiscrepancySettings, Plan
 from fibersweep.discrepancy.settle import settle, settled_verdict
-from fibersweep.discrepancy.simulate import Simulator
+from fibersweep.discrepancy.simulate import BudgetExhausted, Simulator
 
 __all__ = [
     "POWER_BOOT",
+    "POWER_COPIES",
+    "FollowupCosts",
     "LeadingFibers",
     "PowerFibers",
     "fibers_to_name",
     "followup",
+    "followup_costs",
     "next_hypotheses",
     "power_fibers",
     "settle_followup",
@@ -56,6 +65,60 @@ __all__ = [
 #: Bootstrap resamples of the simulated starts behind each detection limit's interval
 #: (no new runs; about a minute of scoring with all seven effects on 40 starts).
 POWER_BOOT = 30
+
+#: Copies per magnitude of the workflow's power analysis (:func:`.power.analyse_power`).
+POWER_COPIES = 3
+
+
+@dataclass(frozen=True)
+class FollowupCosts:
+    """Runs of the stages after the verdict, known before the analysis starts.
+
+    Attributes
+    ----------
+    power : int
+        Runs the power analysis always asks for (0: off), the workflow's
+        baseline copies it reuses not counted.
+    power_more : int
+        Most runs of its re-reads at the limits (they run only where a limit lies
+        far from its probes, and only while the budget leaves room).
+    next : int
+        Most runs of what-to-measure-next (0: off): grid and measured starts
+        under both hypotheses, and the best starts measured again.
+    """
+
+    power: int
+    power_more: int
+    next: int
+
+
+def followup_costs(
+    starts: np.ndarray, s: DiscrepancySettings, plan: Plan, candidates: Sequence[Candidate]
+) -> FollowupCosts:
+    """What each follow-up stage costs at most (see :class:`FollowupCosts`).
+
+    Parameters
+    ----------
+    starts : ndarray, shape (n, 3)
+        Measured starts (the power analysis simulates the first ``power_fibers``;
+        what-to-measure-next's grid spans them).
+    s : DiscrepancySettings
+        ``power_fibers``, ``next_copies``, ``settle_copies``.
+    plan : Plan
+        Its ``copies``: the baseline copies the power analysis reuses.
+    """
+    n = len(starts)
+    power = more = 0
+    if s.power_fibers:
+        n_sim = min(s.power_fibers, n)
+        certain, more = planned_runs(candidates, n_sim, POWER_COPIES)
+        power = certain - min(plan.copies, POWER_COPIES) * n_sim  # its baseline is held
+    nxt = 0
+    if s.next_copies:
+        ng = len(start_grid(starts))
+        again = 2 * s.settle_copies * CONFIRM_POINTS * min(CONFIRM_STARTS, ng)
+        nxt = 2 * s.next_copies * (ng + n) + again
+    return FollowupCosts(power, more, nxt)
 
 
 def fibers_to_name(per_fiber: np.ndarray, k: int, alpha: float, power: float = 0.8) -> int | None:
@@ -120,10 +183,15 @@ class PowerFibers:
     leading : LeadingFibers or None
         The candidate that helped most out of sample, at a nonzero value; None
         when there is none.
+    realistic_ci : tuple of ((int or None, int or None) or None)
+        Per entry, the 95 % interval over the simulated starts of its fibers to
+        detect the realistic magnitude (:meth:`.detection.PowerResult.fibers_to_detect_ci`;
+        None: not computed; an end None: more than 100 000).
     """
 
     realistic: tuple[tuple[float | None, int | None], ...]
     leading: LeadingFibers | None
+    realistic_ci: tuple[tuple[int | None, int | None] | None, ...] = ()
 
 
 def power_fibers(pw: PowerResult, heldout: Sequence[HeldOut], alpha: float) -> PowerFibers:
@@ -137,10 +205,11 @@ def power_fibers(pw: PowerResult, heldout: Sequence[HeldOut], alpha: float) -> P
     alpha : float
         Family-wise level of the held-out decision.
     """
-    realistic = []
+    realistic, real_ci = [], []
     for e in pw.effects:
         real = math.copysign(LIBRARY[e.name].realistic, e.probe) if e.name in LIBRARY else None
         realistic.append((real, pw.fibers_to_detect(e.name, real) if real else None))
+        real_ci.append(pw.fibers_to_detect_ci(e.name, real) if real else None)
     lead = None
     if heldout:
         h = max(heldout, key=lambda h: h.improvement[0])
@@ -152,7 +221,7 @@ def power_fibers(pw: PowerResult, heldout: Sequence[HeldOut], alpha: float) -> P
                 fibers_to_detect_ci=pw.fibers_to_detect_ci(h.name, h.value),
                 fibers_to_name=fibers_to_name(h.per_fiber, len(heldout), alpha, pw.power),
             )
-    return PowerFibers(tuple(realistic), lead)
+    return PowerFibers(tuple(realistic), lead, tuple(real_ci))
 
 
 def _weak(values: list[float]) -> bool:
@@ -258,37 +327,49 @@ def followup(
     dict
         ``power`` (:class:`.detection.PowerResult`) and ``power_fibers``
         (:class:`PowerFibers`), ``next`` (:class:`.result.Discrimination`)
-        and ``next_reason``, or ``power_skipped`` / ``next_skipped`` with the reason.
+        and ``next_reason``, or ``power_skipped`` / ``next_skipped`` with the reason
+        (``"skipped: budget (...)"`` when the budget left too few runs);
+        ``power_unread``: the limits not read again at the limit for the budget.
     """
     out: dict[str, Any] = {}
+    costs = followup_costs(maker.starts, s, plan, candidates)
     if s.power_fibers and verdict.kind in ("no significant gap", "unexplained"):
-        n_sim = min(s.power_fibers, maker.n)
-        cost = 3 * n_sim * 2 * sum(len(c.probes) for c in candidates)
-        if cost <= sim.remaining:
-            out["power"] = analyse_power(
-                maker, candidates, maker.n, obs, rng, n_sim=n_sim,
-                workflow_copies=plan.copies, alpha=s.alpha, n_boot=POWER_BOOT,
-            )  # fmt: skip
-            out["power_fibers"] = power_fibers(out["power"], heldout, s.alpha)
+        if costs.power <= sim.remaining:
+            unread: list[str] = []
+            try:
+                out["power"] = analyse_power(
+                    maker, candidates, maker.n, obs, rng, n_sim=min(s.power_fibers, maker.n),
+                    copies=POWER_COPIES, workflow_copies=plan.copies, alpha=s.alpha,
+                    n_boot=POWER_BOOT, unread=unread,
+                )  # fmt: skip
+                out["power_fibers"] = power_fibers(out["power"], heldout, s.alpha)
+                if unread:
+                    out["power_unread"] = unread
+            except BudgetExhausted as err:  # a batch its plan did not foresee
+                out["power_skipped"] = f"skipped: budget ({err})"
         else:
-            out["power_skipped"] = f"the budget leaves {sim.remaining} runs, it needs {cost}"
+            out["power_skipped"] = _no_room(costs.power, sim.remaining)
     hyp = next_hypotheses(verdict, heldout, fold_values, show) if s.next_copies else None
     if hyp is not None:
         a, b, why = hyp
-        grid = start_grid(maker.starts)
-        # + the best starts measured again in their windows
-        again = 2 * s.settle_copies * CONFIRM_POINTS * min(CONFIRM_STARTS, len(grid))
-        cost = 2 * s.next_copies * (len(grid) + maker.n) + again
-        if cost <= sim.remaining:
-            out["next"] = discriminate(
-                sim, s.noise, (a, b), maker.starts, obs, seed=s.seed,
-                copies=s.next_copies, grid=grid, alpha=s.alpha, show=show,
-                confirm_copies=s.settle_copies,
-            )  # fmt: skip
-            out["next_reason"] = why
+        if costs.next <= sim.remaining:
+            try:
+                out["next"] = discriminate(
+                    sim, s.noise, (a, b), maker.starts, obs, seed=s.seed,
+                    copies=s.next_copies, grid=start_grid(maker.starts), alpha=s.alpha,
+                    show=show, confirm_copies=s.settle_copies,
+                )  # fmt: skip
+                out["next_reason"] = why
+            except BudgetExhausted as err:
+                out["next_skipped"] = f"skipped: budget ({err})"
         else:
-            out["next_skipped"] = f"the budget leaves {sim.remaining} runs, it needs {cost}"
+            out["next_skipped"] = _no_room(costs.next, sim.remaining)
     return out
+
+
+def _no_room(cost: int, left: float) -> str:
+    """Why a stage did not run: the budget left too few runs."""
+    return f"skipped: budget (it needs up to {cost} runs, the budget leaves {left:.0f})"
 
 
 def settle_followup(
@@ -334,13 +415,15 @@ def settle_followup(
         return verdict, {"settle_skipped": why}
     cost = 2 * s.settle_copies * len(followup)
     if cost > sim.remaining:
-        why = f"the budget leaves {sim.remaining} runs, it needs {cost}"
-        return verdict, {"settle_skipped": why}
+        return verdict, {"settle_skipped": _no_room(cost, sim.remaining)}
     a, b, why = hyp
-    st = settle(
-        sim, s.noise, (a, b), (label(a) or "baseline", label(b) or "baseline"), why,
-        followup.table.reset_index(drop=True), followup.starts, obs,
-        np.random.default_rng([s.seed, 23]), seed=s.seed, copies=s.settle_copies, alpha=s.alpha,
-        n_perm=s.n_perm,
-    )  # fmt: skip
+    try:
+        st = settle(
+            sim, s.noise, (a, b), (label(a) or "baseline", label(b) or "baseline"), why,
+            followup.table.reset_index(drop=True), followup.starts, obs,
+            np.random.default_rng([s.seed, 23]), seed=s.seed, copies=s.settle_copies,
+            alpha=s.alpha, n_perm=s.n_perm,
+        )  # fmt: skip
+    except BudgetExhausted as err:  # the first verdict stands
+        return verdict, {"settle_skipped": f"skipped: budget ({err})"}
     return settled_verdict(verdict, st), {"settle": st}

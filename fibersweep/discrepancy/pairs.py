@@ -24,7 +24,7 @@ like a pair; the set also needs each member's own contribution significant):
    one Holm family;
 4. a pair whose members both contribute significantly is refitted on all
    fibers (:func:`pair_refits`: each member with the other held fixed, the
-   same refit and score-test interval a single effect's quoted value gets)
+   same refit and interval a single effect's quoted value gets)
    and checked for adequacy there.
 
 Pairs are tried in that order, and the step stops after the round in which a

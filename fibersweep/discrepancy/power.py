@@ -217,6 +217,7 @@ def analyse_power(
     power: float = 0.8,
     n_boot: int = 0,
     refine: int = 4,
+    unread: list[str] | None = None,
 ) -> PowerResult:
     """Detection limits and look-alikes of ``candidates`` (see the module docstring).
 
@@ -265,8 +266,11 @@ def analyse_power(
     # the dispersion test's own stream: the limits of the gap family stay as they were
     drng = np.random.default_rng([n_sim, 8101])
     shifts: dict[str, np.ndarray] = {}
+    # the probes' own batches still to come: a re-read never takes the runs they need
+    ahead = sum(1 if c.categorical else 2 for c in candidates for _ in c.probes) * copies * n_sim
     for cand in candidates:
         for mp in cand.probes:
+            ahead -= (1 if cand.categorical else 2) * copies * n_sim
             z_full, eff = _z_vector(maker, base, {cand.name: mp}, rows, observables, rng)
             if cand.categorical:  # an alternative has no half: it is on or off
                 z_half, eff_h = z_full, eff
@@ -278,7 +282,8 @@ def analyse_power(
                           z_full, z_half)  # fmt: skip
             lim = detection_limit(e, cand, n, n_sim, z_crit, power)
             e, lim, pair = _refine(e, lim, (eff, eff_h), z_half, refine, cand, maker, base,
-                                   rows, observables, rng, n, z_crit, power, ens)  # fmt: skip
+                                   rows, observables, rng, n, z_crit, power, ens,
+                                   unread, ahead)  # fmt: skip
             kept.append(pair)
             d_lim = None
             if cand.random:
@@ -373,12 +378,16 @@ def _refine(
     z_crit: float,
     power: float,
     ens: float,
+    unread: list[str] | None = None,
+    reserve: int = 0,
 ) -> tuple[EffectPower, float | None, tuple[list[pd.DataFrame], list[pd.DataFrame]]]:
     """Read the limit again where it lies while it is far from its read-out's magnitudes.
 
     Far: more than ``REFINE_FACTOR`` from both, and not between them within
     ``BRACKET_RATIO``. ``pair`` holds the copies at the probe and at half of it.
-    Returns the read-out, its limit and its (read, against) copies.
+    Returns the read-out, its limit and its (read, against) copies. A re-read
+    that the simulator's budget has no room for, besides the ``reserve`` runs
+    the other probes still need, is not made (noted in ``unread``).
     """
     sims = {e.probe: (np.asarray(e.z), pair[0]), e.probe / 2.0: (z_half, pair[1])}
     n_sim = len(rows)
@@ -391,6 +400,11 @@ def _refine(
             or (lo <= abs(lim) <= hi and hi <= BRACKET_RATIO * lo)
         ):
             break  # read close to the limit, or interpolated over a short bracket
+        if len(base) * n_sim > getattr(maker.sim, "remaining", math.inf) - reserve:
+            log.info("power %s@%g: not read again at %.3g (budget)", cand.name, e.probe, lim)
+            if unread is not None:
+                unread.append(f"{cand.name}@{e.probe:g}")
+            break
         grow = getattr(maker.sim, "expect_more", None)
         if grow is not None:
             grow(len(base) * n_sim)  # a refinement the bar counted as "later" now runs

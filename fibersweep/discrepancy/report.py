@@ -9,8 +9,10 @@ Files written into the output directory (each atomically):
 - ``summary.json``: verdict, gaps, ranking, fits (per half), held-out before/after,
   sets of effects tried, power analysis, what to measure next, the follow-up
   fibers' test; for scripts;
-- ``report.md``: the same for people, with the figures (:mod:`.report_text`,
-  :mod:`.report_followup`) and the advice (:mod:`.advice`);
+- ``report.md``: the same for people, in two layers: a first page in words
+  (:mod:`.report_first_page`), then the statistical detail with a glossary and
+  the figures (:mod:`.report_text`, :mod:`.report_followup`) and the advice
+  (:mod:`.advice`); every stage skipped for the budget is said;
 - figures (:mod:`.report_figures`): ``phase_before_after.png``,
   ``residual_map.png``, ``gap_before_after.png``, ``next_measure.png``;
 - ``updated_config.yaml`` (named effect or set) or ``updated_config.<set>.yaml``
@@ -35,11 +37,11 @@ import yaml
 
 from fibersweep.atomic import atomic_write
 from fibersweep.config.loading import apply_overrides
-from fibersweep.discrepancy.advice import advice_lines
+from fibersweep.discrepancy.advice import advice_lines, cannot_exclude
 from fibersweep.discrepancy.candidates import Candidate
 from fibersweep.discrepancy.detection import limit_in_unit
 from fibersweep.discrepancy.gap import GAP_UNIT, GapResult
-from fibersweep.discrepancy.observables import scored
+from fibersweep.discrepancy.observables import OBSERVABLES, scored
 from fibersweep.discrepancy.report_figures import figures
 from fibersweep.discrepancy.report_text import markdown
 from fibersweep.discrepancy.result import DiscrepancyResult
@@ -115,7 +117,8 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
     fibers = res.extra["power_fibers"]
     effects = []
     declared = {c.name: c for c in res.settings.declared}
-    for e, (real, need) in zip(pw.effects, fibers.realistic, strict=True):
+    cis = fibers.realistic_ci or (None,) * len(pw.effects)
+    for e, (real, need), need_ci in zip(pw.effects, fibers.realistic, cis, strict=True):
         unit = limit_in_unit(declared[e.name], e) if e.name in declared else {}
         effects.append(
             {
@@ -129,6 +132,7 @@ def _power_dict(res: DiscrepancyResult) -> dict[str, Any] | None:
                 "dispersion_limit": e.dispersion_limit,
                 "realistic": real,
                 "fibers_for_realistic": need,
+                "fibers_for_realistic_ci": need_ci,
                 **unit,
             }
         )
@@ -249,6 +253,27 @@ def _declared_dict(c: Candidate) -> dict[str, Any]:
     }  # fmt: skip
 
 
+#: The stages that may be skipped, by their summary key, as the report names them.
+SKIPPABLE = {
+    "pairs_skipped": "two effects together",
+    "power_skipped": "power analysis",
+    "next_skipped": "what to measure next",
+    "settle_skipped": "follow-up test",
+}
+
+
+def _skipped(res: DiscrepancyResult) -> dict[str, str]:
+    """Each stage that did not run, as the report names it, with why (budget or other)."""
+    return {name: res.extra[k] for k, name in SKIPPABLE.items() if res.extra.get(k)}
+
+
+def _costs(res: DiscrepancyResult) -> dict[str, int] | None:
+    """The follow-ups' runs planned before the analysis (:func:`.followup.followup_costs`)."""
+    c = res.extra.get("followup_costs")
+    return None if c is None else {"power": c.power, "power_more": c.power_more,
+                                   "next": c.next}  # fmt: skip
+
+
 def summary(res: DiscrepancyResult) -> dict[str, Any]:
     """JSON-ready summary of a workflow result."""
     v = res.verdict
@@ -322,6 +347,8 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "n_heldout": len(res.heldout_rows),
         "observables": list(res.observables),
         "observables_absent": [o for o in scored() if o not in res.observables],
+        # the unit of each observable's values and residuals ('' for a class)
+        "observable_units": {o: OBSERVABLES[o].unit for o in res.observables if o in OBSERVABLES},
         "start_axes_varying": varying,
         "alpha": res.settings.alpha,
         "gap_unit": GAP_UNIT,
@@ -359,6 +386,10 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "next_skipped": res.extra.get("next_skipped"),
         "settle": _settle_dict(res),
         "settle_skipped": res.extra.get("settle_skipped"),
+        "pairs_skipped": res.extra.get("pairs_skipped"),
+        "power_unread": res.extra.get("power_unread", []),
+        "stages_skipped": _skipped(res),
+        "followup_costs": _costs(res),
         "simulations": res.simulations,
         "simulations_planned": res.plan.cost(len(res.observed)),
         "simulations_by_stage": res.extra.get("runs_by_stage", {}),
@@ -377,7 +408,9 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
             "noise": res.settings.noise.as_dict(),
         },
     }
-    out["advice"] = advice_lines(_clean(out))
+    clean = _clean(out)
+    out["cannot_exclude"] = cannot_exclude(clean)
+    out["advice"] = advice_lines(clean)
     return _clean(out)
 
 

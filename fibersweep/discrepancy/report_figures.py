@@ -4,8 +4,11 @@
   baseline model, and the model with what was fitted (the named effect or set,
   else the best candidate, labelled as not named; no third panel when nothing
   was fitted);
-- ``residual_map.png``: binned per-fiber gap over the start axes that vary in
-  the data, one colour range for all panels, in copy-spread units;
+- ``residual_map.png`` (only with a significant gap): the per-fiber gap binned
+  over the start axes the data sample (an axis whose spread is that of the
+  start noise alone is not one), each bin's mean as a z against the noise of a
+  mean of that many fibers, on one symmetric scale; bins within the noise
+  (|z| < :data:`NOISE_Z`) grey;
 - ``gap_before_after.png``: out-of-sample gap per observable, baseline and with
   what was fitted, in copy-spread units;
 - ``next_measure.png``: how well one fiber at each start separates the two
@@ -25,9 +28,17 @@ from fibersweep.discrepancy.observables import OBSERVABLES
 from fibersweep.discrepancy.result import DiscrepancyResult, Discrimination
 from fibersweep.plots.style import CLASS_STYLE, FAILED_STYLE, paper_style, save_figure, subplots
 
-__all__ = ["figures", "fitted_label", "next_figure"]
+__all__ = ["NOISE_Z", "SAMPLED_SPREAD", "bin_z", "figures", "fitted_label", "next_figure"]
 
 UNIT = GAP_UNIT
+
+#: A bin's |z| below this is drawn as noise (grey) in the residual map.
+NOISE_Z = 2.0
+
+#: A start axis is mapped only if its measured spread exceeds this many start-noise sd:
+#: a few dozen starts drawn around one value by the noise alone span about 4-5 sd.
+SAMPLED_SPREAD = 8.0
+
 AXES = {"theta0": r"$\theta_0$ [deg]", "y0": r"$y_0/h_{obs}$", "length": r"$L/l_{obs}$"}
 
 
@@ -109,33 +120,80 @@ def _phase(res: DiscrepancyResult, out: Path) -> str:
     return "phase_before_after.png"
 
 
+def _sampled_axes(res: DiscrepancyResult) -> list[str]:
+    """The start axes the measured fibers sample beyond the start noise."""
+    noise = res.settings.noise
+    obs = res.observed
+    return [c for c in ("theta0", "y0", "length")
+            if float(np.ptp(obs[c])) > SAMPLED_SPREAD * float(getattr(noise, c))]  # fmt: skip
+
+
+def bin_z(mean: np.ndarray, count: np.ndarray, sd: float) -> np.ndarray:
+    """Each bin's mean per-fiber gap as a z: ``mean / (sd / sqrt(count))``.
+
+    Parameters
+    ----------
+    mean, count : ndarray, same shape
+        Mean gap [copy-spread units] and fibers per bin (:func:`.localise.binned_map`).
+    sd : float
+        Spread of the per-fiber gap over all fibers [copy-spread units]: the noise of
+        one fiber (with a gap somewhere it is larger, so a bin's z errs small).
+
+    Returns
+    -------
+    ndarray
+        NaN for an empty bin or a zero ``sd``.
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        z = mean * np.sqrt(count) / sd if sd > 0 else np.full(mean.shape, np.nan)
+    return np.where(count > 0, z, np.nan)
+
+
 def _residual_map(res: DiscrepancyResult, out: Path) -> str | None:
     import matplotlib
+    from matplotlib.colors import ListedColormap
 
+    if not res.gap.any:
+        return None  # no gap: a map of noise would only invite reading it
+    axes_ = _sampled_axes(res)
+    if "y0" not in axes_ or len(axes_) < 2:
+        return None  # fewer than two sampled axes: no map to draw
     obs = res.observed
-    exc = res.gap_per_fiber
+    exc = np.asarray(res.gap_per_fiber, dtype=np.float64)
+    sd = float(np.nanstd(exc, ddof=1)) if np.isfinite(exc).sum() > 1 else 0.0
     y0 = obs["y0"].to_numpy(dtype=np.float64)
-    xs = [c for c in ("theta0", "length") if float(np.ptp(obs[c])) > 1e-9]
-    if float(np.ptp(y0)) <= 1e-9 or not xs:
-        return None  # nothing varies: a map would only split axes the data do not vary
     maps = []
-    for c in xs:
+    # about two fibers per bin on average, at most 5 x 7 bins
+    ny = int(np.clip(round(np.sqrt(len(obs) / 1.4)), 3, 7))
+    nx = int(np.clip(round(0.7 * ny), 3, 5))
+    for c in (a for a in axes_ if a != "y0"):
         x = obs[c].to_numpy(dtype=np.float64)
-        xe = np.linspace(np.nanmin(x), np.nanmax(x) + 1e-9, 6)
-        ye = np.linspace(np.nanmin(y0), np.nanmax(y0) + 1e-9, 8)
-        m, _ = binned_map(x, y0, exc, xe, ye)
-        maps.append((c, xe, ye, m))
-    finite = [np.abs(m[np.isfinite(m)]) for *_, m in maps]
-    lim = max((float(f.max()) for f in finite if len(f)), default=1.0) or 1.0
-    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="0.85")
-    fig, axes = subplots(1, len(maps), figsize=(3.6 * len(maps) + 0.8, 3.2), layout="constrained")
+        xe = np.linspace(np.nanmin(x), np.nanmax(x) + 1e-9, nx + 1)
+        ye = np.linspace(np.nanmin(y0), np.nanmax(y0) + 1e-9, ny + 1)
+        m, cnt = binned_map(x, y0, exc, xe, ye)
+        maps.append((c, xe, ye, bin_z(m, cnt, sd), cnt))
+    top = max((float(np.nanmax(np.abs(z))) for *_, z, _ in maps if np.isfinite(z).any()),
+              default=0.0)  # fmt: skip
+    lim = max(4.0, float(np.ceil(top)))
+    cmap = matplotlib.colormaps["RdBu_r"].with_extremes(bad="white")
+    grey = ListedColormap(["0.85"])
+    fig, axes = subplots(1, len(maps), figsize=(3.6 * len(maps) + 0.9, 3.3), layout="constrained")
     im = None
-    for ax, (c, xe, ye, m) in zip(np.atleast_1d(axes), maps, strict=True):
-        im = ax.pcolormesh(xe, ye, np.ma.masked_invalid(m.T), cmap=cmap, vmin=-lim, vmax=lim)
+    for ax, (c, xe, ye, z, cnt) in zip(np.atleast_1d(axes), maps, strict=True):
+        im = ax.pcolormesh(xe, ye, np.ma.masked_invalid(z.T), cmap=cmap, vmin=-lim, vmax=lim)
+        quiet = np.where(np.isfinite(z) & (np.abs(z) < NOISE_Z), 1.0, np.nan)
+        ax.pcolormesh(xe, ye, np.ma.masked_invalid(quiet.T), cmap=grey, vmin=0, vmax=1)
+        xc, yc = 0.5 * (xe[1:] + xe[:-1]), 0.5 * (ye[1:] + ye[:-1])
+        for i, j in zip(*np.nonzero(cnt), strict=True):  # fibers per bin: how much it rests on
+            ax.text(xc[i], yc[j], str(cnt[i, j]), ha="center", va="center", fontsize=6,
+                    color="0.35")  # fmt: skip
         ax.set_xlabel(AXES[c])
         ax.set_ylabel(AXES["y0"])
-    fig.colorbar(im, ax=np.atleast_1d(axes).tolist(), label=f"mean gap per fiber [{UNIT}]")
-    fig.suptitle("Where the measurement sits worse than the model's copies (grey: no fibers)")
+    cb = fig.colorbar(im, ax=np.atleast_1d(axes).tolist(),
+                      label="z of the bin's mean gap\n(+: measured worse than the model)")
+    cb.ax.axhspan(-NOISE_Z, NOISE_Z, color="0.85")  # the noise band, as on the map
+    fig.suptitle(f"Where the gap is: grey |z| < {NOISE_Z:g} is noise, white no fibers, "
+                 "numbers fibers per bin", fontsize=8)  # fmt: skip
     save_figure(fig, out / "residual_map.png", dpi=110)
     return "residual_map.png"
 

@@ -86,6 +86,9 @@ def power_lines(s: dict[str, Any]) -> list[str]:
     ):
         if items:
             lines += ["", lead + ", ".join(items) + "."]
+    if s.get("power_unread"):
+        lines += ["", "Not read again for the budget (each limit stays as read from its last two "
+                  "magnitudes, less accurate): " + ", ".join(s["power_unread"]) + "."]  # fmt: skip
     if pw["lookalikes"]:
         lines += [
             "",

@@ -1,9 +1,14 @@
 """The Markdown of the discrepancy report, from the JSON summary (:func:`.report.summary`).
 
-The analysis sections are written here (verdict, gap, where it lives, ranking,
-fits and the held-out decision, sets, before / after); the follow-up sections
-in :mod:`.report_followup`. Numbers are rounded to what they can tell
-(:mod:`.report_format`); the gap is in one unit everywhere (copy-spread units).
+Two layers. First a page for a researcher, in words (:mod:`.report_first_page`):
+what differs, what explains it and by how much, what cannot be excluded, what
+to measure next. Then the statistical detail, opened by a short glossary: the
+analysis sections written here (gap, where it lives, ranking, fits and the
+held-out decision, sets, before / after) and the follow-up sections of
+:mod:`.report_followup`. A section about where a gap lives appears only with a
+gap. Numbers are rounded to what they can tell (:mod:`.report_format`); the gap
+is in one unit everywhere (copy-spread units), every residual in its
+observable's unit, every z with what it is about.
 """
 
 from __future__ import annotations
@@ -12,11 +17,36 @@ import json
 from typing import Any
 
 from fibersweep.discrepancy.observables import OBSERVABLES, has_tracks, log_scale, scored
+from fibersweep.discrepancy.report_first_page import first_page, z_labels
 from fibersweep.discrepancy.report_followup import next_lines, power_lines, settle_lines
 from fibersweep.discrepancy.report_format import ci_text, num
 from fibersweep.discrepancy.settings import TIE_COSINE
 
-__all__ = ["markdown"]
+__all__ = ["GLOSSARY", "markdown"]
+
+#: The words of the statistical detail, in plain words (the report's glossary).
+GLOSSARY = (
+    ("copy", "one simulation of a measured fiber by the model, its start and outcome "
+     "jittered by the measurement noise; the model's copies show what the model predicts "
+     "and how much that varies"),
+    ("fair Brier score, fair CRPS", "how far a measured value sits from the model's copies "
+     "(the Brier score for a class or yes/no, the CRPS for a number); lower is better, "
+     "'fair' corrects for the finite number of copies"),
+    ("gap [copy-spread units]", "how much worse the measured fibers score than a copy "
+     "scores against the other copies, divided by the spread of the copies' own scores: "
+     "0 is as good as the model's own copies, 1 one spread worse per fiber"),
+    ("shift z", "the signed residual (measured minus the copies' mean) over its noise: "
+     "positive means measured more often in that class, or larger; |z| above about 2 "
+     "stands out of the noise"),
+    ("p, Holm", "p: how often noise alone gives a result this far out. Holm: the "
+     "p-values of every test of a table adjusted together, so the chance of any false "
+     "alarm stays at alpha"),
+    ("held out, out of sample", "a value fitted on one half of the fibers and judged on "
+     "the other half: an effect is named only if it helps fibers it was not fitted to"),
+    ("95 % interval", "the values the data cannot tell from the fitted one"),
+    ("detection limit", "the smallest size of an effect the tests would see with "
+     "probability 0.8 with this many fibers"),
+)
 
 
 def _score_text(observed: list[str] | tuple[str, ...] = ()) -> str:
@@ -35,7 +65,6 @@ def _score_text(observed: list[str] | tuple[str, ...] = ()) -> str:
 
 
 def _header(s: dict[str, Any]) -> list[str]:
-    v = s["verdict"]
     fails = s["failed_runs"]
     under = {k: n for k, n in s["failed_runs_by_stage"].items() if k != "baseline" and n}
     under_txt = (
@@ -46,12 +75,10 @@ def _header(s: dict[str, Any]) -> list[str]:
         else ""
     )
     return [
-        "# Discrepancy report",
-        "",
-        f"**Verdict: {v['kind']}.** {v['text']}",
-        "",
-        f"{s['n_fibers']} measured fibers, every one scored out of sample (each half with the "
-        f"value fitted on the other half); {s['simulations']} simulations, {fails} failed runs "
+        f"{s['n_fibers']} measured fibers"
+        + (", every one scored out of sample (each half with the value fitted on the other "
+           "half)" if s.get("heldout") else "")
+        + f"; {s['simulations']} simulations, {fails} failed runs "
         f"of the baseline model (kept as failures){under_txt}; {s['seconds']:.0f} s; "
         f"family-wise alpha = {s['alpha']}.",
         "",
@@ -64,6 +91,54 @@ def _header(s: dict[str, Any]) -> list[str]:
     ]
 
 
+def _glossary() -> list[str]:
+    return ["", "## Words used below", ""] + [f"- **{k}**: {v}." for k, v in GLOSSARY]
+
+
+def _z_text(name: str, zs: list[float | None]) -> str:
+    """Each shift z with what it is about ('Below −2.1, Above 2.1'; 'shift 0.3')."""
+    return ", ".join(f"{lab} {num(z, '+.1f')}" for lab, z in
+                     zip(z_labels(name, len(zs)), zs, strict=True))  # fmt: skip
+
+
+def _unit(name: str) -> str:
+    o = OBSERVABLES.get(name)
+    return o.unit if o is not None else ""
+
+
+def _descriptive(d: dict[str, Any]) -> list[str]:
+    """The descriptive measures in words, each in its observable's unit."""
+    out = []
+    for k, val in d.items():
+        if k == "confusion" or val is None:
+            continue
+        name, _, what = k.rpartition("_")
+        if k.endswith("_confusion"):
+            continue
+        u = _unit(name)
+        us = f" {u}" if u else ""
+        if what == "residual" and isinstance(val, dict):
+            if val.get("mean") is None:
+                continue
+            out.append(f"- {name}: measured minus the model's mean {num(val['mean'], '+.3g')}{us} "
+                       f"on average, sd {num(val.get('sd'), '.3g')}{us} over {val.get('n')} "
+                       "fibers")  # fmt: skip
+        elif what == "wasserstein":
+            out.append(f"- {name}: distance between the measured and model distributions "
+                       f"(Wasserstein) {num(val, '.3g')}{us}")  # fmt: skip
+        elif what == "ratio":
+            out.append(f"- {name}: median ratio measured / model {num(val, '.3g')}")
+        elif what == "agreement":
+            out.append(f"- {name}: {100 * val:.0f} % of fibers in the class the model finds "
+                       "most often")  # fmt: skip
+        elif what == "mismatch":
+            out.append(f"- {name}: {100 * val:.0f} % of fibers differ from the model's usual "
+                       "outcome")  # fmt: skip
+        else:
+            out.append(f"- {k}: {json.dumps(val)}")
+    return out
+
+
 def _gap_table(s: dict[str, Any]) -> list[str]:
     lines = [
         "",
@@ -71,8 +146,8 @@ def _gap_table(s: dict[str, Any]) -> list[str]:
         "",
         _score_text(s["observables"]),
         "",
-        "| observable | n | gap [copy-spread units, 95 % CI] | p score (Holm) | p signed (Holm) "
-        "| signed residual z | significant |",
+        "| observable | n | gap [copy-spread units, 95 % CI] | p score (Holm) | p shift (Holm) "
+        "| shift z, per class or of the value | significant |",
         "|---|---|---|---|---|---|---|",
     ]
     for name, g in s["gap"].items():
@@ -82,7 +157,7 @@ def _gap_table(s: dict[str, Any]) -> list[str]:
         lines.append(
             f"| {name} | {g['n']} | {ci_text(g['gap'])} | {num(g['p_holm'], '.2g')} "
             f"| {num(g['signed_p_holm'], '.2g')} "
-            f"| {', '.join(num(z, '.1f') for z in g['bias_z'])} | {sig or 'no'} |"
+            f"| {_z_text(name, g['bias_z'])} | {sig or 'no'} |"
         )
     disp = s.get("dispersion") or {}
     if disp.get("baseline", {}).get("n"):
@@ -111,16 +186,9 @@ def _gap_table(s: dict[str, Any]) -> list[str]:
             lines.append(f"| {lab} | " + " | ".join(str(c) for c in row) + " |")
         lines.append("")
 
-    def rnd(x: Any) -> Any:
-        if isinstance(x, float):
-            return float(f"{x:.3g}")
-        if isinstance(x, dict):
-            return {k: rnd(v) for k, v in x.items()}
-        return x
-
-    for k, val in d.items():
-        if k != "confusion":
-            lines.append(f"- {k}: {json.dumps(rnd(val))}")
+    lines += _descriptive(d)
+    if not any(g["significant"] or g["systematic"] for g in s["gap"].values()):
+        return lines  # no gap: nothing lives anywhere
     varying = s["start_axes_varying"]
     lines += [
         "",
@@ -173,12 +241,11 @@ def _fits(s: dict[str, Any]) -> list[str]:
         "Each half is scored with the value fitted on the other half. Every value is the one "
         "the fit's score test is most compatible with (the zero of its mean loss slope; for a "
         "random effect, where the data are as spread as its copies). Final: the value "
-        "refitted on all fibers (significant candidates), with its 95 % interval: the values "
-        "where the fibers' mean loss slope is not significantly different from zero (a score "
-        "test over the fibers; it includes the copies' Monte Carlo noise, and its critical "
-        "value is calibrated on simulated data sets). '≤' / '≥' mark an "
-        "end where the evaluated values stopped before the test rejected (the effect's range "
-        "end, or where a small budget stopped the refit). Candidates "
+        "refitted on all fibers (significant candidates), with its 95 % interval: where the "
+        "minimum of the fibers' mean loss falls when the fibers are resampled (a bootstrap "
+        "over the fibers; it includes the copies' Monte Carlo noise). '≤' / '≥' mark an "
+        "end where the resampled minima pile up at the last evaluated value (the effect's "
+        "range end, or where a small budget stopped the refit). Candidates "
         "whose fit kept the "
         "baseline (0) on both halves are left out.",
         "",
@@ -299,7 +366,24 @@ def _before_after(s: dict[str, Any]) -> list[str]:
 
 def markdown(s: dict[str, Any], figures: list[str], configs: list[str]) -> str:
     """The report for people (see the module docstring)."""
-    lines = _header(s) + _gap_table(s) + _fits(s) + _before_after(s)
+    v = s["verdict"]
+    lines = [
+        "# Discrepancy report",
+        "",
+        f"**Verdict: {v['kind']}.** {v['text']}",
+        "",
+        "## In short",
+        "",
+        *first_page(s),
+        "",
+        "---",
+        "",
+        "# Statistical detail",
+        "",
+        *_header(s),
+        *_glossary(),
+    ]
+    lines += _gap_table(s) + _fits(s) + _before_after(s)
     if s["advice"]:
         lines += ["", "## Advice", ""] + [f"- {a}" for a in s["advice"]]
     lines += power_lines(s) + next_lines(s) + settle_lines(s)

@@ -34,8 +34,8 @@ is a uniformly random pick among the row's columns, independently per fiber,
 and the exact conditional null distribution of any statistic of column 0 is
 obtained by drawing, for every fiber, a random column instead
 (:func:`permutation_test`). This is the noise floor: it comes from the model's
-own copies, not from a tuned threshold. Holm's correction, bootstrap intervals
-and p-values, and a split-conformal quantile complete the toolbox.
+own copies, not from a tuned threshold. Holm's correction and bootstrap
+intervals and p-values complete the toolbox.
 """
 
 from __future__ import annotations
@@ -51,7 +51,6 @@ __all__ = [
     "boot_p",
     "bootstrap_mean_ci",
     "brier_fair_loo",
-    "conformal_quantile",
     "crps_fair_loo",
     "excess",
     "holm",
@@ -319,26 +318,3 @@ def boot_p(d: np.ndarray, rng: np.random.Generator, n_boot: int = 4000) -> float
         return 1.0
     means = d[rng.integers(0, len(d), size=(n_boot, len(d)))].mean(axis=1)
     return float((1 + np.sum(means <= 0.0)) / (1 + n_boot))
-
-
-def conformal_quantile(scores: np.ndarray, level: float = 0.95) -> float:
-    """Split-conformal quantile: the k-th smallest of n scores, k = ceil((n + 1) level).
-
-    If a new score is exchangeable with the n calibration scores, it is at most
-    this value with probability at least ``level`` (and below (k + 1) / (n + 1)
-    when the scores have no ties). Used to calibrate the score test's critical
-    value on simulated data sets (:data:`.estimate.CRIT_SCALE`).
-
-    Parameters
-    ----------
-    scores : ndarray, shape (n,)
-    level : float
-
-    Returns
-    -------
-    float
-        inf when k > n (too few scores for the level).
-    """
-    s = np.sort(np.asarray(scores, dtype=float))
-    k = int(np.ceil((len(s) + 1) * level))
-    return float(s[k - 1]) if k <= len(s) else float("inf")

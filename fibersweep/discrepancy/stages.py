@@ -150,7 +150,7 @@ class State:
     heldout : tuple of HeldOut
     effect_copies : dict of str -> list of DataFrame
     intervals : dict of str -> (lo, hi, open_lo, open_hi)
-        95 % score-test interval of the pooled refits.
+        95 % interval of the pooled refits (:func:`.estimate.score_interval`).
     sets : tuple of SetHeldOut
         Pairs tried by forward selection.
     """

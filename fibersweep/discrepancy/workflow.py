@@ -12,7 +12,12 @@ adding other candidates to the significant ones that helped most and leave one
 and what to measure next (:mod:`.followup`); (8) with fibers measured after it
 (``followup``), the verdict's two hypotheses tested on them (:mod:`.settle`);
 (9) the dispersion tests the report shows. The simulation count is planned up
-front and never exceeds ``budget``.
+front and never exceeds ``budget``: the analysis (1-6) by :func:`.settings.plan_budget`,
+the follow-ups (7) by :func:`.followup.followup_costs`; a follow-up that does
+not fit in what the analysis leaves is skipped (``extra['power_skipped']`` ...),
+and a batch the budget refuses inside a stage after the verdict's inputs
+(pairs, follow-ups) ends that stage only, so a verdict reached is always
+returned and reported.
 
 The stages (1-6) are the functions of :mod:`.stages`; what a run found is a
 :class:`~.result.DiscrepancyResult`, which the report receives.
@@ -33,13 +38,13 @@ from fibersweep.discrepancy.candidates import show_values
 from fibersweep.discrepancy.copies import CopyMaker
 from fibersweep.discrepancy.decide import decide
 from fibersweep.discrepancy.followup import followup as next_steps
-from fibersweep.discrepancy.followup import settle_followup
+from fibersweep.discrepancy.followup import followup_costs, settle_followup
 from fibersweep.discrepancy.gap import combined_excess
 from fibersweep.discrepancy.observables import has_tracks
 from fibersweep.discrepancy.result import DiscrepancyResult
 from fibersweep.discrepancy.schema import MeasuredData
 from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
-from fibersweep.discrepancy.simulate import Simulator
+from fibersweep.discrepancy.simulate import BudgetExhausted, Simulator
 from fibersweep.discrepancy.stages import (
     Run,
     cross_fit,
@@ -102,7 +107,8 @@ def run_discrepancy(
     if n < 8:
         raise InputError(f"measured: {n} fibers are too few for a held-out split (need >= 8)")
     plan = plan_budget(n, s, candidates)
-    log.info("plan: %s, total %d runs", plan.cost(n), plan.total(n))
+    costs = followup_costs(measured.starts, s, plan, candidates)
+    log.info("plan: %s, total %d runs; then at most %s", plan.cost(n), plan.total(n), costs)
     obs_names = tuple(o for o in measured.observed)
     observed = measured.table.reset_index(drop=True)
     rng = np.random.default_rng([s.seed, 11])
@@ -124,9 +130,15 @@ def run_discrepancy(
         cost = plan.cost(n)
         sim.expect(cost["baseline"], later=plan.total(n) - cost["baseline"])
         st = noise_floor(run)
+        skipped: dict[str, str] = {}
         if st.gap.any:
             sim.expect(plan.total(n) - cost["baseline"] - cost["pairs"], later=cost["pairs"])
-            st = pairs(refit(cross_fit(rank(st))))
+            st = refit(cross_fit(rank(st)))
+            try:  # planned within the budget; a refused batch ends forward selection only
+                st = pairs(st)
+            except BudgetExhausted as err:
+                skipped["pairs"] = f"skipped: budget ({err})"
+                log.warning("pairs %s", skipped["pairs"])
         sim.expect(0)  # follow-ups size their own batches
         heldout = list(st.heldout)
         by_name = {c.name: c for c in candidates}
@@ -147,6 +159,9 @@ def run_discrepancy(
         extra = next_steps(first, heldout, st.fold_values, candidates, maker, sim, plan, s,
                            obs_names, rng, show=show)  # fmt: skip
         extra.update(more)
+        if skipped:
+            extra["pairs_skipped"] = skipped["pairs"]
+        extra["followup_costs"] = costs
         used, failed, by_stage = sim.used, sim.failed, dict(sim.failed_by_stage)
         extra["runs_by_stage"] = dict(sim.used_by_stage)
         extra["seconds_by_stage"] = {k: round(v, 1) for k, v in sim.seconds_by_stage.items()}

@@ -26,6 +26,7 @@ from fibersweep.plots.fractions import wilson_interval
 
 __all__ = [
     "BOX",
+    "COVERAGE_DECLARED",
     "COVERAGE_KINDS",
     "COVERAGE_PAIR",
     "COVERAGE_SEED0",
@@ -127,3 +128,11 @@ def coverage_hidden(kind: str, index: int, seed: int, n: int) -> dict[str, float
     else:
         names = ("start_noise",)
     return {e: _draw(e, n, rng) for e in names}
+
+
+#: The declared candidate of the coverage study (the contact cutoff of a rigid fiber, as
+#: scripts/studies/discrepancy/study_infamily.py declares it) and the range its hidden
+#: coordinate is drawn from uniformly (chi = 1.1 + u, 1.5-1.9; the spec's range is 1.01..2;
+#: chi = 1.69 left no gap in 20 fibers, chi = 2.0 did).
+COVERAGE_DECLARED = {"spec": "fiber.contact.chi=1.01..2", "key": "fiber.contact.chi",
+                     "coordinate": (0.4, 0.8)}  # fmt: skip

@@ -125,8 +125,10 @@ def test_advice_quotes_declared_values_in_their_unit_and_names_the_declared():
         "next": None,
         "power": {
             "effects": [
-                {"effect": "friction", "direction": "+", "limit_ci": [0.1, 0.28]},
-                {"effect": STIFF.name, "direction": "+", "limit_ci": [0.7, 1.36],
+                {"effect": "friction", "direction": "+", "limit": 0.15,
+                 "limit_ci": [0.1, 0.28], "realistic": 0.5},
+                {"effect": STIFF.name, "direction": "+", "limit": 0.935,
+                 "limit_ci": [0.7, 1.36], "realistic": None,
                  "unseen": "flexibility of fiber.young_modulus >= 1.37e+06 Pa"},
             ],  # fmt: skip
             "leading": {"effect": STIFF.name, "value": 1.8, "setting": STIFF.show(1.8),

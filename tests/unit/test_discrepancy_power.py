@@ -270,3 +270,41 @@ def test_power_fibers_are_what_the_report_prints():
     assert lead.fibers_to_detect == pw.fibers_to_detect("fiber.x", 0.7)
     assert lead.fibers_to_detect_ci is None  # no bootstrap read-outs
     assert lead.fibers_to_name == fibers_to_name(d, 2, 0.05, 0.8)
+
+
+class _BudgetSim:
+    """Counts runs like the simulator, with its ``remaining`` under a budget."""
+
+    def __init__(self, budget: int):
+        self.used, self.budget = 0, budget
+
+    @property
+    def remaining(self) -> int:
+        return self.budget - self.used
+
+
+@pytest.mark.parametrize("extra", [0, 179, 180])
+def test_a_re_read_the_budget_cannot_hold_is_not_made_and_is_said(extra):
+    # Budget = the certain runs of two probes (baseline, probe and half of each: 3 x 60 x 5)
+    # + extra. The first probe (0.15, saturated) wants a re-read of 180 runs; it is made
+    # only when the budget holds it beside the second probe's own 360 runs, else noted
+    # in `unread`. The second probe always runs: the budget is never exceeded.
+    from fibersweep.discrepancy.candidates import Candidate
+    from fibersweep.discrepancy.power import analyse_power, planned_runs
+
+    sat = Candidate("inlet_speed", -0.3, 0.3, (0.15,), 0.05, "")
+    other = Candidate("pillar_scale", -0.3, 0.3, (0.012,), 0.05, "")
+    certain, _ = planned_runs([sat, other], 60)
+    assert certain == 3 * 60 * 5
+    maker = _StandInMaker(60, 1, _saturating)
+    maker.sim = _BudgetSim(certain + extra)
+    unread: list[str] = []
+    pw = analyse_power(maker, [sat, other], 100, ["delta"], np.random.default_rng(1), n_sim=60,
+                       refine=1, unread=unread)  # fmt: skip
+    assert maker.sim.used <= maker.sim.budget and len(pw.effects) == 2
+    if extra < 180:
+        assert unread == ["inlet_speed@0.15"] and pw.effects[0].read_at is None
+        assert pw.simulations == certain
+    else:
+        assert unread == [] and pw.effects[0].read_at is not None
+        assert pw.simulations == certain + 180

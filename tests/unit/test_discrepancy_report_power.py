@@ -38,11 +38,14 @@ def test_power_table_shows_each_limit_with_its_interval():
 def test_advice_of_an_unexplained_gap_names_the_next_measurement_and_the_unseen_sizes():
     adv = " ".join(_advice(_summary("unexplained")))
     assert "about 23 more fibers" in adv and "like the measured ones: 140" in adv
-    assert "friction (+) up to 0.2" in adv
-    assert "pillar_hydro" not in adv.split("May be present unseen")[1]  # no upper end
-    # no gap: only the unseen sizes, no next measurement
+    seen, cannot = adv.split("Would have been seen")[1], adv.split("Cannot be excluded")[1]
+    assert "friction (+) up to 0.2" in seen
+    # an interval's upper end out of range: not excluded, with the fibers that would settle it
+    assert "pillar_hydro" not in seen and "pillar_hydro (+)" in cannot.split("Would")[0]
+    assert "about 80 fibers would detect 0.5" in cannot
+    # no gap: only what is and is not excluded, no next measurement
     adv = " ".join(_advice(_summary("no significant gap")))
-    assert "May be present unseen" in adv and "more fibers at" not in adv
+    assert "Would have been seen" in adv and "more fibers at" not in adv
 
 
 def test_unexplained_without_a_candidate_sends_the_fibers_where_the_gap_is_largest():

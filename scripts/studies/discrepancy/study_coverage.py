@@ -1,19 +1,23 @@
-"""Coverage of the discrepancy workflow's 95 % intervals on the simulator (issue 30).
+"""Coverage of the discrepancy workflow's 95 % intervals on the simulator.
 
 Per data set: a hidden value (or pair of values) drawn at random from a stated
 range (``COVERAGE_RANGES`` of ``scripts/studies/common.py``: 1.5-4x the effect's
-detection limit at N = 100), measured-like fibers synthesised with it
-(:func:`synth.synthesize`), and ONLY the workflow's own stages for the true
-effect(s), with no candidate screening:
+detection limit at N = 100, scaled to N; the declared kind: the coordinate range
+of ``COVERAGE_DECLARED``), measured-like fibers synthesised with it
+(:func:`synth.synthesize`; the declared kind with the candidate's setting applied
+to the fiber), and ONLY the workflow's own stages for the true effect(s), with no
+candidate screening:
 
 - the noise floor (:func:`stages.noise_floor`: baseline copies, the gap, the
   loss weights of the observables with a gap); a data set without a significant
   gap is recorded and left out of the coverage (the workflow names nothing);
 - the signature of the true effect alone (:func:`stages.rank`; it gives a signed
   effect's side and makes a random effect the lead, with its extra fit copies);
-- single and random: the halves' fits (:func:`fit.fold_fits`), the pooled refit
-  (:func:`fit.pooled_refit`) and its interval (:func:`estimate.score_interval`), as
-  :func:`stages.refit` runs them for a significant candidate;
+- single, random and declared: the halves' fits (:func:`fit.fold_fits`), the
+  pooled refit (:func:`fit.pooled_refit`) and its interval
+  (:func:`estimate.score_interval`), as :func:`stages.refit` runs them for a
+  significant candidate; the refit's per-fiber losses (and dispersion scores) are
+  stored, so that ``read_intervals.py`` reads the interval again offline;
 - pair: both members' halves, the first member's pooled refit and the gap it
   leaves (the pair's loss weights, :func:`pairs.pair_weights`), the joint fit on
   each fold (:func:`pairs.joint_fit`) and each member's refit with its interval
@@ -29,10 +33,10 @@ measure naming.
 One JSON per data set under ``OUT/KIND/seedS.json``; a set whose file exists is
 skipped, so the study can be stopped and continued, and more seeds appended::
 
-    python scripts/studies/discrepancy/study_coverage.py --kinds single pair random --sets 20 --n \
-        20 \
-        --copies 4 --workers 1 --out results/coverage
-    python scripts/studies/discrepancy/study_coverage.py --tabulate results/coverage
+    python scripts/studies/discrepancy/study_coverage.py --kinds single declared --sets 8 \
+        --n 20 --copies 4 --workers 1 --out results/interval_cov/n20
+    python scripts/studies/discrepancy/study_coverage.py --tabulate --out results/interval_cov/n20
+    python scripts/studies/discrepancy/read_intervals.py results/interval_cov/n20
 """
 
 from __future__ import annotations
@@ -49,6 +53,7 @@ import numpy as np
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.candidates import LIBRARY, get_candidates
 from fibersweep.discrepancy.copies import CopyMaker
+from fibersweep.discrepancy.declared import apply_values, parse_candidate
 from fibersweep.discrepancy.estimate import score_interval
 from fibersweep.discrepancy.fit import fold_fits, pooled_refit
 from fibersweep.discrepancy.gap import assess_gap, value_matrices
@@ -60,19 +65,41 @@ from fibersweep.discrepancy.stages import Run, noise_floor, rank
 from fibersweep.discrepancy.synth import synthesize
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from common import BOX, DEFAULT_CACHE, study_field, wilson  # noqa: E402
-from common import COVERAGE_KINDS as KINDS  # noqa: E402
+from common import (  # noqa: E402
+    BOX,
+    COVERAGE_KINDS,
+    COVERAGE_SEED0,
+    DEFAULT_CACHE,
+    STUDY_FLOW,
+    coverage_hidden,
+    study_field,
+    wilson,
+)
+from common import COVERAGE_DECLARED as DECLARED  # noqa: E402
 from common import COVERAGE_PAIR as PAIR  # noqa: E402
-from common import COVERAGE_SEED0 as SEED0  # noqa: E402
-from common import coverage_hidden as hidden  # noqa: E402
+
+#: The library kinds and a declared candidate (a rigid contact setting, COVERAGE_DECLARED).
+KINDS = (*COVERAGE_KINDS, "declared")
+SEED0 = {**COVERAGE_SEED0, "declared": 8301}
 
 log = logging.getLogger("coverage")
 
-def _interval_row(name, truth, value, halves, iv) -> dict:
+
+def hidden(kind: str, index: int, seed: int, n: int) -> dict[str, float]:
+    """The hidden value(s) of data set ``index``: :func:`common.coverage_hidden`, or for
+    the declared kind the candidate's coordinate drawn uniformly in its stated range."""
+    if kind != "declared":
+        return coverage_hidden(kind, index, seed, n)
+    lo, hi = DECLARED["coordinate"]
+    u = float(np.random.default_rng([seed, 31]).uniform(lo, hi))
+    return {DECLARED["key"]: round(u, 5)}
+
+
+def _interval_row(name, truth, value, halves, iv, cand=None) -> dict:
     """``covered``: the truth in [lo, hi] as reported. ``covered_open``: an end the
     refit's range cut ('≤' / '≥' in the report) taken as the effect's range end."""
     lo, hi, open_lo, open_hi = iv
-    c = LIBRARY[name]
+    c = cand or LIBRARY[name]
     lo_o, hi_o = (c.lo if open_lo else lo), (c.hi if open_hi else hi)
     return {"effect": name, "truth": truth, "value": value, "halves": halves,
             "interval95": [lo, hi], "open": [open_lo, open_hi],
@@ -80,15 +107,31 @@ def _interval_row(name, truth, value, halves, iv) -> dict:
             "covered_open": bool(lo_o <= truth <= hi_o)}  # fmt: skip
 
 
-def run_set(kind: str, index: int, seed: int, field, n: int, copies: int, workers: int) -> dict:
+def run_set(
+    kind: str,
+    index: int,
+    seed: int,
+    field,
+    n: int,
+    copies: int,
+    workers: int,
+    cache: str = DEFAULT_CACHE,
+) -> dict:
     """One data set: synthesise, then the workflow's fit-and-interval stages only."""
     effects = hidden(kind, index, seed, n)
     t0 = time.perf_counter()
-    table, _ = synthesize(field, FiberSettings(), BOX, n, effects, seed=seed, workers=workers,
+    declared: tuple = ()
+    truth_fiber, lib = FiberSettings(), dict(effects)
+    if kind == "declared":
+        cand = parse_candidate(DECLARED["spec"], FiberSettings(), STUDY_FLOW)
+        declared, lib = (cand,), {}
+        truth_fiber, _ = apply_values({cand.name: cand}, effects, FiberSettings(), STUDY_FLOW)
+    table, _ = synthesize(field, truth_fiber, BOX, n, lib, seed=seed, workers=workers,
                           progress=False)  # fmt: skip
     data = validate_measured(table, source=f"{kind}{seed}")
-    s = DiscrepancySettings(seed=seed, workers=workers, copies=copies, effects=tuple(effects))
-    cands = get_candidates(s.effects)
+    s = DiscrepancySettings(seed=seed, workers=workers, copies=copies, effects=tuple(lib),
+                            declared=declared)  # fmt: skip
+    cands = list(declared) or get_candidates(s.effects)
     plan = plan_budget(n, s, cands)
     observed = data.table.reset_index(drop=True)
     rng = np.random.default_rng([s.seed, 11])  # the workflow's folds (run_discrepancy)
@@ -96,7 +139,8 @@ def run_set(kind: str, index: int, seed: int, field, n: int, copies: int, worker
     folds = [np.sort(perm[: n // 2]), np.sort(perm[n // 2 :])]
     row: dict = {"kind": kind, "index": index, "seed": seed, "n": n, "copies": copies,
                  "truth": effects, "rows": []}  # fmt: skip
-    with Simulator(field, FiberSettings(), workers=workers, progress=False) as sim:
+    with Simulator(field, FiberSettings(), workers=workers, progress=False,
+                   candidates=list(declared), flow=STUDY_FLOW, cache_dir=cache) as sim:  # fmt: skip
         maker = CopyMaker(data.starts, s.noise, s.seed, sim)
         run = Run(s, plan, cands, observed, tuple(data.observed), folds, rng, maker)
         st = noise_floor(run)
@@ -118,9 +162,12 @@ def run_set(kind: str, index: int, seed: int, field, n: int, copies: int, worker
                 fit = pooled_refit(c, maker, observed, base, halves[c.name], run.observables,
                                    st.w_gap, plan.refit_evals)  # fmt: skip
                 row["rows"] = [_interval_row(c.name, effects[c.name], fit.value,
-                                             halves[c.name], score_interval(fit))]  # fmt: skip
-                # the refit's per-fiber losses: other read-outs of its interval offline
+                                             halves[c.name], score_interval(fit), c)]  # fmt: skip
+                # the refit's per-fiber losses (and a random effect's dispersion scores):
+                # other read-outs of its interval offline (scripts/.../read_intervals.py)
                 row["profile"] = [[v, loss.tolist()] for v, loss in fit.profile]
+                row["dispersion"] = [[v, d.tolist()] for v, d in fit.dispersion]
+                row["range"] = [c.lo, c.hi]
         row["runs"] = sim.used
     row["seconds"] = time.perf_counter() - t0
     return row
@@ -144,9 +191,14 @@ def _pair(run: Run, st, cands, halves: dict, effects: dict) -> list[dict]:
         refit_evals=plan.refit_evals,
     )  # fmt: skip
     per_fold = [
-        joint_fit(first, second,
-                  {first.name: halves[first.name][f], second.name: halves[second.name][f]},
-                  run.folds[1 - f], inp, maker)  # fmt: skip
+        joint_fit(
+            first,
+            second,
+            {first.name: halves[first.name][f], second.name: halves[second.name][f]},
+            run.folds[1 - f],
+            inp,
+            maker,
+        )  # fmt: skip
         for f in range(2)
     ]
     fold = {m: [pf[m] for pf in per_fold] for m in PAIR}
@@ -248,7 +300,7 @@ def main() -> None:
             path = out / kind / f"seed{seed}.json"
             if path.exists():
                 continue
-            row = run_set(kind, i, seed, field, args.n, args.copies, args.workers)
+            row = run_set(kind, i, seed, field, args.n, args.copies, args.workers, args.cache)
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(json.dumps(row, indent=1, default=float))
             log.warning("%s %d (seed %d): %s %s in %.0f s", kind, i, seed, row["truth"],
