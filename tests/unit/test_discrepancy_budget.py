@@ -14,26 +14,11 @@ from __future__ import annotations
 import json
 
 import numpy as np
-import pytest
 from typer.testing import CliRunner
 
 from fibersweep.cli import app
 from fibersweep.discrepancy.followup import followup_costs
 from fibersweep.discrepancy.settings import DiscrepancySettings, plan_budget
-
-
-@pytest.fixture()
-def config(tmp_path, flow_cache_dir, coarse_field):
-    """The discrepancy CLI tests' sweep box on the shared test cache (one worker)."""
-    p = tmp_path / "cfg.yaml"
-    p.write_text(
-        "sweep:\n"
-        "  theta0: {start: -10, stop: 10, num: 3}\n"
-        "  y0: {start: 0.15, stop: 0.65, num: 3}\n"
-        "  length: {start: 0.5, stop: 1.4, num: 3}\n"
-        f"run:\n  cache_dir: {flow_cache_dir}\n  workers: 1\n"
-    )
-    return p
 
 
 def test_the_follow_up_costs_are_known_before_the_analysis():
