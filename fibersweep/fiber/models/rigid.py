@@ -10,9 +10,12 @@ Time stepping: explicit midpoint (RK2). The step is bounded by
 - a bead displacement: ``max_disp`` far away, shrinking to ``contact_disp``
   as the closest bead approaches the contact layer (half the remaining free
   distance per step, so a step never carries a bead through the layer);
-- the contact stiffness: Δt ≤ 0.5 / (m_tip Σ_i k_i), with m_tip the largest
-  bead mobility of the rigid body and k_i = Σ_pairs |d|F|/dr| (stability of
-  the explicit step, whose real stability interval is [−2, 0]);
+- the contact stiffness: Δt ≤ 0.5 / λ, λ the contact force's decay rate
+  (:mod:`fibersweep.fiber.integrators.contact_rate`): m_tip Σ_i k_i, with m_tip the
+  largest bead mobility of the rigid body and k_i = Σ_pairs |d|F|/dr|, or, where an
+  effect changed the body mobility (``near_wall``), Σ_i k_i g_iᵀ N' g_i along each
+  bead's contact normal (stability of the explicit step, whose real stability
+  interval is [−2, 0]);
 - ``dt_max``.
 
 While the fiber is *stopped* (in contact and slower than ``trap_speed``) it
@@ -41,6 +44,7 @@ import numpy as np
 
 from fibersweep.fiber import frame as F
 from fibersweep.fiber.hydro.rpy import body_velocity
+from fibersweep.fiber.integrators.contact_rate import contact_rate
 from fibersweep.fiber.integrators.rosw import GAMMA2
 from fibersweep.fiber.kernel import hooks as H
 from fibersweep.fiber.kernel import record as R
@@ -75,9 +79,10 @@ def rigid_velocity(frame, flow, pillar, body, w, effects, xc, yc, th):
 
     Returns
     -------
-    (vx, vy, om, n_pillars, cx, cy, min_dist, stiff_sum)
+    (vx, vy, om, n_pillars, cx, cy, min_dist, rate)
         Velocity [µm/s, rad/s], pillars in contact (int) and the contact point
-        [µm], smallest distance to a pillar [µm], summed contact stiffness [pN/µm].
+        [µm], smallest distance to a pillar [µm], the contact force's decay rate
+        [1/s] (:func:`~fibersweep.fiber.integrators.contact_rate.contact_rate`).
     """
     # Bind the arrays once (each read of a bundle's field costs a reference count).
     s = body.s
@@ -99,11 +104,9 @@ def rigid_velocity(frame, flow, pillar, body, w, effects, xc, yc, th):
     any_c = n_c > 0
     H.each_background(effects, w, u)
     min_d = 1e300
-    stiff = 0.0
     for i in range(n):
         if dist[i] < min_d:
             min_d = dist[i]
-        stiff += st[i]
     ub = u.reshape(2 * n)
     vbx, vby, om = body_velocity(c, sn, s, body.pm, body.nm, ub, fx, fy, any_c)
     nm_eff = body.nm
@@ -111,7 +114,8 @@ def rigid_velocity(frame, flow, pillar, body, w, effects, xc, yc, th):
     vbx, vby, om = H.each_rigid_contact(effects, body, w, c, sn, any_c, vbx, vby, om, nm_eff)
     vx = c * vbx - sn * vby
     vy = sn * vbx + c * vby
-    return vx, vy, om, n_c, cx, cy, min_d, stiff
+    rate = contact_rate(s, body.nm, nm_eff, body.tip_m, c, sn, fx, fy, st) if any_c else 0.0
+    return vx, vy, om, n_c, cx, cy, min_d, rate
 
 
 @nb.njit(cache=True)
@@ -207,7 +211,6 @@ def integrate_rigid(state, k, rec):
     th = state[3]
     stopped_since = state[4]
     r_cut = pillar.r_cut
-    tip_m = body.tip_m
     half = 0.5 * (s[n - 1] - s[0])
     # finite-difference angle step (a one-bead fiber, a sphere in an array: no arm)
     dth = FD_STEP / max(half, FD_STEP)
@@ -219,11 +222,11 @@ def integrate_rigid(state, k, rec):
     # f at the current state, when an accepted implicit step has evaluated it already
     have_f = False
     shrink = 1.0  # implicit steps are shortened after a rejected one
-    vx = vy = om = cx = cy = min_d = stiff = 0.0
+    vx = vy = om = cx = cy = min_d = rate = 0.0
     n_c = np.int64(0)
     while rows < cap:
         if not have_f:
-            vx, vy, om, n_c, cx, cy, min_d, stiff = rigid_velocity(
+            vx, vy, om, n_c, cx, cy, min_d, rate = rigid_velocity(
                 frame, flow, pillar, body, w, effects, xc, yc, th
             )
         have_f = False
@@ -270,7 +273,7 @@ def integrate_rigid(state, k, rec):
             # Accepted only if the fiber is still stopped: leaving the stop (stick-slip
             # under friction, a slow slide off the pillar) is left to the explicit step.
             if fi[3] > 0 and math.sqrt(fi[0] * fi[0] + fi[1] * fi[1]) < p.trap_speed:
-                vx, vy, om, n_c, cx, cy, min_d, stiff = fi
+                vx, vy, om, n_c, cx, cy, min_d, rate = fi
                 have_f = True
                 xc = xi
                 yc = yi
@@ -281,8 +284,8 @@ def integrate_rigid(state, k, rec):
             # Rejected: shorter implicit steps next time; now an explicit step (which
             # needs only f(q), not the buffers in w).
             shrink *= 0.25
-        if stiff > 0.0:
-            dt = min(dt, 0.5 / (tip_m * stiff))
+        if rate > 0.0:
+            dt = min(dt, 0.5 / rate)
         # Midpoint step.
         xm = xc + 0.5 * dt * vx
         ym = yc + 0.5 * dt * vy
