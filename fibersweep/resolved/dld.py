@@ -25,6 +25,7 @@ import logging
 import math
 import time
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -65,6 +66,12 @@ class CellSettings:
         Least surface gap: a hard, inelastic contact stops the sphere there [lattice units].
     passes : int
         Pillars passed before deciding.
+    threads : int, optional
+        Threads of the lattice kernels (None: the lattice's default,
+        :data:`fibersweep.resolved.lattice.SERIAL_BELOW`); no effect on the result.
+    cache_dir : str, optional
+        Folder that keeps the solved empty cell between processes (an ``.npz`` per
+        shift, dx, τ and geometry); None: kept in memory for this process only.
     """
 
     shift: float
@@ -78,6 +85,8 @@ class CellSettings:
     lub_range: float = 2.0
     contact_gap: float = 1.0
     passes: int = 2
+    threads: int | None = None
+    cache_dir: str | None = None
 
     @property
     def array(self) -> PillarArray:
@@ -135,8 +144,9 @@ def _box(cs: CellSettings) -> tuple[Box, object, int]:
     return box, shape, s
 
 
-def _steady_empty(box: Box, fluid: FluidSettings, force, tol: float = 1e-6) -> Lattice:
-    lat = Lattice(box, fluid, force=force)
+def _steady_empty(box: Box, fluid: FluidSettings, force, tol: float = 1e-6,
+                  threads: int | None = None) -> Lattice:  # fmt: skip
+    lat = Lattice(box, fluid, force=force, threads=threads)
     prev = None
     for _ in range(1000):
         for _ in range(100):
@@ -161,22 +171,35 @@ def empty_cell(cs: CellSettings, radius: float) -> tuple[Lattice, float]:
     box, _, _ = _box(cs)
     fluid = FluidSettings(tau=cs.tau)
     key = (cs.shift, cs.dx, cs.tau, cs.pillar, cs.period, cs.depth)
+    path = None
+    if cs.cache_dir is not None:
+        path = Path(cs.cache_dir) / ("resolved-empty-" + "-".join(f"{v:g}" for v in key) + ".npz")
+        if key not in _EMPTY and path.exists():
+            with np.load(path) as z:
+                _EMPTY[key] = (z["dev"], float(z["us"]), z["force"])
     if key not in _EMPTY:
+        t0 = time.perf_counter()
         g = 1e-6
-        lx = _steady_empty(box, fluid, (g, 0.0, 0.0))
-        ly = _steady_empty(box, fluid, (0.0, g, 0.0))
+        lx = _steady_empty(box, fluid, (g, 0.0, 0.0), threads=cs.threads)
+        ly = _steady_empty(box, fluid, (0.0, g, 0.0), threads=cs.threads)
         _, ux = lx.velocity()
         _, uy = ly.velocity()
         alpha = -float(ux[1].sum()) / float(uy[1].sum())
         dev = (lx.f - _rest(box)) + alpha * (ly.f - _rest(box))
         us = (float(ux[0].sum()) + alpha * float(uy[0].sum())) / box.nodes
         _EMPTY[key] = (dev, us, np.array([g, alpha * g, 0.0]))
-        log.info("empty cell eps=%g dx=%g: lateral force ratio %.4f", cs.shift, cs.dx, alpha)
+        log.info("empty cell eps=%g dx=%g: lateral force ratio %.4f, %d + %d steps, %.0f s",
+                 cs.shift, cs.dx, alpha, lx.steps, ly.steps, time.perf_counter() - t0)  # fmt: skip
+        if path is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(".tmp.npz")
+            np.savez(tmp, dev=dev, us=us, force=_EMPTY[key][2])
+            tmp.replace(path)
     dev, us, force = _EMPTY[key]
     u_gap_per_us = 1.5 * cs.period / (cs.period - cs.pillar)
     target = cs.reynolds * fluid.nu / radius / u_gap_per_us  # superficial velocity
     c = target / us
-    lat = Lattice(box, fluid, force=force * c)
+    lat = Lattice(box, fluid, force=force * c, threads=cs.threads)
     lat.f[:] = _rest(box) + c * dev
     return lat, target * u_gap_per_us
 
@@ -187,20 +210,21 @@ def _rest(box: Box) -> np.ndarray:
 
 def _nearest_pillar(shape, box: Box, x: np.ndarray, radius: float) -> tuple[float, np.ndarray]:
     """Surface gap of a sphere at ``x`` (unwrapped) to the nearest pillar image, and the normal."""
-    best = (math.inf, np.zeros(3))
+    best, bx, by, br = math.inf, 0.0, 0.0, 1.0
+    x0, x1 = float(x[0]), float(x[1])
     for di in (-1, 0, 1):
-        rows = math.floor(x[0] / box.nx) + di
+        rows = math.floor(x0 / box.nx) + di
         cx = shape.cx + rows * box.nx
         base = shape.cy + rows * box.shift
-        m0 = math.floor((x[1] - base) / box.ny)
+        m0 = math.floor((x1 - base) / box.ny)
         for dj in (-1, 0, 1, 2):
             cy = base + (m0 + dj) * box.ny
-            d = np.array([x[0] - cx, x[1] - cy, 0.0])
-            r = float(np.hypot(d[0], d[1]))
+            d0, d1 = x0 - cx, x1 - cy
+            r = math.hypot(d0, d1)
             h = r - shape.radius - radius
-            if h < best[0]:
-                best = (h, d / r)
-    return best
+            if h < best:
+                best, bx, by, br = h, d0, d1, r
+    return best, np.array([bx, by, 0.0]) / br
 
 
 def _contact(cs: CellSettings, shape, box: Box, radius: float, fluid: FluidSettings, gaps: list):
@@ -250,6 +274,9 @@ def decide(cs: CellSettings, diameter: float, max_steps: int | None = None) -> D
         steps += 20
         xs.append(run.state.x[0])
         ys.append(run.state.x[1])
+        if steps % 5000 == 0:
+            log.debug("D = %g µm, step %d: x %.1f y %.1f (lattice units), %.0f s", diameter,
+                      steps, xs[-1], ys[-1], time.perf_counter() - t0)  # fmt: skip
     if xs[-1] < start[0] + cs.passes * nx:
         raise RuntimeError(f"sphere D = {diameter} µm did not pass {cs.passes} pillars "
                            f"in {steps} steps (trapped?)")  # fmt: skip

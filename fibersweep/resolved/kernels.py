@@ -30,6 +30,7 @@ _E = np.ascontiguousarray(E.astype(np.int64))
 _EF = np.ascontiguousarray(E.astype(np.float64))
 _OPP = np.ascontiguousarray(OPP.astype(np.int64))
 _W = np.ascontiguousarray(W.astype(np.float64))
+_REACH = 1.415  # > √2, the longest D3Q19 link
 
 
 @nb.njit(cache=True, parallel=True, fastmath=True)
@@ -204,19 +205,30 @@ def particle_links(f, fn, flags, dims, body, out):
                 if n < 0 or flags[n] != 0:
                     continue
                 x, y, z = ii + 0.5, jj + 0.5, kk + 0.5
+                # the distance is 1-Lipschitz and a link at most √2 long: no link from here
+                if _sdf(x, y, z, cx, cy, cz, px, py, pz, ell, a) > _REACH:
+                    continue
                 for q in range(1, 19):
                     ex, ey, ez = _EF[q, 0], _EF[q, 1], _EF[q, 2]
                     if _sdf(x - ex, y - ey, z - ez, cx, cy, cz, px, py, pz, ell, a) >= 0.0:
                         continue
-                    t0, t1 = 0.0, 1.0  # sdf(x − t e) >= 0 at t0, < 0 at t1
-                    for _ in range(30):
-                        tm = 0.5 * (t0 + t1)
-                        if _sdf(x - tm * ex, y - tm * ey, z - tm * ez, cx, cy, cz, px, py, pz,
-                                ell, a) >= 0.0:  # fmt: skip
-                            t0 = tm
-                        else:
-                            t1 = tm
-                    t = max(0.5 * (t0 + t1), 1e-6)
+                    if ell == 0.0:  # a sphere: the link's entry |x − t e − c| = a, exactly
+                        dx_, dy_, dz_ = x - cx, y - cy, z - cz
+                        de = dx_ * ex + dy_ * ey + dz_ * ez
+                        ee = ex * ex + ey * ey + ez * ez
+                        disc = de * de - ee * (dx_ * dx_ + dy_ * dy_ + dz_ * dz_ - a * a)
+                        t = (de - np.sqrt(max(disc, 0.0))) / ee
+                        t = min(max(t, 1e-6), 1.0)
+                    else:  # a capsule: bisection, sdf(x − t e) >= 0 at t0, < 0 at t1
+                        t0, t1 = 0.0, 1.0
+                        for _ in range(30):
+                            tm = 0.5 * (t0 + t1)
+                            if _sdf(x - tm * ex, y - tm * ey, z - tm * ez, cx, cy, cz, px, py,
+                                    pz, ell, a) >= 0.0:  # fmt: skip
+                                t0 = tm
+                            else:
+                                t1 = tm
+                        t = max(0.5 * (t0 + t1), 1e-6)
                     xw, yw, zw = x - t * ex, y - t * ey, z - t * ez
                     rx, ry, rz = xw - cx, yw - cy, zw - cz
                     vx = ux + wy * rz - wz * ry

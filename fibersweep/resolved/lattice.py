@@ -13,7 +13,7 @@ import numba
 import numpy as np
 
 from fibersweep.flow.lattice import E, W
-from fibersweep.resolved import kernels
+from fibersweep.resolved import kernels, kernels_blocked
 from fibersweep.resolved.box import Box, pillar_links, pull_table
 
 __all__ = ["FluidSettings", "Lattice", "body_vector", "SERIAL_BELOW"]
@@ -75,19 +75,33 @@ class Lattice:
     fluid : FluidSettings
     force : array_like, shape (3,)
         Body force density on the fluid [lattice units].
+    blocked : bool
+        True: the blocked collision and row-wise streaming of
+        :mod:`fibersweep.resolved.kernels_blocked`; False: the node-wise reference
+        kernels of :mod:`fibersweep.resolved.kernels` (equal to round-off; kept for
+        the tests and the benchmark; also used for rows shorter than 3 nodes).
+    threads : int, optional
+        Threads of the parallel kernels; default one below :data:`SERIAL_BELOW`
+        nodes, else Numba's thread count.
     """
 
-    def __init__(self, box: Box, fluid: FluidSettings, force=(0.0, 0.0, 0.0)) -> None:
+    def __init__(self, box: Box, fluid: FluidSettings, force=(0.0, 0.0, 0.0), *,
+                 blocked: bool = True, threads: int | None = None) -> None:  # fmt: skip
         self.box = box
         self.fluid = fluid
         self.force = np.asarray(force, dtype=np.float64).reshape(3)
+        self.blocked = blocked and box.nx >= 3  # a row needs an interior
         self.src = pull_table(box)
+        self.rows = kernels_blocked.row_table(self.src, box.nx) if self.blocked else None
         self.links = pillar_links(box)
         self.flags = box.solid_flags()
         self.f = np.repeat(W[:, None], box.nodes, axis=1).astype(np.float64)
         self.fn = self.f.copy()
         self.steps = 0
-        self.threads = 1 if box.nodes < SERIAL_BELOW else numba.config.NUMBA_NUM_THREADS
+        if threads is None:
+            threads = 1 if box.nodes < SERIAL_BELOW else numba.config.NUMBA_NUM_THREADS
+        self.threads = int(threads)
+        self._rates = fluid.rates
         b = box
         self.dims = np.array([b.nx, b.ny, b.nz, b.shift, int(b.periodic_y),
                               int(b.z_mode == "periodic"), int(b.z_mode == "symmetric")],
@@ -106,9 +120,14 @@ class Lattice:
         """
         out = np.zeros(43)
         numba.set_num_threads(self.threads)
-        om_p, om_m = self.fluid.rates
-        kernels.collide(self.f, self.flags, self.force, om_p, om_m)
-        kernels.stream(self.f, self.fn, self.src, self.flags, self.box.wall_velocity)
+        om_p, om_m = self._rates
+        if self.blocked:
+            kernels_blocked.collide_blocked(self.f, self.flags, self.force, om_p, om_m)
+            kernels_blocked.stream_rows(self.f, self.fn, self.rows, self.src,
+                                        self.box.wall_velocity)  # fmt: skip
+        else:
+            kernels.collide(self.f, self.flags, self.force, om_p, om_m)
+            kernels.stream(self.f, self.fn, self.src, self.flags, self.box.wall_velocity)
         node, q, t, beyond = self.links
         if node.size:
             kernels.static_links(self.f, self.fn, self.flags, node, q, t, beyond)

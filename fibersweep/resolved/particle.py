@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 import numpy as np
 
@@ -113,8 +114,19 @@ def _rotate(p: np.ndarray, w: np.ndarray) -> np.ndarray:
     if th == 0.0:
         return p
     k = w / th
-    out = p * math.cos(th) + np.cross(k, p) * math.sin(th) + k * np.dot(k, p) * (1 - math.cos(th))
+    # np.cross, without its per-call checks
+    kxp = np.array([k[1] * p[2] - k[2] * p[1], k[2] * p[0] - k[0] * p[2],
+                    k[0] * p[1] - k[1] * p[0]])  # fmt: skip
+    out = p * math.cos(th) + kxp * math.sin(th) + k * np.dot(k, p) * (1 - math.cos(th))
     return out / np.linalg.norm(out)
+
+
+@lru_cache(maxsize=64)
+def _inertia(body: Body) -> tuple[float, float]:
+    return body.inertia()
+
+
+_KEEP = {"planar": np.array([0, 1, 5]), "spin": np.arange(3, 6), "free": np.arange(6)}
 
 
 def advance(body: Body, state: BodyState, force: np.ndarray, torque: np.ndarray,
@@ -144,16 +156,18 @@ def advance(body: Body, state: BodyState, force: np.ndarray, torque: np.ndarray,
         raise ValueError(f"motion must be one of {MOTIONS}, got {motion!r}")
     if motion == "held":
         return state
-    i_ax, i_perp = body.inertia()
+    i_ax, i_perp = _inertia(body)
     p = state.p / np.linalg.norm(state.p)
     mass = np.zeros((6, 6))
-    mass[:3, :3] = body.mass * np.eye(3)
-    mass[3:, 3:] = i_perp * np.eye(3) + (i_ax - i_perp) * np.outer(p, p)
+    idx = np.arange(3)
+    mass[idx, idx] = body.mass
+    mass[3:, 3:] = (i_ax - i_perp) * (p[:, None] * p[None, :])
+    mass[idx + 3, idx + 3] += i_perp
     lhs = mass + (resistance if resistance is not None else 0.0)
     rhs = mass @ np.concatenate([state.u, state.w]) + np.concatenate([force, torque])
-    keep = {"planar": np.array([0, 1, 5]), "spin": np.arange(3, 6)}.get(motion, np.arange(6))
+    keep = _KEEP[motion]
     v = np.zeros(6)
-    v[keep] = np.linalg.solve(lhs[np.ix_(keep, keep)], rhs[keep])
+    v[keep] = np.linalg.solve(lhs[keep[:, None], keep[None, :]], rhs[keep])
     u, w = v[:3], v[3:]
     if motion == "spin":
         return replace(state, w=w)

@@ -22,6 +22,9 @@ __all__ = ["Coupled", "Record"]
 
 log = logging.getLogger(__name__)
 
+_SEL = np.array([0, 1, 5])  # in-plane force, z torque: what a mirror-plane body keeps
+_SEL2 = (_SEL[:, None], _SEL[None, :])
+
 #: An external action on the body: state -> (force (3,), torque (3,), resistance (3, 3) or None).
 External = Callable[[BodyState], tuple[np.ndarray, np.ndarray, np.ndarray | None]]
 
@@ -85,10 +88,9 @@ class Coupled:
         ft = out[0:6].copy()
         z = out[7:43].reshape(6, 6).copy() if out.size >= 43 else np.zeros((6, 6))
         if self.symmetric:  # the mirror half acts alike: in-plane force and z torque double
-            sel = np.array([0, 1, 5])
             ft2, z2 = np.zeros(6), np.zeros((6, 6))
-            ft2[sel] = 2 * ft[sel]
-            z2[np.ix_(sel, sel)] = 2 * z[np.ix_(sel, sel)]
+            ft2[_SEL] = 2 * ft[_SEL]
+            z2[_SEL2] = 2 * z[_SEL2]
             ft, z = ft2, z2
         return ft, z
 
@@ -103,7 +105,10 @@ class Coupled:
         out = self.lattice.step(st.vector(self.body))
         ft, z = self._full(out)
         if self.motion != "held":
-            imp, _ = self._full(np.concatenate([self._impulse, np.zeros(37)]))
+            imp = self._impulse
+            if self.symmetric:
+                imp = np.zeros(6)
+                imp[_SEL] = 2 * self._impulse[_SEL]
             v_old = np.concatenate([st.u, st.w])
             total = ft + imp + z @ v_old
             res = z

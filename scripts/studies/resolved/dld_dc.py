@@ -6,7 +6,7 @@ G = H = 40 µm) with row shift ε, solved on the resolved lattice
 passes above the next ``--passes`` pillars. Prints every decision and the bracket.
 
     python3 scripts/studies/resolved/dld_dc.py --shift 0.1 --lo 8 --hi 20 [--dx 2] [--tau 1.5]
-        [--reynolds 0.2] [--tol 1] [--only D ...]
+        [--reynolds 0.2] [--tol 1] [--only D ...] [--threads N]
 
 ``--only`` runs the listed diameters without bisection (the Reynolds check).
 """
@@ -36,11 +36,18 @@ def main() -> None:
     ap.add_argument("--hi", type=float, default=28.0)
     ap.add_argument("--tol", type=float, default=1.0)
     ap.add_argument("--only", type=float, nargs="*")
+    ap.add_argument("-v", "--verbose", action="store_true", help="log progress every 5000 steps")
+    ap.add_argument("--cache", default=".fibersweep-cache/resolved",
+                    help="folder that keeps the solved empty cell between runs")
+    ap.add_argument("--threads", type=int, default=None,
+                    help="threads of the lattice kernels (default: one below 200 000 nodes)")
     args = ap.parse_args()
     logging.basicConfig(level=logging.WARNING)
-    logging.getLogger("fibersweep.resolved.dld").setLevel(logging.INFO)
+    logging.getLogger("fibersweep.resolved.dld").setLevel(
+        logging.DEBUG if args.verbose else logging.INFO)  # fmt: skip
     cs = CellSettings(shift=args.shift, dx=args.dx, tau=args.tau, reynolds=args.reynolds,
-                      passes=args.passes)
+                      passes=args.passes, threads=args.threads,
+                      cache_dir=args.cache)
     print(f"eps = {cs.shift}, dx = {cs.dx} µm, tau = {cs.tau}, Re_p = {cs.reynolds}, "
           f"contact gap {cs.contact_gap * cs.dx:g} µm, passes {cs.passes}")
     print("| D [µm] | outcome | height above next pillars [µm] | least gap [µm] | Re_p "

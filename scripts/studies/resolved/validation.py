@@ -10,10 +10,12 @@ Cases (each at the radii given, the box scaled with the radius):
   against Brenner's series with the far wall superposed, λ_B(h) + λ_B(H − h) − 1;
 * ``spin``: torque-free sphere in simple shear between plates 6a apart, box 6a
   wide: spin/γ̇ against ½ (Jeffery's r_e = 1: period 4π/γ̇);
-* ``rod``: torque-free spins of a capsule (radius a, straight half-length a) along
-  and across the flow, box 12a wide, plates 12a apart: r_e and γ̇T/2π
-  (Jeffery, Bretherton), beside Cox's (1971) slender-body r_e = 1.24 r/√(ln r)
-  (r = 2 is outside its range; printed for orientation only).
+* ``rod``: torque-free spins of a capsule (radius a, straight half-length a, length
+  4a: aspect ratio r = 2) along and across the flow, box 12a wide, plates 12a apart:
+  r_e and γ̇T/2π (Jeffery, Bretherton), beside a spheroid of the same r (r_e = 2,
+  γ̇T/2π = 2.5) and Cox's (1971) slender-body r_e = 1.24 r/√(ln r) (r = 2 is outside
+  its range; printed for orientation only); and the spin at 45° to the flow, which
+  Jeffery's orbit puts at γ̇/2 for any r_e.
 
     python3 scripts/studies/resolved/validation.py array --radii 4 6 8 [--tau 1.0]
 """
@@ -64,11 +66,15 @@ def main() -> None:
         else:
             n = int(round((args.width or 12) * a))
             period, r_e, steps, secs = jeffery_period(a, a, n, n, args.tau)
+            # Jeffery's orbit for any axisymmetric body: ω(φ) = γ̇ (r_e² sin²φ + cos²φ)/(r_e² + 1),
+            # so at 45° the spin is γ̇/2 whatever r_e: a check of the orbit's form itself
+            w45, s45, t45 = shear_spin(a, a, 45.0, n, n, args.tau)
             r = 2.0
             cox = 1.24 * r / math.sqrt(math.log(r))
-            print(f"| {a:g} | {n}³ | r_e {r_e:.4f}, γ̇T/2π {period:.4f} | Cox r_e {cox:.3f}, "
-                  f"γ̇T/2π {cox + 1 / cox:.3f} | {period / (cox + 1 / cox) - 1:+.4f} | {steps} "
-                  f"| {secs:.0f} |", flush=True)
+            print(f"| {a:g} | {n}³ | r_e {r_e:.4f}, γ̇T/2π {period:.4f}; ω(45°)/γ̇ {abs(w45):.4f} "
+                  f"| spheroid r = 2: γ̇T/2π 2.5; Jeffery ω(45°)/γ̇ 0.5; Cox r_e {cox:.3f} "
+                  f"| T {period / 2.5 - 1:+.4f}; ω(45°) {abs(w45) / 0.5 - 1:+.4f} "
+                  f"| {steps + s45} | {secs + t45:.0f} |", flush=True)
             continue
         print(f"| {a:g} | {box} | {val:.4f} | {ref:.4f} | {val / ref - 1:+.4f} | {steps} "
               f"| {secs:.0f} |", flush=True)
