@@ -16,6 +16,7 @@ if TYPE_CHECKING:  # annotations only: the API imports what it runs when it runs
     from fibersweep.config import Config
     from fibersweep.config.fiber import ClassifySettings
     from fibersweep.sorting.design import GroupAnswer
+    from fibersweep.sorting.measured import Measured
     from fibersweep.sorting.report import ShortRows
 
 from fibersweep.api.common import load_config
@@ -214,6 +215,10 @@ class SortReport:
     caveats : dict
         Setting -> the lengths that decide its critical lengths on few moving runs,
         named with their counts (:func:`fibersweep.sorting.report.thin_crossings`).
+    measured : Measured or None
+        A measured table beside the model (``measured``): f and the trapped share per
+        length bin with their intervals, the measured critical length, the model's runs
+        per bin (``measured.csv``; :mod:`fibersweep.sorting.measured`).
     """
 
     path: Path
@@ -238,6 +243,7 @@ class SortReport:
     notes: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
     caveats: dict[int, list[str]] = attr(default_factory=dict)
+    measured: Measured | None = None
 
 
 def sort_report(
@@ -252,6 +258,8 @@ def sort_report(
     zigzag_max: float = 0.25,
     displacement_min: float = 0.75,
     write: bool = True,
+    measured: str | Path | pd.DataFrame | None = None,
+    edges: str | Sequence[float] | None = None,
 ) -> SortReport:
     """A sorter designer's page: critical lengths, outlets, and the array setting to
     choose (``fibersweep sort-report``).
@@ -264,7 +272,10 @@ def sort_report(
     outlet of a device of ``rows`` rows. With a swept array setting: the critical
     length against it, and with ``target_length`` or ``separate``, the value that
     gives it, its interval and the runs to add to be sure. Where the settings leave
-    the validated range, ``warnings`` say so.
+    the validated range, ``warnings`` say so. With a ``measured`` table of fibers
+    through the fabricated array: its f and trapped share per length bin beside the
+    model's, and its critical length beside the model's
+    (:mod:`fibersweep.sorting.measured`).
 
     Parameters
     ----------
@@ -289,7 +300,16 @@ def sort_report(
     displacement_min : float
         Mode rule: f above this is displacement.
     write : bool
-        Write the tables (``RESULTS/migration.csv``, ``outlets.csv``, ``critical.csv``).
+        Write the tables (``RESULTS/migration.csv``, ``outlets.csv``, ``critical.csv``,
+        and with ``measured``, ``measured.csv``).
+    measured : str, Path or DataFrame, optional
+        An array measured table (Parquet or CSV, read by
+        :func:`fibersweep.discrepancy.array_schema.load_array_measured`), or its
+        DataFrame: one row per measured fiber with ``length`` [µm], ``fraction`` and
+        ``trapped``.
+    edges : str or sequence of float, optional
+        Length bin edges of the measured fibers [µm], ``"4,10,14,30"`` [default: one bin
+        per simulated length].
 
     Returns
     -------
@@ -297,14 +317,22 @@ def sort_report(
     """
     from fibersweep.analysis.modes import ModeSettings
     from fibersweep.config.fiber import ARRAY_ROWS
+    from fibersweep.errors import InputError
     from fibersweep.results import load_array_results
     from fibersweep.sorting import design as sd
     from fibersweep.sorting import report as sr
     from fibersweep.sweep.validity import facts_from_dict, warnings_for
 
     results = Path(results)
-    edges = sr.parse_edges(outlets)
+    out_edges = sr.parse_edges(outlets)
     target = sd.target_length(target_length, separate)
+    if edges is not None:  # checked before the runs are read
+        from fibersweep.sorting.measured import parse_length_edges
+
+        if measured is None:
+            raise InputError("--edges: bins the measured fibers; give a table with --measured")
+        edges = parse_length_edges(edges)
+    fibers = None if measured is None else _measured_table(measured)
     runs, settings, cfg = load_array_results(results)
     modes = ModeSettings(zigzag_max=zigzag_max, displacement_min=displacement_min)
     runs = sr.relabel(runs, settings, modes, cfg["fiber"]["classify"]["trap_speed"])
@@ -314,12 +342,20 @@ def sort_report(
     table = sr.migration_table(runs, settings)
     crit = sr.critical_table(table)
     bead = 2.0 * cfg["fiber"]["bead_radius"]
-    out = sr.outlet_table(runs, settings, n_rows, edges)
+    out = sr.outlet_table(runs, settings, n_rows, out_edges)
     written = []
     if write:
         written = [results / "migration.csv", results / "outlets.csv"]
         table.to_csv(written[0], index=False)
         out.to_csv(written[1], index=False)
+    meas = None
+    if fibers is not None:
+        from fibersweep.sorting.measured import compare
+
+        meas = compare(fibers, table, edges)
+        if write:
+            meas.table().to_csv(results / "measured.csv", index=False)
+            written.append(results / "measured.csv")
     curve, found = None, []
     thin = sr.thin_crossings(table, crit, settings)
     if key is not None:
@@ -348,7 +384,7 @@ def sort_report(
         narrowing=sr.narrowing_lengths(table, crit, bead),
         short=tuple(sr.short_rows(settings, array_rows)), key=key, curve=curve,
         target=target, separate=pair, answers=tuple(found), tables=tuple(written),
-        warnings=warned, caveats=thin,
+        warnings=warned, caveats=thin, measured=meas,
     )  # fmt: skip
     if figures:
         drawn, notes = _sort_figures(report)
@@ -356,6 +392,18 @@ def sort_report(
 
         report = replace(report, figures=tuple(drawn), notes=tuple(notes))
     return report
+
+
+def _measured_table(measured: str | Path | pd.DataFrame) -> pd.DataFrame:
+    """The measured fibers: a DataFrame as given, a file through the array measured
+    table's loader (its checks name the column, rule and rows)."""
+    import pandas as pd
+
+    if isinstance(measured, pd.DataFrame):
+        return measured
+    from fibersweep.discrepancy.array_schema import load_array_measured
+
+    return load_array_measured(Path(measured))
 
 
 def _slug(values: dict) -> str:
@@ -408,8 +456,12 @@ def _sort_figures(rep: SortReport) -> tuple[list[Path], list[str]]:
         tilts = {i: math.degrees(math.atan(s["array"]["shift"])) for i, s in enumerate(settings)}
         labels = describe(settings)  # in words with units: "E = 10 kPa"
         written.append(
-            save_figure(pd_.migration_figure(rep.migration, tilts, labels, rep.critical),
-                        fig_dir / "migration.png")  # fmt: skip
+            save_figure(
+                pd_.migration_figure(
+                    rep.migration, tilts, labels, rep.critical, measured=rep.measured
+                ),
+                fig_dir / "migration.png",
+            )  # fmt: skip
         )
         written.append(save_figure(pd_.outlets_figure(rep.outlets, labels),
                                    fig_dir / "outlets.png"))  # fmt: skip

@@ -74,6 +74,21 @@ def sort_report(
     figures: Annotated[bool, typer.Option(help="Write the figures (RESULTS/figures/).")] = True,
     zigzag_max: Annotated[float, typer.Option(help="Mode rule: |f| below this is zigzag.")] = 0.25,
     displacement_min: Annotated[float, typer.Option(help="f above this is displacement.")] = 0.75,
+    measured: Annotated[
+        Path | None,
+        typer.Option(
+            "--measured",
+            help="Array measured table (Parquet or CSV, one row per fiber: length [µm], "
+            "fraction, trapped): its f(L) and critical length beside the model's.",
+        ),
+    ] = None,
+    edges: Annotated[
+        str | None,
+        typer.Option(
+            help="Length bin edges of the measured fibers [µm], comma separated.",
+            show_default="one bin per simulated length",
+        ),
+    ] = None,
     verbose: Verbose = False,
 ) -> None:
     """A sorter designer's page: critical lengths, outlets, and the array setting to choose.
@@ -86,8 +101,12 @@ def sort_report(
     the trapped share beside them. With a swept array setting (shift, a period, the
     pillar size or shape): the critical length against it, and with --target-length
     or --separate, the value that gives it, its interval and the runs to add to be
-    sure. Settings outside the validated range are warned about first. Tables go to
-    RESULTS/*.csv, figures to RESULTS/figures/.
+    sure. Settings outside the validated range are warned about first. With
+    --measured TABLE (fibers measured through the fabricated array): per length bin
+    the measured f with its 95 % Wilson interval and trapped share beside the model's,
+    the measured critical length with its interval beside the model's, and the
+    measured points on migration.png. Tables go to RESULTS/*.csv, figures to
+    RESULTS/figures/.
     """
     from fibersweep import api
 
@@ -96,11 +115,13 @@ def sort_report(
         rep = api.sort_report(
             results, rows=rows, outlets=outlets, target_length=target_length,
             separate=separate, setting=setting, figures=figures, zigzag_max=zigzag_max,
-            displacement_min=displacement_min,
+            displacement_min=displacement_min, measured=measured, edges=edges,
         )  # fmt: skip
     for message in rep.warnings:  # outside the validated range: before the numbers
         typer.secho(f"warning: {message}", fg=typer.colors.YELLOW)
     _echo_migration(rep)
+    if rep.measured is not None:
+        _echo_measured(rep, measured)
     _echo_outlets(rep.outlets, rep.settings, rep.rows)
     if rep.curve is not None:
         _echo_design(rep)
@@ -170,6 +191,87 @@ def _echo_migration(rep) -> None:
                 "do it: 'sweep.refine={axes: [length], tolerance: {length: "
                 f"{bead:g}}}, max_runs: 200}}'"
             )
+
+
+def _echo_measured(rep, path: Path) -> None:
+    """The measured f and trapped share per length bin beside the model's, the critical
+    length of each, and the trapped share over all fibers."""
+    import pandas as pd
+
+    from fibersweep.sorting.interval import level_text
+    from fibersweep.sorting.report import critical_text
+
+    m = rep.measured
+    lev = level_text()
+    bins = "the given --edges" if m.given_edges else "one per simulated length"
+    out = (
+        f", {m.outside} outside {m.edges[0]:g} to {m.edges[-1]:g} µm left out" if m.outside else ""
+    )
+    typer.echo(
+        f"\nmeasured beside the model ({path}: {m.fibers} fibers, "
+        f"{m.binned if m.outside else 'all'} in "
+        f"{len(m.bins)} length bins, {bins}{out}): f over the fibers that were not trapped "
+        f"and the trapped share of all, each with its {lev} Wilson interval; model: the "
+        "runs of the simulated lengths in the bin"
+    )
+    many = len(rep.settings) > 1
+    rows = []
+    for b in m.bins.to_dict("records"):
+        row = {
+            "L bin [µm]": f"{b['from']:g} to {b['to']:g}",
+            "fibers": b["fibers"],
+            "L mean [µm]": f"{b['length']:.1f}",
+            "measured f": _ci(b["fraction_mean"], b["fraction_lo"], b["fraction_hi"]),
+            "trapped": _ci(b["trapped"], b["trapped_lo"], b["trapped_hi"]),
+        }
+        for s, g in m.model.groupby("setting"):
+            r = g[g["bin"] == b["bin"]].iloc[0]
+            tag = f" {_name(rep.settings[int(s)])}" if many else ""
+            row[f"model f{tag}"] = _pm(r["fraction_mean"], math.nan, 2)
+            row[f"model trapped{tag}"] = _pm(r["trapped"], math.nan, 2)
+        rows.append(row)
+    typer.echo(pd.DataFrame(rows).to_string(index=False))
+    if m.critical.empty:
+        f = m.bins["fraction_mean"].to_numpy(float)
+        side = "below" if (f[np.isfinite(f)] < m.level).all() else "above"
+        typer.echo(f"critical length, measured: none in the bins (f {side} 1/2 in every bin)")
+    for r in m.critical.itertuples():
+        typer.echo(
+            f"critical length, measured ({'f rises' if r.rising else 'f falls'} through 1/2): "
+            f"{critical_text(r.critical, r.ci_lo, r.ci_hi)}, between the bins at {r.lo:.1f} "
+            f"and {r.hi:.1f} µm"
+        )
+    for s in range(len(rep.settings)):
+        c = rep.critical[rep.critical["setting"] == s]
+        tag = f" ({_name(rep.settings[s])})" if many else ""
+        text = ", ".join(critical_text(r.critical, r.ci_lo, r.ci_hi) for r in c.itertuples())
+        typer.echo(f"critical length, model{tag}: {text or 'none in the simulated lengths'}")
+        both = [(a, b) for a in m.critical.itertuples() for b in c.itertuples()
+                if a.rising == b.rising]  # fmt: skip
+        if len(both) == 1:  # one edge each, the same way: how far apart, and is it clear
+            a, b = both[0]
+            apart = a.ci_hi < b.ci_lo or b.ci_hi < a.ci_lo
+            typer.echo(
+                f"  measured - model: {a.critical - b.critical:+.1f} µm; their {lev} intervals "
+                + ("do not overlap" if apart else "overlap")
+            )
+    t = m.trapped
+    model = ", ".join(
+        f"{_pm(v, math.nan, 2)}" + (f" ({_name(rep.settings[s])})" if many else "")
+        for s, v in t.model.items()
+    )
+    typer.echo(
+        f"trapped: measured {t.trapped} of {t.fibers} fibers, {t.share:.2f} ({lev}: "
+        f"{t.lo:.2f} to {t.hi:.2f}); model at the same lengths {model}"
+    )
+
+
+def _ci(v: float, lo: float, hi: float) -> str:
+    """'0.42 (0.21 to 0.66)': a share and its interval; '-' where there is none."""
+    if not math.isfinite(v):
+        return "-"
+    v, lo, hi = (round(x, 2) + 0.0 for x in (v, lo, hi))  # no '-0.00'
+    return f"{v:.2f} ({lo:.2f} to {hi:.2f})"
 
 
 def _name(meta: dict) -> str:

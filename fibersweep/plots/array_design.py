@@ -7,11 +7,15 @@ and :mod:`fibersweep.sorting.design`), matplotlib Figures out.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from fibersweep.plots.style import subplots
+
+if TYPE_CHECKING:
+    from fibersweep.sorting.measured import Measured
 
 __all__ = ["critical_figure", "migration_figure", "outlets_figure"]
 
@@ -29,13 +33,17 @@ def migration_figure(
     labels: dict[int, str],
     crit: pd.DataFrame | None = None,
     level: float = 0.5,
+    measured: Measured | None = None,
 ):
     """Mean f (± standard error) and migration angle (± sd) against length, per setting.
 
     The critical lengths (mean f crossing ``level``) are marked on every panel, with
     their 95 % interval (scatter and interpolation between the simulated lengths,
     ``ci_lo``–``ci_hi`` of the critical table) as a shaded band; the trapped share of
-    each length (runs not in the means) has its own panel below.
+    each length (runs not in the means) has its own panel below. With ``measured``,
+    the measured f and trapped share per length bin are black squares with their 95 %
+    Wilson interval, labelled "measured (N fibers)", and the measured critical length
+    a black dash-dotted line with its interval hatched.
 
     Parameters
     ----------
@@ -47,6 +55,8 @@ def migration_figure(
         Label per setting ('' for a single setting).
     crit : DataFrame, optional
         :func:`fibersweep.sorting.report.critical_table`.
+    measured : Measured, optional
+        :func:`fibersweep.sorting.measured.compare`.
     """
     settings = sorted(table["setting"].unique())
     fig, (ax_f, ax_a, ax_t) = subplots(
@@ -55,7 +65,7 @@ def migration_figure(
     )  # fmt: skip
     for s, col in zip(settings, _colours(len(settings)), strict=True):
         g = table[table["setting"] == s].sort_values("length")
-        lab = labels.get(int(s)) or "array"
+        lab = labels.get(int(s)) or ("model" if measured is not None else "array")
         mine = crit[crit["setting"] == s] if crit is not None else crit
         if mine is not None and len(mine):
             both = mine["rising"].nunique() > 1  # a band: say which edge is which
@@ -100,24 +110,72 @@ def migration_figure(
                     ax.axvline(r.critical, color=col, ls="--", lw=0.9)
                     if math.isfinite(r.ci_lo) and math.isfinite(r.ci_hi) and r.ci_hi > r.ci_lo:
                         ax.axvspan(r.ci_lo, r.ci_hi, color=col, alpha=0.12, lw=0)
+    if measured is not None:
+        _measured_points(ax_f, ax_t, measured)
     ax_f.axhline(level, color="0.5", lw=0.7, ls="-.")
     ax_f.axhline(0.0, color="0.8", lw=0.6)
     ax_f.axhline(1.0, color="0.8", lw=0.6)
     ax_f.set_ylabel("mean f of moving runs")
-    ax_f.set_title(
+    title = (
         f"f = displacement per row / ε λy; dashed: critical lengths (f = {level:g}), "
-        "shaded: their 95 % interval",
-        fontsize=7,
+        "shaded: their 95 % interval"
     )
+    if measured is not None:
+        title += (
+            "\nsquares: measured (95 % Wilson interval); dash-dot, hatched: measured "
+            "critical length (95 %)"
+        )
+    ax_f.set_title(title, fontsize=7)
     ax_a.axhline(0.0, color="0.5", lw=0.6)
     ax_t.set_ylim(-0.05, 1.05)
     ax_t.set_ylabel("share trapped")
     ax_t.set_xlabel("fiber length L [µm]")
     ax_a.set_ylabel("migration angle [deg]")
-    ax_a.set_title("mean ± sd; dotted: the array's tilt atan ε", fontsize=7)
+    ax_a.set_title(
+        "mean ± sd; dotted: the array's tilt atan ε"
+        + ("; the model's only (no angle measured)" if measured is not None else ""),
+        fontsize=7,
+    )
     fig.legend(loc="outside upper center", fontsize=7, frameon=False,
                ncol=1 if len(settings) > 2 else len(settings))  # fmt: skip
     return fig
+
+
+def _measured_points(ax_f, ax_t, measured: Measured) -> None:
+    """The measured bins (f and trapped share with their Wilson intervals) and the
+    measured critical lengths on the f and trapped panels."""
+    b = measured.bins
+    lab = f"measured ({measured.binned} fibers)"
+    c = measured.critical
+    if len(c):
+        lab += (
+            ": critical "
+            + ", ".join(
+                f"{r.critical:.1f}"
+                + (
+                    f" (95 %: {r.ci_lo:.1f} to {r.ci_hi:.1f})"
+                    if math.isfinite(r.ci_lo) and math.isfinite(r.ci_hi)
+                    else ""
+                )
+                for r in c.itertuples()
+            )
+            + " µm"
+        )
+    f = b[b["moving"] > 0]
+    yerr = np.vstack([f["fraction_mean"] - f["fraction_lo"], f["fraction_hi"] - f["fraction_mean"]])
+    # a mean f a little below 0 (a zigzag) keeps its bar at 0: the interval is a share's
+    ax_f.errorbar(f["length"], f["fraction_mean"], yerr=np.clip(yerr, 0.0, None), ls="none",
+                  marker="s", ms=5, mfc="none", mec="k", ecolor="k", capsize=3, zorder=5,
+                  label=lab)  # fmt: skip
+    terr = np.vstack([b["trapped"] - b["trapped_lo"], b["trapped_hi"] - b["trapped"]])
+    ax_t.errorbar(b["length"], b["trapped"], yerr=terr, ls="none", marker="s", ms=4,
+                  mfc="none", mec="k", ecolor="k", capsize=2, zorder=5)  # fmt: skip
+    for r in c.itertuples():
+        for ax in (ax_f, ax_t):
+            ax.axvline(r.critical, color="k", ls="-.", lw=0.9)
+            if math.isfinite(r.ci_lo) and math.isfinite(r.ci_hi) and r.ci_hi > r.ci_lo:
+                ax.axvspan(r.ci_lo, r.ci_hi, facecolor="none", edgecolor="0.75", hatch="//",
+                           lw=0)  # fmt: skip
 
 
 def outlets_figure(outlets: pd.DataFrame, labels: dict[int, str]):
