@@ -566,6 +566,8 @@ def _measured_section() -> list[str]:
     starts = {f.name: f.metadata for f in FiberStart.__dataclass_fields__.values()}
     rows = [[f"`{c}`", "start", "yes", starts[c]["unit"], starts[c]["doc"]] for c in START_COLUMNS]
     for name, o in OBSERVABLES.items():
+        if o.geometry != "channel":
+            continue  # the array's table is below
         if o.track:
             source = "from the track"
         elif o.derived_from:
@@ -574,7 +576,19 @@ def _measured_section() -> list[str]:
             source = "column"
         rows.append([f"`{name}`", f"{o.kind}, {source}", "yes" if o.required else "",
                      o.unit, o.description])  # fmt: skip
-    return lines + _table(["column", "kind", "required", "unit", "meaning"], rows)
+    lines += _table(["column", "kind", "required", "unit", "meaning"], rows)
+    arr = [[f"`{n}`", o.kind, "yes" if o.required else "", o.unit, o.description]
+           for n, o in OBSERVABLES.items() if o.geometry == "array"]  # fmt: skip
+    lines += [
+        "",
+        "### In a pillar array",
+        "",
+        "A config with `flow.array` reads the array measured table: starts `theta0` [deg],",
+        "`y0` [fraction of period_y] and `length` [µm], then these observables",
+        "(`fibersweep.discrepancy.array_schema` lists the optional columns it also checks).",
+        "",
+    ]
+    return lines + _table(["column", "kind", "required", "unit", "meaning"], arr)
 
 
 # --------------------------------------------------------------------------- api

@@ -18,8 +18,21 @@ from fibersweep.api.common import load_config
 log = logging.getLogger("fibersweep.api")
 
 
-def refuse_array(cfg: Config, command: str) -> None:
-    """The discrepancy workflow is the channel's: refuse a pillar array, naming what to use.
+def is_array(cfg: Config) -> bool:
+    """Whether ``cfg`` is a pillar array (``flow.array`` set): the array workflow."""
+    return cfg.flow.array is not None
+
+
+def refuse_array(cfg: Config, command: str, what: str = "") -> None:
+    """Refuse a pillar array for a part of the workflow that is the channel's only.
+
+    Parameters
+    ----------
+    cfg : Config
+    command : str
+        The command or option named in the message.
+    what : str
+        What has no meaning in an array (e.g. 'trajectories in the channel frame').
 
     Raises
     ------
@@ -30,11 +43,45 @@ def refuse_array(cfg: Config, command: str) -> None:
 
     if cfg.flow.array is not None:
         raise InputError(
-            f"{command}: the discrepancy workflow compares fibers measured past one pillar in "
-            "a channel (class, δ, contact, exit position); a pillar array (flow.array) has "
-            "none of these observables. For an array: fibersweep run CONFIG, then fibersweep "
-            "sort-report RESULTS (migration, critical lengths, outlets)"
+            f"{command}: {what or 'this'} is the single-pillar channel's; a pillar array "
+            "(flow.array) is compared by its array observables (fraction, trapped, mode, "
+            "bend; docs/discrepancy.md, 'In a pillar array')"
         )
+
+
+def array_settings_parts(
+    cfg: Config, effects: Sequence[str] | None, declared: tuple
+) -> dict[str, Any]:
+    """What a pillar array changes in :class:`DiscrepancySettings`: noise, library, candidates.
+
+    InputError for a library effect or declared candidate an array cannot apply.
+    """
+    from fibersweep.discrepancy.array_workflow import array_effect_names, check_array_candidates
+    from fibersweep.discrepancy.copies import array_noise
+
+    check_array_candidates(declared)
+    return {"noise": array_noise(cfg.fiber), "effects": array_effect_names(effects, cfg.fiber)}
+
+
+def load_measured_for(
+    cfg: Config, path: str | Path, trajectories: str | Path | None = None,
+    ignore_extra: bool = False,
+) -> Any:  # fmt: skip
+    """The measured fibers as the workflow takes them (``MeasuredData``).
+
+    An array measured table for an array config (:mod:`fibersweep.discrepancy.array_schema`),
+    the channel's otherwise (:func:`fibersweep.discrepancy.measured.load_measured`).
+    """
+    if is_array(cfg):
+        from fibersweep.discrepancy.array_schema import array_measured_data, load_array_measured
+
+        if trajectories is not None:
+            refuse_array(cfg, "--trajectories", "measured tracks in the channel frame")
+        return array_measured_data(load_array_measured(path, ignore_extra), str(path))
+    from fibersweep.discrepancy.measured import load_measured
+
+    return load_measured(path, trajectories, ignore_extra=ignore_extra,
+                         geometry=cfg.flow.geometry.to_geometry())  # fmt: skip
 
 
 def sweep_box(cfg: Config) -> dict[str, tuple[float, float]]:
@@ -74,14 +121,20 @@ class DiscrepancyPlan:
     followup : int or None
         Follow-up fibers, if given.
     starts : ndarray, shape (fibers, 3), optional
-        The measured starts (θ0 [deg], y0 [h_obs], L [l_obs]): what the follow-up
-        stages cost follows from them (:func:`fibersweep.discrepancy.followup.followup_costs`).
+        The measured starts (θ0 [deg], y0 [h_obs], L [l_obs]; in an array y0 [/period_y],
+        L [µm]): what the follow-up stages cost follows from them
+        (:func:`fibersweep.discrepancy.followup.followup_costs`).
+    fields : tuple of str
+        In a pillar array, a line per declared flow candidate: its unit-cell field
+        found in the cache, or solved once at the cost stated
+        (:func:`fibersweep.discrepancy.array_workflow.field_plan`).
     """
 
     fibers: int
     settings: DiscrepancySettings
     followup: int | None = None
     starts: Any = attr(default=None, repr=False, compare=False)
+    fields: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -136,8 +189,9 @@ def discrepancy(
     progress: bool = False,
     on_plan: Callable[[DiscrepancyPlan], None] | None = None,
 ) -> DiscrepancyReport:
-    """Where the model disagrees with fibers measured past one pillar, which effects
-    explain it, and the gap left (``fibersweep discrepancy``); writes the report.
+    """Where the model disagrees with fibers measured past one pillar or through a pillar
+    array, which effects explain it, and the gap left (``fibersweep discrepancy``); writes
+    the report.
 
     With ``followup``, ``measured`` is analysed as without it (same seed, same
     verdict), then the two hypotheses the verdict leaves are tested on the
@@ -148,7 +202,8 @@ def discrepancy(
     measured : str or Path
         Measured fibers (.parquet or .csv; ``docs/reference/columns.md``).
     config : str, Path or Config
-        The model's config (one pillar in a channel).
+        The model's config: one pillar in a channel, or a pillar array (``flow.array``:
+        ``measured`` is then an array measured table, :mod:`fibersweep.discrepancy.array_schema`).
     *overrides : str
         ``KEY=VALUE`` settings.
     output : str or Path
@@ -189,34 +244,39 @@ def discrepancy(
     -------
     DiscrepancyReport
     """
-    from fibersweep.discrepancy.measured import load_measured
     from fibersweep.discrepancy.report import write_report
     from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
     from fibersweep.flow.cache import get_flow_field
 
     cfg = load_config(config, *overrides)
-    refuse_array(cfg, "discrepancy")
-    data = load_measured(
-        measured, trajectories, ignore_extra=ignore_extra_columns,
-        geometry=cfg.flow.geometry.to_geometry(),
-    )  # fmt: skip
+    data = load_measured_for(cfg, measured, trajectories, ignore_extra_columns)
     more = (
-        load_measured(followup, ignore_extra=ignore_extra_columns)
+        load_measured_for(cfg, followup, ignore_extra=ignore_extra_columns)
         if followup is not None
         else None
     )
+    declared = declared_candidates(cfg, candidates)
+    # a pillar array: its noise model, and the library effects that act in it
+    arr = array_settings_parts(cfg, effects, declared) if is_array(cfg) else {}
     settings = DiscrepancySettings(
         copies=copies, budget=budget, seed=seed, alpha=alpha, pairs=pairs,
         power_fibers=40 if power else 0, next_copies=2 if propose_next else 0,
         workers=workers or cfg.run.workers,
         executor=cfg.run.executor, scheduler=cfg.run.scheduler,
-        effects=tuple(effects) if effects else None,
-        declared=declared_candidates(cfg, candidates),
+        **{"effects": tuple(effects) if effects else None, "declared": declared, **arr},
     )  # fmt: skip
-    plan = DiscrepancyPlan(len(data), settings, None if more is None else len(more), data.starts)
+    fields: list[str] = []
+    if is_array(cfg):  # a unit cell costs seconds: solved first, its cost scales the plan's
+        from fibersweep.discrepancy.array_workflow import field_plan
+
+        field_, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
+        fields = field_plan(declared, cfg.fiber, cfg.flow, cfg.run.cache_dir, field_.meta)
+    plan = DiscrepancyPlan(len(data), settings, None if more is None else len(more), data.starts,
+                           tuple(fields))  # fmt: skip
     if on_plan is not None:
         on_plan(plan)
-    field_, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
+    if not is_array(cfg):
+        field_, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
     res = run_discrepancy(data, field_, cfg.fiber, settings, progress=progress, flow=cfg.flow,
                           cache_dir=cfg.run.cache_dir, followup=more)  # fmt: skip
     out = Path(output)

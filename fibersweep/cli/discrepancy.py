@@ -27,11 +27,11 @@ from fibersweep.cli._app import (
 )
 
 
-def _channel_only(cfg, command: str) -> None:
-    """The discrepancy workflow is the channel's (:func:`fibersweep.api.compare.refuse_array`)."""
-    from fibersweep.api.compare import refuse_array
+def _is_array(cfg) -> bool:
+    """A pillar-array config (``flow.array``): the array measured table and observables."""
+    from fibersweep.api.compare import is_array
 
-    refuse_array(cfg, command)
+    return is_array(cfg)
 
 
 def _sweep_box(cfg) -> dict[str, tuple[float, float]]:
@@ -66,20 +66,24 @@ def synth(
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
-    """Measured-like fibers past one pillar from the model, with hidden effects and
-    measurement noise.
+    """Measured-like fibers past one pillar or through a pillar array, from the model,
+    with hidden effects and measurement noise.
 
     Starts are uniform in the range of CONFIG's sweep axes; the truth (effects,
     noise, true starts) goes to a separate JSON file. With --tracks, the
     trajectories too (channel frame, per-frame noise 1 µm and 1.5°), for
-    ``discrepancy --trajectories``.
+    ``discrepancy --trajectories``. On a pillar array (flow.array) the table is an
+    array measured table: starts, fraction, trapped, mode (and bend for a
+    flexible fiber), each fiber through fiber.array_rows rows.
     """
     import json
 
     _setup_logging(verbose)
     with _errors():
         cfg = _load(config, overrides)
-        _channel_only(cfg, "synth")
+        if _is_array(cfg):
+            _synth_array(cfg, effect, n, seed, output, truth, tracks, workers)
+            return
         from fibersweep.discrepancy.schema import write_table
         from fibersweep.discrepancy.synth import parse_effects, synthesize_with_tracks
         from fibersweep.errors import InputError
@@ -106,6 +110,38 @@ def synth(
     typer.echo(f"wrote {output} ({len(table)} fibers) and {tpath}")
     if tracks is not None:
         typer.echo(f"wrote {tracks} (trajectories, {fps:g} frames/s)")
+    if tr["failed"]:
+        typer.secho(f"  {len(tr['failed'])} failed runs left out (listed in the truth)",
+                    fg=typer.colors.YELLOW)  # fmt: skip
+
+
+def _synth_array(cfg, effect, n: int, seed: int, output: Path, truth: Path | None,
+                 tracks: Path | None, workers: int | None) -> None:  # fmt: skip
+    """``synth`` on a pillar array (:func:`fibersweep.discrepancy.array_synth.synthesize_array`)."""
+    import json
+
+    from fibersweep.api.compare import refuse_array
+    from fibersweep.atomic import atomic_write
+    from fibersweep.discrepancy.array_synth import synthesize_array
+    from fibersweep.discrepancy.schema import write_table
+    from fibersweep.discrepancy.synth import parse_effects
+    from fibersweep.flow.cache import get_flow_field
+
+    if tracks is not None:
+        refuse_array(cfg, "synth --tracks", "writing trajectories in the channel frame")
+    effects = parse_effects(effect)
+    field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
+    table, tr = synthesize_array(
+        field, cfg.fiber, _sweep_box(cfg), n, effects, seed=seed,
+        workers=workers or cfg.run.workers, executor=cfg.run.executor,
+        scheduler=cfg.run.scheduler,
+    )  # fmt: skip
+    write_table(table, output)
+    tpath = truth or output.with_suffix(".truth.json")
+    atomic_write(tpath, json.dumps(tr, indent=2))
+    typer.echo(f"wrote {output} ({len(table)} fibers through {cfg.fiber.array_rows} rows; "
+               "theta0 [deg], y0 [fraction of period_y], length [µm]) and "
+               f"{tpath}")  # fmt: skip
     if tr["failed"]:
         typer.secho(f"  {len(tr['failed'])} failed runs left out (listed in the truth)",
                     fg=typer.colors.YELLOW)  # fmt: skip
@@ -198,7 +234,7 @@ def _followup_lines(starts, settings, plan, total: int) -> list[str]:
 
 def _print_discrepancy_plan(plan) -> None:
     """The plan before it runs (:class:`fibersweep.api.DiscrepancyPlan`)."""
-    for line in _plan_lines(plan.fibers, plan.settings, plan.starts):
+    for line in [*_plan_lines(plan.fibers, plan.settings, plan.starts), *plan.fields]:
         typer.echo(line)
     if plan.followup is not None:
         typer.echo(
@@ -261,8 +297,13 @@ def discrepancy(
     workers: Workers = None,
     verbose: Verbose = False,
 ) -> None:
-    """Where the model disagrees with fibers MEASURED past one pillar, which effects
-    explain it, and the gap left.
+    """Where the model disagrees with fibers MEASURED past one pillar or through a pillar
+    array, which effects explain it, and the gap left.
+
+    On a pillar array (flow.array) MEASURED is an array measured table (starts,
+    fraction, trapped, optional mode and bend); fabrication settings are candidates
+    as alternatives (--candidate flow.array.shift=0.125), each value's unit-cell
+    field solved once and cached.
 
     With --followup, MEASURED is analysed as without it (same seed, same
     verdict), then the two hypotheses the verdict leaves are tested on the
@@ -297,6 +338,23 @@ def discrepancy(
     typer.echo(f"wrote {output / 'report.md'} and {output / 'summary.json'}")
     for c in s["updated_configs"]:
         typer.echo(f"wrote {output / c}")
+
+
+def _clear_array_starts(field, fiber, starts, box, rng):
+    """Starts uniform in ``box`` (θ0 [deg], y0 [/period_y], L [µm]), redrawn where the fiber
+    would touch a pillar at its start (as ``synth`` draws them on an array)."""
+    import numpy as np
+
+    from fibersweep.discrepancy.array_synth import clear_starts
+
+    lo = np.array([box[c][0] for c in ("theta0", "y0", "length")])
+    hi = np.array([box[c][1] for c in ("theta0", "y0", "length")])
+    for _ in range(50):
+        bad = ~clear_starts(field, fiber, starts)
+        if not bad.any():
+            break
+        starts[bad] = lo + (hi - lo) * rng.random((int(bad.sum()), 3))
+    return starts
 
 
 @app.command("power", rich_help_panel=MEASURED)
@@ -353,12 +411,11 @@ def power_cmd(
     _setup_logging(verbose)
     with _errors():
         cfg = _load(config, overrides)
-        _channel_only(cfg, "power")
+        from fibersweep.api.compare import array_settings_parts, load_measured_for
         from fibersweep.atomic import atomic_write
         from fibersweep.discrepancy.candidates import get_candidates
         from fibersweep.discrepancy.copies import CopyMaker, NoiseModel
         from fibersweep.discrepancy.detection import limit_in_unit
-        from fibersweep.discrepancy.measured import load_measured
         from fibersweep.discrepancy.observables import scored
         from fibersweep.discrepancy.power import analyse_power
         from fibersweep.discrepancy.simulate import Simulator
@@ -369,25 +426,39 @@ def power_cmd(
             raise InputError(f"--n and --simulate must be >= 8, got {n} and {simulate}")
         declared = _declared(cfg, candidate)
         names = _effect_names(effect)
+        array = _is_array(cfg)
+        noise, library = NoiseModel(), names
+        if array:  # the array's noise; only the library effects that act in an array
+            parts = array_settings_parts(cfg, names, declared)
+            noise, library = parts["noise"], parts["effects"]
         # declared candidates alone: the library only when --effect names some of it
-        cands = [*(get_candidates(names) if names or not declared else []), *declared]
+        cands = [*(get_candidates(library) if names or not declared else []), *declared]
         rng = np.random.default_rng([seed, 17])
+        field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
         if measured is not None:
-            starts = load_measured(measured).starts
-            obs = tuple(load_measured(measured).observed)
+            data = load_measured_for(cfg, measured)
+            starts, obs = data.starts, tuple(data.observed)
         else:
             box = _sweep_box(cfg)
             k = min(n, simulate)
             starts = np.column_stack([rng.uniform(*box[c], k) for c in ("theta0", "y0", "length")])
             obs = scored()
-        field, _ = get_flow_field(cfg.flow, cfg.run.cache_dir)
+            if array:
+                starts = _clear_array_starts(field, cfg.fiber, starts, box, rng)
+                obs = tuple(o for o in scored(geometry="array")
+                            if o != "bend" or cfg.fiber.model != "rigid")  # fmt: skip
+        if array:
+            from fibersweep.discrepancy.array_workflow import field_plan
+
+            for line in field_plan(declared, cfg.fiber, cfg.flow, cfg.run.cache_dir, field.meta):
+                typer.echo(line)
         # the bar's length comes from the analysis (discrepancy.power.planned_runs)
         with Simulator(
             field, cfg.fiber, workers=workers or cfg.run.workers, executor=cfg.run.executor,
             scheduler=cfg.run.scheduler, tracks=False, candidates=cands, flow=cfg.flow,
             cache_dir=cfg.run.cache_dir,
         ) as sim:  # fmt: skip
-            maker = CopyMaker(starts, NoiseModel(), seed, sim)
+            maker = CopyMaker(starts, noise, seed, sim)
             pw = analyse_power(maker, cands, n, obs, rng, n_sim=simulate, alpha=alpha,
                                n_boot=boot)  # fmt: skip
         rows = []

@@ -33,18 +33,19 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
 
-__all__ = ["CopyMaker", "NoiseModel", "crossfit_copies", "fixed_columns"]
+__all__ = ["CopyMaker", "NoiseModel", "array_noise", "crossfit_copies", "fixed_columns"]
 
 
-def _default_outcome_sd(tracks: bool = True) -> dict[str, float]:
+def _default_outcome_sd(tracks: bool = True, geometry: str = "channel") -> dict[str, float]:
     return {
         n: o.noise.sd
         for n, o in OBSERVABLES.items()
-        if o.noise is not None and (tracks or not o.track)
+        if o.noise is not None and (tracks or not o.track) and o.geometry == geometry
     }
 
 
@@ -66,22 +67,31 @@ class NoiseModel:
         [-], ``dwell`` [s]; observables left out get their registry default
         (:mod:`fibersweep.discrepancy.observables`). The track observables' are
         listed only when given (so reports without tracks are unchanged).
+    geometry : {'channel', 'array'}
+        Whose observables ``outcome`` lists. In an array (:func:`array_noise`) the
+        starts are y0 [fraction of period_y, periodic: a jittered y0 is taken
+        modulo 1] and length [µm].
+    min_length : float
+        Shortest jittered length (reflected there), in the length's unit: a small
+        floor in the channel; one bead (2a) in an array, below which no fiber exists.
     """
 
     theta0: float = 1.0
     y0: float = 0.01
     length: float = 0.01
     outcome: Mapping[str, float] = field(default_factory=dict)
+    geometry: str = "channel"
+    min_length: float = 0.05
 
     def __post_init__(self) -> None:
-        valid = _default_outcome_sd()
+        valid = _default_outcome_sd(geometry=self.geometry)
         unknown = [k for k in self.outcome if k not in valid]
         if unknown:
             raise InputError(
                 f"noise: no measurement noise law for {', '.join(unknown)}; "
                 f"valid: {', '.join(valid)}"
             )
-        sd = _default_outcome_sd(tracks=False)
+        sd = _default_outcome_sd(tracks=False, geometry=self.geometry)
         sd.update({k: float(v) for k, v in self.outcome.items()})
         object.__setattr__(self, "outcome", sd)
         for name, v in self.as_dict().items():
@@ -89,7 +99,8 @@ class NoiseModel:
                 raise InputError(f"noise.{name}: must be a finite number >= 0, got {v!r}")
 
     def __hash__(self) -> int:  # the outcome dict is never mutated after __post_init__
-        return hash((self.theta0, self.y0, self.length, tuple(self.outcome.items())))
+        return hash((self.theta0, self.y0, self.length, tuple(self.outcome.items()),
+                     self.geometry, self.min_length))  # fmt: skip
 
     def sd(self, name: str) -> float:
         """Standard deviation of the start column or observable ``name``."""
@@ -121,7 +132,9 @@ class NoiseModel:
             raise ValueError(f"starts must have shape (n, 3), got {s.shape}")
         sd = np.array([self.theta0, self.y0, self.length])
         out = s + rng.standard_normal(s.shape) * sd
-        out[:, 2] = np.abs(out[:, 2] - 0.05) + 0.05
+        out[:, 2] = np.abs(out[:, 2] - self.min_length) + self.min_length
+        if self.geometry == "array":  # the lattice repeats every period_y
+            out[:, 1] = np.mod(out[:, 1], 1.0)
         return out
 
     def observe(self, outcomes: pd.DataFrame, z: Mapping[str, np.ndarray]) -> pd.DataFrame:
@@ -150,6 +163,18 @@ class NoiseModel:
                 raise ValueError(f"z[{name!r}] must have shape ({n},), got {zn.shape}")
             out[name] = o.noise.apply(out[name].to_numpy(dtype=np.float64), self.sd(name), zn)
         return out
+
+
+def array_noise(fiber: FiberSettings, **outcome: float) -> NoiseModel:
+    """The measurement noise of fibers through a pillar array (the array measured table).
+
+    Start angle 1° (as in the channel); y0 0.01 period_y (0.8 µm in the shipped
+    80 µm cell: sub-pixel centroid tracking); length 1 µm (a fiber's two ends each
+    located to about 0.7 µm), reflected at one bead, 2a; the observables' errors
+    from the registry (:mod:`.array_observables`) unless given in ``outcome``.
+    """
+    return NoiseModel(theta0=1.0, y0=0.01, length=1.0, outcome=outcome, geometry="array",
+                      min_length=2.0 * float(fiber.bead_radius))  # fmt: skip
 
 
 #: Fewest fibers from which a start column is checked for a single true value: with fewer,

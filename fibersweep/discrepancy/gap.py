@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import wasserstein_distance
 
-from fibersweep.discrepancy.observables import OBSERVABLES, has_tracks, scored
+from fibersweep.discrepancy.observables import OBSERVABLES, geometry_of, has_tracks, scored
 from fibersweep.discrepancy.scores import (
     PermTest,
     bootstrap_mean_ci,
@@ -184,7 +184,7 @@ def assess_gap(
     alpha : float
         Family-wise error rate (Holm over the observables).
     """
-    names = [o for o in scored(tracks=True) if o in values]
+    names = [o for o in scored(tracks=True, geometry=geometry_of(values)) if o in values]
     tests: dict[str, PermTest] = {}
     per_fiber: dict[str, np.ndarray] = {}
     biases: dict[str, list[PermTest]] = {}
@@ -225,7 +225,7 @@ def _feature_parts(gap: GapResult) -> list[tuple[np.ndarray, bool]]:
     """The blocks of :func:`feature_vector`, each with whether its tests are one-sided."""
     # the track observables' components only when the gap has them (tracks measured):
     # without tracks, no track components: vectors of data sets without tracks compare
-    names = scored(tracks=has_tracks(gap.gaps))
+    names = scored(tracks=has_tracks(gap.gaps), geometry=geometry_of(gap.gaps))
     parts = []
     for name in names:
         g = gap.gaps.get(name)

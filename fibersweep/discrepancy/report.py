@@ -41,7 +41,7 @@ from fibersweep.discrepancy.advice import advice_lines, cannot_exclude
 from fibersweep.discrepancy.candidates import Candidate
 from fibersweep.discrepancy.detection import limit_in_unit
 from fibersweep.discrepancy.gap import GAP_UNIT, GapResult
-from fibersweep.discrepancy.observables import OBSERVABLES, scored
+from fibersweep.discrepancy.observables import OBSERVABLES, geometry_of, scored
 from fibersweep.discrepancy.report_figures import figures
 from fibersweep.discrepancy.report_text import markdown
 from fibersweep.discrepancy.result import DiscrepancyResult
@@ -346,7 +346,9 @@ def summary(res: DiscrepancyResult) -> dict[str, Any]:
         "n_fibers": len(res.observed),
         "n_heldout": len(res.heldout_rows),
         "observables": list(res.observables),
-        "observables_absent": [o for o in scored() if o not in res.observables],
+        "observables_absent": [
+            o for o in scored(geometry=geometry_of(res.observables)) if o not in res.observables
+        ],
         # the unit of each observable's values and residuals ('' for a class)
         "observable_units": {o: OBSERVABLES[o].unit for o in res.observables if o in OBSERVABLES},
         "start_axes_varying": varying,

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fibersweep.discrepancy.array_report import ARRAY_AXES, array_phase, is_array_report
 from fibersweep.discrepancy.candidates import show_values
 from fibersweep.discrepancy.gap import GAP_UNIT, GapResult
 from fibersweep.discrepancy.localise import binned_map
@@ -82,9 +83,17 @@ def _class_groups(codes: np.ndarray) -> list[tuple[str, dict[str, object], np.nd
     return out
 
 
+def _axes(res: DiscrepancyResult) -> dict[str, str]:
+    """Start-axis labels: the channel's, or a pillar array's (its own units)."""
+    return ARRAY_AXES if is_array_report(getattr(res, "observables", ())) else AXES
+
+
 def _phase(res: DiscrepancyResult, out: Path) -> str:
     from matplotlib.lines import Line2D
 
+    if is_array_report(res.observables):  # f(L): the array's own picture
+        key, label, _ = fitted_label(res)
+        return array_phase(res, out, label, key)
     obs = res.observed
     codes = OBSERVABLES["class"].values
     key, label, _ = fitted_label(res)
@@ -187,8 +196,8 @@ def _residual_map(res: DiscrepancyResult, out: Path) -> str | None:
         for i, j in zip(*np.nonzero(cnt), strict=True):  # fibers per bin: how much it rests on
             ax.text(xc[i], yc[j], str(cnt[i, j]), ha="center", va="center", fontsize=6,
                     color="0.35")  # fmt: skip
-        ax.set_xlabel(AXES[c])
-        ax.set_ylabel(AXES["y0"])
+        ax.set_xlabel(_axes(res)[c])
+        ax.set_ylabel(_axes(res)["y0"])
     cb = fig.colorbar(im, ax=np.atleast_1d(axes).tolist(),
                       label="z of the bin's mean gap\n(+: measured worse than the model)")
     cb.ax.axhspan(-NOISE_Z, NOISE_Z, color="0.85")  # the noise band, as on the map
@@ -226,11 +235,14 @@ def _next(res: DiscrepancyResult, out: Path) -> str | None:
     nx = res.extra.get("next")
     if nx is None:
         return None
-    next_figure(nx, res.observed[["theta0", "y0"]].to_numpy(), out / "next_measure.png")
+    next_figure(nx, res.observed[["theta0", "y0"]].to_numpy(), out / "next_measure.png",
+                _axes(res))  # fmt: skip
     return "next_measure.png"
 
 
-def next_figure(nx: Discrimination, measured: np.ndarray, path: Path) -> Path:
+def next_figure(
+    nx: Discrimination, measured: np.ndarray, path: Path, axes: dict[str, str] | None = None
+) -> Path:
     """Map of the separation per fiber over (θ0, y0), best over L, best starts circled.
 
     Parameters
@@ -240,7 +252,10 @@ def next_figure(nx: Discrimination, measured: np.ndarray, path: Path) -> Path:
         Measured θ0 [deg], y0 [/h_obs] (small dots).
     path : Path
         PNG written.
+    axes : dict, optional
+        Axis labels (default :data:`AXES`, the channel's).
     """
+    labels = axes or AXES
     g, d = nx.grid, nx.d
     th, ys = np.unique(g[:, 0]), np.unique(g[:, 1])
     D = np.full((len(th), len(ys)), np.nan)
@@ -267,8 +282,8 @@ def next_figure(nx: Discrimination, measured: np.ndarray, path: Path) -> Path:
     )  # dark edge: visible on the map and in the legend
     bt = np.array([[b.theta0, b.y0] for b in nx.best])
     ax.scatter(bt[:, 0], bt[:, 1], s=40, facecolors="none", edgecolors="r", label="best starts")
-    ax.set_xlabel(AXES["theta0"])
-    ax.set_ylabel(AXES["y0"])
+    ax.set_xlabel(labels["theta0"])
+    ax.set_ylabel(labels["y0"])
     ax.set_title(f"{nx.labels[0]}  vs  {nx.labels[1]}", fontsize=8)
     ax.legend(frameon=False, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=2)
     fig.colorbar(im, ax=ax, label="separation per fiber (best over L) [noise sd]")

@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from fibersweep.discrepancy.advice import cannot_exclude
+from fibersweep.discrepancy.array_report import start_units
 from fibersweep.discrepancy.candidates import LIBRARY
 from fibersweep.discrepancy.observables import OBSERVABLES
 
@@ -208,8 +209,9 @@ def _next_words(s: dict[str, Any]) -> list[str]:
         b = nx["best"][0]
         a, c = nx["hypotheses"]
         need = nx.get("fibers_needed")
+        yu, lu = start_units(s.get("observables", ()))
         return [f"To tell **{a}** from **{c}**: about {_n(need)} fibers near θ0 "
-                f"{b['theta0']:.1f}°, y0 {b['y0']:.2f} h_obs, L {b['length']:.2f} l_obs "
+                f"{b['theta0']:.1f}°, y0 {b['y0']:.2f} {yu}, L {b['length']:.2f} {lu} "
                 "(the other starts in the table 'What to measure next' below)."]  # fmt: skip
     listed = s.get("cannot_exclude") or []
     n = int(s.get("n_fibers") or 0)

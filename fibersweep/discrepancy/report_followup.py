@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from fibersweep.discrepancy.array_report import start_units
 from fibersweep.discrepancy.report_format import num
 
 __all__ = ["next_lines", "power_lines", "settle_lines"]
@@ -110,13 +111,13 @@ def power_lines(s: dict[str, Any]) -> list[str]:
     return lines
 
 
-def _window(w: list[float] | None) -> str:
+def _window(w: list[float] | None, units: tuple[str, str] = ("h_obs", "l_obs")) -> str:
     """Where the fibers should start: spread over the window around each start, or at it."""
     if not w:
         return "at these starts"
     return (
-        f"with starts spread over θ0 ±{w[0]:.2g}°, y0 ±{w[1]:.2g} h_obs, L ±{w[2]:.2g} l_obs "
-        "around these starts"
+        f"with starts spread over θ0 ±{w[0]:.2g}°, y0 ±{w[1]:.2g} {units[0]}, "
+        f"L ±{w[2]:.2g} {units[1]} around these starts"
     )
 
 
@@ -130,15 +131,16 @@ def next_lines(s: dict[str, Any]) -> list[str]:
             else []
         )
     a, b = nx["hypotheses"]
+    units = start_units(s.get("observables", ()))
     lines = [
         "",
         "## What to measure next",
         "",
         f"Why: {nx['reason']}. To separate **{a}** from **{b}**, measure fibers "
-        f"{_window(nx.get('window'))} (separation per fiber: the two predictions' "
+        f"{_window(nx.get('window'), units)} (separation per fiber: the two predictions' "
         "difference over the noise of one measured fiber, summed over the observables):",
         "",
-        "| θ0 [deg] | y0 [h_obs] | L [l_obs] | separation per fiber | observable | "
+        f"| θ0 [deg] | y0 [{units[0]}] | L [{units[1]}] | separation per fiber | observable | "
         "prediction A | prediction B |",
         "|---|---|---|---|---|---|---|",
     ]

@@ -16,7 +16,13 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from fibersweep.discrepancy.observables import OBSERVABLES, has_tracks, log_scale, scored
+from fibersweep.discrepancy.observables import (
+    OBSERVABLES,
+    geometry_of,
+    has_tracks,
+    log_scale,
+    scored,
+)
 from fibersweep.discrepancy.report_first_page import first_page, z_labels
 from fibersweep.discrepancy.report_followup import next_lines, power_lines, settle_lines
 from fibersweep.discrepancy.report_format import ci_text, num
@@ -51,7 +57,7 @@ GLOSSARY = (
 
 def _score_text(observed: list[str] | tuple[str, ...] = ()) -> str:
     # the track observables only when tracks were measured
-    names = scored(tracks=has_tracks(observed))
+    names = scored(tracks=has_tracks(observed), geometry=geometry_of(observed))
     cat = [n for n in names if OBSERVABLES[n].categorical]
     logs = [n for n in names if OBSERVABLES[n].transform is log_scale]
     on_log = f"; {', '.join(logs)} on a log scale" if logs else ""

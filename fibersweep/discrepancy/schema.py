@@ -219,9 +219,13 @@ def _angles_to_degrees(df: pd.DataFrame, vals: dict[str, np.ndarray], problems: 
             )
 
 
-def _unknown_columns(columns: list[str]) -> list[str]:
-    """One problem line per column the schema does not know, with a did-you-mean."""
-    known = ["fiber_id", "angle_unit", *START_COLUMNS, *table_columns()]
+def unknown_columns(columns: list[str], known: list[str] | None = None) -> list[str]:
+    """One problem line per column the schema does not know, with a did-you-mean.
+
+    ``known``: the schema's columns (default: the channel's measured table).
+    """
+    if known is None:
+        known = ["fiber_id", "angle_unit", *START_COLUMNS, *table_columns()]
     lowered = {k.lower(): k for k in known}
     problems = []
     for c in columns:
@@ -276,7 +280,7 @@ def validate_measured(
     if extra and ignore_extra:
         log.warning("%s: ignoring extra columns %s", source, extra)
     elif extra:
-        problems.extend(_unknown_columns(extra))
+        problems.extend(unknown_columns(extra))
     if len(df) == 0:
         raise InputError(f"{source}: the table has no rows")
     df = df.reset_index(drop=True)
@@ -430,6 +434,8 @@ def observed_columns_doc() -> str:
     without = {"not_trapped": "for Trapping", "contact": "without contact"}
     rows = []
     for name, o in OBSERVABLES.items():
+        if o.geometry != "channel":  # the array's table: fibersweep.discrepancy.array_schema
+            continue
         if o.derived_from or o.track:
             src = "from the trajectories" if o.track else "derived"
             rows.append((name, "-", f"{o.description} [{o.unit}], {src}"))

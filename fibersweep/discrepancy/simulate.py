@@ -41,9 +41,10 @@ import pandas as pd
 
 from fibersweep.analysis.observables import track_values
 from fibersweep.config.fiber import FiberSettings
+from fibersweep.discrepancy.array_observables import is_array_result
 from fibersweep.discrepancy.candidates import Candidate
 from fibersweep.discrepancy.declared import apply_values
-from fibersweep.discrepancy.observables import OBSERVABLES
+from fibersweep.discrepancy.observables import OBSERVABLES, of_geometry
 from fibersweep.errors import FibersweepError, InputError
 from fibersweep.fiber.result import CLASSES
 from fibersweep.flow.field import FlowField
@@ -59,12 +60,23 @@ from fibersweep.sweep.worker import (
 )
 from fibersweep.units import Geometry
 
-__all__ = ["OUTCOME_COLUMNS", "TRACK_SAMPLES", "Simulator", "BudgetExhausted", "outcome_row"]
+__all__ = [
+    "ARRAY_OUTCOME_COLUMNS",
+    "OUTCOME_COLUMNS",
+    "TRACK_SAMPLES",
+    "Simulator",
+    "BudgetExhausted",
+    "is_array",
+    "outcome_row",
+]
 
 log = logging.getLogger(__name__)
 
-#: Outcome columns of a batch, one per observable of the registry, in its order.
-OUTCOME_COLUMNS = tuple(OBSERVABLES)
+#: Outcome columns of a channel batch, one per channel observable, in registry order
+#: (an array batch's: :data:`ARRAY_OUTCOME_COLUMNS`).
+OUTCOME_COLUMNS = of_geometry("channel")
+#: Outcome columns of a pillar-array batch (:mod:`.array_observables`).
+ARRAY_OUTCOME_COLUMNS = of_geometry("array")
 
 #: Fewest trajectory samples a run keeps for its track observables (a 2 s pass: one
 #: sample per ~2 ms, ~1.2 µm of travel; linear interpolation at a station then errs
@@ -76,11 +88,18 @@ TRACK_SAMPLES = 1000
 FLEXIBLE_CHUNKS = 16
 
 
+def is_array(field: Any) -> bool:
+    """Whether ``field`` is a pillar array's unit cell (a CellField: it has ``array``)."""
+    return getattr(field, "array", None) is not None
+
+
 class BudgetExhausted(FibersweepError):
     """The simulation budget does not allow the requested batch."""
 
 
-def outcome_row(result: Any, geometry: Geometry | None = None) -> dict[str, Any]:
+def outcome_row(
+    result: Any, geometry: Geometry | None = None, array: bool | None = None
+) -> dict[str, Any]:
     """Observable values of a RunResult (registry order), missing for a failed run.
 
     Values follow :mod:`fibersweep.discrepancy.observables` (class name, contact
@@ -94,13 +113,23 @@ def outcome_row(result: Any, geometry: Geometry | None = None) -> dict[str, Any]
         ``result.trajectory`` the track observables are derived
         (:func:`fibersweep.analysis.observables.track_values`), else NaN. NaN as
         well for Trapping (their NaN rule).
+    array : bool, optional
+        The run went through a pillar array: the array observables
+        (:data:`ARRAY_OUTCOME_COLUMNS`) [default: whether ``result`` has a mode;
+        a run that failed before it started has none, so the batch says].
     """
+    if array or (array is None and is_array_result(result)):  # its own observables, no tracks
+        ok = result.status == "ok" and is_array_result(result)
+        row = {n: OBSERVABLES[n].outcome(result if ok else None) for n in of_geometry("array")}
+        row["status"] = "ok" if ok else "failed"
+        row["reason"] = "" if ok else (result.reason or "failed")
+        return row
     ok = result.status == "ok" and result.cls in CLASSES
     tracks = None
     traj = getattr(result, "trajectory", None)
     if ok and geometry is not None and traj is not None and result.cls != "Trapping":
         tracks = track_values(traj.t, traj.x, traj.y, traj.theta, geometry, result.start.length)
-    row = {name: o.outcome(result if ok else None, tracks) for name, o in OBSERVABLES.items()}
+    row = {n: OBSERVABLES[n].outcome(result if ok else None, tracks) for n in of_geometry()}
     row["status"] = "ok" if ok else "failed"
     row["reason"] = "" if ok else (result.reason or f"class {result.cls!r}")
     return row
@@ -127,8 +156,8 @@ def frames(traj: Any, fps: float) -> dict[str, np.ndarray] | None:
     return {"t": t, **{c: np.interp(t, traj.t, getattr(traj, c)) for c in ("x", "y", "theta")}}
 
 
-def _failed(reason: str) -> dict[str, Any]:
-    row = {name: o.outcome(None) for name, o in OBSERVABLES.items()}
+def _failed(reason: str, array: bool = False) -> dict[str, Any]:
+    row = {n: OBSERVABLES[n].outcome(None) for n in of_geometry("array" if array else "channel")}
     row.update(status="failed", reason=reason)
     return row
 
@@ -140,7 +169,8 @@ def batch_outcome(result: Any, field: FlowField, tracks: bool, fps: float | None
     (top-level: it pickles by name). Positions are the effects' own report
     (``pillar_scale`` rescales the trajectory itself).
     """
-    row = outcome_row(result, field.geometry if tracks else None)
+    array = is_array(field)
+    row = outcome_row(result, field.geometry if tracks and not array else None, array)
     if fps is not None:
         row["track"] = frames(result.trajectory, fps)
     return row
@@ -204,6 +234,7 @@ class Simulator:
         if workers < 1:
             raise InputError(f"workers must be >= 1, got {workers}")
         self.field = field
+        self.array = is_array(field)  # a pillar array's unit cell: array observables
         self.settings = settings
         self.workers = workers
         self.tracks = bool(tracks)
@@ -218,6 +249,7 @@ class Simulator:
         self._flow = flow
         self._cache_dir = cache_dir
         self._variants: dict[tuple, tuple[SettingSpec, FiberSettings]] = {}
+        self._fields: dict[tuple, Any] = {}  # each variant's field (an array's start check)
         self._batches = 0
         self._planned = planned if planned is not None else budget
         self._later = 0  # runs later stages may add (said beside the bar)
@@ -297,7 +329,26 @@ class Simulator:
                 field, _ = get_flow_field(new_flow, self._cache_dir)
             sid = f"candidate-{len(self._variants)}"
             self._variants[on] = (setting_for_field(field, fiber, sid), fiber)
+            self._fields[on] = field
         return self._variants[on]
+
+    def _clear(self, starts: np.ndarray, fiber: FiberSettings, rows: list) -> np.ndarray:
+        """Indices of the array starts clear of every pillar; the others' rows failed.
+
+        The run itself would refuse such a start (:class:`fibersweep.fiber.array_run.ArrayCase`);
+        checking here spares a worker's traceback per start and keeps the same outcome.
+        """
+        from fibersweep.discrepancy.array_synth import clear_starts
+
+        on = tuple(sorted((n, float(v)) for n, v in self._last_on.items()))
+        ok = clear_starts(self._fields.get(on, self.field), fiber, starts)
+        for i in np.flatnonzero(~ok):
+            rows[int(i)] = _failed(
+                f"start touches a pillar: y0 = {starts[i, 1]:.4g} (fraction of period_y), "
+                f"theta0 = {starts[i, 0]:.4g} deg, L = {starts[i, 2]:.4g} µm",
+                array=True,
+            )
+        return np.flatnonzero(ok)
 
     @property
     def remaining(self) -> float:
@@ -348,7 +399,8 @@ class Simulator:
                 f"starts (n, 3) and seeds (n,) expected: {starts.shape}, {seeds.shape}"
             )
         effects = {k: float(v) for k, v in (effects or {}).items() if float(v) != 0.0}
-        spec, fiber = self.variant({k: v for k, v in effects.items() if k in self.declared})
+        self._last_on = {k: v for k, v in effects.items() if k in self.declared}
+        spec, fiber = self.variant(self._last_on)
         effects = {k: v for k, v in effects.items() if k not in self.declared}
         build_effects({**fiber.effects, **effects})  # unknown names fail here
         n = len(starts)
@@ -358,9 +410,12 @@ class Simulator:
                 f"{self.budget} are left"
             )
         rows: list[dict[str, Any] | None] = [None] * n
+        todo = np.arange(n)
+        if self.array:  # a (jittered) start inside a pillar's reach fails here, not in a worker
+            todo = self._clear(starts, fiber, rows)
         per_worker = 4 if fiber.model == "rigid" else FLEXIBLE_CHUNKS
-        n_chunks = max(1, min(n, per_worker * self.workers))
-        chunks = [c for c in np.array_split(np.arange(n), n_chunks) if len(c)]
+        n_chunks = max(1, min(len(todo), per_worker * self.workers))
+        chunks = [c for c in np.array_split(todo, n_chunks) if len(c)]
         self._batches += 1
         reduce = partial(batch_outcome, tracks=self.tracks, fps=fps)
         keep_track = self.tracks or fps is not None
@@ -390,16 +445,21 @@ class Simulator:
             if bar.total is not None and bar.n + n > bar.total:
                 bar.total = bar.n + n  # more than planned: grow (the ETA stays honest)
             bar.set_description_str(desc[:40])
+            if n > len(todo):
+                bar.update(n - len(todo))  # starts refused before any run
         t0 = time.perf_counter()
         outcomes = (
             (o.key, o.value, o.error)
-            for o in self._executor.run(
-                run_batch, list(tasks.values()), init_worker, self._initargs
+            for o in (
+                self._executor.run(run_batch, list(tasks.values()), init_worker, self._initargs)
+                if tasks
+                else ()
             )
         )
         for key, chunk, error in outcomes:
             if error:  # the worker died (or the task could not run): failed runs
-                chunk = [(int(i), _failed(f"worker: {error}")) for i in tasks[key].idx]
+                chunk = [(int(i), _failed(f"worker: {error}", self.array))
+                         for i in tasks[key].idx]  # fmt: skip
             for i, row in chunk:
                 rows[i] = row
             if bar is not None:

@@ -21,7 +21,7 @@ import pandas as pd
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.copies import NoiseModel
 from fibersweep.discrepancy.measured import validate_trajectories, with_tracks
-from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws
+from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws, table_columns
 from fibersweep.discrepancy.schema import validate_measured
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
@@ -101,9 +101,8 @@ def measured_table(
             "length": starts[:, 2],
         }
     )
-    for name, o in OBSERVABLES.items():
-        if not o.derived_from and not o.track:
-            table[name] = o.to_table(outcomes[name])
+    for name in table_columns():  # the channel's (an array's: .array_synth)
+        table[name] = OBSERVABLES[name].to_table(outcomes[name])
     for name, o in OBSERVABLES.items():
         if o.underive is not None:
             o.underive(table, outcomes[name].to_numpy(dtype=np.float64))

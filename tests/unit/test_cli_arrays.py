@@ -270,21 +270,6 @@ def test_simulate_a_flexible_fiber_in_an_array_draws_every_bead(tmp_path, flow_c
     assert segs and all(len(s) == n_beads for s in segs), {len(s) for s in segs}
 
 
-@pytest.mark.parametrize("command", ["synth", "power"])
-def test_measurement_commands_refuse_an_array_config_naming_what_to_use(command, tmp_path):
-    res = _run([command, "configs/array.yaml", "-o", str(tmp_path / "x")])
-    assert res.exit_code == 2, res.output
-    assert "sort-report" in res.output, res.output
-
-
-def test_discrepancy_refuses_an_array_config(tmp_path):
-    measured = tmp_path / "m.csv"
-    measured.write_text("theta0,y0,length,delta\n0,0.3,1.0,0.1\n")
-    res = _run(["discrepancy", str(measured), "configs/array.yaml", "-o", str(tmp_path / "r")])
-    assert res.exit_code == 2, res.output
-    assert "flow.array" in res.output and "sort-report" in res.output, res.output
-
-
 def test_a_grid_start_on_a_pillar_is_refused_naming_the_free_starts(tmp_path):
     """A grid start that touches a pillar exits 2 before anything runs, with the ranges of
     y0 free at its angle and length (the run's own check)."""

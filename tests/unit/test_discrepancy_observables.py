@@ -21,6 +21,7 @@ from fibersweep.discrepancy.observables import (
     NoiseLaw,
     Observable,
     noise_draws,
+    of_geometry,
     scored,
     stream_key,
     table_columns,
@@ -32,7 +33,7 @@ from fibersweep.discrepancy.synth import measured_table
 from fibersweep.errors import InputError
 from fibersweep.fiber.result import FiberStart, RunResult
 
-NAMES = list(OBSERVABLES)
+NAMES = list(of_geometry("channel"))
 
 
 @pytest.fixture()
@@ -171,7 +172,7 @@ def test_nan_rule(name):
 
 def test_outcome_rows_follow_the_registry():
     row = outcome_row(_runs()[1])
-    assert list(row)[: len(OBSERVABLES)] == NAMES and row["status"] == "ok"
+    assert list(row)[: len(NAMES)] == NAMES and row["status"] == "ok"
     assert row["class"] == "Above" and row["contact"] == 1.0
     assert row["dwell"] == pytest.approx(1.4 * 1.01 - 0.9 * 1.01)
     failed = outcome_row(RunResult(start=FiberStart(0, 0, 1), status="failed", reason="nan"))

@@ -1,0 +1,164 @@
+"""Measured-like fibers through a pillar array with hidden effects (``synth`` on an array).
+
+As :mod:`.synth` does past one pillar: true starts uniform in the box of the
+config's sweep axes (θ0 [deg], y0 [fraction of period_y], L [µm]), redrawn where
+the fiber would touch a pillar at its start (an array sweep cannot start it
+there either); reported starts with the start noise of :func:`.copies.array_noise`;
+every fiber run through ``fiber.array_rows`` rows at its *true* start with the
+hidden effects on; its observables (:mod:`.array_observables`) with their
+measurement noise. The table follows :mod:`.array_schema`; the truth (effects,
+noise, seed, true starts, failures) is returned apart.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from fibersweep.config.fiber import FiberSettings
+from fibersweep.discrepancy.array_schema import validate_array_measured
+from fibersweep.discrepancy.copies import NoiseModel, array_noise
+from fibersweep.discrepancy.observables import noise_draws
+from fibersweep.discrepancy.simulate import Simulator
+from fibersweep.errors import InputError
+
+__all__ = ["array_effects_check", "clear_starts", "synthesize_array"]
+
+log = logging.getLogger(__name__)
+
+_AXES = ("theta0", "y0", "length")
+#: Redraws of a start that touches a pillar before giving up (a box mostly inside pillars).
+_MAX_REDRAWS = 50
+
+
+def array_effects_check(fiber: FiberSettings, effects: Mapping[str, float], what: str) -> None:
+    """InputError naming an effect a pillar-array run cannot apply (before any run).
+
+    ``what`` names the source in the message (e.g. '--effect', 'candidate').
+    """
+    from fibersweep.fiber.rows import check_array_effects
+
+    on = {k: float(v) for k, v in effects.items() if float(v) != 0.0}
+    try:
+        check_array_effects(fiber.model_copy(update={"effects": {**fiber.effects, **on}}))
+    except InputError as exc:
+        raise InputError(f"{what}: {exc}") from None
+
+
+def clear_starts(field: Any, fiber: FiberSettings, starts: np.ndarray) -> np.ndarray:
+    """Whether each start (θ0 [deg], y0 [/period_y], L [µm]) clears every pillar, shape (n,)."""
+    from fibersweep.fiber.array_run import n_beads_of, start_clear
+    from fibersweep.fiber.rows import array_pillar
+
+    array = field.array
+    pillar = array_pillar(array, fiber, field.viscosity, field.u_center)
+    a = float(fiber.bead_radius)
+    return np.array([
+        start_clear(array, pillar, n_beads_of(L, a, fiber.bead_spacing), a, y, th,
+                    fiber.bead_spacing)
+        for th, y, L in starts
+    ], dtype=bool)  # fmt: skip
+
+
+def synthesize_array(
+    field: Any,
+    fiber: FiberSettings,
+    box: Mapping[str, tuple[float, float]],
+    n: int,
+    effects: Mapping[str, float] | None = None,
+    noise: NoiseModel | None = None,
+    seed: int = 0,
+    workers: int = 2,
+    progress: bool = True,
+    executor: str = "local",
+    scheduler: str | None = None,
+) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """An array measured table and its truth.
+
+    Parameters
+    ----------
+    field : fibersweep.flow.cell.CellField
+        The array's unit-cell field (baseline).
+    fiber : FiberSettings
+        Fiber settings (``array_rows`` rows); ``effects`` are added to its own.
+    box : mapping 'theta0' | 'y0' | 'length' -> (lo, hi)
+        Range of the true starts [deg, fraction of period_y, µm].
+    n : int
+        Fibers.
+    effects : mapping name -> value
+        Hidden effects (those a pillar-array run applies).
+    noise : NoiseModel, optional
+        Default :func:`~fibersweep.discrepancy.copies.array_noise` of ``fiber``.
+    seed : int
+
+    Returns
+    -------
+    table : DataFrame
+        Follows :mod:`fibersweep.discrepancy.array_schema` (validated); ``bend``
+        only for a flexible model.
+    truth : dict
+        JSON-ready: effects, noise, seed, box, true starts, failed runs.
+    """
+    if n < 1:
+        raise InputError(f"--n: must be >= 1, got {n}")
+    noise = noise or array_noise(fiber)
+    effects = {k: float(v) for k, v in (effects or {}).items()}
+    array_effects_check(fiber, effects, "--effect")
+    rng = np.random.default_rng([seed, 4242])
+    lo = np.array([box[k][0] for k in _AXES], dtype=np.float64)
+    hi = np.array([box[k][1] for k in _AXES], dtype=np.float64)
+    true = lo + (hi - lo) * rng.random((n, 3))
+    for _ in range(_MAX_REDRAWS):  # a start inside a pillar's reach is no start
+        bad = ~clear_starts(field, fiber, true)
+        if not bad.any():
+            break
+        true[bad] = lo + (hi - lo) * rng.random((int(bad.sum()), 3))
+    else:
+        raise InputError(
+            f"synth: {int(bad.sum())} of {n} starts still touch a pillar after "
+            f"{_MAX_REDRAWS} redraws; widen sweep.y0 or shorten sweep.length"
+        )
+    reported = noise.jitter_starts(true, rng)
+    seeds = rng.integers(0, 2**31 - 1, size=n)
+    z = noise_draws([seed, 4242], n)
+    effects = {**fiber.effects, **effects}
+    with Simulator(field, fiber, workers=workers, progress=progress, executor=executor,
+                   scheduler=scheduler, planned=n) as sim:  # fmt: skip
+        raw = sim.run(true, effects, seeds, desc="synth")
+    obs = noise.observe(raw, z)
+    keep = (obs["status"] == "ok").to_numpy()
+    table = pd.DataFrame({"fiber_id": np.arange(n, dtype=np.int64)})
+    for k, name in enumerate(_AXES):
+        table[name] = reported[:, k]
+    table["fraction"] = obs["fraction"].to_numpy(dtype=np.float64)
+    table["trapped"] = obs["trapped"].to_numpy(dtype=np.float64) > 0.5
+    table["mode"] = obs["mode"].to_numpy(dtype=object)
+    if fiber.model != "rigid":
+        table["bend"] = obs["bend"].to_numpy(dtype=np.float64)
+    failures = [
+        {"fiber_id": int(i), "true_start": true[i].tolist(), "reason": str(raw["reason"][i])}
+        for i in np.flatnonzero(~keep)
+    ]
+    if failures:
+        log.warning("synth: %d of %d runs failed and are left out (listed in the truth)",
+                    len(failures), n)  # fmt: skip
+    table = validate_array_measured(table[keep].reset_index(drop=True), source="synth")
+    truth = {
+        "geometry": "array",
+        "effects": effects,
+        "noise": noise.as_dict(),
+        "seed": seed,
+        "n_requested": n,
+        "n_written": int(keep.sum()),
+        "box": {k: list(v) for k, v in box.items()},
+        "true_starts": {
+            "fiber_id": np.flatnonzero(keep).tolist(),
+            **{name: true[keep, k].tolist() for k, name in enumerate(_AXES)},
+        },
+        "failed": failures,
+    }
+    return table, truth
