@@ -13,7 +13,10 @@ Constants that are the package's own live in the package and are re-exported her
 
 from __future__ import annotations
 
+import argparse
+import logging
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +39,9 @@ __all__ = [
     "STUDY_FLOW",
     "coverage_hidden",
     "coverage_limit",
+    "parse_study",
     "study_field",
+    "study_parser",
     "uniform_starts",
     "wilson",
 ]
@@ -60,6 +65,43 @@ def study_field(cache: str | Path = DEFAULT_CACHE) -> FlowField:
 
     field, _ = get_flow_field(STUDY_FLOW, cache)
     return field
+
+
+def study_parser(doc: str, out: str) -> argparse.ArgumentParser:
+    """The command line a stored-results study starts from.
+
+    Its description is the first line of ``doc`` (the script's docstring); the options
+    every such study has: ``--workers``, ``--cache`` (:data:`DEFAULT_CACHE`), ``--out``
+    (a folder of one JSON per data set, default ``out``) and ``--tabulate`` (no runs:
+    print the table of ``--out``). The script adds its own and passes the parser to
+    :func:`parse_study`.
+    """
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--cache", default=DEFAULT_CACHE)
+    ap.add_argument("--out", default=out)
+    ap.add_argument("--tabulate", action="store_true", help="no runs: the table of --out")
+    return ap
+
+
+def parse_study(
+    ap: argparse.ArgumentParser, tabulate: Callable[[Path], str]
+) -> argparse.Namespace | None:
+    """Parse a :func:`study_parser` command line, with warnings logged.
+
+    Returns
+    -------
+    Namespace or None
+        The arguments, ``out`` a :class:`~pathlib.Path`; None with ``--tabulate``,
+        after printing ``tabulate(out)`` (the script then has nothing to run).
+    """
+    args = ap.parse_args()
+    logging.basicConfig(level=logging.WARNING)
+    args.out = Path(args.out)
+    if args.tabulate:
+        print(tabulate(args.out))
+        return None
+    return args
 
 
 def uniform_starts(rng: np.random.Generator, n: int, box=BOX) -> np.ndarray:

@@ -42,7 +42,14 @@ from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.discrepancy.synth import synthesize
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from common import BOX, DEFAULT_CACHE, REPO, study_field, wilson  # noqa: E402
+from common import (  # noqa: E402
+    BOX,
+    REPO,
+    parse_study,
+    study_field,
+    study_parser,
+    wilson,
+)
 
 log = logging.getLogger("truthgap")
 
@@ -113,7 +120,7 @@ def tabulate(out: Path) -> str:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = study_parser(__doc__, "results/truthgap")
     ap.add_argument("--box", choices=("study", "quick"), default="study")
     ap.add_argument("--effects", nargs="*", default=[])
     ap.add_argument(
@@ -125,16 +132,9 @@ def main() -> None:
     ap.add_argument("--shrink", action=argparse.BooleanOptionalAction, default=True)
     ap.add_argument("--n", type=int, default=100)
     ap.add_argument("--seeds", type=int, nargs="+", default=[1])
-    ap.add_argument("--workers", type=int, default=1)
-    ap.add_argument("--cache", default=DEFAULT_CACHE)
-    ap.add_argument("--out", default="results/truthgap")
-    ap.add_argument("--tabulate", action="store_true")
-    args = ap.parse_args()
-    logging.basicConfig(level=logging.WARNING)
-    out = Path(args.out)
-    if args.tabulate:
-        print(tabulate(out))
+    if (args := parse_study(ap, tabulate)) is None:
         return
+    out = args.out
     out.mkdir(parents=True, exist_ok=True)
     field = study_field(args.cache)
     tag = "_".join([args.box, *args.effects, f"E{args.young_modulus or 0:g}",

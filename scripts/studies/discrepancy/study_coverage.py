@@ -41,7 +41,6 @@ skipped, so the study can be stopped and continued, and more seeds appended::
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import sys
@@ -72,7 +71,9 @@ from common import (  # noqa: E402
     DEFAULT_CACHE,
     STUDY_FLOW,
     coverage_hidden,
+    parse_study,
     study_field,
+    study_parser,
     wilson,
 )
 from common import COVERAGE_DECLARED as DECLARED  # noqa: E402
@@ -266,7 +267,7 @@ def tabulate(out: Path) -> str:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = study_parser(__doc__, "results/coverage")
     ap.add_argument("--kinds", nargs="+", choices=KINDS, default=list(KINDS))
     ap.add_argument("--sets", type=int, default=20,
                     help="data sets per kind with a significant gap (fitted)")  # fmt: skip
@@ -276,16 +277,9 @@ def main() -> None:
                     help="added to each kind's first seed (new data sets)")  # fmt: skip
     ap.add_argument("--n", type=int, default=60, help="fibers per data set")
     ap.add_argument("--copies", type=int, default=8, help="baseline copies per fiber")
-    ap.add_argument("--workers", type=int, default=1)
-    ap.add_argument("--cache", default=DEFAULT_CACHE)
-    ap.add_argument("--out", default="results/coverage")
-    ap.add_argument("--tabulate", action="store_true", help="no runs: the table of --out")
-    args = ap.parse_args()
-    logging.basicConfig(level=logging.WARNING)
-    out = Path(args.out)
-    if args.tabulate:
-        print(tabulate(out))
+    if (args := parse_study(ap, tabulate)) is None:
         return
+    out = args.out
     field = study_field(args.cache)
     # index-major: a study cut short has every kind at its first indices. A data set
     # without a significant gap is recorded (the workflow would name nothing) and costs

@@ -35,7 +35,6 @@ Usage::
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import sys
@@ -54,7 +53,15 @@ from fibersweep.discrepancy.synth import synthesize
 from fibersweep.discrepancy.workflow import DiscrepancySettings, run_discrepancy
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from common import BOX, DEFAULT_CACHE, REPO, STUDY_FLOW, study_field, wilson  # noqa: E402
+from common import (  # noqa: E402
+    BOX,
+    REPO,
+    STUDY_FLOW,
+    parse_study,
+    study_field,
+    study_parser,
+    wilson,
+)
 
 log = logging.getLogger("infamily")
 
@@ -252,7 +259,7 @@ def tabulate(out: Path) -> str:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = study_parser(__doc__, "results/infamily")
     ap.add_argument("--scenarios", nargs="+", default=["friction=2"])
     ap.add_argument("--seeds", type=int, nargs="+", default=[9701])
     ap.add_argument("--n", type=int, default=100)
@@ -262,21 +269,14 @@ def main() -> None:
         default="study",
         help="start box: the studies' or configs/quick.yaml's (one length)",
     )
-    ap.add_argument("--workers", type=int, default=1)
-    ap.add_argument("--cache", default=DEFAULT_CACHE)
-    ap.add_argument("--out", default="results/infamily")
     ap.add_argument(
         "--truth-gap",
         action="store_true",
         help="also test the gap against copies of the true model",
     )
-    ap.add_argument("--tabulate", action="store_true")
-    args = ap.parse_args()
-    logging.basicConfig(level=logging.WARNING)
-    out = Path(args.out)
-    if args.tabulate:
-        print(tabulate(out))
+    if (args := parse_study(ap, tabulate)) is None:
         return
+    out = args.out
     out.mkdir(parents=True, exist_ok=True)
     field = study_field(args.cache)
     for seed in args.seeds:
