@@ -20,7 +20,6 @@ from fibersweep.fiber.effects.near_wall import NearWall
 from fibersweep.fiber.frame import CHANNEL
 from fibersweep.fiber.integrators.contact_rate import contact_rate
 from fibersweep.fiber.kernel.bundles import FlowArrays, assemble, make_params
-from fibersweep.fiber.models import rigid
 from fibersweep.fiber.models.rigid import rigid_velocity
 from fibersweep.fiber.result import FiberStart
 from fibersweep.fiber.run import simulate
@@ -114,10 +113,6 @@ def test_a_fiber_with_one_end_in_the_layer_is_bounded_by_the_rate():
     assert rate < k.body.tip_m * stiff
 
 
-@pytest.mark.skipif(
-    not hasattr(rigid, "contact_rate"),
-    reason="the rigid model's step does not take the rate yet (fiber/models/rigid.py)",
-)
 def test_the_apex_run_with_all_on_keeps_its_outcome_in_the_steps_of_one_without(coarse_field):
     """The channel's rigid fiber with contact at the apex (y0/h 0.45, as the benchmarks),
     ``near_wall``, ``faxen``, curvature local (r_c 1 µm), gap law δ_r = 0.05 µm: with the
