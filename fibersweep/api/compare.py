@@ -63,6 +63,45 @@ def array_settings_parts(
     return {"noise": array_noise(cfg.fiber), "effects": array_effect_names(effects, cfg.fiber)}
 
 
+def check_array_lengths(length: Any, bead_radius: float, source: str) -> None:
+    """Every measured length [µm] holds at least one bead of the config's fiber.
+
+    Parameters
+    ----------
+    length : ndarray, shape (n,)
+        Measured lengths [µm].
+    bead_radius : float
+        The config's bead radius a [µm]; the shortest fiber is one bead, 2a.
+    source : str
+        The table, for the message.
+
+    Raises
+    ------
+    InputError
+        Naming the rows; lengths that all lie below 2 µm are said to look like
+        fractions L / l_obs (the channel's unit).
+    """
+    import numpy as np
+
+    from fibersweep.discrepancy.schema import rows_text
+    from fibersweep.errors import InputError
+
+    length = np.asarray(length, dtype=np.float64)
+    short = length < 2.0 * bead_radius * (1.0 - 1e-9)
+    if not short.any():
+        return
+    hint = (
+        "; every length is below 2 µm: they look like fractions L / l_obs (a pillar array "
+        "takes the length in µm)"
+        if (length < 2.0).all()
+        else ""
+    )
+    raise InputError(
+        f"{source}: length: shorter than one bead (2a = {2.0 * bead_radius:g} µm) in "
+        f"{rows_text(short)} (e.g. {length[short][0]:g} µm){hint}"
+    )
+
+
 def load_measured_for(
     cfg: Config, path: str | Path, trajectories: str | Path | None = None,
     ignore_extra: bool = False,
@@ -77,7 +116,9 @@ def load_measured_for(
 
         if trajectories is not None:
             refuse_array(cfg, "--trajectories", "measured tracks in the channel frame")
-        return array_measured_data(load_array_measured(path, ignore_extra), str(path))
+        table = load_array_measured(path, ignore_extra)
+        check_array_lengths(table["length"].to_numpy(), cfg.fiber.bead_radius, str(path))
+        return array_measured_data(table, str(path))
     from fibersweep.discrepancy.measured import load_measured
 
     return load_measured(path, trajectories, ignore_extra=ignore_extra,
@@ -99,12 +140,22 @@ def declared_candidates(cfg: Config, candidates: Sequence[str] | None) -> tuple:
     """Declared candidates: the config's ``discrepancy.candidates``, then ``candidates``
     (``--candidate`` texts: ``KEY=LO..HI``, ``KEY=VALUE``, or a switch with its parameter)."""
     from fibersweep.discrepancy.declared import parse_candidates
+    from fibersweep.errors import InputError
 
     texts = list(cfg.discrepancy.candidates)
     where = [f"discrepancy.candidates[{i}]:" for i in range(len(texts))]
     texts += list(candidates or [])
     where += ["--candidate"] * len(candidates or [])
-    return tuple(parse_candidates(texts, cfg.fiber, cfg.flow, where))
+    declared = tuple(parse_candidates(texts, cfg.fiber, cfg.flow, where))
+    if cfg.flow.array is None:
+        for c, w in zip(declared, where, strict=False):
+            keys = [c.key, *(k for k, _ in c.switch)] if c.key else [k for k, _ in c.switch]
+            if any(k.startswith("flow.array") for k in keys):
+                raise InputError(
+                    f"{w} {c.name}: flow.array settings are a pillar array's; this config "
+                    "has no flow.array (it is the single-pillar channel)"
+                )
+    return declared
 
 
 @dataclass(frozen=True)

@@ -395,15 +395,19 @@ def sort_report(
 
 
 def _measured_table(measured: str | Path | pd.DataFrame) -> pd.DataFrame:
-    """The measured fibers: a DataFrame as given, a file through the array measured
-    table's loader (its checks name the column, rule and rows)."""
+    """The measured fibers: a DataFrame as given, or read from a Parquet or CSV file.
+
+    Either way only ``length``, ``fraction`` and ``trapped`` are read and checked
+    (:func:`fibersweep.sorting.measured.check_measured`): the starts, which the
+    discrepancy workflow needs, are not used here.
+    """
     import pandas as pd
 
     if isinstance(measured, pd.DataFrame):
         return measured
-    from fibersweep.discrepancy.array_schema import load_array_measured
+    from fibersweep.discrepancy.schema import read_table
 
-    return load_array_measured(Path(measured))
+    return read_table(Path(measured))
 
 
 def _slug(values: dict) -> str:

@@ -233,11 +233,20 @@ def _echo_measured(rep, path: Path) -> None:
     typer.echo(pd.DataFrame(rows).to_string(index=False))
     if m.critical.empty:
         f = m.bins["fraction_mean"].to_numpy(float)
-        side = "below" if (f[np.isfinite(f)] < m.level).all() else "above"
-        typer.echo(f"critical length, measured: none in the bins (f {side} 1/2 in every bin)")
+        f = f[np.isfinite(f)]
+        if not f.size:
+            why = "no bin has a fiber that was not trapped"
+        elif (f < m.level).all():
+            why = f"f below {m.level:g} in every bin"
+        elif (f > m.level).all():
+            why = f"f above {m.level:g} in every bin"
+        else:
+            why = f"f does not cross {m.level:g} between two bins"
+        typer.echo(f"critical length, measured: none in the bins ({why})")
     for r in m.critical.itertuples():
         typer.echo(
-            f"critical length, measured ({'f rises' if r.rising else 'f falls'} through 1/2): "
+            f"critical length, measured ({'f rises' if r.rising else 'f falls'} through "
+            f"{m.level:g}): "
             f"{critical_text(r.critical, r.ci_lo, r.ci_hi)}, between the bins at {r.lo:.1f} "
             f"and {r.hi:.1f} µm"
         )
@@ -250,10 +259,12 @@ def _echo_measured(rep, path: Path) -> None:
                 if a.rising == b.rising]  # fmt: skip
         if len(both) == 1:  # one edge each, the same way: how far apart, and is it clear
             a, b = both[0]
+            known = all(math.isfinite(v) for v in (a.ci_lo, a.ci_hi, b.ci_lo, b.ci_hi))
             apart = a.ci_hi < b.ci_lo or b.ci_hi < a.ci_lo
+            say = ("do not overlap" if apart else "overlap") if known else "are not both known"
             typer.echo(
-                f"  measured - model: {a.critical - b.critical:+.1f} µm; their {lev} intervals "
-                + ("do not overlap" if apart else "overlap")
+                f"  measured - model: {a.critical - b.critical:+.1f} µm; "
+                f"their {lev} intervals {say}"
             )
     t = m.trapped
     model = ", ".join(

@@ -340,23 +340,6 @@ def discrepancy(
         typer.echo(f"wrote {output / c}")
 
 
-def _clear_array_starts(field, fiber, starts, box, rng):
-    """Starts uniform in ``box`` (θ0 [deg], y0 [/period_y], L [µm]), redrawn where the fiber
-    would touch a pillar at its start (as ``synth`` draws them on an array)."""
-    import numpy as np
-
-    from fibersweep.discrepancy.array_synth import clear_starts
-
-    lo = np.array([box[c][0] for c in ("theta0", "y0", "length")])
-    hi = np.array([box[c][1] for c in ("theta0", "y0", "length")])
-    for _ in range(50):
-        bad = ~clear_starts(field, fiber, starts)
-        if not bad.any():
-            break
-        starts[bad] = lo + (hi - lo) * rng.random((int(bad.sum()), 3))
-    return starts
-
-
 @app.command("power", rich_help_panel=MEASURED)
 def power_cmd(
     config: ConfigArg,
@@ -444,7 +427,9 @@ def power_cmd(
             starts = np.column_stack([rng.uniform(*box[c], k) for c in ("theta0", "y0", "length")])
             obs = scored()
             if array:
-                starts = _clear_array_starts(field, cfg.fiber, starts, box, rng)
+                from fibersweep.discrepancy.array_starts import redraw_clear
+
+                starts = redraw_clear(field, cfg.fiber, starts, box, rng, "power")
                 obs = tuple(o for o in scored(geometry="array")
                             if o != "bend" or cfg.fiber.model != "rigid")  # fmt: skip
         if array:

@@ -6,11 +6,13 @@ reports per fiber (the measured-table columns of :mod:`.array_schema`):
 - ``fraction``: the displacement fraction f (1 displaced every row, 0 zigzag),
   the ``fraction`` column of an array sweep's runs; undefined (NaN) for a trapped
   fiber. Its noise: f is read from the lateral displacement over the rows crossed,
-  f = Δy / (rows ε λy); a 1 µm error of each end over the shipped config's 20 rows
-  of ε λy = 8 µm is an error of about 0.006 in f; the default 0.01 rounds it up.
+  f = Δy / (rows ε λy); a 1 µm error at each end (√2 µm in Δy) over the shipped
+  config's 20 rows of ε λy = 8 µm is an error of about 0.009 in f; the default 0.01
+  rounds it up.
 - ``trapped``: whether the fiber stopped on a pillar (no noise: it is seen).
-- ``mode``: zigzag, displacement, wrap-and-jump, trapped or mixed
-  (:data:`fibersweep.analysis.modes.MODES`), when the fibers were imaged (no noise).
+- ``mode``: zigzag, displacement, wrap-and-jump or mixed
+  (:data:`fibersweep.analysis.modes.MODES` but trapped), when the fibers were imaged
+  (no noise); undefined for a trapped fiber, which ``trapped`` counts.
 - ``bend``: 1 - the smallest end-to-end distance over the contour length
   (``RunResult.min_end_to_end``), for flexible fibers; NaN for a rigid model.
   Its noise: 0.01, a 1 % error of an end-to-end distance read from an image.
@@ -76,7 +78,10 @@ ARRAY_OBSERVABLES: tuple[Observable, ...] = (
         "",
         "transport mode through the rows",
         extract=lambda r: r.mode,
-        categories=MODES,
+        # trapped is its own observable: a trapped fiber's mode is undefined, so that
+        # trapping enters the tests and the fit once
+        defined=("not_trapped",),
+        categories=tuple(m for m in MODES if m != "trapped"),
         geometry="array",
     ),
     Observable(

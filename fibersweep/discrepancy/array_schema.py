@@ -149,9 +149,18 @@ def validate_array_measured(
     """
     missing = [c for c in _REQUIRED if c not in df.columns]
     if missing:
+        hints = [h for h in _unknown([c for c in df.columns if c not in ARRAY_COLUMNS])
+                 if "did you mean" in h]  # fmt: skip
+        channel = [c for c in df.columns if c in OBSERVABLES and OBSERVABLES[c].geometry != "array"]
+        if channel:
+            hints.append(
+                f"{', '.join(map(str, channel))}: the single-pillar channel's observables; a "
+                "pillar array config compares fibers measured through the array"
+            )
         raise InputError(
             f"{source}: missing required column(s) {', '.join(missing)} of an array measured "
             f"table; the columns present are {', '.join(map(str, df.columns)) or '(none)'}"
+            + "".join(f"\n  {h}" for h in hints)
         )
     if len(df) == 0:
         raise InputError(f"{source}: the table has no rows")

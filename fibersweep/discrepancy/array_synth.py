@@ -21,18 +21,17 @@ import pandas as pd
 
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.array_schema import validate_array_measured
+from fibersweep.discrepancy.array_starts import AXES as _AXES
+from fibersweep.discrepancy.array_starts import redraw_clear
 from fibersweep.discrepancy.copies import NoiseModel, array_noise
 from fibersweep.discrepancy.observables import noise_draws
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
 
-__all__ = ["array_effects_check", "clear_starts", "synthesize_array"]
+__all__ = ["array_effects_check", "synthesize_array"]
 
 log = logging.getLogger(__name__)
 
-_AXES = ("theta0", "y0", "length")
-#: Redraws of a start that touches a pillar before giving up (a box mostly inside pillars).
-_MAX_REDRAWS = 50
 
 
 def array_effects_check(fiber: FiberSettings, effects: Mapping[str, float], what: str) -> None:
@@ -47,21 +46,6 @@ def array_effects_check(fiber: FiberSettings, effects: Mapping[str, float], what
         check_array_effects(fiber.model_copy(update={"effects": {**fiber.effects, **on}}))
     except InputError as exc:
         raise InputError(f"{what}: {exc}") from None
-
-
-def clear_starts(field: Any, fiber: FiberSettings, starts: np.ndarray) -> np.ndarray:
-    """Whether each start (θ0 [deg], y0 [/period_y], L [µm]) clears every pillar, shape (n,)."""
-    from fibersweep.fiber.array_run import n_beads_of, start_clear
-    from fibersweep.fiber.rows import array_pillar
-
-    array = field.array
-    pillar = array_pillar(array, fiber, field.viscosity, field.u_center)
-    a = float(fiber.bead_radius)
-    return np.array([
-        start_clear(array, pillar, n_beads_of(L, a, fiber.bead_spacing), a, y, th,
-                    fiber.bead_spacing)
-        for th, y, L in starts
-    ], dtype=bool)  # fmt: skip
 
 
 def synthesize_array(
@@ -111,17 +95,7 @@ def synthesize_array(
     rng = np.random.default_rng([seed, 4242])
     lo = np.array([box[k][0] for k in _AXES], dtype=np.float64)
     hi = np.array([box[k][1] for k in _AXES], dtype=np.float64)
-    true = lo + (hi - lo) * rng.random((n, 3))
-    for _ in range(_MAX_REDRAWS):  # a start inside a pillar's reach is no start
-        bad = ~clear_starts(field, fiber, true)
-        if not bad.any():
-            break
-        true[bad] = lo + (hi - lo) * rng.random((int(bad.sum()), 3))
-    else:
-        raise InputError(
-            f"synth: {int(bad.sum())} of {n} starts still touch a pillar after "
-            f"{_MAX_REDRAWS} redraws; widen sweep.y0 or shorten sweep.length"
-        )
+    true = redraw_clear(field, fiber, lo + (hi - lo) * rng.random((n, 3)), box, rng, "synth")
     reported = noise.jitter_starts(true, rng)
     seeds = rng.integers(0, 2**31 - 1, size=n)
     z = noise_draws([seed, 4242], n)

@@ -27,6 +27,7 @@ from typing import Any
 
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.candidates import LIBRARY, Candidate
+from fibersweep.discrepancy.declared import apply_values
 from fibersweep.errors import InputError
 
 __all__ = ["array_effect_names", "array_library", "check_array_candidates", "field_plan"]
@@ -90,7 +91,6 @@ def field_plan(
     steps ∝ the longest side / dx (the same grid for a shift or a pillar size: the
     same time).
     """
-    from fibersweep.discrepancy.declared import apply_values
     from fibersweep.flow.cache import cache_key
     from fibersweep.flow.cell_cache import cell_path
 

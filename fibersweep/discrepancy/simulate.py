@@ -42,10 +42,11 @@ import pandas as pd
 from fibersweep.analysis.observables import track_values
 from fibersweep.config.fiber import FiberSettings
 from fibersweep.discrepancy.array_observables import is_array_result
+from fibersweep.discrepancy.array_starts import clear_starts
 from fibersweep.discrepancy.candidates import Candidate
 from fibersweep.discrepancy.declared import apply_values
 from fibersweep.discrepancy.observables import OBSERVABLES, of_geometry
-from fibersweep.errors import FibersweepError, InputError
+from fibersweep.errors import FibersweepError, InputError, SolverError
 from fibersweep.fiber.result import CLASSES
 from fibersweep.flow.field import FlowField
 from fibersweep.progressbar import WarmingBar, finish, progress_bar
@@ -338,8 +339,6 @@ class Simulator:
         The run itself would refuse such a start (:class:`fibersweep.fiber.array_run.ArrayCase`);
         checking here spares a worker's traceback per start and keeps the same outcome.
         """
-        from fibersweep.discrepancy.array_synth import clear_starts
-
         on = tuple(sorted((n, float(v)) for n, v in self._last_on.items()))
         ok = clear_starts(self._fields.get(on, self.field), fiber, starts)
         for i in np.flatnonzero(~ok):
@@ -471,6 +470,12 @@ class Simulator:
         self.seconds_by_stage[stage] = self.seconds_by_stage.get(stage, 0.0) + dt
         df = pd.DataFrame(rows)
         nf = int((df["status"] != "ok").sum())
+        bare = spec is None and not any(float(v) != 0.0 for v in (effects or {}).values())
+        if nf == n and n and bare:  # the model as it is ran none: no verdict can rest on it
+            raise SolverError(
+                f"{desc}: every one of the {n} runs of the model as it is failed, e.g. "
+                f"{df['reason'].iloc[0]}; check the measured starts against the config"
+            )
         if nf:
             self.failed += nf
             self.failed_by_stage[stage] = self.failed_by_stage.get(stage, 0) + nf

@@ -179,7 +179,7 @@ def test_a_channel_only_option_on_array_results_is_refused_alike(arrays):
 def test_discrepancy_refuses_an_array_config_alike(tmp_path):
     measured = tmp_path / "m.csv"
     measured.write_text("theta0,y0,length,delta\n0,0.3,1.0,0.1\n")
-    with pytest.raises(fibersweep.errors.InputError, match="flow.array") as exc:
+    with pytest.raises(fibersweep.errors.InputError, match="single-pillar channel") as exc:
         api.discrepancy(measured, "configs/array.yaml", output=tmp_path / "r")
     res = _cli(["discrepancy", measured, "configs/array.yaml", "-o", tmp_path / "r"])
     assert res.exit_code == 2 and str(exc.value)[:60] in " ".join(res.output.split())

@@ -62,12 +62,6 @@ def _case(cache: Path, truth: list[str], effects: dict[str, float], declared: li
                            flow=cfg.flow, cache_dir=cache)  # fmt: skip
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="measured 2026-12-07 (reduced plan, seed 5701): 'unexplained': the best effect, "
-    "flow.array.shift=0.125, improves the held-out fibers but leaves a significant systematic "
-    "residual in fraction (y0 < 0.23, L < 37 µm); an in-family truth must not; cause open",
-)
 def test_a_row_shift_one_lattice_step_off_is_named(flow_cache_dir):
     # designed 0.1 (8 µm per row), fabricated 0.125 (10 µm: one dx = 2 µm step more)
     res = _case(flow_cache_dir, ["flow.array.shift=0.125"], {}, ["flow.array.shift=0.125"], 5701)

@@ -6,7 +6,8 @@ mode is the contact force's: bead i, pushed along its contact normal n_i with th
 radial stiffness k_i = |d|F|/dr| of the pair law, moves the body (V, Ω) by N' g_i per
 unit force, g_i = K_iᵀ n_i (the body-frame force and torque of a unit force along n_i at
 bead i; K_i as in :func:`~fibersweep.fiber.hydro.rpy.rigid_map`) and N' the body
-mobility that the run's mobility hooks leave (the wall's, with ``near_wall``). The
+mobility that the run's mobility hooks leave (the wall's with ``near_wall``, the
+pillar's drag with ``pillar_hydro``). The
 Jacobian of the body velocity by the body's coordinates is then −N' G, G = Σ_i k_i g_i g_iᵀ
 (symmetric, positive semi-definite), whose largest eigenvalue is at most the trace of
 N'^½ G N'^½:

@@ -13,8 +13,8 @@ Time stepping: explicit midpoint (RK2). The step is bounded by
 - the contact stiffness: Δt ≤ 0.5 / λ, λ the contact force's decay rate
   (:mod:`fibersweep.fiber.integrators.contact_rate`): m_tip Σ_i k_i, with m_tip the
   largest bead mobility of the rigid body and k_i = Σ_pairs |d|F|/dr|, or, where an
-  effect changed the body mobility (``near_wall``), Σ_i k_i g_iᵀ N' g_i along each
-  bead's contact normal (stability of the explicit step, whose real stability
+  effect changed the body mobility (``near_wall``, ``pillar_hydro``), Σ_i k_i g_iᵀ N' g_i
+  along each bead's contact normal (stability of the explicit step, whose real stability
   interval is [−2, 0]);
 - ``dt_max``.
 

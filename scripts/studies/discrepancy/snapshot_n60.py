@@ -7,9 +7,9 @@ library effects) and writes what a verdict is made of: the verdict's kind, names
 and fitted values, the fits, the refits' intervals, each held-out evaluation and
 the gap per observable, every float at full precision (JSON's shortest repr that
 round-trips). Whoever changes a shared code path of the workflow shows single-pillar
-verdicts unchanged by a bit-identical snapshot (``tests/validation/test_discrepancy_array_hidden.py``
-compares it). A change that is meant to alter the numbers (fit.py, estimate.py)
-regenerates it with ``--write``.
+verdicts unchanged by a bit-identical snapshot
+(``tests/validation/test_discrepancy_array_hidden.py`` compares it). A change that is
+meant to alter the numbers (fit.py, estimate.py) regenerates it with ``--write``.
 
 Usage (about 1-3 minutes on the 2 loaded cores)::
 
