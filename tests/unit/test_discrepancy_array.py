@@ -262,3 +262,34 @@ def test_array_discrepancy_refuses_channel_tables_and_tracks(tmp_path, flow_cach
     assert res.exit_code == 2 and "missing required column(s) fraction, trapped" in res.output
     res = CliRunner().invoke(app, [*base, "--trajectories", str(channel)])
     assert res.exit_code == 2 and "channel frame" in res.output, res.output
+
+
+def test_lengths_shorter_than_a_bead_are_refused_naming_the_rows():
+    """A fiber shorter than one bead (2a) cannot run; lengths all below 2 µm are named as
+    L / l_obs. Exact rule, no tolerance: 2a itself is allowed."""
+    from fibersweep.api.compare import check_array_lengths
+
+    check_array_lengths(np.array([4.0, 40.0]), 2.0, "t.csv")  # one bead: allowed
+    with pytest.raises(InputError, match=r"row 2 .*3 µm") as exc:
+        check_array_lengths(np.array([10.0, 3.0]), 2.0, "t.csv")
+    assert "l_obs" not in str(exc.value)
+    with pytest.raises(InputError, match="look like fractions L / l_obs"):
+        check_array_lengths(np.array([0.5, 0.8]), 2.0, "t.csv")
+
+
+def test_an_array_candidate_on_a_channel_config_is_refused():
+    from fibersweep.api.compare import declared_candidates
+
+    cfg = load_config("configs/quick.yaml")
+    with pytest.raises(InputError, match="flow.array settings are a pillar array's"):
+        declared_candidates(cfg, ["flow.array.shift=0.15"])
+
+
+def test_a_misspelled_required_column_gets_a_did_you_mean(tmp_path):
+    from fibersweep.discrepancy.array_schema import load_array_measured
+
+    path = tmp_path / "m.csv"
+    pd.DataFrame({"theta0": [0.0], "y0": [0.5], "length": [40.0], "fracton": [0.1],
+                  "trapped": [False]}).to_csv(path, index=False)  # fmt: skip
+    with pytest.raises(InputError, match="did you mean 'fraction'"):
+        load_array_measured(path)
