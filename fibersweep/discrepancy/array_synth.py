@@ -33,7 +33,6 @@ __all__ = ["array_effects_check", "synthesize_array"]
 log = logging.getLogger(__name__)
 
 
-
 def array_effects_check(fiber: FiberSettings, effects: Mapping[str, float], what: str) -> None:
     """InputError naming an effect a pillar-array run cannot apply (before any run).
 

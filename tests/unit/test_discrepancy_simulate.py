@@ -36,6 +36,19 @@ def test_bad_start_is_a_recorded_failure_and_unknown_effect_an_input_error(unifo
             sim.run(starts, {"fricton": 0.2}, np.arange(2))
 
 
+
+def test_a_bare_batch_whose_every_run_failed_stops_with_an_error(uniform_field):
+    """No verdict may rest on a model that ran none of the fibers; under an effect such a
+    batch is an outcome of the effect and is returned."""
+    from fibersweep.errors import SolverError
+
+    starts = np.array([[0.0, 9.0, 1.0], [0.0, 8.0, 1.0]])  # both outside the channel
+    with Simulator(uniform_field, FiberSettings(), workers=1, progress=False) as sim:
+        with pytest.raises(SolverError, match="every one of the 2 runs"):
+            sim.run(starts, {}, np.arange(2), desc="baseline")
+        df = sim.run(starts, {"friction": 0.2}, np.arange(2))
+        assert list(df["status"]) == ["failed", "failed"]
+
 @pytest.mark.parametrize(("executor", "workers"), [("local", 2), ("dask", 2)])
 def test_batches_run_on_every_executor_with_the_same_results(uniform_field, executor, workers):
     """The workflow's simulations go through the sweep executors: the local pool and Dask
