@@ -24,7 +24,7 @@ from fibersweep.discrepancy.array_schema import validate_array_measured
 from fibersweep.discrepancy.array_starts import AXES as _AXES
 from fibersweep.discrepancy.array_starts import redraw_clear
 from fibersweep.discrepancy.copies import NoiseModel, array_noise
-from fibersweep.discrepancy.observables import noise_draws
+from fibersweep.discrepancy.observables import OBSERVABLES, noise_draws, of_geometry
 from fibersweep.discrepancy.simulate import Simulator
 from fibersweep.errors import InputError
 
@@ -107,11 +107,9 @@ def synthesize_array(
     table = pd.DataFrame({"fiber_id": np.arange(n, dtype=np.int64)})
     for k, name in enumerate(_AXES):
         table[name] = reported[:, k]
-    table["fraction"] = obs["fraction"].to_numpy(dtype=np.float64)
-    table["trapped"] = obs["trapped"].to_numpy(dtype=np.float64) > 0.5
-    table["mode"] = obs["mode"].to_numpy(dtype=object)
-    if fiber.model != "rigid":
-        table["bend"] = obs["bend"].to_numpy(dtype=np.float64)
+    for name in of_geometry("array"):  # as the registry writes them; no bend for a rigid model
+        if name != "bend" or fiber.model != "rigid":
+            table[name] = OBSERVABLES[name].to_table(obs[name])
     failures = [
         {"fiber_id": int(i), "true_start": true[i].tolist(), "reason": str(raw["reason"][i])}
         for i in np.flatnonzero(~keep)
